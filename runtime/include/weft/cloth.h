@@ -1,0 +1,33 @@
+#pragma once
+/// @file
+/// A cloth instance: a shared `Fabric` placed in the world with its own material, pins and state.
+
+#include <cstdint>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "weft/fabric.h"
+#include "weft/material.h"
+#include "weft/motion.h"
+
+namespace weft {
+
+/// A hard positional constraint on one vertex (filtered out of the solve, Baraff & Witkin 1998 §5).
+/// With `motion < 0` the vertex stays where it starts; otherwise it is carried rigidly by
+/// `World::motions()[motion]` (a cape pinned to a moving shoulder).
+struct PinDesc {
+    std::uint32_t vertex = 0;
+    int motion = -1;
+};
+
+struct ClothDesc {
+    std::string name;
+    std::shared_ptr<const Fabric> fabric;
+    Transform transform{};        ///< places the fabric's rest shape in the world
+    Material material{};
+    std::vector<PinDesc> pins;
+    Vec3d initial_velocity{};     ///< m/s, every vertex
+};
+
+}  // namespace weft

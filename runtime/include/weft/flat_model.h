@@ -1,0 +1,55 @@
+#pragma once
+/// @file
+/// The model flattened into one system for a backend: every cloth's vertices, triangles and hinges
+/// concatenated with global indices, one block pattern for the whole world (cloths are independent
+/// diagonal blocks of it), and the gather tables that make assembly deterministic. The CPU and CUDA
+/// backends build their state from this; it is rebuilt only when `Model::topology_version` changes.
+
+#include <cstdint>
+#include <vector>
+
+#include "weft/fabric.h"
+#include "weft/model.h"
+
+namespace weft {
+
+struct FlatModel {
+    std::size_t vertex_count = 0;
+    std::vector<std::uint32_t> cloth_vertex_offset;    ///< size cloths+1
+    std::vector<std::uint32_t> cloth_triangle_offset;  ///< size cloths+1
+    std::vector<std::uint32_t> cloth_hinge_offset;     ///< size cloths+1
+    std::vector<Vec3d> initial_positions;              ///< rest shape placed by each cloth's transform, m
+    std::vector<Vec3d> initial_velocities;             ///< m/s
+    std::vector<double> mass;                          ///< lumped, kg
+    std::vector<std::uint32_t> vertex_cloth;           ///< owning cloth of each vertex
+    std::vector<Triangle> triangles;                   ///< global vertex indices
+    std::vector<TriangleRest> triangle_rest;
+    std::vector<std::uint32_t> triangle_cloth;
+    std::vector<Hinge> hinges;                         ///< global vertex indices
+    std::vector<std::uint32_t> hinge_cloth;
+    BlockPattern pattern;                              ///< global; slot maps index global triangles/hinges
+
+    /// Element force entries: triangle t, corner a → 3t + a; hinge k, corner a → 3T + 4k + a.
+    /// `vertex_force_index[vertex_force_start[i] .. vertex_force_start[i+1])` lists vertex i's entries
+    /// in a fixed order, so summing them gives the same bits on any thread count.
+    std::vector<std::uint32_t> vertex_force_start, vertex_force_index;
+    /// Element Hessian blocks: triangle t, pair (a,b) → 9t + 3a + b; hinge k → 9T + 16k + 4a + b.
+    /// `slot_block_index[slot_block_start[s] .. slot_block_start[s+1])` lists the blocks summed into
+    /// BSR slot s, in a fixed order.
+    std::vector<std::uint32_t> slot_block_start, slot_block_index;
+
+    /// Pins: vertex, motion followed (−1: fixed) and the vertex position in that motion's frame at t=0.
+    std::vector<std::uint32_t> pin_vertex;
+    std::vector<int> pin_motion;
+    std::vector<Vec3d> pin_local;
+    std::vector<std::int32_t> vertex_pin;  ///< pin index of each vertex or −1
+
+    [[nodiscard]] std::size_t triangle_count() const { return triangles.size(); }
+    [[nodiscard]] std::size_t hinge_count() const { return hinges.size(); }
+    [[nodiscard]] std::size_t memory_bytes() const;
+};
+
+/// Flattens `model` (throws `weft::Error` if a cloth has no fabric).
+[[nodiscard]] FlatModel flatten(const Model& model);
+
+}  // namespace weft

@@ -1,0 +1,41 @@
+#pragma once
+/// @file
+/// Kinematic motion of a rigid frame: what animated colliders and animated pins follow.
+
+#include "weft/types.h"
+
+namespace weft {
+
+/// A rigid transform: x_world = rotation · x_local + translation.
+struct Transform {
+    Mat3d rotation = Mat3d::identity();  ///< orthonormal, local → world
+    Vec3d translation{};                 ///< m
+    [[nodiscard]] Vec3d apply(Vec3d p) const { return rotation * p + translation; }
+};
+
+/// A parametric rigid motion, evaluated at time t (s):
+///   translation(t) = origin + linear_velocity·t + amplitude·sin(2π·frequency·t + phase)
+///   rotation(t)    = exp([angular_velocity]× t) · initial_rotation
+/// The rotation turns about the frame's own origin (translation(t)). This covers a rotating sphere,
+/// a swinging shoulder and a collider thrown at constant speed; keyframed tracks are not supported yet.
+struct Motion {
+    Vec3d origin{};            ///< m
+    Mat3d initial_rotation = Mat3d::identity();
+    Vec3d linear_velocity{};   ///< m/s
+    Vec3d angular_velocity{};  ///< rad/s, axis × rate, world frame
+    Vec3d amplitude{};         ///< m, oscillation amplitude per axis
+    double frequency = 0.0;    ///< Hz
+    double phase = 0.0;        ///< rad
+
+    /// The frame at time t (s).
+    [[nodiscard]] Transform at(double t) const;
+    /// Velocity (m/s) at time t of the material point that sits at world position p.
+    [[nodiscard]] Vec3d point_velocity(double t, Vec3d p) const;
+    /// True when the frame never moves.
+    [[nodiscard]] bool is_static() const;
+};
+
+/// Rotation matrix of the rotation vector w (axis × angle, rad): Rodrigues' formula.
+[[nodiscard]] Mat3d rotation_from_vector(Vec3d w);
+
+}  // namespace weft

@@ -1,0 +1,52 @@
+#pragma once
+/// @file
+/// World-wide settings: gravity, wind and the solver's speed/accuracy knobs.
+
+#include <cstdint>
+
+#include "weft/types.h"
+
+namespace weft {
+
+/// Wind acting on every cloth through per-triangle aerodynamic drag and lift.
+struct WindDesc {
+    Vec3d velocity{};             ///< m/s, mean wind
+    double air_density = 1.2;     ///< kg/m³
+    double turbulence = 0.0;      ///< m/s, amplitude of the gust field added to the mean
+    double turbulence_frequency = 1.0;  ///< Hz, how fast gusts change
+    double turbulence_scale = 1.0;      ///< m, spatial size of a gust
+    [[nodiscard]] bool active() const {
+        return velocity.x != 0.0 || velocity.y != 0.0 || velocity.z != 0.0 || turbulence > 0.0;
+    }
+};
+
+/// Which Hessian approximation the elements hand to the solver (a speed/accuracy knob).
+enum class HessianMode : std::uint8_t {
+    /// Cheap PSD form: membrane with compressive stress dropped from the geometric term, bending
+    /// by Gauss–Newton (∇θ ∇θᵀ). Exact at rest and in tension.
+    Fast,
+    /// Exact element Hessian, eigen-clamped to the nearest PSD matrix (9×9 membrane, 12×12 bending).
+    Projected,
+};
+
+/// Solver knobs. Every one trades speed against accuracy; docs/tuning.md measures them.
+struct SolverSettings {
+    double dt = 1.0 / 60.0;        ///< frame time step, s. Valid range [1e-5, 0.1].
+    int substeps = 1;              ///< implicit steps per frame. Valid range [1, 1000].
+    int newton_iterations = 1;     ///< linearisations per substep (1 = Baraff–Witkin). Valid range [1, 50].
+    double cg_tolerance = 1e-4;    ///< relative residual: stop when rᵀP⁻¹r ≤ ε²·δ₀. Valid range [1e-12, 1].
+    int cg_max_iterations = 500;   ///< CG cap per solve. Valid range [1, 100000].
+    Precision precision = Precision::Double;  ///< CPU backend scalar; double is the reference
+    HessianMode hessian = HessianMode::Fast;
+    double contact_stiffness = 0.0;  ///< N/m per vertex against colliders; 0 picks a stiffness from mass and dt
+    int threads = 0;               ///< CPU worker threads; 0 = all cores. Results do not depend on it.
+};
+
+/// Everything that applies to the whole world.
+struct WorldDesc {
+    Vec3d gravity{0.0, -9.81, 0.0};  ///< m/s²
+    WindDesc wind{};
+    SolverSettings solver{};
+};
+
+}  // namespace weft

@@ -1,0 +1,77 @@
+#pragma once
+/// @file
+/// `World`: the object a game holds. Add cloths, colliders and motions, then call `step()` once a
+/// frame.
+///
+/// @code
+///   weft::World world({}, "cpu");
+///   auto fabric = weft::Fabric::cook(weft::make_grid(1.0, 1.0, 32, 32));
+///   world.add_cloth({.name = "sheet", .fabric = fabric});
+///   for (int frame = 0; frame < 600; ++frame) world.step();
+/// @endcode
+
+#include <cstddef>
+#include <memory>
+#include <span>
+#include <string_view>
+#include <vector>
+
+#include "weft/backend.h"
+#include "weft/model.h"
+
+namespace weft {
+
+class World {
+public:
+    /// Creates a world stepped by the backend called `backend` ("cpu", "cuda", …).
+    explicit World(const WorldDesc& desc = {}, std::string_view backend = "cpu", const BackendOptions& options = {});
+    ~World();
+    World(const World&) = delete;
+    World& operator=(const World&) = delete;
+
+    /// Adds a motion that pins and colliders can follow; returns its index.
+    int add_motion(const Motion& motion);
+    /// Adds a cloth; returns its index. Throws `weft::Error` on bad input (no fabric, pin index out
+    /// of range, material out of range).
+    std::size_t add_cloth(const ClothDesc& cloth);
+    /// Adds a collider; returns its index. Throws `weft::Error` if its motion index is out of range.
+    std::size_t add_collider(const ColliderDesc& collider);
+
+    /// Advances one frame of `settings().solver.dt` seconds in `substeps` implicit substeps.
+    /// Never throws for numerical trouble: the returned stats say what happened.
+    const StepStats& step();
+
+    /// Simulated time, s.
+    [[nodiscard]] double time() const { return time_; }
+    [[nodiscard]] std::size_t steps() const { return steps_; }
+    [[nodiscard]] const StepStats& last_stats() const { return stats_; }
+
+    /// Live-editable settings, materials and motions: changes apply at the next step, no rebuild.
+    [[nodiscard]] WorldDesc& settings() { return model_.settings; }
+    [[nodiscard]] Material& material(std::size_t cloth) { return model_.cloths.at(cloth).material; }
+    [[nodiscard]] Motion& motion(int index) { return model_.motions.at(static_cast<std::size_t>(index)); }
+    [[nodiscard]] const Model& model() const { return model_; }
+
+    /// Current positions (m) and velocities (m/s) of a cloth, copied from the backend.
+    [[nodiscard]] std::vector<Vec3d> positions(std::size_t cloth) const;
+    [[nodiscard]] std::vector<Vec3d> velocities(std::size_t cloth) const;
+    /// Overwrites a cloth's state (sizes must equal the fabric's vertex count).
+    void set_state(std::size_t cloth, std::span<const Vec3d> positions, std::span<const Vec3d> velocities);
+
+    /// Kinetic + gravitational potential + elastic energy of all cloths, J (diagnostics and tests).
+    [[nodiscard]] double energy() const;
+
+    [[nodiscard]] Backend& backend() { return *backend_; }
+    [[nodiscard]] const Backend& backend() const { return *backend_; }
+
+private:
+    void ensure_built() const;
+    Model model_;
+    std::unique_ptr<Backend> backend_;
+    mutable std::uint64_t built_version_ = ~std::uint64_t{0};
+    double time_ = 0.0;
+    std::size_t steps_ = 0;
+    StepStats stats_{};
+};
+
+}  // namespace weft

@@ -1,0 +1,37 @@
+#pragma once
+// Block sparse row matrix with 3×3 blocks over a fixed pattern (weft::BlockPattern).
+
+#include <vector>
+
+#include "cpu/parallel.h"
+#include "weft/fabric.h"
+#include "weft/physics/vec.h"
+
+namespace weft::cpu {
+
+template <typename T>
+struct BsrMatrix {
+    const BlockPattern* pattern = nullptr;
+    std::vector<physics::Mat3<T>> blocks;
+
+    void resize(const BlockPattern& p) {
+        pattern = &p;
+        blocks.assign(p.block_count(), physics::Mat3<T>{});
+    }
+    [[nodiscard]] std::size_t rows() const { return pattern->diagonal.size(); }
+
+    /// y = A x, one block row per task.
+    void multiply(const std::vector<physics::Vec3<T>>& x, std::vector<physics::Vec3<T>>& y) const {
+        const auto& rs = pattern->row_start;
+        const auto& col = pattern->column;
+        parallel_chunks(rows(), [&](std::size_t b, std::size_t e) {
+            for (std::size_t i = b; i < e; ++i) {
+                physics::Vec3<T> acc{};
+                for (std::uint32_t s = rs[i]; s < rs[i + 1]; ++s) acc += blocks[s] * x[col[s]];
+                y[i] = acc;
+            }
+        });
+    }
+};
+
+}  // namespace weft::cpu

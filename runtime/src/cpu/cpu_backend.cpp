@@ -1,0 +1,93 @@
+// The CPU backend: a TBB task arena around a CpuSolver in float or double.
+#include "cpu/cpu_backend.h"
+
+#include <tbb/info.h>
+#include <tbb/task_arena.h>
+
+#include <string>
+#include <variant>
+
+#include "cpu/cpu_solver.h"
+#include "weft/error.h"
+#include "weft/flat_model.h"
+
+namespace weft::cpu {
+namespace {
+
+class CpuBackend final : public Backend {
+public:
+    explicit CpuBackend(const BackendOptions& options)
+        : threads_(options.threads > 0 ? options.threads : tbb::info::default_concurrency()), arena_(threads_) {}
+
+    std::string_view name() const override { return "cpu"; }
+
+    std::string device_description() const override {
+        return "CPU, " + std::to_string(threads_) + " thread" + (threads_ == 1 ? "" : "s") + ", " +
+               (precision_ == Precision::Double ? "double" : "float");
+    }
+
+    void build(const Model& model) override {
+        flat_ = flatten(model);
+        precision_ = model.settings.solver.precision;
+        arena_.execute([&] {
+            if (precision_ == Precision::Double)
+                solver_.emplace<CpuSolver<double>>().build(flat_);
+            else
+                solver_.emplace<CpuSolver<float>>().build(flat_);
+        });
+    }
+
+    void substep(const Model& model, double t, double h, StepStats& stats) override {
+        if (model.settings.solver.precision != precision_) switch_precision(model);
+        arena_.execute([&] { std::visit([&](auto& s) { s.substep(model, t, h, stats); }, solver_); });
+    }
+
+    void read_state(std::size_t cloth, std::span<Vec3d> x, std::span<Vec3d> v) const override {
+        const auto [first, count] = range(cloth, x.size(), v.size());
+        std::visit([&](const auto& s) { s.read_state(first, count, x.data(), v.data()); }, solver_);
+    }
+
+    void write_state(std::size_t cloth, std::span<const Vec3d> x, std::span<const Vec3d> v) override {
+        const auto [first, count] = range(cloth, x.size(), v.size());
+        std::visit([&](auto& s) { s.write_state(first, count, x.data(), v.data()); }, solver_);
+    }
+
+    std::size_t memory_bytes() const override {
+        return flat_.memory_bytes() + std::visit([](const auto& s) { return s.memory_bytes(); }, solver_);
+    }
+
+private:
+    std::pair<std::size_t, std::size_t> range(std::size_t cloth, std::size_t nx, std::size_t nv) const {
+        if (cloth + 1 >= flat_.cloth_vertex_offset.size()) throw Error("cloth index " + std::to_string(cloth) + " out of range");
+        const std::size_t first = flat_.cloth_vertex_offset[cloth];
+        const std::size_t count = flat_.cloth_vertex_offset[cloth + 1] - first;
+        if (nx != count || nv != count) throw Error("cloth " + std::to_string(cloth) + ": state size mismatch");
+        return {first, count};
+    }
+
+    // Changing precision live keeps the state (converted) and rebuilds the solver.
+    void switch_precision(const Model& model) {
+        std::vector<Vec3d> x(flat_.vertex_count), v(flat_.vertex_count);
+        std::visit([&](const auto& s) { s.read_state(0, flat_.vertex_count, x.data(), v.data()); }, solver_);
+        precision_ = model.settings.solver.precision;
+        arena_.execute([&] {
+            if (precision_ == Precision::Double)
+                solver_.emplace<CpuSolver<double>>().build(flat_);
+            else
+                solver_.emplace<CpuSolver<float>>().build(flat_);
+        });
+        std::visit([&](auto& s) { s.write_state(0, flat_.vertex_count, x.data(), v.data()); }, solver_);
+    }
+
+    int threads_;
+    tbb::task_arena arena_;
+    FlatModel flat_;
+    Precision precision_ = Precision::Double;
+    std::variant<CpuSolver<double>, CpuSolver<float>> solver_;
+};
+
+}  // namespace
+
+std::unique_ptr<Backend> make_cpu_backend(const BackendOptions& options) { return std::make_unique<CpuBackend>(options); }
+
+}  // namespace weft::cpu

@@ -1,0 +1,91 @@
+#pragma once
+// The CPU implementation of one implicit substep (docs/architecture.md, "the step in detail").
+
+#include <cstdint>
+#include <vector>
+
+#include "cpu/bsr_matrix.h"
+#include "cpu/pcg.h"
+#include "weft/flat_model.h"
+#include "weft/model.h"
+#include "weft/physics/bending.h"
+#include "weft/physics/collider_contact.h"
+#include "weft/physics/membrane.h"
+#include "weft/stats.h"
+
+namespace weft::cpu {
+
+/// Implicit Euler with Newton iterations on the velocity (Baraff & Witkin 1998), in scalar T.
+template <typename T>
+class CpuSolver {
+public:
+    using V3 = physics::Vec3<T>;
+    using M3 = physics::Mat3<T>;
+
+    /// Allocates all state for `flat` (kept by reference: it must outlive the solver).
+    void build(const FlatModel& flat);
+    void substep(const Model& model, double t, double h, StepStats& stats);
+    void read_state(std::size_t first, std::size_t count, Vec3d* x, Vec3d* v) const;
+    void write_state(std::size_t first, std::size_t count, const Vec3d* x, const Vec3d* v);
+    [[nodiscard]] std::size_t memory_bytes() const;
+
+private:
+    struct ClothParams {
+        physics::MembraneMaterial<T> membrane{};
+        T bending = T(0);
+        T damping_mass = T(0);
+        T damping_stiffness = T(0);
+        T drag = T(0), lift = T(0);
+        T thickness = T(0), friction = T(0);
+    };
+    struct TriangleRestT {
+        T dm_inv[2][2];
+        T area;
+    };
+    struct HingeRestT {
+        T weight;
+        T rest_angle;
+    };
+
+    void prepare_parameters(const Model& model, double t, double h);
+    void evaluate_elements(const Model& model, double t, T h);
+    int evaluate_vertices(const Model& model, T h);
+    void assemble();
+
+    const FlatModel* flat_ = nullptr;
+    std::size_t n_ = 0;
+    // State and its copy at the start of the substep (also the rollback point on NaN).
+    std::vector<V3> x_, v_, x0_, v0_;
+    // Newton iterate: velocity guess v_k and the velocity w_k that places the linearisation point
+    // x0 + h·w_k (w_0 = 0 gives Baraff–Witkin's first step exactly; w_k = v_k afterwards).
+    std::vector<V3> vk_, wk_;
+    std::vector<T> mass_;
+    std::vector<TriangleRestT> triangle_rest_;
+    std::vector<HingeRestT> hinge_rest_;
+    // Per-element outputs gathered per vertex / per BSR slot in fixed order (deterministic).
+    std::vector<V3> element_rhs_;
+    std::vector<M3> element_blocks_;
+    std::vector<V3> vertex_rhs_;
+    std::vector<M3> vertex_blocks_;
+    std::vector<V3> b_, dv_, pin_velocity_;
+    std::vector<std::uint8_t> fixed_;
+    std::vector<int> contacts_;
+    std::vector<double> partials_;
+    BsrMatrix<T> A_;
+    Pcg<T> pcg_;
+    std::vector<ClothParams> cloth_params_;
+    std::vector<physics::Shape<T>> shapes_;
+    std::vector<T> shape_friction_;
+    physics::HessianKind hessian_ = physics::HessianKind::Fast;
+    V3 gravity_{};
+    V3 wind_{};
+    bool wind_active_ = false;
+    T turbulence_ = T(0), turbulence_frequency_ = T(0), turbulence_scale_ = T(1), air_density_ = T(0);
+    T contact_stiffness_ = T(0);
+    T time_ = T(0);
+};
+
+extern template class CpuSolver<float>;
+extern template class CpuSolver<double>;
+
+}  // namespace weft::cpu

@@ -1,0 +1,114 @@
+#pragma once
+// Modified preconditioned conjugate gradient with filtered constraints (Baraff & Witkin 1998 §5.3;
+// the P-Cloth slide "Recalling CG Solver"). Pinned vertices have S = 0: their Δv is the prescribed
+// z and never changes. Block-Jacobi preconditioner: P⁻¹ = inverse of each 3×3 diagonal block.
+
+#include <cmath>
+#include <cstdint>
+#include <vector>
+
+#include "cpu/bsr_matrix.h"
+#include "cpu/parallel.h"
+
+namespace weft::cpu {
+
+struct PcgResult {
+    int iterations = 0;
+    double relative_residual = 0.0;  ///< sqrt(δ_new / δ₀) at exit
+    bool converged = false;
+};
+
+template <typename T>
+class Pcg {
+public:
+    using V3 = physics::Vec3<T>;
+    using M3 = physics::Mat3<T>;
+
+    void resize(std::size_t n) {
+        r_.assign(n, V3{});
+        c_.assign(n, V3{});
+        q_.assign(n, V3{});
+        s_.assign(n, V3{});
+        precond_.assign(n, M3{});
+    }
+
+    /// Solves A·dv = b. On entry dv holds z (the prescribed values on filtered vertices, zero
+    /// elsewhere); `fixed[i]` != 0 filters vertex i out completely.
+    PcgResult solve(const BsrMatrix<T>& A, const std::vector<V3>& b, const std::vector<std::uint8_t>& fixed,
+                    std::vector<V3>& dv, double tolerance, int max_iterations) {
+        const std::size_t n = b.size();
+        const auto& diag = A.pattern->diagonal;
+        // Block-Jacobi preconditioner. Diagonal blocks are SPD (mass + PSD stiffness), so invertible.
+        parallel_chunks(n, [&](std::size_t lo, std::size_t hi) {
+            for (std::size_t i = lo; i < hi; ++i) precond_[i] = physics::inverse(A.blocks[diag[i]]);
+        });
+        // δ₀ = filter(b)ᵀ P⁻¹ filter(b): the scale the residual is measured against.
+        const double delta0_b = sum(n, [&](std::size_t i) {
+            return fixed[i] ? 0.0 : static_cast<double>(physics::dot(b[i], precond_[i] * b[i]));
+        });
+        // r = filter(b − A·dv); c = filter(P⁻¹ r); δ = rᵀc
+        A.multiply(dv, q_);
+        double delta = sum(n, [&](std::size_t i) {
+            if (fixed[i]) {
+                r_[i] = c_[i] = V3{};
+                return 0.0;
+            }
+            r_[i] = b[i] - q_[i];
+            c_[i] = precond_[i] * r_[i];
+            return static_cast<double>(physics::dot(r_[i], c_[i]));
+        });
+        // Measure against the larger of |b| and the initial residual, so a solve whose right-hand side
+        // vanishes but whose pinned values drive the rest still converges relative to something.
+        const double delta0 = std::max(delta0_b, delta);
+        PcgResult result;
+        const double eps2 = tolerance * tolerance;
+        if (!(delta0 > 0.0)) {  // nothing to do (or NaN: reported by the caller's finite check)
+            result.converged = delta0 == 0.0;
+            return result;
+        }
+        while (delta > eps2 * delta0 && result.iterations < max_iterations) {
+            A.multiply(c_, q_);
+            const double cq = sum(n, [&](std::size_t i) {
+                if (fixed[i]) q_[i] = V3{};
+                return static_cast<double>(physics::dot(c_[i], q_[i]));
+            });
+            if (!(cq > 0.0)) break;  // loss of positive definiteness or breakdown: report, don't loop
+            const T alpha = static_cast<T>(delta / cq);
+            const double delta_new = sum(n, [&](std::size_t i) {
+                dv[i] += alpha * c_[i];
+                r_[i] -= alpha * q_[i];
+                s_[i] = precond_[i] * r_[i];
+                return static_cast<double>(physics::dot(r_[i], s_[i]));
+            });
+            const T beta = static_cast<T>(delta_new / delta);
+            delta = delta_new;
+            parallel_chunks(n, [&](std::size_t lo, std::size_t hi) {
+                for (std::size_t i = lo; i < hi; ++i) c_[i] = fixed[i] ? V3{} : s_[i] + beta * c_[i];
+            });
+            ++result.iterations;
+        }
+        result.relative_residual = std::sqrt(std::max(delta, 0.0) / delta0);
+        result.converged = delta <= eps2 * delta0;
+        return result;
+    }
+
+    [[nodiscard]] std::size_t memory_bytes() const {
+        return (r_.capacity() + c_.capacity() + q_.capacity() + s_.capacity()) * sizeof(V3) +
+               precond_.capacity() * sizeof(M3) + partials_.capacity() * sizeof(double);
+    }
+
+private:
+    template <typename F>
+    double sum(std::size_t n, F&& per_row) {
+        return deterministic_sum(n, partials_, [&](std::size_t lo, std::size_t hi) {
+            double acc = 0.0;
+            for (std::size_t i = lo; i < hi; ++i) acc += per_row(i);
+            return acc;
+        });
+    }
+    std::vector<V3> r_, c_, q_, s_;
+    std::vector<M3> precond_;
+    std::vector<double> partials_;
+};
+
+}  // namespace weft::cpu

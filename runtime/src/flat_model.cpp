@@ -1,0 +1,133 @@
+// Flattening of the model into one global system (see weft/flat_model.h).
+#include "weft/flat_model.h"
+
+#include <string>
+
+#include "weft/error.h"
+
+namespace weft {
+
+FlatModel flatten(const Model& model) {
+    FlatModel f;
+    const std::size_t cloths = model.cloths.size();
+    f.cloth_vertex_offset.assign(cloths + 1, 0);
+    f.cloth_triangle_offset.assign(cloths + 1, 0);
+    f.cloth_hinge_offset.assign(cloths + 1, 0);
+    std::size_t blocks = 0;
+    for (std::size_t c = 0; c < cloths; ++c) {
+        const auto& fabric = model.cloths[c].fabric;
+        if (!fabric) throw Error("cloth '" + model.cloths[c].name + "' has no fabric");
+        f.cloth_vertex_offset[c + 1] = f.cloth_vertex_offset[c] + static_cast<std::uint32_t>(fabric->vertex_count());
+        f.cloth_triangle_offset[c + 1] = f.cloth_triangle_offset[c] + static_cast<std::uint32_t>(fabric->triangle_count());
+        f.cloth_hinge_offset[c + 1] = f.cloth_hinge_offset[c] + static_cast<std::uint32_t>(fabric->hinges().size());
+        blocks += fabric->pattern().block_count();
+    }
+    const std::size_t nv = f.cloth_vertex_offset[cloths];
+    const std::size_t nt = f.cloth_triangle_offset[cloths];
+    const std::size_t nh = f.cloth_hinge_offset[cloths];
+    f.vertex_count = nv;
+    f.initial_positions.reserve(nv);
+    f.initial_velocities.reserve(nv);
+    f.mass.reserve(nv);
+    f.vertex_cloth.reserve(nv);
+    f.triangles.reserve(nt);
+    f.triangle_rest.reserve(nt);
+    f.triangle_cloth.reserve(nt);
+    f.hinges.reserve(nh);
+    f.hinge_cloth.reserve(nh);
+    BlockPattern& p = f.pattern;
+    p.row_start.reserve(nv + 1);
+    p.row_start.push_back(0);
+    p.column.reserve(blocks);
+    p.diagonal.reserve(nv);
+    p.triangle_slots.reserve(nt * 9);
+    p.hinge_slots.reserve(nh * 16);
+    f.vertex_pin.assign(nv, -1);
+
+    for (std::size_t c = 0; c < cloths; ++c) {
+        const ClothDesc& cloth = model.cloths[c];
+        const Fabric& fab = *cloth.fabric;
+        const std::uint32_t vo = f.cloth_vertex_offset[c];
+        const auto slot_offset = static_cast<std::uint32_t>(p.column.size());
+        for (std::size_t i = 0; i < fab.vertex_count(); ++i) {
+            f.initial_positions.push_back(cloth.transform.apply(fab.rest_positions()[i]));
+            f.initial_velocities.push_back(cloth.initial_velocity);
+            f.mass.push_back(fab.masses()[i]);
+            f.vertex_cloth.push_back(static_cast<std::uint32_t>(c));
+        }
+        for (std::size_t t = 0; t < fab.triangle_count(); ++t) {
+            Triangle tri = fab.triangles()[t];
+            for (auto& v : tri.v) v += vo;
+            f.triangles.push_back(tri);
+            f.triangle_rest.push_back(fab.triangle_rest()[t]);
+            f.triangle_cloth.push_back(static_cast<std::uint32_t>(c));
+        }
+        for (const Hinge& h0 : fab.hinges()) {
+            Hinge h = h0;
+            for (auto& v : h.v) v += vo;
+            f.hinges.push_back(h);
+            f.hinge_cloth.push_back(static_cast<std::uint32_t>(c));
+        }
+        const BlockPattern& fp = fab.pattern();
+        for (std::size_t i = 0; i < fab.vertex_count(); ++i) {
+            p.diagonal.push_back(fp.diagonal[i] + slot_offset);
+            p.row_start.push_back(fp.row_start[i + 1] + slot_offset);
+        }
+        for (std::uint32_t col : fp.column) p.column.push_back(col + vo);
+        for (std::uint32_t s : fp.triangle_slots) p.triangle_slots.push_back(s + slot_offset);
+        for (std::uint32_t s : fp.hinge_slots) p.hinge_slots.push_back(s + slot_offset);
+
+        // Pins: remember each pinned vertex's position in its motion's frame at t = 0.
+        for (const PinDesc& pin : cloth.pins) {
+            const std::uint32_t v = vo + pin.vertex;
+            if (f.vertex_pin[v] >= 0) continue;  // pinned twice: keep the first
+            Vec3d local = f.initial_positions[v];
+            if (pin.motion >= 0) {
+                const Transform frame = model.motions.at(static_cast<std::size_t>(pin.motion)).at(0.0);
+                local = physics::transpose(frame.rotation) * (local - frame.translation);
+            }
+            f.vertex_pin[v] = static_cast<std::int32_t>(f.pin_vertex.size());
+            f.pin_vertex.push_back(v);
+            f.pin_motion.push_back(pin.motion);
+            f.pin_local.push_back(local);
+        }
+    }
+
+    // Gather tables (counting sort by destination keeps entries in element order: deterministic).
+    const auto build_gather = [](std::size_t rows, const std::vector<std::uint32_t>& dest,
+                                 std::vector<std::uint32_t>& start, std::vector<std::uint32_t>& index) {
+        start.assign(rows + 1, 0);
+        for (std::uint32_t d : dest) ++start[d + 1];
+        for (std::size_t r = 0; r < rows; ++r) start[r + 1] += start[r];
+        index.resize(dest.size());
+        std::vector<std::uint32_t> cursor(start.begin(), start.end() - 1);
+        for (std::size_t e = 0; e < dest.size(); ++e) index[cursor[dest[e]]++] = static_cast<std::uint32_t>(e);
+    };
+    std::vector<std::uint32_t> dest;
+    dest.reserve(3 * nt + 4 * nh);
+    for (const Triangle& t : f.triangles)
+        for (std::uint32_t v : t.v) dest.push_back(v);
+    for (const Hinge& h : f.hinges)
+        for (std::uint32_t v : h.v) dest.push_back(v);
+    build_gather(nv, dest, f.vertex_force_start, f.vertex_force_index);
+    dest.clear();
+    dest.reserve(9 * nt + 16 * nh);
+    dest.insert(dest.end(), p.triangle_slots.begin(), p.triangle_slots.end());
+    dest.insert(dest.end(), p.hinge_slots.begin(), p.hinge_slots.end());
+    build_gather(p.column.size(), dest, f.slot_block_start, f.slot_block_index);
+    return f;
+}
+
+std::size_t FlatModel::memory_bytes() const {
+    const auto u32 = [](const std::vector<std::uint32_t>& v) { return v.capacity() * sizeof(std::uint32_t); };
+    return u32(cloth_vertex_offset) + u32(cloth_triangle_offset) + u32(cloth_hinge_offset) +
+           (initial_positions.capacity() + initial_velocities.capacity() + pin_local.capacity()) * sizeof(Vec3d) +
+           mass.capacity() * sizeof(double) + u32(vertex_cloth) + triangles.capacity() * sizeof(Triangle) +
+           triangle_rest.capacity() * sizeof(TriangleRest) + u32(triangle_cloth) + hinges.capacity() * sizeof(Hinge) +
+           u32(hinge_cloth) + u32(pattern.row_start) + u32(pattern.column) + u32(pattern.diagonal) +
+           u32(pattern.triangle_slots) + u32(pattern.hinge_slots) + u32(vertex_force_start) +
+           u32(vertex_force_index) + u32(slot_block_start) + u32(slot_block_index) + u32(pin_vertex) +
+           pin_motion.capacity() * sizeof(int) + vertex_pin.capacity() * sizeof(std::int32_t);
+}
+
+}  // namespace weft

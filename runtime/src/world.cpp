@@ -1,0 +1,145 @@
+// World: owns the model and drives the backend one frame at a time.
+#include "weft/world.h"
+
+#include <chrono>
+#include <cmath>
+#include <string>
+
+#include "cpu/energy.h"
+#include "weft/error.h"
+
+namespace weft {
+namespace {
+
+void check_range(const std::string& where, const char* key, double value, double lo, double hi) {
+    if (!(value >= lo && value <= hi))
+        throw Error(where + ": " + key + " = " + std::to_string(value) + " is outside [" + std::to_string(lo) + ", " +
+                    std::to_string(hi) + "]");
+}
+
+void validate(const Material& m, const std::string& where) {
+    check_range(where, "stretch_stiffness", m.stretch_stiffness, 1.0, 1e8);
+    check_range(where, "poisson_ratio", m.poisson_ratio, 0.0, 0.49);
+    check_range(where, "bending_stiffness", m.bending_stiffness, 0.0, 1.0);
+    check_range(where, "damping_mass", m.damping_mass, 0.0, 100.0);
+    check_range(where, "damping_stiffness", m.damping_stiffness, 0.0, 1.0);
+    check_range(where, "drag_coefficient", m.drag_coefficient, 0.0, 10.0);
+    check_range(where, "lift_coefficient", m.lift_coefficient, 0.0, 10.0);
+    check_range(where, "contact_thickness", m.contact_thickness, 1e-5, 0.1);
+    check_range(where, "friction", m.friction, 0.0, 10.0);
+}
+
+void validate(const SolverSettings& s) {
+    check_range("solver", "dt", s.dt, 1e-5, 0.1);
+    check_range("solver", "substeps", s.substeps, 1, 1000);
+    check_range("solver", "newton_iterations", s.newton_iterations, 1, 50);
+    check_range("solver", "cg_tolerance", s.cg_tolerance, 1e-12, 1.0);
+    check_range("solver", "cg_max_iterations", s.cg_max_iterations, 1, 100000);
+    check_range("solver", "contact_stiffness", s.contact_stiffness, 0.0, 1e12);
+    check_range("solver", "threads", s.threads, 0, 1024);
+}
+
+}  // namespace
+
+World::World(const WorldDesc& desc, std::string_view backend, const BackendOptions& options) {
+    validate(desc.solver);
+    model_.settings = desc;
+    BackendOptions o = options;
+    if (o.threads == 0) o.threads = desc.solver.threads;
+    backend_ = create_backend(backend, o);
+}
+
+World::~World() = default;
+
+int World::add_motion(const Motion& motion) {
+    model_.motions.push_back(motion);
+    ++model_.topology_version;
+    return static_cast<int>(model_.motions.size()) - 1;
+}
+
+std::size_t World::add_cloth(const ClothDesc& cloth) {
+    const std::string where = "cloth '" + cloth.name + "'";
+    if (!cloth.fabric) throw Error(where + ": no fabric");
+    validate(cloth.material, where + " material");
+    for (const PinDesc& pin : cloth.pins) {
+        if (pin.vertex >= cloth.fabric->vertex_count())
+            throw Error(where + ": pinned vertex " + std::to_string(pin.vertex) + " is out of range (the fabric has " +
+                        std::to_string(cloth.fabric->vertex_count()) + " vertices)");
+        if (pin.motion >= static_cast<int>(model_.motions.size()))
+            throw Error(where + ": pin follows motion " + std::to_string(pin.motion) + " which does not exist");
+    }
+    model_.cloths.push_back(cloth);
+    ++model_.topology_version;
+    return model_.cloths.size() - 1;
+}
+
+std::size_t World::add_collider(const ColliderDesc& collider) {
+    const std::string where = "collider '" + collider.name + "'";
+    if (collider.shape == ColliderShape::Sphere || collider.shape == ColliderShape::Capsule)
+        check_range(where, "radius", collider.radius, 1e-6, 1e6);
+    if (collider.shape == ColliderShape::Capsule) check_range(where, "half_height", collider.half_height, 0.0, 1e6);
+    if (collider.shape == ColliderShape::Box)
+        for (int k = 0; k < 3; ++k) check_range(where, "half_extents", collider.half_extents[k], 1e-6, 1e6);
+    if (collider.friction > 10.0) check_range(where, "friction", collider.friction, 0.0, 10.0);
+    model_.colliders.push_back(collider);
+    ++model_.topology_version;
+    return model_.colliders.size() - 1;
+}
+
+void World::ensure_built() const {
+    if (built_version_ == model_.topology_version) return;
+    backend_->build(model_);
+    built_version_ = model_.topology_version;
+}
+
+const StepStats& World::step() {
+    validate(model_.settings.solver);
+    ensure_built();
+    const auto start = std::chrono::steady_clock::now();
+    stats_ = StepStats{};
+    const int substeps = model_.settings.solver.substeps;
+    const double h = model_.settings.solver.dt / substeps;
+    for (int s = 0; s < substeps; ++s) {
+        backend_->substep(model_, time_, h, stats_);
+        time_ += h;
+        ++stats_.substeps;
+    }
+    ++steps_;
+    stats_.step_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
+    return stats_;
+}
+
+std::vector<Vec3d> World::positions(std::size_t cloth) const {
+    const auto n = model_.cloths.at(cloth).fabric->vertex_count();
+    std::vector<Vec3d> x(n), v(n);
+    ensure_built();
+    backend_->read_state(cloth, x, v);
+    return x;
+}
+
+std::vector<Vec3d> World::velocities(std::size_t cloth) const {
+    const auto n = model_.cloths.at(cloth).fabric->vertex_count();
+    std::vector<Vec3d> x(n), v(n);
+    ensure_built();
+    backend_->read_state(cloth, x, v);
+    return v;
+}
+
+void World::set_state(std::size_t cloth, std::span<const Vec3d> positions, std::span<const Vec3d> velocities) {
+    const auto n = model_.cloths.at(cloth).fabric->vertex_count();
+    if (positions.size() != n || velocities.size() != n)
+        throw Error("set_state: cloth " + std::to_string(cloth) + " has " + std::to_string(n) + " vertices, got " +
+                    std::to_string(positions.size()) + " positions and " + std::to_string(velocities.size()) +
+                    " velocities");
+    ensure_built();
+    backend_->write_state(cloth, positions, velocities);
+}
+
+double World::energy() const {
+    double e = 0.0;
+    for (std::size_t c = 0; c < model_.cloths.size(); ++c)
+        e += cpu::cloth_energy(model_.cloths[c], model_.settings, positions(c), velocities(c)).total();
+    return e;
+}
+
+}  // namespace weft
