@@ -41,7 +41,7 @@ struct TriangleRest {
 struct Hinge {
     std::uint32_t v[4]{};     ///< v0, v1 on the shared edge; v2, v3 the opposite vertices
     double rest_angle = 0.0;  ///< signed dihedral angle at rest, rad
-    double weight = 0.0;      ///< 3·|e|²/(A₀+A₁) (Grinspun et al. 2003), dimensionless
+    double weight = 0.0;      ///< |e|²/(A₀+A₁), 1 (E = ½·k_b·w·(θ−θ̄)²; calibrated in tests/physics so k_b is the plate stiffness)
 };
 
 /// Fixed block-sparse (BSR) pattern of the implicit system of one fabric: one block row per

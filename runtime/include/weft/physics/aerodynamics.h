@@ -155,10 +155,11 @@ WEFT_HD inline T value_noise4(const T p[4], unsigned channel, T grad[3]) {
 /// incompressible eddies, not sources and sinks), C¹ in space and time, deterministic and identical
 /// on host and device (integer hash, no tables). The typical (RMS) speed is about `amplitude`.
 /// @param p position (m). @param t time (s). @param amplitude typical gust speed (m/s).
-/// @param frequency how fast the pattern changes (1/s). @param scale eddy size (m), > 0.
+/// @param frequency how fast the pattern changes (1/s). @param scale eddy size (m); ≤ 0 gives no gust.
 /// Valid while |p|/scale and |t|·frequency stay below 2³¹ (lattice indices are int).
 template <typename T>
 WEFT_HD inline Vec3<T> wind_gust(Vec3<T> p, T t, T amplitude, T frequency, T scale) {
+    if (!(scale > T(0))) return Vec3<T>{};  // no eddy size: no turbulence (and no division by zero)
     const T q[4] = {p.x / scale, p.y / scale, p.z / scale, t * frequency};
     T d0[3], d1[3], d2[3];
     detail::value_noise4(q, 0U, d0);

@@ -43,8 +43,9 @@ struct Shape {
 };
 
 namespace detail {
-/// Distance to a point `c` (the closest point of a convex core) inflated by `radius`; n = (p − c)/|p − c|,
-/// ∂n/∂p = (I − nnᵀ)·dc_perp/|p − c| where `proj` is ∂(p − c)/∂p.
+/// Distance from p to a convex core (point, segment or box) inflated by `radius`, given r = p − c with
+/// c the closest core point: d = |r| − radius, n = r/|r|, and ∂n/∂p = (I − nnᵀ)·proj/|r| where
+/// proj = ∂r/∂p (I for a point core; I − aaᵀ along a segment; the outside axes of a box).
 template <typename T>
 WEFT_HD inline T round_distance(Vec3<T> r, T radius, const Mat3<T>& proj, Vec3<T> fallback, Vec3<T>& normal,
                                 Mat3<T>* normal_jacobian) {

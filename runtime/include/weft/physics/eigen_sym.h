@@ -6,7 +6,7 @@
 /// Why Jacobi: it needs no workspace beyond the matrix and its eigenvectors, has no data-dependent
 /// recursion, is accurate to a few ulps in every eigenvalue (Demmel & Veselić 1992), and runs the
 /// same code path on host and device. For the 9×9 membrane and 12×12 hinge Hessians it converges in
-/// 5–8 sweeps. Golub & Van Loan, Matrix Computations, §8.5 (the "cyclic Jacobi" algorithm).
+/// 5–8 sweeps. Golub & Van Loan, Matrix Computations (4th ed.), §8.5, the cyclic Jacobi algorithm.
 
 #include <cmath>
 
@@ -54,7 +54,7 @@ WEFT_HD inline int eigen_sym(T a[N][N], T eval[N], T evec[N][N], int max_sweeps 
             for (int q = p + 1; q < N; ++q) {
                 const T apq = a[p][q];
                 if (apq == T(0)) continue;
-                // Rotation angle that annihilates a_pq (Golub & Van Loan Alg. 8.5.1, "sym.schur2"):
+                // Rotation angle that annihilates a_pq (Golub & Van Loan 4th ed., Alg. 8.5.1):
                 // t = tan φ is the smaller root of t² + 2τt − 1 = 0, for stability.
                 const T tau = (a[q][q] - a[p][p]) / (T(2) * apq);
                 const T t = sign_(tau) / (fabs(tau) + sqrt(T(1) + tau * tau));
