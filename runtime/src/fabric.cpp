@@ -46,6 +46,7 @@ std::shared_ptr<const Fabric> Fabric::cook(const MeshData& mesh, const FabricDes
     Fabric& f = *fabric;
     f.desc_ = desc;
     CookReport& report = f.report_;
+    report.welded_vertices = mesh.welded_vertices;
 
     // 1. Drop degenerate and duplicate triangles. A triangle is degenerate when its area is tiny
     //    against its longest edge (a sliver of zero height): it has no rest frame for the membrane.
