@@ -1,0 +1,185 @@
+// Argument parsing of the `weft` command: every mistake is a UsageError whose one-line message
+// names the flag or value at fault.
+#include <gtest/gtest.h>
+
+#include <initializer_list>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include "cli_args.h"
+#include "usage.h"
+
+namespace weft::cli {
+namespace {
+
+Invocation parse(std::initializer_list<std::string_view> args) {
+    const std::vector<std::string_view> v(args);
+    return parse_command_line(v);
+}
+
+/// The UsageError message for `args`, or "<no error>".
+std::string error_of(std::initializer_list<std::string_view> args) {
+    try {
+        (void)parse(args);
+    } catch (const UsageError& e) {
+        EXPECT_EQ(std::string(e.what()).find('\n'), std::string::npos) << "message must be one line";
+        return e.what();
+    }
+    return "<no error>";
+}
+
+std::string command_of(std::initializer_list<std::string_view> args) {
+    try {
+        (void)parse(args);
+    } catch (const UsageError& e) {
+        return e.command();
+    }
+    return "<no error>";
+}
+
+TEST(CliArgs, RunDefaults) {
+    const Invocation inv = parse({"run", "flag"});
+    ASSERT_EQ(inv.command, Invocation::Command::Run);
+    EXPECT_EQ(inv.run.scene, "flag");
+    EXPECT_EQ(inv.run.sim.backend, "cpu");
+    EXPECT_EQ(inv.run.sim.threads, 0);
+    EXPECT_FALSE(inv.run.frames.has_value());
+    EXPECT_TRUE(inv.run.out_dir.empty());
+    EXPECT_TRUE(inv.run.stats_file.empty());
+    EXPECT_EQ(inv.run.format, MeshFormat::Ply);
+    EXPECT_FALSE(inv.run.quiet);
+}
+
+TEST(CliArgs, RunAllFlags) {
+    const Invocation inv =
+        parse({"run", "--frames", "12", "scenes/x.toml", "--out=out/x", "--format", "obj", "--stats", "s.json", "--set",
+               "solver.substeps=4", "--set=wind.velocity=[1, 0, 0]", "--threads", "3", "--backend", "cpu", "--quiet"});
+    ASSERT_EQ(inv.command, Invocation::Command::Run);
+    EXPECT_EQ(inv.run.scene, "scenes/x.toml");
+    EXPECT_EQ(inv.run.frames, 12);
+    EXPECT_EQ(inv.run.out_dir, "out/x");
+    EXPECT_EQ(inv.run.format, MeshFormat::Obj);
+    EXPECT_EQ(inv.run.stats_file, "s.json");
+    ASSERT_EQ(inv.run.sim.overrides.size(), 2u);
+    EXPECT_EQ(inv.run.sim.overrides[0], "solver.substeps=4");
+    EXPECT_EQ(inv.run.sim.overrides[1], "wind.velocity=[1, 0, 0]");  // only the first '=' splits
+    EXPECT_EQ(inv.run.sim.threads, 3);
+    EXPECT_TRUE(inv.run.quiet);
+}
+
+TEST(CliArgs, FramesZeroWritesInitialStateOnly) { EXPECT_EQ(parse({"run", "flag", "--frames", "0"}).run.frames, 0); }
+
+TEST(CliArgs, DoubleDashEndsOptions) {
+    EXPECT_EQ(parse({"run", "--", "--odd-name.toml"}).run.scene, "--odd-name.toml");
+}
+
+TEST(CliArgs, UnknownFlagIsNamedWithSuggestion) {
+    const std::string e = error_of({"run", "flag", "--frmes", "3"});
+    EXPECT_NE(e.find("'--frmes'"), std::string::npos) << e;
+    EXPECT_NE(e.find("did you mean '--frames'"), std::string::npos) << e;
+    EXPECT_EQ(command_of({"run", "flag", "--frmes", "3"}), "run");
+}
+
+TEST(CliArgs, MissingValueNamesFlag) {
+    EXPECT_NE(error_of({"run", "flag", "--frames"}).find("--frames needs a value"), std::string::npos);
+    EXPECT_NE(error_of({"run", "flag", "--out", "--quiet"}).find("--out needs a value"), std::string::npos);
+    EXPECT_NE(error_of({"run", "flag", "--stats="}).find("--stats"), std::string::npos);
+}
+
+TEST(CliArgs, NonNumericAndOutOfRangeNumbers) {
+    std::string e = error_of({"run", "flag", "--frames", "abc"});
+    EXPECT_NE(e.find("--frames"), std::string::npos) << e;
+    EXPECT_NE(e.find("'abc'"), std::string::npos) << e;
+    e = error_of({"run", "flag", "--frames", "12x"});
+    EXPECT_NE(e.find("'12x'"), std::string::npos) << e;
+    e = error_of({"run", "flag", "--frames", "-1"});
+    EXPECT_NE(e.find("--frames must be in [0,"), std::string::npos) << e;
+    e = error_of({"run", "flag", "--threads", "99999999999999999999"});
+    EXPECT_NE(e.find("--threads"), std::string::npos) << e;
+    e = error_of({"bench", "flag", "--frames", "0"});
+    EXPECT_NE(e.find("--frames must be in [1,"), std::string::npos) << e;
+    e = error_of({"bench", "flag", "--warmup", "1.5"});
+    EXPECT_NE(e.find("--warmup"), std::string::npos) << e;
+}
+
+TEST(CliArgs, BadFormatAndOverride) {
+    EXPECT_NE(error_of({"run", "flag", "--format", "stl"}).find("--format expects ply or obj, got 'stl'"),
+              std::string::npos);
+    EXPECT_NE(error_of({"run", "flag", "--set", "substeps"}).find("--set expects key=value"), std::string::npos);
+    EXPECT_NE(error_of({"run", "flag", "--set", "=4"}).find("--set"), std::string::npos);
+    EXPECT_NE(error_of({"run", "flag", "--set", "solver.substeps="}).find("--set"), std::string::npos);
+}
+
+TEST(CliArgs, SwitchWithValueIsAnError) {
+    EXPECT_NE(error_of({"run", "flag", "--quiet=yes"}).find("--quiet takes no value"), std::string::npos);
+}
+
+TEST(CliArgs, SceneCount) {
+    EXPECT_NE(error_of({"run"}).find("missing SCENE"), std::string::npos);
+    EXPECT_NE(error_of({"run", "a", "b"}).find("'b'"), std::string::npos);
+    EXPECT_NE(error_of({"bench"}).find("missing SCENE"), std::string::npos);
+}
+
+TEST(CliArgs, Bench) {
+    const Invocation inv =
+        parse({"bench", "flag", "hanging", "--json", "b.json", "--warmup", "2", "--frames", "5", "--set", "a.b=1"});
+    ASSERT_EQ(inv.command, Invocation::Command::Bench);
+    EXPECT_EQ(inv.bench.scenes, (std::vector<std::string>{"flag", "hanging"}));
+    EXPECT_EQ(inv.bench.json_file, "b.json");
+    EXPECT_EQ(inv.bench.warmup, 2);
+    EXPECT_EQ(inv.bench.frames, 5);
+    EXPECT_EQ(inv.bench.sim.overrides, (std::vector<std::string>{"a.b=1"}));
+    const Invocation defaults = parse({"bench", "flag"});
+    EXPECT_EQ(defaults.bench.warmup, 10);
+    EXPECT_EQ(defaults.bench.frames, 100);
+    // run-only flags are not bench flags
+    EXPECT_NE(error_of({"bench", "flag", "--out", "x"}).find("'--out'"), std::string::npos);
+}
+
+TEST(CliArgs, TopLevel) {
+    EXPECT_EQ(parse({"--help"}).command, Invocation::Command::Help);
+    EXPECT_EQ(parse({"-h"}).command, Invocation::Command::Help);
+    EXPECT_EQ(parse({"help"}).help_topic, "");
+    EXPECT_EQ(parse({"help", "bench"}).help_topic, "bench");
+    EXPECT_EQ(parse({"run", "--help"}).help_topic, "run");
+    EXPECT_EQ(parse({"bench", "x", "-h"}).help_topic, "bench");
+    EXPECT_EQ(parse({"--version"}).command, Invocation::Command::Version);
+    EXPECT_EQ(parse({"info"}).command, Invocation::Command::Info);
+
+    EXPECT_NE(error_of({}).find("no command"), std::string::npos);
+    std::string e = error_of({"rnu", "flag"});
+    EXPECT_NE(e.find("unknown command 'rnu'"), std::string::npos) << e;
+    EXPECT_NE(e.find("did you mean 'run'"), std::string::npos) << e;
+    EXPECT_EQ(command_of({"rnu"}), "");
+    e = error_of({"--frames", "3"});
+    EXPECT_NE(e.find("'--frames'"), std::string::npos) << e;
+    EXPECT_NE(error_of({"help", "nope"}).find("'nope'"), std::string::npos);
+    EXPECT_NE(error_of({"info", "extra"}).find("'extra'"), std::string::npos);
+    EXPECT_NE(error_of({"info", "--verbose"}).find("'--verbose'"), std::string::npos);
+}
+
+TEST(CliArgs, ParseInt) {
+    EXPECT_EQ(parse_int("run", "--frames", "42", 0, 100), 42);
+    EXPECT_EQ(parse_int("run", "--frames", "0", 0, 100), 0);
+    EXPECT_THROW((void)parse_int("run", "--frames", "", 0, 100), UsageError);
+    EXPECT_THROW((void)parse_int("run", "--frames", " 4", 0, 100), UsageError);
+    EXPECT_THROW((void)parse_int("run", "--frames", "+4", 0, 100), UsageError);
+    EXPECT_THROW((void)parse_int("run", "--frames", "101", 0, 100), UsageError);
+    EXPECT_THROW((void)parse_int("run", "--frames", "0x10", 0, 100), UsageError);
+}
+
+TEST(CliArgs, HelpTextsCoverEveryFlag) {
+    for (const std::string_view flag :
+         {"--backend", "--threads", "--frames", "--out", "--format", "--stats", "--set", "--quiet"}) {
+        EXPECT_NE(usage_text("run").find(flag), std::string_view::npos) << flag;
+    }
+    for (const std::string_view flag : {"--backend", "--threads", "--frames", "--warmup", "--json", "--set"}) {
+        EXPECT_NE(usage_text("bench").find(flag), std::string_view::npos) << flag;
+    }
+    EXPECT_EQ(usage_hint("run"), "Try 'weft run --help'.");
+    EXPECT_EQ(usage_hint(""), "Try 'weft help'.");
+}
+
+}  // namespace
+}  // namespace weft::cli

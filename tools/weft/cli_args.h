@@ -1,0 +1,79 @@
+#pragma once
+/// @file
+/// Command-line parsing for `weft`: turns argv into an `Invocation` or throws `UsageError` with a
+/// one-line message that names the offending flag or value. Parsing never touches the file system
+/// or the runtime, so every case is unit-tested (tests/cli/cli_args_test.cpp).
+
+#include <cstdint>
+#include <filesystem>
+#include <optional>
+#include <span>
+#include <stdexcept>
+#include <string>
+#include <string_view>
+#include <vector>
+
+namespace weft::cli {
+
+/// Exit codes of the `weft` command.
+inline constexpr int kExitOk = 0;
+inline constexpr int kExitError = 1;          ///< bad scene, unreadable mesh, unwritable output
+inline constexpr int kExitUsage = 2;          ///< wrong flags or values
+inline constexpr int kExitNonFinite = 3;      ///< the simulation produced NaN or Inf at least once
+inline constexpr int kExitInterrupted = 130;  ///< Ctrl-C (128 + SIGINT, as shells report it); stats still written
+
+/// A command-line mistake. `what()` is one line without the program name; `command` names the
+/// subcommand whose help the user should read ("" for the top level).
+class UsageError : public std::runtime_error {
+public:
+    UsageError(std::string_view command, const std::string& message) : std::runtime_error(message), command_(command) {}
+    [[nodiscard]] const std::string& command() const { return command_; }
+
+private:
+    std::string command_;
+};
+
+enum class MeshFormat : std::uint8_t { Ply, Obj };
+[[nodiscard]] std::string_view extension(MeshFormat format);
+
+/// What `run` and `bench` share: where the simulation runs and how the scene is overridden.
+struct SimulationOptions {
+    std::string backend = "cpu";
+    int threads = 0;                     ///< 0 = all cores
+    std::vector<std::string> overrides;  ///< "dotted.key=value", in command-line order
+};
+
+struct RunOptions {
+    std::string scene;  ///< a path or a bare scene name
+    SimulationOptions sim;
+    std::optional<int> frames;      ///< empty: the scene's `frames`
+    std::filesystem::path out_dir;  ///< empty: write no meshes
+    MeshFormat format = MeshFormat::Ply;
+    std::filesystem::path stats_file;  ///< empty: write no stats JSON
+    bool quiet = false;
+};
+
+struct BenchOptions {
+    std::vector<std::string> scenes;
+    SimulationOptions sim;
+    std::filesystem::path json_file;  ///< empty: print the table only
+    int warmup = 10;
+    int frames = 100;
+};
+
+struct Invocation {
+    enum class Command : std::uint8_t { Help, Version, Run, Bench, Info };
+    Command command = Command::Help;
+    std::string help_topic;  ///< Help: "" for the overview, or a subcommand name
+    RunOptions run;
+    BenchOptions bench;
+};
+
+/// Parses the arguments after the program name. Throws `UsageError`.
+[[nodiscard]] Invocation parse_command_line(std::span<const std::string_view> args);
+
+/// Parses a whole decimal integer in [min, max] for `flag`; throws `UsageError` (for `command`)
+/// naming the flag and the text otherwise.
+[[nodiscard]] int parse_int(std::string_view command, std::string_view flag, std::string_view text, int min, int max);
+
+}  // namespace weft::cli

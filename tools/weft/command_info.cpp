@@ -1,0 +1,89 @@
+// `weft info`: version, backends and the devices they run on, host threads, build options.
+#include <algorithm>
+#include <fstream>
+#include <string>
+#include <thread>
+
+#include "weft/backend.h"
+#include "weft/mesh.h"
+
+#include "build_info.h"
+#include "commands.h"
+#include "scene_lookup.h"
+#include "text_table.h"
+
+namespace weft::cli {
+
+namespace {
+
+std::string cpu_model() {
+    std::ifstream cpuinfo("/proc/cpuinfo");
+    std::string line;
+    while (std::getline(cpuinfo, line)) {
+        if (line.starts_with("model name")) {
+            const auto colon = line.find(':');
+            if (colon != std::string::npos) return line.substr(line.find_first_not_of(' ', colon + 1));
+        }
+    }
+    return "unknown";
+}
+
+std::string yes_no(bool on, std::string_view detail) {
+    return std::string(on ? "yes" : "no") + (detail.empty() ? "" : " (" + std::string(detail) + ")");
+}
+
+}  // namespace
+
+int info_command(std::ostream& out) {
+    const BuildInfo& build = build_info();
+    out << "weft " << build.version << (build.build_type.empty() ? "" : " (" + std::string(build.build_type) + ")")
+        << "\n\n";
+
+    // Devices come from the backends themselves: each one says where it runs, so the CUDA backend
+    // lists its GPUs here without this command knowing about CUDA.
+    out << "backends\n";
+    TextTable backends({{"name", TextTable::Align::Left},
+                        {"device", TextTable::Align::Left},
+                        {"description", TextTable::Align::Left}});
+    for (const std::string& name : backend_names()) {
+        std::string device;
+        try {
+            device = create_backend(name)->device_description();
+        } catch (const std::exception& e) {
+            device = std::string("unavailable: ") + e.what();
+        }
+        backends.add_row({name, device, backend_description(name)});
+    }
+    backends.print(out);
+
+    out << "\nhost\n";
+    out << "  CPU            " << cpu_model() << '\n';
+    out << "  threads        " << std::thread::hardware_concurrency() << '\n';
+
+    out << "\nbuild options\n";
+    const auto backends_built = backend_names();
+    const bool cuda_registered =
+        std::find(backends_built.begin(), backends_built.end(), "cuda") != backends_built.end();
+    out << "  CUDA backend   "
+        << yes_no(cuda_registered, build.cuda ? (cuda_registered ? "" : "nvcc found, but no CUDA backend in this build")
+                                              : "WEFT_CUDA off or no nvcc found")
+        << '\n';
+    out << "  renderer       " << yes_no(build.render, "WEFT_RENDER: Vulkan, EGL capture") << '\n';
+    out << "  editor         " << yes_no(build.editor, "WEFT_EDITOR: ImGui") << '\n';
+    out << "  mesh import    "
+        << yes_no(has_mesh_file_loader(), has_mesh_file_loader() ? "assimp: OBJ, PLY, glTF, FBX, ..."
+                                                                 : "WEFT_ASSETS off: procedural grids only")
+        << '\n';
+
+    out << "\nscene folders\n";
+    for (const std::filesystem::path& folder : scene_folders()) {
+        const auto names = scene_names(folder);
+        out << "  " << folder.string() << ": ";
+        if (names.empty()) out << "(none)";
+        for (std::size_t i = 0; i < names.size(); ++i) out << (i ? " " : "") << names[i];
+        out << '\n';
+    }
+    return kExitOk;
+}
+
+}  // namespace weft::cli

@@ -1,0 +1,111 @@
+// `weft run SCENE`: simulate, write meshes and stats, print a summary.
+#include <algorithm>
+#include <chrono>
+#include <csignal>
+#include <fstream>
+#include <optional>
+#include <vector>
+
+#include "weft/error.h"
+
+#include "commands.h"
+#include "frame_writer.h"
+#include "output_file.h"
+#include "progress_bar.h"
+#include "stats_report.h"
+#include "world_setup.h"
+
+namespace weft::cli {
+
+namespace {
+
+// Ctrl-C stops after the current frame so that the stats of the frames done are still written.
+volatile std::sig_atomic_t g_interrupted = 0;
+extern "C" void on_interrupt(int /*signal*/) { g_interrupted = 1; }
+
+class InterruptGuard {
+public:
+    InterruptGuard() : previous_(std::signal(SIGINT, on_interrupt)) { g_interrupted = 0; }
+    ~InterruptGuard() { std::signal(SIGINT, previous_ == SIG_ERR ? SIG_DFL : previous_); }
+    InterruptGuard(const InterruptGuard&) = delete;
+    InterruptGuard& operator=(const InterruptGuard&) = delete;
+
+private:
+    void (*previous_)(int);
+};
+
+}  // namespace
+
+int run_command(const RunOptions& options, std::ostream& out, std::ostream& err) {
+    require_backend("run", options.sim.backend);
+    LoadedScene loaded = load_world(options.scene, options.sim);
+    World& world = *loaded.world;
+    const int frames = options.frames.value_or(loaded.desc.frames);
+
+    std::vector<std::string> cloth_names;
+    for (const ClothDesc& cloth : world.model().cloths) cloth_names.push_back(cloth.name);
+    std::ofstream stats_stream;
+    if (!options.stats_file.empty()) stats_stream = open_output_file(options.stats_file, "stats file");
+    std::optional<FrameWriter> writer;
+    if (!options.out_dir.empty()) writer.emplace(options.out_dir, options.format, cloth_names, frames);
+
+    const RunContext before = describe_run(loaded.desc, world, options.sim.threads);
+    if (!options.quiet) {
+        out << "simulating " << frames << (frames == 1 ? " frame of " : " frames of ") << before.scene << " ("
+            << before.vertices << " vertices, " << before.triangles << " triangles) on " << before.backend << ": "
+            << before.device << std::endl;
+    }
+
+    const auto start = std::chrono::steady_clock::now();
+    if (writer) writer->write(0, world);
+    std::vector<StepStats> stats;
+    stats.reserve(static_cast<std::size_t>(std::min(frames, 1'000'000)));  // a huge --frames grows as it goes
+    bool interrupted = false;
+    {
+        const InterruptGuard guard;
+        ProgressBar bar(err, frames, !options.quiet && ProgressBar::stderr_is_terminal(), start);
+        for (int frame = 1; frame <= frames; ++frame) {
+            stats.push_back(world.step());
+            if (writer) writer->write(frame, world);
+            bar.update(frame);
+            if (g_interrupted != 0) {
+                interrupted = true;
+                break;
+            }
+        }
+    }
+    const double wall_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+
+    // Describe again: backends may grow scratch memory while stepping (reported, STYLE.md item 3).
+    const RunContext context = describe_run(loaded.desc, world, options.sim.threads);
+    const RunSummary summary = summarize(stats);
+    if (stats_stream.is_open()) {
+        write_run_json(stats_stream, context, summary, stats, wall_seconds);
+        close_output_file(stats_stream, options.stats_file, "stats file");
+    }
+
+    if (!options.quiet) {
+        print_run_summary(out, context, summary, wall_seconds);
+        out << '\n';
+        if (writer) {
+            out << "  meshes         " << writer->files_written()
+                << (writer->files_written() == 1 ? " file: " : " files: ") << writer->pattern() << '\n';
+        }
+        if (!options.stats_file.empty()) out << "  stats          " << options.stats_file.string() << '\n';
+    } else {
+        for (const std::string& w : run_warnings(context, summary)) err << "weft: WARNING: " << w << '\n';
+    }
+
+    if (interrupted) {
+        err << "weft: interrupted after " << stats.size() << " of " << frames << " frames" << std::endl;
+        return kExitInterrupted;
+    }
+    if (summary.non_finite_frames > 0) {
+        err << "weft: the simulation produced non-finite values (NaN/Inf) in " << summary.non_finite_frames
+            << " frames; exit code " << kExitNonFinite << std::endl;
+        return kExitNonFinite;
+    }
+    return kExitOk;
+}
+
+}  // namespace weft::cli

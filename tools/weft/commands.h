@@ -1,0 +1,20 @@
+#pragma once
+/// @file
+/// The subcommands of `weft`. Each returns the process exit code (cli_args.h) and throws
+/// `UsageError` for command-line mistakes found late (an unknown backend) and `weft::Error` for
+/// bad scenes or unwritable output; main.cpp turns those into messages and exit codes 2 and 1.
+
+#include <ostream>
+
+#include "cli_args.h"
+
+namespace weft::cli {
+
+/// `weft run`: summary and output locations on `out`; progress bar, warnings and errors on `err`.
+int run_command(const RunOptions& options, std::ostream& out, std::ostream& err);
+/// `weft bench`: the table on `out`, progress lines on `err`.
+int bench_command(const BenchOptions& options, std::ostream& out, std::ostream& err);
+/// `weft info`.
+int info_command(std::ostream& out);
+
+}  // namespace weft::cli

@@ -1,0 +1,234 @@
+#include "stats_report.h"
+
+#include <algorithm>
+#include <cmath>
+#include <set>
+
+#include "weft/scene.h"
+#include "weft/world.h"
+
+#include "build_info.h"
+#include "text_table.h"
+
+namespace weft::cli {
+
+Distribution distribution(std::vector<double> values) {
+    // A NaN has no place in an order (and would break std::sort): drop it, it is not a time.
+    std::erase_if(values, [](double v) { return std::isnan(v); });
+    Distribution d;
+    d.count = values.size();
+    if (values.empty()) return d;
+    std::sort(values.begin(), values.end());
+    const std::size_t n = values.size();
+    d.median = n % 2 == 1 ? values[n / 2] : 0.5 * (values[n / 2 - 1] + values[n / 2]);
+    d.max = values.back();
+    for (const double v : values) d.total += v;
+    d.mean = d.total / static_cast<double>(n);
+    return d;
+}
+
+RunSummary summarize(std::span<const StepStats> frames) {
+    RunSummary s;
+    s.frames = frames.size();
+    std::array<std::vector<double>, kStageCount> stage;
+    std::vector<double> step, cg, contacts;
+    for (auto& v : stage) v.reserve(frames.size());
+    step.reserve(frames.size());
+    cg.reserve(frames.size());
+    contacts.reserve(frames.size());
+    for (std::size_t f = 0; f < frames.size(); ++f) {
+        const StepStats& st = frames[f];
+        for (std::size_t k = 0; k < kStageCount; ++k) stage[k].push_back(st.stage_ms[k]);
+        step.push_back(st.step_ms);
+        cg.push_back(st.cg_iterations);
+        contacts.push_back(st.collider_contacts);
+        s.cg_iterations_max_solve = std::max(s.cg_iterations_max_solve, st.cg_iterations_max);
+        s.solves += st.newton_iterations;
+        s.cg_not_converged += st.cg_not_converged;
+        if (st.cg_not_converged > 0) ++s.frames_not_converged;
+        // fmax ignores a NaN residual; a NaN there comes with non_finite, which is counted below.
+        s.cg_residual_max = std::fmax(s.cg_residual_max, st.cg_residual);
+        if (st.non_finite) {
+            if (s.non_finite_frames == 0) s.first_non_finite_frame = static_cast<long long>(f) + 1;
+            ++s.non_finite_frames;
+        }
+    }
+    for (std::size_t k = 0; k < kStageCount; ++k) s.stage_ms[k] = distribution(std::move(stage[k]));
+    s.step_ms = distribution(std::move(step));
+    s.cg_iterations = distribution(std::move(cg));
+    s.contacts = distribution(std::move(contacts));
+    s.simulation_seconds = s.step_ms.total / 1000.0;
+    s.fps = s.simulation_seconds > 0.0 ? static_cast<double>(s.frames) / s.simulation_seconds : 0.0;
+    return s;
+}
+
+RunContext describe_run(const SceneDesc& scene, const World& world, int threads) {
+    RunContext c;
+    c.scene = scene.name;
+    c.scene_file = scene.path.string();
+    c.backend = std::string(world.backend().name());
+    c.device = world.backend().device_description();
+    c.threads = threads;
+    const Model& model = world.model();
+    const SolverSettings& solver = model.settings.solver;
+    c.dt = solver.dt;
+    c.substeps = solver.substeps;
+    c.newton_iterations = solver.newton_iterations;
+    c.cg_tolerance = solver.cg_tolerance;
+    c.cg_max_iterations = solver.cg_max_iterations;
+    c.precision = solver.precision == Precision::Float ? "float" : "double";
+    c.cloths = model.cloths.size();
+    c.backend_memory_bytes = world.backend().memory_bytes();
+    std::set<const Fabric*> counted;
+    for (const ClothDesc& cloth : model.cloths) {
+        if (!cloth.fabric) continue;
+        c.vertices += cloth.fabric->vertex_count();
+        c.triangles += cloth.fabric->triangle_count();
+        if (counted.insert(cloth.fabric.get()).second) {
+            c.fabric_memory_bytes += cloth.fabric->memory_bytes();
+            for (const std::string& w : cloth.fabric->report().warnings) {
+                c.cook_warnings.push_back("cloth '" + cloth.name + "': " + w);
+            }
+        }
+    }
+    return c;
+}
+
+std::vector<std::string> run_warnings(const RunContext& context, const RunSummary& summary) {
+    std::vector<std::string> out;
+    if (summary.cg_not_converged > 0) {
+        out.push_back(std::to_string(summary.cg_not_converged) + " of " + std::to_string(summary.solves) +
+                      " linear solves hit the CG cap (" + std::to_string(context.cg_max_iterations) +
+                      " iterations) in " + std::to_string(summary.frames_not_converged) + " of " +
+                      std::to_string(summary.frames) + " frames; largest final residual " +
+                      json_number(summary.cg_residual_max) + " against tolerance " + json_number(context.cg_tolerance) +
+                      " (raise the CG iteration cap or the substeps)");
+    }
+    if (summary.non_finite_frames > 0) {
+        out.push_back("non-finite values (NaN/Inf) in " + std::to_string(summary.non_finite_frames) + " of " +
+                      std::to_string(summary.frames) + " frames, first at frame " +
+                      std::to_string(summary.first_non_finite_frame) +
+                      "; the state was rolled back each time, so the motion is wrong from there on "
+                      "(try a smaller time step or more substeps)");
+    }
+    for (const std::string& w : context.cook_warnings) out.push_back(w);
+    return out;
+}
+
+namespace {
+
+void write_distribution(JsonWriter& json, const Distribution& d) {
+    json.begin_object().field("median", d.median).field("max", d.max).field("mean", d.mean).end_object();
+}
+
+}  // namespace
+
+void write_summary_fields(JsonWriter& json, const RunContext& c, const RunSummary& s) {
+    json.field("weft_version", build_info().version);
+    json.field("scene", c.scene).field("scene_file", c.scene_file);
+    json.field("backend", c.backend).field("device", c.device);
+    json.key("devices").begin_array(true).value(c.device).end_array();
+    json.field("threads", c.threads);
+    json.field("cloths", c.cloths).field("vertices", c.vertices).field("triangles", c.triangles);
+    json.field("steps", s.frames).field("dt", c.dt).field("substeps", c.substeps);
+    json.field("newton_iterations", c.newton_iterations);
+    json.field("precision", c.precision);
+    json.field("cg_tolerance", c.cg_tolerance).field("cg_max_iterations", c.cg_max_iterations);
+
+    json.key("stage_ms").begin_object();
+    for (std::size_t k = 0; k < kStageCount; ++k) {
+        json.key(kStageNames[k]);
+        write_distribution(json, s.stage_ms[k]);
+    }
+    json.key("step");
+    write_distribution(json, s.step_ms);
+    json.end_object();
+
+    json.key("cg_iterations").begin_object();
+    json.field("mean", s.cg_iterations.mean);  // per step (all solves of a frame)
+    json.field("median", s.cg_iterations.median);
+    json.field("max", s.cg_iterations.max);
+    json.field("max_solve", s.cg_iterations_max_solve);
+    json.field("total", static_cast<long long>(std::llround(s.cg_iterations.total)));
+    json.field("solves", s.solves);
+    json.end_object();
+    json.field("cg_not_converged", s.cg_not_converged);
+    json.field("cg_not_converged_frames", s.frames_not_converged);
+    json.field("cg_residual_max", s.cg_residual_max);
+    json.field("non_finite_frames", s.non_finite_frames);
+
+    json.key("contacts").begin_object().field("mean", s.contacts.mean).field("max", s.contacts.max).end_object();
+    json.field("impact_zones", 0);               // impact zones come with CCD (a later issue)
+    json.key("remaining_intersections").null();  // not computed yet: null, not a misleading 0
+    json.key("memory_bytes").begin_object();
+    json.field("backend", c.backend_memory_bytes)
+        .field("fabric", c.fabric_memory_bytes)
+        .field("total", c.memory_bytes());
+    json.end_object();
+    json.field("memory_bytes_per_triangle", c.memory_bytes_per_triangle());
+    json.field("simulation_seconds", s.simulation_seconds);
+    json.field("fps", s.fps);
+    json.key("warnings").begin_array();
+    for (const std::string& w : run_warnings(c, s)) json.value(w);
+    json.end_array();
+}
+
+void write_run_json(std::ostream& out, const RunContext& context, const RunSummary& summary,
+                    std::span<const StepStats> frames, double wall_seconds) {
+    JsonWriter json(out);
+    json.begin_object();
+    write_summary_fields(json, context, summary);
+    json.field("wall_seconds", wall_seconds);
+    json.key("series").begin_object();
+    json.key("step_ms").begin_array(true);
+    for (const StepStats& f : frames) json.value(f.step_ms);
+    json.end_array();
+    json.key("cg_iterations").begin_array(true);
+    for (const StepStats& f : frames) json.value(f.cg_iterations);
+    json.end_array();
+    json.key("cg_not_converged").begin_array(true);
+    for (const StepStats& f : frames) json.value(f.cg_not_converged);
+    json.end_array();
+    json.key("contacts").begin_array(true);
+    for (const StepStats& f : frames) json.value(f.collider_contacts);
+    json.end_array();
+    json.end_object();
+    json.end_object();
+}
+
+void print_run_summary(std::ostream& out, const RunContext& c, const RunSummary& s, double wall_seconds) {
+    out << "\nweft run " << c.scene << ": " << c.backend << " (" << c.device << ")\n";
+    out << "  scene        " << c.scene_file << ": " << c.cloths << (c.cloths == 1 ? " cloth, " : " cloths, ")
+        << c.vertices << " vertices, " << c.triangles << " triangles\n";
+    out << "  solver       dt " << format_fixed(c.dt * 1000.0, 3) << " ms x " << c.substeps << " substeps, "
+        << c.newton_iterations << " Newton, CG tol " << json_number(c.cg_tolerance) << " cap " << c.cg_max_iterations
+        << ", " << c.precision << "\n";
+    out << "  frames       " << s.frames << " in " << format_fixed(wall_seconds, 2) << " s wall, "
+        << format_fixed(s.simulation_seconds, 2) << " s stepping: " << format_fixed(s.fps, 2) << " fps\n\n";
+
+    TextTable table({{"stage", TextTable::Align::Left}, {"median ms"}, {"max ms"}, {"mean ms"}});
+    for (std::size_t k = 0; k < kStageCount; ++k) {
+        const Distribution& d = s.stage_ms[k];
+        table.add_row(
+            {std::string(kStageNames[k]), format_fixed(d.median, 3), format_fixed(d.max, 3), format_fixed(d.mean, 3)});
+    }
+    table.add_row({"step (total)", format_fixed(s.step_ms.median, 3), format_fixed(s.step_ms.max, 3),
+                   format_fixed(s.step_ms.mean, 3)});
+    table.print(out);
+
+    out << "\n  CG iterations  per frame: mean " << format_fixed(s.cg_iterations.mean, 1) << ", max "
+        << format_fixed(s.cg_iterations.max, 0) << "; largest solve " << s.cg_iterations_max_solve << "; "
+        << s.cg_not_converged << " of " << s.solves << " solves not converged\n";
+    out << "  NaN/Inf        " << s.non_finite_frames << " frames\n";
+    out << "  contacts       mean " << format_fixed(s.contacts.mean, 1) << ", max " << format_fixed(s.contacts.max, 0)
+        << "\n";
+    out << "  memory         " << format_bytes(static_cast<double>(c.memory_bytes())) << " (backend "
+        << format_bytes(static_cast<double>(c.backend_memory_bytes)) << " + fabric "
+        << format_bytes(static_cast<double>(c.fabric_memory_bytes)) << "; "
+        << format_fixed(c.memory_bytes_per_triangle(), 0) << " B per triangle)\n";
+    const auto warnings = run_warnings(c, s);
+    if (!warnings.empty()) out << '\n';
+    for (const std::string& w : warnings) out << "  WARNING: " << w << '\n';
+}
+
+}  // namespace weft::cli

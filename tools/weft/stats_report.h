@@ -1,0 +1,96 @@
+#pragma once
+/// @file
+/// What a run measured and how it is reported: per-frame `StepStats` reduced to medians and maxima,
+/// the stats JSON of DESIGN.md ("Stats JSON per run") and the summary table `weft run` prints.
+/// Numerical trouble (CG hitting its cap, NaN/Inf) is counted and turned into warnings, never hidden.
+
+#include <array>
+#include <cstddef>
+#include <limits>
+#include <ostream>
+#include <span>
+#include <string>
+#include <vector>
+
+#include "weft/stats.h"
+
+#include "json_writer.h"
+
+namespace weft {
+class World;
+struct SceneDesc;
+}  // namespace weft
+
+namespace weft::cli {
+
+inline constexpr std::size_t kStageCount = static_cast<std::size_t>(Stage::Count);
+
+/// Median, maximum, mean and sum of a per-frame quantity, NaN values left out. NaN (JSON null) when
+/// nothing is left.
+struct Distribution {
+    double median = std::numeric_limits<double>::quiet_NaN();
+    double max = std::numeric_limits<double>::quiet_NaN();
+    double mean = std::numeric_limits<double>::quiet_NaN();
+    double total = 0.0;
+    std::size_t count = 0;
+};
+[[nodiscard]] Distribution distribution(std::vector<double> values);
+
+/// Frame-by-frame stats reduced over a run.
+struct RunSummary {
+    std::size_t frames = 0;
+    std::array<Distribution, kStageCount> stage_ms{};  ///< per frame (summed over its substeps)
+    Distribution step_ms;
+    Distribution cg_iterations;       ///< per frame, summed over its solves
+    int cg_iterations_max_solve = 0;  ///< largest single solve
+    long long solves = 0;             ///< linear solves (Newton iterations) in all frames
+    long long cg_not_converged = 0;   ///< solves that hit the iteration cap
+    std::size_t frames_not_converged = 0;
+    double cg_residual_max = 0.0;  ///< largest final relative residual of any solve
+    std::size_t non_finite_frames = 0;
+    long long first_non_finite_frame = -1;  ///< 1-based frame number, -1 if none
+    Distribution contacts;                  ///< collider contacts per frame
+    double simulation_seconds = 0.0;        ///< sum of step times, s
+    double fps = 0.0;                       ///< frames per second of simulation time (I/O excluded)
+    [[nodiscard]] bool ok() const { return cg_not_converged == 0 && non_finite_frames == 0; }
+};
+[[nodiscard]] RunSummary summarize(std::span<const StepStats> frames);
+
+/// Facts about the scene and world that do not change from frame to frame.
+struct RunContext {
+    std::string scene;  ///< scene name
+    std::string scene_file;
+    std::string backend;
+    std::string device;
+    int threads = 0;  ///< as requested (0 = all cores)
+    std::size_t cloths = 0;
+    std::size_t vertices = 0;
+    std::size_t triangles = 0;
+    double dt = 0.0;  ///< s per frame
+    int substeps = 0;
+    int newton_iterations = 0;
+    double cg_tolerance = 0.0;
+    int cg_max_iterations = 0;
+    std::string precision;  ///< "float" or "double"
+    std::size_t backend_memory_bytes = 0;
+    std::size_t fabric_memory_bytes = 0;     ///< each shared fabric counted once
+    std::vector<std::string> cook_warnings;  ///< from the fabrics' cook reports, prefixed by cloth name
+    [[nodiscard]] std::size_t memory_bytes() const { return backend_memory_bytes + fabric_memory_bytes; }
+    [[nodiscard]] double memory_bytes_per_triangle() const {
+        return triangles > 0 ? static_cast<double>(memory_bytes()) / static_cast<double>(triangles) : 0.0;
+    }
+};
+[[nodiscard]] RunContext describe_run(const SceneDesc& scene, const World& world, int threads);
+
+/// One line per problem: solves that did not converge, non-finite events, cook warnings.
+[[nodiscard]] std::vector<std::string> run_warnings(const RunContext& context, const RunSummary& summary);
+
+/// Writes the summary keys into an object the caller has opened (shared by run and bench JSON).
+void write_summary_fields(JsonWriter& json, const RunContext& context, const RunSummary& summary);
+/// The stats JSON of one run: summary keys plus the per-frame series (step_ms, cg_iterations, contacts).
+void write_run_json(std::ostream& out, const RunContext& context, const RunSummary& summary,
+                    std::span<const StepStats> frames, double wall_seconds);
+/// The summary table printed at the end of `weft run`, warnings included.
+void print_run_summary(std::ostream& out, const RunContext& context, const RunSummary& summary, double wall_seconds);
+
+}  // namespace weft::cli

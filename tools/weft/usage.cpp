@@ -1,0 +1,85 @@
+#include "usage.h"
+
+namespace weft::cli {
+
+namespace {
+
+constexpr std::string_view kOverview = R"(weft: real-time cloth simulation
+
+Usage:
+  weft run SCENE [options]        simulate a scene, write meshes and stats
+  weft bench SCENE... [options]   time scenes after a warm-up, report per-stage medians
+  weft info                       version, backends, devices and build options
+  weft help [COMMAND]             this text, or a command's options
+  weft --version
+
+SCENE is a scene file (assets/scenes/*.toml) or the bare name of one, e.g. 'flag'.
+Run 'weft help run' for the options of a command.
+
+Exit codes: 0 success, 1 error (bad scene, unreadable mesh, unwritable output),
+            2 usage error, 3 the simulation produced NaN/Inf,
+            130 interrupted by Ctrl-C (the stats of the frames done are still written).
+)";
+
+constexpr std::string_view kRun = R"(Usage: weft run SCENE [options]
+
+Simulates SCENE (a .toml file, or a name looked up in ./assets/scenes and in the source tree's
+assets/scenes) and prints a summary: per-stage times, CG iterations, warnings.
+
+Options:
+  --backend NAME     simulation backend (see 'weft info'); default cpu
+  --threads N        CPU worker threads, 0 = all cores; results do not depend on it
+  --frames N         frames to simulate; default: the scene's 'frames'
+  --out DIR          write a mesh per cloth per frame: DIR/frame_0000_<cloth>.ply (frame 0 = initial state)
+  --format ply|obj   mesh format for --out; default ply
+  --stats FILE.json  write run statistics as JSON (per-stage ms, CG iterations, per-frame series)
+  --set KEY=VALUE    override a scene key, as if written in the file; repeatable
+                     e.g. --set solver.substeps=4 --set 'wind.velocity=[2, 0, 0]'
+  --quiet            no progress bar and no summary table (warnings are still printed)
+  -h, --help         this text
+
+Exit code 3 means the solver met non-finite values (NaN/Inf) at least once.
+)";
+
+constexpr std::string_view kBench = R"(Usage: weft bench SCENE... [options]
+
+For each scene: build, step --warmup frames untimed, then time --frames frames. Prints a table of
+per-stage medians, frames per second, CG iterations per step and memory per triangle.
+
+Options:
+  --frames N         timed frames per scene; default 100
+  --warmup N         untimed frames first; default 10
+  --json FILE        write the results as a JSON array (one object per scene)
+  --backend NAME     simulation backend; default cpu
+  --threads N        CPU worker threads, 0 = all cores
+  --set KEY=VALUE    override a scene key in every scene; repeatable
+  -h, --help         this text
+)";
+
+constexpr std::string_view kInfo = R"(Usage: weft info
+
+Prints the version, the compiled backends and the devices they run on, CPU threads and the build
+options (CUDA, renderer, editor, mesh import).
+)";
+
+constexpr std::string_view kHelp = R"(Usage: weft help [COMMAND]
+
+Prints the overview, or the options of COMMAND (run, bench, info).
+)";
+
+}  // namespace
+
+std::string_view usage_text(std::string_view topic) {
+    if (topic == "run") return kRun;
+    if (topic == "bench") return kBench;
+    if (topic == "info") return kInfo;
+    if (topic == "help") return kHelp;
+    return kOverview;
+}
+
+std::string usage_hint(std::string_view command) {
+    if (command.empty()) return "Try 'weft help'.";
+    return "Try 'weft " + std::string(command) + " --help'.";
+}
+
+}  // namespace weft::cli

@@ -1,0 +1,30 @@
+#include "world_setup.h"
+
+#include <algorithm>
+#include <string>
+
+#include "weft/backend.h"
+
+#include "scene_lookup.h"
+
+namespace weft::cli {
+
+void require_backend(std::string_view command, std::string_view backend) {
+    const std::vector<std::string> names = backend_names();
+    if (std::find(names.begin(), names.end(), backend) != names.end()) return;
+    std::string known;
+    for (const std::string& n : names) known += (known.empty() ? "" : ", ") + n;
+    throw UsageError(std::string(command),
+                     "--backend: unknown backend '" + std::string(backend) + "' (compiled backends: " + known + ")");
+}
+
+LoadedScene load_world(std::string_view scene, const SimulationOptions& sim) {
+    LoadedScene loaded;
+    loaded.desc = load_scene(find_scene(scene), sim.overrides);
+    BackendOptions options;
+    options.threads = sim.threads;
+    loaded.world = build_world(loaded.desc, sim.backend, options);
+    return loaded;
+}
+
+}  // namespace weft::cli
