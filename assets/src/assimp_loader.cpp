@@ -80,15 +80,9 @@ MeshData import_mesh(const std::filesystem::path& path, ImportReport* report) {
     // Assimp keeps one vertex per (position, UV, normal) combination, so a garment arrives cut open
     // along its UV seams. Weld by position, relative to the model's size so that millimetre and
     // metre models behave alike.
-    Vec3d lo = mesh.positions.front(), hi = lo;
-    for (const Vec3d& p : mesh.positions)
-        for (int k = 0; k < 3; ++k) {
-            lo[k] = std::min(lo[k], p[k]);
-            hi[k] = std::max(hi[k], p[k]);
-        }
-    const double diagonal = physics::length(hi - lo);
+    const double diagonal = bounding_box_diagonal(mesh);
     if (!std::isfinite(diagonal)) throw Error(file + ": the mesh has non-finite vertex positions");
-    r.weld_tolerance = 1e-6 * diagonal;
+    r.weld_tolerance = kSeamWeldRelativeTolerance * diagonal;
     weld_by_position(mesh, r.weld_tolerance);
     r.welded_vertices = mesh.welded_vertices;
     if (r.welded_vertices > 0)

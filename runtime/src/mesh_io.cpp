@@ -96,16 +96,8 @@ MeshData load_mesh_file(const std::filesystem::path& path) {
     if (mesh.source.empty()) mesh.source = path.string();
     // Importers split vertices at UV and normal seams; weld them back relative to the mesh's size so
     // that a garment does not fall apart along its seams. A no-op for loaders that welded already.
-    if (!mesh.positions.empty()) {
-        Vec3d lo = mesh.positions.front(), hi = lo;
-        for (const Vec3d& p : mesh.positions)
-            for (int k = 0; k < 3; ++k) {
-                lo[k] = std::min(lo[k], p[k]);
-                hi[k] = std::max(hi[k], p[k]);
-            }
-        const double diagonal = physics::length(hi - lo);
-        if (std::isfinite(diagonal)) weld_by_position(mesh, 1e-6 * diagonal);
-    }
+    const double diagonal = bounding_box_diagonal(mesh);
+    if (std::isfinite(diagonal) && diagonal > 0.0) weld_by_position(mesh, kSeamWeldRelativeTolerance * diagonal);
     return mesh;
 }
 

@@ -1,5 +1,6 @@
 // Welding vertices by position: undoes the vertex splits an importer makes at UV and normal seams.
 #include <cmath>
+#include <algorithm>
 #include <cstdint>
 #include <string>
 #include <unordered_map>
@@ -99,6 +100,17 @@ std::size_t weld_by_position(MeshData& mesh, double tolerance) {
         for (std::uint32_t& v : t.v) v = compact[v];
     mesh.welded_vertices += merged;
     return n - kept;
+}
+
+double bounding_box_diagonal(const MeshData& mesh) {
+    if (mesh.positions.empty()) return 0.0;
+    Vec3d lo = mesh.positions.front(), hi = lo;
+    for (const Vec3d& p : mesh.positions)
+        for (int k = 0; k < 3; ++k) {
+            lo[k] = std::min(lo[k], p[k]);
+            hi[k] = std::max(hi[k], p[k]);
+        }
+    return physics::length(hi - lo);
 }
 
 }  // namespace weft

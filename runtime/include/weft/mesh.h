@@ -27,6 +27,13 @@ enum class GridPlane : std::uint8_t {
 /// and remaps the triangles. Returns the number of vertices removed. Deterministic.
 std::size_t weld_by_position(MeshData& mesh, double tolerance);
 
+/// Relative tolerance of the seam welding that mesh import applies: 1e-6 of the bounding-box
+/// diagonal, so that millimetre and metre models behave alike.
+inline constexpr double kSeamWeldRelativeTolerance = 1e-6;
+/// Length of the diagonal of the mesh's axis-aligned bounding box, m (0 for an empty mesh; not
+/// finite when a position is not).
+[[nodiscard]] double bounding_box_diagonal(const MeshData& mesh);
+
 /// Loads a mesh file (OBJ, PLY, glTF, FBX … whatever the installed loader reads) and welds it.
 /// Throws `weft::Error` naming the file on failure, or saying that mesh import was not built.
 using MeshFileLoader = std::function<MeshData(const std::filesystem::path&)>;
