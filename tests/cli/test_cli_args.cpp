@@ -42,7 +42,7 @@ TEST(CliArgs, RunDefaults) {
     const Invocation inv = parse({"run", "flag"});
     ASSERT_EQ(inv.command, Invocation::Command::Run);
     EXPECT_EQ(inv.run.scene, "flag");
-    EXPECT_EQ(inv.run.sim.backend, "cpu");
+    EXPECT_EQ(inv.run.sim.backend, "auto");
     EXPECT_EQ(inv.run.sim.threads, 0);
     EXPECT_FALSE(inv.run.frames.has_value());
     EXPECT_TRUE(inv.run.out_dir.empty());

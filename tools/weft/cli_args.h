@@ -38,7 +38,7 @@ enum class MeshFormat : std::uint8_t { Ply, Obj };
 
 /// What `run` and `bench` share: where the simulation runs and how the scene is overridden.
 struct SimulationOptions {
-    std::string backend = "cpu";
+    std::string backend = "auto";  ///< "auto": cuda when a GPU is present, else cpu
     int threads = 0;                     ///< 0 = all cores
     std::vector<std::string> overrides;  ///< "dotted.key=value", in command-line order
 };

@@ -14,6 +14,9 @@
 #if WEFT_HAVE_ASSETS
 #include "weft/assets/assimp_loader.h"
 #endif
+#if WEFT_HAVE_CUDA_BACKEND
+#include "weft/cuda/cuda_backend.h"
+#endif
 
 namespace {
 
@@ -43,6 +46,9 @@ int main(int argc, char** argv) {
     try {
 #if WEFT_HAVE_ASSETS
         weft::assets::install_mesh_loader();
+#endif
+#if WEFT_HAVE_CUDA_BACKEND
+        weft::cuda::register_cuda_backend();
 #endif
         return dispatch(weft::cli::parse_command_line(args));
     } catch (const weft::cli::UsageError& e) {

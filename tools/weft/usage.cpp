@@ -27,7 +27,8 @@ Simulates SCENE (a .toml file, or a name looked up in ./assets/scenes and in the
 assets/scenes) and prints a summary: per-stage times, CG iterations, warnings.
 
 Options:
-  --backend NAME     simulation backend (see 'weft info'); default cpu
+  --backend NAME     simulation backend: cpu, cuda (see 'weft info'); default auto:
+                     cuda when a GPU is present, else cpu
   --threads N        CPU worker threads, 0 = all cores; results do not depend on it
   --frames N         frames to simulate; default: the scene's 'frames'
   --out DIR          write a mesh per cloth per frame: DIR/frame_0000_<cloth>.ply (frame 0 = initial state)
@@ -50,7 +51,7 @@ Options:
   --frames N         timed frames per scene; default 100
   --warmup N         untimed frames first; default 10
   --json FILE        write the results as a JSON array (one object per scene)
-  --backend NAME     simulation backend; default cpu
+  --backend NAME     simulation backend: cpu, cuda; default auto (cuda when a GPU is present)
   --threads N        CPU worker threads, 0 = all cores
   --set KEY=VALUE    override a scene key in every scene; repeatable
   -h, --help         this text

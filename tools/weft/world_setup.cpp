@@ -9,7 +9,22 @@
 
 namespace weft::cli {
 
+std::string resolve_backend(std::string_view backend) {
+    if (backend != "auto") return std::string(backend);
+    // The CUDA backend when it is compiled in and a device answers; the CPU otherwise.
+    const std::vector<std::string> names = backend_names();
+    if (std::find(names.begin(), names.end(), "cuda") != names.end()) {
+        try {
+            (void)create_backend("cuda");
+            return "cuda";
+        } catch (const std::exception&) {
+        }
+    }
+    return "cpu";
+}
+
 void require_backend(std::string_view command, std::string_view backend) {
+    if (backend == "auto") return;
     const std::vector<std::string> names = backend_names();
     if (std::find(names.begin(), names.end(), backend) != names.end()) return;
     std::string known;
@@ -23,7 +38,7 @@ LoadedScene load_world(std::string_view scene, const SimulationOptions& sim) {
     loaded.desc = load_scene(find_scene(scene), sim.overrides);
     BackendOptions options;
     options.threads = sim.threads;
-    loaded.world = build_world(loaded.desc, sim.backend, options);
+    loaded.world = build_world(loaded.desc, resolve_backend(sim.backend), options);
     return loaded;
 }
 

@@ -4,6 +4,7 @@
 /// overrides, build the world.
 
 #include <memory>
+#include <string>
 #include <string_view>
 
 #include "weft/scene.h"
@@ -19,6 +20,9 @@ struct LoadedScene {
 };
 
 /// Throws `UsageError` (for `command`) when `backend` is not one of the compiled backends.
+/// "auto" → "cuda" when that backend is compiled in and a device is present, else "cpu"; any other
+/// name is returned unchanged.
+[[nodiscard]] std::string resolve_backend(std::string_view backend);
 void require_backend(std::string_view command, std::string_view backend);
 
 /// Finds `scene` (path or bare name), loads it with `sim.overrides` and builds its world on

@@ -1,0 +1,13 @@
+#pragma once
+// Internal access to the device solver behind a "cuda" backend, for benchmarks and tests that
+// measure kernels in isolation. Not part of the public API.
+
+#include "device_solver.h"
+#include "weft/backend.h"
+
+namespace weft::cuda {
+
+/// The DeviceSolver of a CUDA backend, or nullptr for any other backend.
+DeviceSolver* device_solver(Backend& backend);
+
+}  // namespace weft::cuda

@@ -1,0 +1,147 @@
+// The "cuda" backend: a weft::Backend around one DeviceSolver, registered with the runtime's factory.
+#include "weft/cuda/cuda_backend.h"
+
+#include <cuda_runtime_api.h>
+
+#include <cstdio>
+#include <cstdlib>
+#include <cstring>
+#include <mutex>
+
+#include "backend_access.h"
+#include "cuda_check.h"
+#include "device_solver.h"
+#include "weft/error.h"
+#include "weft/flat_model.h"
+
+namespace weft::cuda {
+namespace {
+
+std::string format_gib(std::size_t bytes) {
+    const double gib = static_cast<double>(bytes) / (1024.0 * 1024.0 * 1024.0);
+    char buf[32];
+    std::snprintf(buf, sizeof buf, "%.0f GiB", gib);
+    return buf;
+}
+
+class CudaBackend final : public Backend, public CudaBackendApi {
+public:
+    explicit CudaBackend(const BackendOptions& options) {
+        const std::vector<DeviceInfo> all = devices();
+        if (all.empty()) throw Error("CUDA backend: " + unavailable_reason());
+        if (options.device < 0 || options.device >= static_cast<int>(all.size()))
+            throw Error("CUDA backend: device " + std::to_string(options.device) + " does not exist (" +
+                        std::to_string(all.size()) + " CUDA device" + (all.size() == 1 ? "" : "s") + ")");
+        if (options.gpus > 1)
+            throw Error("CUDA backend: --gpus " + std::to_string(options.gpus) +
+                        " needs the multi-GPU solver, which is not built yet; use one GPU");
+        info_ = all[static_cast<std::size_t>(options.device)];
+        solver_ = std::make_unique<DeviceSolver>(info_.ordinal);
+        // WEFT_CUDA_GRAPHS=0 runs the same kernels without graphs: for tools that cannot follow
+        // conditional graph nodes (compute-sanitizer's racecheck) and for comparing the two paths.
+        if (const char* env = std::getenv("WEFT_CUDA_GRAPHS"); env != nullptr && std::string_view(env) == "0")
+            solver_->set_use_graph(false);
+    }
+
+    std::string_view name() const override { return "cuda"; }
+
+    std::string device_description() const override {
+        return info_.name + " (sm_" + std::to_string(info_.compute_major) + std::to_string(info_.compute_minor) + ", " +
+               format_gib(info_.memory_bytes) + "), float" + (solver_->graph_active() ? ", CUDA graph" : "");
+    }
+
+    void build(const Model& model) override {
+        flat_ = flatten(model);
+        solver_->build(flat_, model);
+    }
+
+    void substep(const Model& model, double t, double h, StepStats& stats) override { solver_->substep(model, t, h, stats); }
+
+    void read_state(std::size_t cloth, std::span<Vec3d> x, std::span<Vec3d> v) const override {
+        const auto [first, count] = range(cloth, x.size(), v.size());
+        solver_->read_state(first, count, x.data(), v.data());
+    }
+
+    void write_state(std::size_t cloth, std::span<const Vec3d> x, std::span<const Vec3d> v) override {
+        const auto [first, count] = range(cloth, x.size(), v.size());
+        solver_->write_state(first, count, x.data(), v.data());
+    }
+
+    std::size_t memory_bytes() const override { return solver_->memory_bytes(); }
+
+    void set_stream(CUstream_st* stream) override { solver_->set_stream(stream); }
+    void set_output(void* device_buffer, std::size_t stride) override { solver_->set_output(device_buffer, stride); }
+    std::size_t vertex_count() const override { return flat_.vertex_count; }
+    void set_use_graph(bool enabled) override { solver_->set_use_graph(enabled); }
+    bool graph_active() const override { return solver_->graph_active(); }
+    std::vector<std::pair<std::string, std::size_t>> memory_breakdown() const override { return solver_->ledger().entries(); }
+
+    DeviceSolver& solver() { return *solver_; }
+
+private:
+    std::pair<std::size_t, std::size_t> range(std::size_t cloth, std::size_t nx, std::size_t nv) const {
+        if (cloth + 1 >= flat_.cloth_vertex_offset.size()) throw Error("cloth index " + std::to_string(cloth) + " out of range");
+        const std::size_t first = flat_.cloth_vertex_offset[cloth];
+        const std::size_t count = flat_.cloth_vertex_offset[cloth + 1] - first;
+        if (nx != count || nv != count) throw Error("cloth " + std::to_string(cloth) + ": state size mismatch");
+        return {first, count};
+    }
+
+    DeviceInfo info_;
+    FlatModel flat_;
+    std::unique_ptr<DeviceSolver> solver_;
+};
+
+}  // namespace
+
+std::vector<DeviceInfo> devices() {
+    int count = 0;
+    if (cudaGetDeviceCount(&count) != cudaSuccess) {
+        cudaGetLastError();  // clear the sticky "no driver" error
+        return {};
+    }
+    std::vector<DeviceInfo> out;
+    for (int d = 0; d < count; ++d) {
+        cudaDeviceProp prop{};
+        if (cudaGetDeviceProperties(&prop, d) != cudaSuccess) continue;
+        DeviceInfo info;
+        info.ordinal = d;
+        info.name = prop.name;
+        info.compute_major = prop.major;
+        info.compute_minor = prop.minor;
+        info.memory_bytes = prop.totalGlobalMem;
+        info.multiprocessors = prop.multiProcessorCount;
+        std::memcpy(info.uuid, prop.uuid.bytes, sizeof info.uuid);
+        out.push_back(std::move(info));
+    }
+    return out;
+}
+
+std::string unavailable_reason() {
+    int count = 0;
+    const cudaError_t err = cudaGetDeviceCount(&count);
+    if (err == cudaSuccess && count > 0) return {};
+    cudaGetLastError();
+    if (err == cudaErrorNoDevice || (err == cudaSuccess && count == 0)) return "no CUDA-capable device is present";
+    if (err == cudaErrorInsufficientDriver)
+        return "no usable CUDA driver (none installed, or one older than the CUDA " + std::to_string(CUDART_VERSION / 1000) +
+               " runtime Weft was built with)";
+    return std::string("no CUDA driver (") + cudaGetErrorName(err) + ")";
+}
+
+void register_cuda_backend() {
+    static std::once_flag once;
+    std::call_once(once, [] {
+        register_backend("cuda", "CUDA backend on one GPU, float: the whole substep on the device as a CUDA graph",
+                         [](const BackendOptions& o) { return std::make_unique<CudaBackend>(o); });
+    });
+}
+
+CudaBackendApi* as_cuda(Backend& backend) { return dynamic_cast<CudaBackendApi*>(&backend); }
+
+DeviceSolver* device_solver(Backend& backend) {
+    auto* b = dynamic_cast<CudaBackend*>(&backend);
+    return b != nullptr ? &b->solver() : nullptr;
+}
+
+}  // namespace weft::cuda

@@ -1,0 +1,111 @@
+#pragma once
+// Owning device allocations. All of them are made in DeviceSolver::build (STYLE.md: no allocation
+// in the step); an arena of named allocations reports how the device memory is spent.
+
+#include <cuda_runtime_api.h>
+
+#include <cstddef>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "cuda_check.h"
+
+namespace weft::cuda {
+
+/// Running total of device allocations by purpose.
+class MemoryLedger {
+public:
+    void add(const std::string& purpose, std::size_t bytes) {
+        for (auto& [name, total] : entries_)
+            if (name == purpose) {
+                total += bytes;
+                return;
+            }
+        entries_.emplace_back(purpose, bytes);
+    }
+    void clear() { entries_.clear(); }
+    [[nodiscard]] std::size_t total() const {
+        std::size_t sum = 0;
+        for (const auto& e : entries_) sum += e.second;
+        return sum;
+    }
+    [[nodiscard]] const std::vector<std::pair<std::string, std::size_t>>& entries() const { return entries_; }
+
+private:
+    std::vector<std::pair<std::string, std::size_t>> entries_;
+};
+
+template <typename T>
+class DeviceArray {
+public:
+    DeviceArray() = default;
+    DeviceArray(const DeviceArray&) = delete;
+    DeviceArray& operator=(const DeviceArray&) = delete;
+    DeviceArray(DeviceArray&& o) noexcept : ptr_(std::exchange(o.ptr_, nullptr)), size_(std::exchange(o.size_, 0)) {}
+    DeviceArray& operator=(DeviceArray&& o) noexcept {
+        if (this != &o) {
+            release();
+            ptr_ = std::exchange(o.ptr_, nullptr);
+            size_ = std::exchange(o.size_, 0);
+        }
+        return *this;
+    }
+    ~DeviceArray() { release(); }
+
+    /// Allocates `count` elements (contents undefined), charged to `purpose` in `ledger`.
+    void allocate(std::size_t count, MemoryLedger& ledger, const std::string& purpose) {
+        release();
+        size_ = count;
+        if (count == 0) return;
+        WEFT_CUDA_CHECK(cudaMalloc(reinterpret_cast<void**>(&ptr_), count * sizeof(T)));
+        ledger.add(purpose, count * sizeof(T));
+    }
+    /// Allocates and copies `host` in (synchronously: build time only).
+    void upload(const std::vector<T>& host, MemoryLedger& ledger, const std::string& purpose) {
+        allocate(host.size(), ledger, purpose);
+        if (!host.empty()) WEFT_CUDA_CHECK(cudaMemcpy(ptr_, host.data(), host.size() * sizeof(T), cudaMemcpyHostToDevice));
+    }
+    void zero(cudaStream_t stream) {
+        if (size_ > 0) WEFT_CUDA_CHECK(cudaMemsetAsync(ptr_, 0, size_ * sizeof(T), stream));
+    }
+    [[nodiscard]] T* get() const { return ptr_; }
+    [[nodiscard]] std::size_t size() const { return size_; }
+    [[nodiscard]] std::size_t bytes() const { return size_ * sizeof(T); }
+
+private:
+    void release() noexcept {
+        if (ptr_ != nullptr) cudaFree(ptr_);
+        ptr_ = nullptr;
+        size_ = 0;
+    }
+    T* ptr_ = nullptr;
+    std::size_t size_ = 0;
+};
+
+/// Page-locked host memory for asynchronous copies (parameters in, stats out).
+template <typename T>
+class PinnedArray {
+public:
+    PinnedArray() = default;
+    PinnedArray(const PinnedArray&) = delete;
+    PinnedArray& operator=(const PinnedArray&) = delete;
+    ~PinnedArray() {
+        if (ptr_ != nullptr) cudaFreeHost(ptr_);
+    }
+    void allocate(std::size_t count) {
+        if (ptr_ != nullptr) cudaFreeHost(ptr_);
+        ptr_ = nullptr;
+        size_ = count;
+        if (count > 0) WEFT_CUDA_CHECK(cudaMallocHost(reinterpret_cast<void**>(&ptr_), count * sizeof(T)));
+    }
+    [[nodiscard]] T* get() const { return ptr_; }
+    [[nodiscard]] std::size_t size() const { return size_; }
+    T& operator[](std::size_t i) { return ptr_[i]; }
+
+private:
+    T* ptr_ = nullptr;
+    std::size_t size_ = 0;
+};
+
+}  // namespace weft::cuda

@@ -1,0 +1,119 @@
+// Colouring and sliced-ELL layout of the flattened model for the CUDA backend.
+#include "device_layout.h"
+
+#include <algorithm>
+#include <bit>
+
+#include "weft/error.h"
+
+namespace weft::cuda {
+
+Coloring color_elements(const std::vector<std::uint32_t>& vertex_ids, std::size_t corners, std::size_t vertex_count) {
+    const std::size_t count = corners == 0 ? 0 : vertex_ids.size() / corners;
+    // used[v] is a bit set of the colours already taken by elements touching v; 64 colours cover any
+    // mesh whose vertices touch fewer than 64 elements (a valence-12 vertex touches about 36 hinges);
+    // beyond that further 64-colour banks are opened.
+    std::vector<std::uint32_t> color(count, 0);
+    std::uint32_t colors = 0;
+    std::vector<std::uint64_t> used;
+    for (std::uint32_t bank = 0;; ++bank) {
+        used.assign(vertex_count, 0);
+        bool pending = false;
+        for (std::size_t e = 0; e < count; ++e) {
+            if (bank > 0 && color[e] != 64 * bank) continue;  // only elements that overflowed the last bank
+            std::uint64_t taken = 0;
+            for (std::size_t a = 0; a < corners; ++a) taken |= used[vertex_ids[corners * e + a]];
+            if (taken == ~std::uint64_t{0}) {
+                color[e] = 64 * (bank + 1);
+                pending = true;
+                continue;
+            }
+            const auto c = static_cast<std::uint32_t>(std::countr_one(taken));
+            color[e] = 64 * bank + c;
+            colors = std::max(colors, color[e] + 1);
+            for (std::size_t a = 0; a < corners; ++a) used[vertex_ids[corners * e + a]] |= std::uint64_t{1} << c;
+        }
+        if (!pending) break;
+    }
+    Coloring out;
+    out.color_start.assign(colors + 1, 0);
+    for (std::uint32_t c : color) ++out.color_start[c + 1];
+    for (std::uint32_t c = 0; c < colors; ++c) out.color_start[c + 1] += out.color_start[c];
+    out.order.resize(count);
+    std::vector<std::uint32_t> fill(out.color_start.begin(), out.color_start.end() - 1);
+    for (std::size_t e = 0; e < count; ++e) out.order[fill[color[e]]++] = static_cast<std::uint32_t>(e);
+    return out;
+}
+
+EllLayout make_ell_layout(const BlockPattern& pattern) {
+    EllLayout ell;
+    const std::size_t rows = pattern.diagonal.size();
+    const std::size_t slices = (rows + kSliceRows - 1) / kSliceRows;
+    ell.slice_start.assign(slices + 1, 0);
+    for (std::size_t s = 0; s < slices; ++s) {
+        std::uint32_t width = 0;
+        for (std::size_t i = s * kSliceRows; i < std::min(rows, (s + 1) * kSliceRows); ++i)
+            width = std::max(width, pattern.row_start[i + 1] - pattern.row_start[i]);
+        ell.slice_start[s + 1] = ell.slice_start[s] + width * kSliceRows;
+    }
+    ell.column.resize(ell.slice_start[slices]);
+    ell.slot_position.resize(pattern.block_count());
+    ell.diagonal.resize(rows);
+    for (std::size_t s = 0; s < slices; ++s) {
+        const std::uint32_t width = ell.width(s);
+        for (std::uint32_t lane = 0; lane < kSliceRows; ++lane) {
+            const std::size_t i = s * kSliceRows + lane;
+            for (std::uint32_t k = 0; k < width; ++k) {
+                const std::uint32_t pos = ell.slice_start[s] + k * kSliceRows + lane;
+                const std::uint32_t slot = i < rows ? pattern.row_start[i] + k : 0;
+                if (i < rows && slot < pattern.row_start[i + 1]) {
+                    ell.column[pos] = pattern.column[slot];
+                    ell.slot_position[slot] = pos;
+                } else {
+                    // Padding multiplies a zero block by the row's own entry: no branch in the SpMV, and
+                    // the load hits a line the warp reads anyway. Rows past the end point at row 0.
+                    ell.column[pos] = i < rows ? static_cast<std::uint32_t>(i) : 0;
+                }
+            }
+        }
+    }
+    for (std::size_t i = 0; i < rows; ++i) ell.diagonal[i] = ell.slot_position[pattern.diagonal[i]];
+    return ell;
+}
+
+DeviceLayout make_device_layout(const FlatModel& flat) {
+    DeviceLayout d;
+    d.ell = make_ell_layout(flat.pattern);
+    const std::size_t nt = flat.triangle_count(), nh = flat.hinge_count();
+    std::vector<std::uint32_t> ids(3 * nt);
+    for (std::size_t t = 0; t < nt; ++t)
+        for (int a = 0; a < 3; ++a) ids[3 * t + a] = flat.triangles[t].v[a];
+    d.triangle_colors = color_elements(ids, 3, flat.vertex_count);
+    ids.resize(4 * nh);
+    for (std::size_t k = 0; k < nh; ++k)
+        for (int a = 0; a < 4; ++a) ids[4 * k + a] = flat.hinges[k].v[a];
+    d.hinge_colors = color_elements(ids, 4, flat.vertex_count);
+
+    d.triangle_positions.resize(9 * nt);
+    for (std::size_t j = 0; j < nt; ++j) {
+        const std::uint32_t t = d.triangle_colors.order[j];
+        for (int e = 0; e < 9; ++e) d.triangle_positions[9 * j + e] = d.ell.slot_position[flat.pattern.triangle_slots[9 * t + e]];
+    }
+    d.hinge_positions.resize(16 * nh);
+    for (std::size_t j = 0; j < nh; ++j) {
+        const std::uint32_t k = d.hinge_colors.order[j];
+        for (int e = 0; e < 16; ++e) d.hinge_positions[16 * j + e] = d.ell.slot_position[flat.pattern.hinge_slots[16 * k + e]];
+    }
+
+    d.vertex_triangle_start.assign(flat.vertex_count + 1, 0);
+    for (const Triangle& t : flat.triangles)
+        for (std::uint32_t v : t.v) ++d.vertex_triangle_start[v + 1];
+    for (std::size_t i = 0; i < flat.vertex_count; ++i) d.vertex_triangle_start[i + 1] += d.vertex_triangle_start[i];
+    d.vertex_triangle.resize(3 * nt);
+    std::vector<std::uint32_t> fill(d.vertex_triangle_start.begin(), d.vertex_triangle_start.end() - 1);
+    for (std::size_t t = 0; t < nt; ++t)
+        for (std::uint32_t v : flat.triangles[t].v) d.vertex_triangle[fill[v]++] = static_cast<std::uint32_t>(t);
+    return d;
+}
+
+}  // namespace weft::cuda

@@ -1,0 +1,65 @@
+#pragma once
+// Plain structs shared by the host side of the CUDA backend and its kernels: the per-substep
+// parameters uploaded in one copy, the device-resident CG control block and the stats the device
+// accumulates. float throughout except the CG scalars, which are reduced in double like the CPU's.
+
+#include <cstdint>
+
+#include "weft/physics/collider_contact.h"
+#include "weft/physics/membrane.h"
+#include "weft/physics/vec.h"
+
+namespace weft::cuda {
+
+using V3 = physics::Vec3<float>;
+using M3 = physics::Mat3<float>;
+
+/// One cloth's material in solver units (float).
+struct ClothParams {
+    physics::MembraneMaterial<float> membrane{};
+    float bending = 0, damping_mass = 0, damping_stiffness = 0;
+    float drag = 0, lift = 0, thickness = 0, friction = 0;
+};
+
+/// Everything that may change from one substep to the next, uploaded with one copy. The arrays
+/// (cloth parameters, shapes, their friction, pin targets) follow the header in the same buffer at
+/// the offsets the header gives (bytes from the start of the buffer).
+struct StepParams {
+    float h = 0, h2 = 0, time = 0;
+    int hessian = 0;  ///< physics::HessianKind
+    V3 gravity{}, wind{};
+    int wind_active = 0;
+    float air_density = 0, turbulence = 0, turbulence_frequency = 0, turbulence_scale = 1;
+    float contact_stiffness = 0;
+    int shape_count = 0;
+    int pin_count = 0;
+    int cg_max_iterations = 0;
+    double cg_eps2 = 0;
+    std::uint32_t cloth_offset = 0, shape_offset = 0, friction_offset = 0, pin_target_offset = 0;
+};
+
+/// The PCG state that lives on the device, so the loop needs no host round trip.
+struct PcgControl {
+    double delta0_b;   ///< filter(b)ᵀ P⁻¹ filter(b)
+    double delta;      ///< rᵀ P⁻¹ r of the current iterate
+    double delta0;     ///< the scale convergence is measured against
+    double cq;         ///< cᵀ A c of the current direction
+    float alpha, beta;
+    int iterations;
+    int running;       ///< 1 while the loop must go on
+    int converged;
+    std::uint32_t counter;  ///< blocks finished in the current grid reduction
+};
+
+/// What one substep reports, accumulated on the device and read back once at its end.
+struct DeviceStats {
+    int cg_iterations;
+    int cg_iterations_max;
+    double cg_residual;
+    int cg_not_converged;
+    int newton_iterations;
+    int contacts;
+    int non_finite;
+};
+
+}  // namespace weft::cuda

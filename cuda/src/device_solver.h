@@ -1,0 +1,108 @@
+#pragma once
+// All the state of the CUDA solver on one device, in one object, so that several can run side by
+// side (the multi-GPU solver partitions rows across them and reuses these kernels).
+
+#include <cuda_runtime_api.h>
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "device_array.h"
+#include "device_layout.h"
+#include "device_params.h"
+#include "device_view.h"
+#include "weft/flat_model.h"
+#include "weft/model.h"
+#include "weft/stats.h"
+
+namespace weft::cuda {
+
+class DeviceSolver {
+public:
+    /// Binds to CUDA device `device` and creates its streams; throws weft::Error if it cannot.
+    explicit DeviceSolver(int device);
+    ~DeviceSolver();
+    DeviceSolver(const DeviceSolver&) = delete;
+    DeviceSolver& operator=(const DeviceSolver&) = delete;
+
+    /// Uploads `flat` (kept by reference; it must outlive the solver) and allocates every buffer the
+    /// step needs. `model` sizes the per-substep parameter block (cloths, colliders, pins).
+    void build(const FlatModel& flat, const Model& model);
+    void substep(const Model& model, double t, double h, StepStats& stats);
+    void read_state(std::size_t first, std::size_t count, Vec3d* x, Vec3d* v) const;
+    void write_state(std::size_t first, std::size_t count, const Vec3d* x, const Vec3d* v);
+
+    void set_stream(cudaStream_t stream);
+    void set_output(void* device_buffer, std::size_t stride);
+    void set_use_graph(bool enabled);
+    [[nodiscard]] bool graph_active() const { return graph_active_; }
+    [[nodiscard]] std::size_t memory_bytes() const { return ledger_.total(); }
+    [[nodiscard]] const MemoryLedger& ledger() const { return ledger_; }
+    [[nodiscard]] int device() const { return device_; }
+
+    // For benchmarks: the arrays, the layout and the stream the solver uses.
+    [[nodiscard]] const DeviceView& view() const { return view_; }
+    [[nodiscard]] const DeviceLayout& layout() const { return layout_; }
+    [[nodiscard]] cudaStream_t stream() const { return active_stream(); }
+
+private:
+    /// Enqueues one whole substep on `stream`. In graph mode (`capturing`) the CG loop becomes a
+    /// conditional while node; otherwise it is driven from the host with a check every few iterations.
+    void record(cudaStream_t stream, bool capturing);
+    void record_pcg_loop(cudaStream_t stream, bool capturing, int newton);
+    void fill_staging(const Model& model, double t, double h);
+    void capture_graph();
+    void destroy_graph();
+    [[nodiscard]] cudaStream_t active_stream() const { return user_stream_ != nullptr ? user_stream_ : stream_; }
+
+    int device_ = 0;
+    cudaStream_t stream_ = nullptr;       // the solver's own stream
+    cudaStream_t body_stream_ = nullptr;  // captures the CG loop body into the while node
+    cudaStream_t user_stream_ = nullptr;
+    const FlatModel* flat_ = nullptr;
+    DeviceLayout layout_;
+    MemoryLedger ledger_;
+    DeviceView view_;
+
+    DeviceArray<float> state_;        // x, v, x0, v0, vk, wk, b, dv, pin velocity: 3n each
+    DeviceArray<float> cg_vectors_;   // r, c, q, s: 3n each, and the preconditioner: 9n
+    DeviceArray<float> mass_;
+    DeviceArray<std::uint8_t> fixed_;
+    DeviceArray<std::uint32_t> vertex_cloth_;
+    DeviceArray<float> blocks_;
+    DeviceArray<std::uint32_t> column_, slice_start_, diagonal_;
+    DeviceArray<std::uint32_t> triangle_vertices_, triangle_cloth_, triangle_positions_;
+    DeviceArray<float> triangle_rest_;
+    DeviceArray<std::uint32_t> hinge_vertices_, hinge_cloth_, hinge_positions_;
+    DeviceArray<float> hinge_rest_;
+    DeviceArray<std::uint32_t> vertex_triangle_start_, vertex_triangle_;
+    DeviceArray<std::uint32_t> pin_vertex_;
+    DeviceArray<unsigned char> staging_;
+    DeviceArray<PcgControl> control_;
+    DeviceArray<DeviceStats> stats_;
+    DeviceArray<double> partials_;
+
+    PinnedArray<unsigned char> host_staging_;
+    PinnedArray<DeviceStats> host_stats_;
+    PinnedArray<int> host_running_;
+    StepParams layout_params_{};  // offsets of the arrays in the staging block
+
+    void* output_ = nullptr;
+    std::size_t output_stride_ = 0;
+
+    // Stage timing: events recorded between stages (in the graph too).
+    std::vector<cudaEvent_t> events_;
+    int recorded_newton_ = 0;
+
+    bool use_graph_ = true;
+    bool graph_active_ = false;
+    bool graph_unsupported_ = false;
+    bool warm_ = false;
+    cudaGraphExec_t graph_exec_ = nullptr;
+    int graph_newton_ = 0;            // settings the graph was captured with
+    void* graph_output_ = nullptr;
+    std::size_t graph_output_stride_ = 0;
+};
+
+}  // namespace weft::cuda

@@ -1,0 +1,47 @@
+#pragma once
+// The device solver's arrays as one struct of raw pointers, passed by value to every kernel.
+// Vertex vectors are structure-of-arrays: component c of vertex i is at [c·n + i], so a warp's loads
+// of one component are contiguous. Matrix blocks are 9 floats (row-major) per sliced-ELL position.
+
+#include <cstdint>
+
+#include "device_params.h"
+
+namespace weft::cuda {
+
+struct DeviceView {
+    std::uint32_t n = 0, triangles = 0, hinges = 0, pins = 0, slices = 0;
+    // Vertex state and solver vectors, 3n floats each.
+    float *x = nullptr, *v = nullptr, *x0 = nullptr, *v0 = nullptr, *vk = nullptr, *wk = nullptr;
+    float *b = nullptr, *dv = nullptr, *pin_velocity = nullptr;
+    float *r = nullptr, *c = nullptr, *q = nullptr, *s = nullptr;
+    float* precond = nullptr;  ///< block-Jacobi inverse, 9n floats, entry e of vertex i at [e·n + i]
+    const float* mass = nullptr;
+    const std::uint8_t* fixed = nullptr;
+    const std::uint32_t* vertex_cloth = nullptr;
+    // Matrix (sliced ELL).
+    float* blocks = nullptr;
+    const std::uint32_t* column = nullptr;
+    const std::uint32_t* slice_start = nullptr;
+    const std::uint32_t* diagonal = nullptr;
+    // Triangles and hinges in colour order.
+    const std::uint32_t* triangle_vertices = nullptr;  ///< 3 per triangle
+    const float* triangle_rest = nullptr;              ///< Dm⁻¹ (4, row-major) and area, 5 per triangle
+    const std::uint32_t* triangle_cloth = nullptr;
+    const std::uint32_t* triangle_positions = nullptr; ///< 9 ELL positions per triangle
+    const std::uint32_t* hinge_vertices = nullptr;     ///< 4 per hinge
+    const float* hinge_rest = nullptr;                 ///< weight and rest angle, 2 per hinge
+    const std::uint32_t* hinge_cloth = nullptr;
+    const std::uint32_t* hinge_positions = nullptr;    ///< 16 ELL positions per hinge
+    // Vertex → incident triangles (colour-order ids), for normals.
+    const std::uint32_t* vertex_triangle_start = nullptr;
+    const std::uint32_t* vertex_triangle = nullptr;
+    const std::uint32_t* pin_vertex = nullptr;
+    // Per-substep parameters, CG control, stats and reduction scratch.
+    const unsigned char* staging = nullptr;
+    PcgControl* control = nullptr;
+    DeviceStats* stats = nullptr;
+    double* partials = nullptr;
+};
+
+}  // namespace weft::cuda

@@ -1,0 +1,53 @@
+#pragma once
+// Host-side launchers of the solver kernels (one .cu file per concept: state_kernels.cu,
+// force_kernels.cu, pcg_kernels.cu). Each launches on `stream` and checks the launch.
+
+#include <cuda_runtime_api.h>
+
+#include <cstdint>
+
+#include "device_view.h"
+
+namespace weft::cuda {
+
+inline constexpr int kBlockSize = 256;
+[[nodiscard]] inline unsigned grid_for(std::uint32_t count) { return (count + kBlockSize - 1) / kBlockSize; }
+
+// ---- state (state_kernels.cu) --------------------------------------------------------------------
+/// x0 = x, v0 = v, v_k = v, w_k = 0; resets the substep's stats.
+void launch_begin_substep(const DeviceView& d, cudaStream_t stream);
+/// Pinned vertices' velocity that lands them on their targets at t + h.
+void launch_pin_velocities(const DeviceView& d, cudaStream_t stream);
+/// Resets the CG control and the contact count at the start of a Newton iteration.
+void launch_begin_newton(const DeviceView& d, cudaStream_t stream);
+/// v_k += Δv, w_k = v_k.
+void launch_newton_update(const DeviceView& d, cudaStream_t stream);
+/// x = x0 + h·v_k, v = v_k; counts non-finite values and restores x0, v0 if there are any.
+void launch_commit(const DeviceView& d, cudaStream_t stream);
+/// Writes position and area-weighted normal of every vertex to `out` (stride bytes apart).
+void launch_write_output(const DeviceView& d, void* out, std::size_t stride, cudaStream_t stream);
+
+// ---- forces and assembly (force_kernels.cu) -------------------------------------------------------
+/// Per vertex: inertia, gravity, mass damping and collider contacts into b and the diagonal block;
+/// zeroes the rest of the row.
+void launch_vertex_terms(const DeviceView& d, cudaStream_t stream);
+/// Triangles [first, last) of one colour: membrane, stiffness damping and wind, added into A and b.
+void launch_triangle_terms(const DeviceView& d, std::uint32_t first, std::uint32_t last, cudaStream_t stream);
+/// Hinges [first, last) of one colour: bending, added into A and b.
+void launch_hinge_terms(const DeviceView& d, std::uint32_t first, std::uint32_t last, cudaStream_t stream);
+
+// ---- PCG (pcg_kernels.cu) --------------------------------------------------------------------------
+/// Block-Jacobi inverse, Δv initialised (prescribed on filtered vertices), δ₀ of b.
+void launch_pcg_setup(const DeviceView& d, cudaStream_t stream);
+/// r = filter(b − AΔv), c = P⁻¹r, δ; decides whether the loop runs. `handle` (0: none) is the
+/// graph's while-node condition, set to the loop's `running` flag.
+void launch_pcg_residual(const DeviceView& d, unsigned long long handle, cudaStream_t stream);
+/// One CG iteration: q = filter(A c) with cᵀq (fused), then the axpy pair with P⁻¹ and rᵀs (fused),
+/// then the new direction. Every kernel does nothing once the loop has stopped.
+void launch_pcg_iteration(const DeviceView& d, unsigned long long handle, cudaStream_t stream);
+/// Folds the finished solve into the stats.
+void launch_pcg_finish(const DeviceView& d, cudaStream_t stream);
+/// y = A·x over the whole matrix (benchmarks; the solver's SpMV is fused with its dot product).
+void launch_spmv(const DeviceView& d, const float* x, float* y, cudaStream_t stream);
+
+}  // namespace weft::cuda

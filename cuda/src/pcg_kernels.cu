@@ -1,0 +1,198 @@
+// Filtered block-Jacobi PCG on the device, the same algorithm as the CPU's (runtime/src/cpu/pcg.h,
+// Baraff & Witkin 1998 §5.3). Every scalar of the loop (δ, α, β, the iteration count and whether to go
+// on) lives in device memory, so the loop runs without the host: under a CUDA graph its while node
+// reads `running` through the conditional handle each kernel sets.
+//
+// Three kernels per iteration, each one pass over the data it needs:
+//   1. q = filter(A c) fused with the dot cᵀq, and α = δ/cᵀq in the last block;
+//   2. Δv += αc, r −= αq, s = P⁻¹r fused with the dot rᵀs, and β, δ and the convergence test;
+//   3. c = filter(s + βc), which needs every row's new s first (the SpMV reads neighbours).
+// The reductions are deterministic (device_math.cuh, grid_sum), so a solve gives the same bits on
+// every run and whether or not it runs inside a graph.
+#include <cuda_runtime.h>
+
+#include "cuda_check.h"
+#include "device_math.cuh"
+
+namespace weft::cuda {
+namespace {
+
+__device__ inline void set_condition(unsigned long long handle, int running) {
+    if (handle != 0) cudaGraphSetConditional(static_cast<cudaGraphConditionalHandle>(handle), running ? 1u : 0u);
+}
+
+__device__ inline M3 load_precond(const DeviceView& d, std::uint32_t i) {
+    M3 m;
+    for (int e = 0; e < 9; ++e) m.m[e / 3][e % 3] = d.precond[e * d.n + i];
+    return m;
+}
+
+/// Row i of A·x.
+__device__ inline V3 row_times(const DeviceView& d, std::uint32_t i, const float* x) {
+    const std::uint32_t slice = i / kSliceRowsDevice;
+    const std::uint32_t first = d.slice_start[slice], width = (d.slice_start[slice + 1] - first) / kSliceRowsDevice;
+    V3 acc{};
+    for (std::uint32_t k = 0; k < width; ++k) {
+        const std::uint32_t pos = first + k * kSliceRowsDevice + i % kSliceRowsDevice;
+        acc += load_block(d.blocks, pos) * load3(x, d.column[pos], d.n);
+    }
+    return acc;
+}
+
+__global__ void pcg_setup_kernel(DeviceView d) {
+    const std::uint32_t i = blockIdx.x * blockDim.x + threadIdx.x;
+    double value = 0.0;
+    if (i < d.n) {
+        const M3 P = physics::inverse(load_block(d.blocks, d.diagonal[i]));
+        for (int e = 0; e < 9; ++e) d.precond[e * d.n + i] = P.m[e / 3][e % 3];
+        const bool fixed = d.fixed[i] != 0;
+        // Filtered vertices get their prescribed change z = v_target − v_k; the rest start at 0.
+        store3(d.dv, i, d.n, fixed ? load3(d.pin_velocity, i, d.n) - load3(d.vk, i, d.n) : V3{});
+        if (!fixed) {
+            const V3 b = load3(d.b, i, d.n);
+            value = static_cast<double>(physics::dot(b, P * b));
+        }
+    }
+    grid_sum(value, d, [&](double total) { d.control->delta0_b = total; });
+}
+
+__global__ void pcg_residual_kernel(DeviceView d, unsigned long long handle) {
+    const std::uint32_t i = blockIdx.x * blockDim.x + threadIdx.x;
+    double value = 0.0;
+    if (i < d.n) {
+        V3 r{}, c{};
+        if (!d.fixed[i]) {
+            r = load3(d.b, i, d.n) - row_times(d, i, d.dv);
+            c = load_precond(d, i) * r;
+            value = static_cast<double>(physics::dot(r, c));
+        }
+        store3(d.r, i, d.n, r);
+        store3(d.c, i, d.n, c);
+    }
+    grid_sum(value, d, [&](double delta) {
+        PcgControl& ctl = *d.control;
+        const StepParams& sp = step_params(d);
+        ctl.delta = delta;
+        // As on the CPU: measured against the larger of |b| and the initial residual.
+        ctl.delta0 = ctl.delta0_b > delta ? ctl.delta0_b : delta;
+        ctl.iterations = 0;
+        if (!(ctl.delta0 > 0.0)) {
+            ctl.converged = ctl.delta0 == 0.0;
+            ctl.running = 0;
+        } else {
+            ctl.converged = delta <= sp.cg_eps2 * ctl.delta0;
+            ctl.running = !ctl.converged && sp.cg_max_iterations > 0;
+        }
+        set_condition(handle, ctl.running);
+    });
+}
+
+__global__ void pcg_spmv_dot_kernel(DeviceView d, unsigned long long handle) {
+    if (!d.control->running) return;
+    const std::uint32_t i = blockIdx.x * blockDim.x + threadIdx.x;
+    double value = 0.0;
+    if (i < d.n) {
+        const V3 q = d.fixed[i] ? V3{} : row_times(d, i, d.c);
+        store3(d.q, i, d.n, q);
+        value = static_cast<double>(physics::dot(load3(d.c, i, d.n), q));
+    }
+    grid_sum(value, d, [&](double cq) {
+        PcgControl& ctl = *d.control;
+        ctl.cq = cq;
+        if (!(cq > 0.0)) {  // loss of positive definiteness or breakdown: stop and report
+            ctl.running = 0;
+            ctl.converged = 0;
+            set_condition(handle, 0);
+        } else {
+            ctl.alpha = static_cast<float>(ctl.delta / cq);
+        }
+    });
+}
+
+__global__ void pcg_update_kernel(DeviceView d, unsigned long long handle) {
+    if (!d.control->running) return;
+    const std::uint32_t i = blockIdx.x * blockDim.x + threadIdx.x;
+    const float alpha = d.control->alpha;
+    double value = 0.0;
+    if (i < d.n) {
+        const V3 r = load3(d.r, i, d.n) - alpha * load3(d.q, i, d.n);
+        const V3 s = load_precond(d, i) * r;
+        store3(d.dv, i, d.n, load3(d.dv, i, d.n) + alpha * load3(d.c, i, d.n));
+        store3(d.r, i, d.n, r);
+        store3(d.s, i, d.n, s);
+        value = static_cast<double>(physics::dot(r, s));
+    }
+    grid_sum(value, d, [&](double delta_new) {
+        PcgControl& ctl = *d.control;
+        const StepParams& sp = step_params(d);
+        ctl.beta = static_cast<float>(delta_new / ctl.delta);
+        ctl.delta = delta_new;
+        ++ctl.iterations;
+        ctl.converged = delta_new <= sp.cg_eps2 * ctl.delta0;
+        // On exit the direction update of this iteration is skipped: the CPU computes it but never
+        // uses it, so Δv is the same.
+        if (ctl.converged || ctl.iterations >= sp.cg_max_iterations) {
+            ctl.running = 0;
+            set_condition(handle, 0);
+        }
+    });
+}
+
+__global__ void pcg_direction_kernel(DeviceView d) {
+    PcgControl& ctl = *d.control;
+    if (!ctl.running) return;
+    const std::uint32_t i = blockIdx.x * blockDim.x + threadIdx.x;
+    if (i < d.n) {
+        const float beta = ctl.beta;
+        store3(d.c, i, d.n, d.fixed[i] ? V3{} : load3(d.s, i, d.n) + beta * load3(d.c, i, d.n));
+    }
+}
+
+__global__ void pcg_finish_kernel(DeviceView d) {
+    const PcgControl& ctl = *d.control;
+    DeviceStats& st = *d.stats;
+    st.cg_iterations += ctl.iterations;
+    st.cg_iterations_max = ctl.iterations > st.cg_iterations_max ? ctl.iterations : st.cg_iterations_max;
+    const double residual = ctl.delta0 > 0.0 ? sqrt((ctl.delta > 0.0 ? ctl.delta : 0.0) / ctl.delta0) : 0.0;
+    st.cg_residual = residual > st.cg_residual ? residual : st.cg_residual;
+    if (!ctl.converged) ++st.cg_not_converged;
+    ++st.newton_iterations;
+}
+
+__global__ void spmv_kernel(DeviceView d, const float* x, float* y) {
+    const std::uint32_t i = blockIdx.x * blockDim.x + threadIdx.x;
+    if (i < d.n) store3(y, i, d.n, row_times(d, i, x));
+}
+
+}  // namespace
+
+void launch_pcg_setup(const DeviceView& d, cudaStream_t stream) {
+    pcg_setup_kernel<<<grid_for(d.n), kBlockSize, 0, stream>>>(d);
+    WEFT_CUDA_CHECK_LAUNCH("pcg_setup_kernel");
+}
+
+void launch_pcg_residual(const DeviceView& d, unsigned long long handle, cudaStream_t stream) {
+    pcg_residual_kernel<<<grid_for(d.n), kBlockSize, 0, stream>>>(d, handle);
+    WEFT_CUDA_CHECK_LAUNCH("pcg_residual_kernel");
+}
+
+void launch_pcg_iteration(const DeviceView& d, unsigned long long handle, cudaStream_t stream) {
+    pcg_spmv_dot_kernel<<<grid_for(d.n), kBlockSize, 0, stream>>>(d, handle);
+    WEFT_CUDA_CHECK_LAUNCH("pcg_spmv_dot_kernel");
+    pcg_update_kernel<<<grid_for(d.n), kBlockSize, 0, stream>>>(d, handle);
+    WEFT_CUDA_CHECK_LAUNCH("pcg_update_kernel");
+    pcg_direction_kernel<<<grid_for(d.n), kBlockSize, 0, stream>>>(d);
+    WEFT_CUDA_CHECK_LAUNCH("pcg_direction_kernel");
+}
+
+void launch_pcg_finish(const DeviceView& d, cudaStream_t stream) {
+    pcg_finish_kernel<<<1, 1, 0, stream>>>(d);
+    WEFT_CUDA_CHECK_LAUNCH("pcg_finish_kernel");
+}
+
+void launch_spmv(const DeviceView& d, const float* x, float* y, cudaStream_t stream) {
+    spmv_kernel<<<grid_for(d.n), kBlockSize, 0, stream>>>(d, x, y);
+    WEFT_CUDA_CHECK_LAUNCH("spmv_kernel");
+}
+
+}  // namespace weft::cuda

@@ -1,0 +1,121 @@
+// Substep bookkeeping on the device: start-of-substep copies, pins, the Newton update, the commit
+// with its non-finite check and rollback, and the output of positions and normals.
+#include "cuda_check.h"
+#include "device_math.cuh"
+
+namespace weft::cuda {
+namespace {
+
+__global__ void begin_substep_kernel(DeviceView d) {
+    const std::uint32_t i = blockIdx.x * blockDim.x + threadIdx.x;
+    if (i == 0) *d.stats = DeviceStats{};
+    if (i >= 3 * d.n) return;
+    d.x0[i] = d.x[i];
+    d.v0[i] = d.v[i];
+    d.vk[i] = d.v[i];
+    d.wk[i] = 0.0f;
+}
+
+__global__ void pin_velocities_kernel(DeviceView d) {
+    const std::uint32_t p = blockIdx.x * blockDim.x + threadIdx.x;
+    const StepParams& sp = step_params(d);
+    if (p >= d.pins) return;
+    const std::uint32_t i = d.pin_vertex[p];
+    const V3 target = staged<V3>(d, sp.pin_target_offset)[p];
+    store3(d.pin_velocity, i, d.n, (target - load3(d.x, i, d.n)) / sp.h);
+}
+
+__global__ void begin_newton_kernel(DeviceView d) {
+    d.control->counter = 0;
+    d.control->running = 0;
+    d.control->iterations = 0;
+    d.control->converged = 0;
+    d.stats->contacts = 0;
+}
+
+__global__ void newton_update_kernel(DeviceView d) {
+    const std::uint32_t i = blockIdx.x * blockDim.x + threadIdx.x;
+    if (i >= 3 * d.n) return;
+    const float v = d.vk[i] + d.dv[i];
+    d.vk[i] = v;
+    d.wk[i] = v;
+}
+
+__global__ void commit_kernel(DeviceView d) {
+    const std::uint32_t i = blockIdx.x * blockDim.x + threadIdx.x;
+    if (i >= d.n) return;
+    const float h = step_params(d).h;
+    const V3 v = load3(d.vk, i, d.n);
+    const V3 x = load3(d.x0, i, d.n) + h * v;
+    store3(d.v, i, d.n, v);
+    store3(d.x, i, d.n, x);
+    if (!physics::is_finite(x) || !physics::is_finite(v)) atomicAdd(&d.stats->non_finite, 1);
+}
+
+// A NaN or Inf anywhere rolls the whole substep back, as on the CPU; the stats say so.
+__global__ void rollback_kernel(DeviceView d) {
+    const std::uint32_t i = blockIdx.x * blockDim.x + threadIdx.x;
+    if (i >= 3 * d.n || d.stats->non_finite == 0) return;
+    d.x[i] = d.x0[i];
+    d.v[i] = d.v0[i];
+}
+
+__global__ void write_output_kernel(DeviceView d, unsigned char* out, std::size_t stride) {
+    const std::uint32_t i = blockIdx.x * blockDim.x + threadIdx.x;
+    if (i >= d.n) return;
+    // Area-weighted vertex normal: the sum of the incident faces' cross products, in a fixed order.
+    V3 normal{};
+    for (std::uint32_t e = d.vertex_triangle_start[i]; e < d.vertex_triangle_start[i + 1]; ++e) {
+        const std::uint32_t t = d.vertex_triangle[e];
+        const V3 a = load3(d.x, d.triangle_vertices[3 * t], d.n);
+        const V3 b = load3(d.x, d.triangle_vertices[3 * t + 1], d.n);
+        const V3 c = load3(d.x, d.triangle_vertices[3 * t + 2], d.n);
+        normal += physics::cross(b - a, c - a);
+    }
+    normal = physics::normalized(normal);
+    const V3 x = load3(d.x, i, d.n);
+    float* o = reinterpret_cast<float*>(out + stride * i);
+    o[0] = x.x;
+    o[1] = x.y;
+    o[2] = x.z;
+    o[3] = normal.x;
+    o[4] = normal.y;
+    o[5] = normal.z;
+}
+
+}  // namespace
+
+void launch_begin_substep(const DeviceView& d, cudaStream_t stream) {
+    begin_substep_kernel<<<grid_for(3 * d.n), kBlockSize, 0, stream>>>(d);
+    WEFT_CUDA_CHECK_LAUNCH("begin_substep_kernel");
+}
+
+void launch_pin_velocities(const DeviceView& d, cudaStream_t stream) {
+    if (d.pins == 0) return;
+    pin_velocities_kernel<<<grid_for(d.pins), kBlockSize, 0, stream>>>(d);
+    WEFT_CUDA_CHECK_LAUNCH("pin_velocities_kernel");
+}
+
+void launch_begin_newton(const DeviceView& d, cudaStream_t stream) {
+    begin_newton_kernel<<<1, 1, 0, stream>>>(d);
+    WEFT_CUDA_CHECK_LAUNCH("begin_newton_kernel");
+}
+
+void launch_newton_update(const DeviceView& d, cudaStream_t stream) {
+    newton_update_kernel<<<grid_for(3 * d.n), kBlockSize, 0, stream>>>(d);
+    WEFT_CUDA_CHECK_LAUNCH("newton_update_kernel");
+}
+
+void launch_commit(const DeviceView& d, cudaStream_t stream) {
+    commit_kernel<<<grid_for(d.n), kBlockSize, 0, stream>>>(d);
+    WEFT_CUDA_CHECK_LAUNCH("commit_kernel");
+    rollback_kernel<<<grid_for(3 * d.n), kBlockSize, 0, stream>>>(d);
+    WEFT_CUDA_CHECK_LAUNCH("rollback_kernel");
+}
+
+void launch_write_output(const DeviceView& d, void* out, std::size_t stride, cudaStream_t stream) {
+    write_output_kernel<<<grid_for(d.n), kBlockSize, 0, stream>>>(d, static_cast<unsigned char*>(out), stride);
+    WEFT_CUDA_CHECK_LAUNCH("write_output_kernel");
+}
+
+}  // namespace weft::cuda
