@@ -34,6 +34,7 @@ struct StepParams {
     int shape_count = 0;
     int pin_count = 0;
     int cg_max_iterations = 0;
+    int cg_warm_start = 0;
     double cg_eps2 = 0;
     std::uint32_t cloth_offset = 0, shape_offset = 0, friction_offset = 0, pin_target_offset = 0;
 };

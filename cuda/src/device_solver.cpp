@@ -75,8 +75,8 @@ void DeviceSolver::build(const FlatModel& flat, const Model& model) {
     if (n > 0x7fffffffu / 9 || layout_.ell.positions() > 0x7fffffffu / 9)
         throw Error("CUDA backend: " + std::to_string(n) + " vertices is more than one device solver indexes");
 
-    // Vertex state: x, v, x0, v0, vk, wk, b, dv, pin velocity.
-    constexpr int kStateVectors = 9;
+    // Vertex state: x, v, x0, v0, vk, wk, b, dv, pin velocity, previous dv.
+    constexpr int kStateVectors = 10;
     std::vector<float> host(kStateVectors * 3 * n, 0.0f);
     scatter_soa(host, 0, n, flat.initial_positions);
     scatter_soa(host, 3 * n, n, flat.initial_velocities);
@@ -165,7 +165,7 @@ void DeviceSolver::build(const FlatModel& flat, const Model& model) {
     d.pins = static_cast<std::uint32_t>(flat.pin_vertex.size());
     d.slices = static_cast<std::uint32_t>(layout_.ell.slices());
     float* sv = state_.get();
-    float** vectors[] = {&d.x, &d.v, &d.x0, &d.v0, &d.vk, &d.wk, &d.b, &d.dv, &d.pin_velocity};
+    float** vectors[] = {&d.x, &d.v, &d.x0, &d.v0, &d.vk, &d.wk, &d.b, &d.dv, &d.pin_velocity, &d.dv_previous};
     for (int k = 0; k < kStateVectors; ++k) *vectors[k] = sv + static_cast<std::size_t>(k) * 3 * n;
     float* cv = cg_vectors_.get();
     d.r = cv;
@@ -218,6 +218,7 @@ void DeviceSolver::fill_staging(const Model& model, double t, double h) {
     p.shape_count = static_cast<int>(model.colliders.size());
     p.pin_count = static_cast<int>(flat_->pin_vertex.size());
     p.cg_max_iterations = w.solver.cg_max_iterations;
+    p.cg_warm_start = w.solver.cg_warm_start ? 1 : 0;
     p.cg_eps2 = w.solver.cg_tolerance * w.solver.cg_tolerance;
     std::memcpy(base, &p, sizeof(p));
 
@@ -335,7 +336,7 @@ void DeviceSolver::record(cudaStream_t stream, bool capturing) {
         for (std::size_t c = 0; c < hc.color_count(); ++c)
             launch_hinge_terms(view_, hc.color_start[c], hc.color_start[c + 1], stream);
         mark();
-        launch_pcg_setup(view_, stream);
+        launch_pcg_setup(view_, it == 0, stream);
         record_pcg_loop(stream, capturing, it);
         launch_pcg_finish(view_, stream);
         mark();
@@ -463,6 +464,8 @@ void DeviceSolver::write_state(std::size_t first, std::size_t count, const Vec3d
     std::vector<float> buf(3 * count);
     float* arrays[2] = {view_.x, view_.v};
     const Vec3d* ins[2] = {x, v};
+    // The motion was replaced: nothing to extrapolate the next solve's start from.
+    for (int c = 0; c < 3; ++c) WEFT_CUDA_CHECK(cudaMemset(view_.dv_previous + c * n + first, 0, count * sizeof(float)));
     for (int a = 0; a < 2; ++a) {
         for (std::size_t i = 0; i < count; ++i)
             for (int c = 0; c < 3; ++c) buf[c * count + i] = static_cast<float>(ins[a][i][c]);

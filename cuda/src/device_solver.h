@@ -65,7 +65,7 @@ private:
     MemoryLedger ledger_;
     DeviceView view_;
 
-    DeviceArray<float> state_;        // x, v, x0, v0, vk, wk, b, dv, pin velocity: 3n each
+    DeviceArray<float> state_;        // x, v, x0, v0, vk, wk, b, dv, pin velocity, previous dv: 3n each
     DeviceArray<float> cg_vectors_;   // r, c, q, s: 3n each, and the preconditioner: 9n
     DeviceArray<float> mass_;
     DeviceArray<std::uint8_t> fixed_;

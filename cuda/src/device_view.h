@@ -14,6 +14,7 @@ struct DeviceView {
     // Vertex state and solver vectors, 3n floats each.
     float *x = nullptr, *v = nullptr, *x0 = nullptr, *v0 = nullptr, *vk = nullptr, *wk = nullptr;
     float *b = nullptr, *dv = nullptr, *pin_velocity = nullptr;
+    float* dv_previous = nullptr;  ///< v − v0 of the last substep (CG warm start)
     float *r = nullptr, *c = nullptr, *q = nullptr, *s = nullptr;
     float* precond = nullptr;  ///< block-Jacobi inverse, 9n floats, entry e of vertex i at [e·n + i]
     const float* mass = nullptr;

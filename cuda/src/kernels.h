@@ -37,8 +37,9 @@ void launch_triangle_terms(const DeviceView& d, std::uint32_t first, std::uint32
 void launch_hinge_terms(const DeviceView& d, std::uint32_t first, std::uint32_t last, cudaStream_t stream);
 
 // ---- PCG (pcg_kernels.cu) --------------------------------------------------------------------------
-/// Block-Jacobi inverse, Δv initialised (prescribed on filtered vertices), δ₀ of b.
-void launch_pcg_setup(const DeviceView& d, cudaStream_t stream);
+/// Block-Jacobi inverse, Δv initialised (prescribed on filtered vertices; on the others the last
+/// substep's change when `first_newton` and warm starts are on, else 0), δ₀ of b.
+void launch_pcg_setup(const DeviceView& d, bool first_newton, cudaStream_t stream);
 /// r = filter(b − AΔv), c = P⁻¹r, δ; decides whether the loop runs. `handle` (0: none) is the
 /// graph's while-node condition, set to the loop's `running` flag.
 void launch_pcg_residual(const DeviceView& d, unsigned long long handle, cudaStream_t stream);

@@ -39,15 +39,18 @@ __device__ inline V3 row_times(const DeviceView& d, std::uint32_t i, const float
     return acc;
 }
 
-__global__ void pcg_setup_kernel(DeviceView d) {
+__global__ void pcg_setup_kernel(DeviceView d, int first_newton) {
     const std::uint32_t i = blockIdx.x * blockDim.x + threadIdx.x;
     double value = 0.0;
     if (i < d.n) {
         const M3 P = physics::inverse(load_block(d.blocks, d.diagonal[i]));
         for (int e = 0; e < 9; ++e) d.precond[e * d.n + i] = P.m[e / 3][e % 3];
         const bool fixed = d.fixed[i] != 0;
-        // Filtered vertices get their prescribed change z = v_target − v_k; the rest start at 0.
-        store3(d.dv, i, d.n, fixed ? load3(d.pin_velocity, i, d.n) - load3(d.vk, i, d.n) : V3{});
+        // Filtered vertices get their prescribed change z = v_target − v_k; the rest start at 0 or,
+        // warm, at the last substep's velocity change (as on the CPU).
+        const bool warm = first_newton && step_params(d).cg_warm_start;
+        store3(d.dv, i, d.n,
+               fixed ? load3(d.pin_velocity, i, d.n) - load3(d.vk, i, d.n) : (warm ? load3(d.dv_previous, i, d.n) : V3{}));
         if (!fixed) {
             const V3 b = load3(d.b, i, d.n);
             value = static_cast<double>(physics::dot(b, P * b));
@@ -166,8 +169,8 @@ __global__ void spmv_kernel(DeviceView d, const float* x, float* y) {
 
 }  // namespace
 
-void launch_pcg_setup(const DeviceView& d, cudaStream_t stream) {
-    pcg_setup_kernel<<<grid_for(d.n), kBlockSize, 0, stream>>>(d);
+void launch_pcg_setup(const DeviceView& d, bool first_newton, cudaStream_t stream) {
+    pcg_setup_kernel<<<grid_for(d.n), kBlockSize, 0, stream>>>(d, first_newton ? 1 : 0);
     WEFT_CUDA_CHECK_LAUNCH("pcg_setup_kernel");
 }
 

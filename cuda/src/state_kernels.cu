@@ -49,6 +49,7 @@ __global__ void commit_kernel(DeviceView d) {
     const V3 x = load3(d.x0, i, d.n) + h * v;
     store3(d.v, i, d.n, v);
     store3(d.x, i, d.n, x);
+    store3(d.dv_previous, i, d.n, v - load3(d.v0, i, d.n));
     if (!physics::is_finite(x) || !physics::is_finite(v)) atomicAdd(&d.stats->non_finite, 1);
 }
 
@@ -58,6 +59,7 @@ __global__ void rollback_kernel(DeviceView d) {
     if (i >= 3 * d.n || d.stats->non_finite == 0) return;
     d.x[i] = d.x0[i];
     d.v[i] = d.v0[i];
+    d.dv_previous[i] = 0.0f;
 }
 
 __global__ void write_output_kernel(DeviceView d, unsigned char* out, std::size_t stride) {

@@ -78,6 +78,7 @@ void read_solver(Table& root, SolverSettings& s) {
     s.newton_iterations = t->integer("newton_iterations", s.newton_iterations, 1, 50);
     s.cg_tolerance = t->number("cg_tolerance", s.cg_tolerance, {1e-12, 1.0});
     s.cg_max_iterations = t->integer("cg_max_iterations", s.cg_max_iterations, 1, 100000);
+    s.cg_warm_start = t->boolean("cg_warm_start", s.cg_warm_start);
     if (auto p = t->choice("precision", {"float", "double"})) s.precision = *p == 0 ? Precision::Float : Precision::Double;
     if (auto h = t->choice("hessian", {"fast", "projected"}))
         s.hessian = *h == 0 ? HessianMode::Fast : HessianMode::Projected;

@@ -60,6 +60,7 @@ void CpuSolver<T>::build(const FlatModel& flat) {
     vertex_blocks_.assign(n_, M3{});
     b_.assign(n_, V3{});
     dv_.assign(n_, V3{});
+    dv_previous_.assign(n_, V3{});
     pin_velocity_.assign(n_, V3{});
     fixed_.assign(n_, 0);
     for (std::uint32_t v : flat.pin_vertex) fixed_[v] = 1;
@@ -301,8 +302,11 @@ void CpuSolver<T>::substep(const Model& model, double t, double h_double, StepSt
 
         clock = Clock::now();
         assemble();
-        // Filtered vertices get their prescribed change z = v_target − v_k; the rest start at 0.
-        for (std::size_t i = 0; i < n_; ++i) dv_[i] = fixed_[i] ? pin_velocity_[i] - vk_[i] : V3{};
+        // Filtered vertices get their prescribed change z = v_target − v_k. The rest start at 0, or in
+        // the first Newton iteration from the last substep's velocity change (warm start).
+        const bool warm = solver.cg_warm_start && newton == 0;
+        for (std::size_t i = 0; i < n_; ++i)
+            dv_[i] = fixed_[i] ? pin_velocity_[i] - vk_[i] : (warm ? dv_previous_[i] : V3{});
         stats.ms(Stage::Assembly) += ms_since(clock);
 
         clock = Clock::now();
@@ -331,6 +335,7 @@ void CpuSolver<T>::substep(const Model& model, double t, double h_double, StepSt
         for (std::size_t i = lo; i < hi; ++i) {
             v_[i] = vk_[i];
             x_[i] = x0_[i] + h * vk_[i];
+            dv_previous_[i] = vk_[i] - v0_[i];
             if (!physics::is_finite(x_[i]) || !physics::is_finite(v_[i])) count += 1.0;
         }
         return count;
@@ -338,6 +343,7 @@ void CpuSolver<T>::substep(const Model& model, double t, double h_double, StepSt
     if (bad > 0.0) {
         x_ = x0_;
         v_ = v0_;
+        std::fill(dv_previous_.begin(), dv_previous_.end(), V3{});
         stats.non_finite = true;
     }
     stats.ms(Stage::Update) += ms_since(clock);
@@ -356,13 +362,14 @@ void CpuSolver<T>::write_state(std::size_t first, std::size_t count, const Vec3d
     for (std::size_t i = 0; i < count; ++i) {
         x_[first + i] = to<T>(x[i]);
         v_[first + i] = to<T>(v[i]);
+        dv_previous_[first + i] = V3{};  // the motion was replaced: nothing to extrapolate from
     }
 }
 
 template <typename T>
 std::size_t CpuSolver<T>::memory_bytes() const {
     const std::size_t vec3 = x_.capacity() + v_.capacity() + x0_.capacity() + v0_.capacity() + vk_.capacity() +
-                             wk_.capacity() + element_rhs_.capacity() + vertex_rhs_.capacity() + b_.capacity() +
+                             wk_.capacity() + dv_previous_.capacity() + element_rhs_.capacity() + vertex_rhs_.capacity() + b_.capacity() +
                              dv_.capacity() + pin_velocity_.capacity();
     return vec3 * sizeof(V3) + (element_blocks_.capacity() + vertex_blocks_.capacity() + A_.blocks.capacity()) * sizeof(M3) +
            mass_.capacity() * sizeof(T) + triangle_rest_.capacity() * sizeof(TriangleRestT) +
