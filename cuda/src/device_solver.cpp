@@ -19,6 +19,8 @@ static_assert(kSliceRows == 32, "device code assumes 32-row ELL slices (kSliceRo
 /// Host-driven CG (before the graph exists, or when graphs are off): iterations launched in batches of
 /// this many, then one small copy of the `running` flag. Kernels after convergence do nothing.
 constexpr int kHostCheckInterval = 8;
+/// CG iterations in the body of the graph's while node.
+constexpr int kIterationsPerGraphLoop = 2;
 
 std::uint32_t align16(std::size_t bytes) { return static_cast<std::uint32_t>((bytes + 15) / 16 * 16); }
 
@@ -305,7 +307,9 @@ void DeviceSolver::record_pcg_loop(cudaStream_t stream, bool capturing, int newt
     cudaGraph_t body = params.conditional.phGraph_out[0];
     WEFT_CUDA_CHECK(cudaStreamBeginCaptureToGraph(body_stream_, body, nullptr, nullptr, 0, cudaStreamCaptureModeThreadLocal));
     try {
-        launch_pcg_iteration(view_, handle, body_stream_);
+        // Two iterations per trip round the while node halve its per-iteration overhead; the second
+        // does nothing if the first finished the solve.
+        for (int k = 0; k < kIterationsPerGraphLoop; ++k) launch_pcg_iteration(view_, handle, body_stream_);
     } catch (...) {
         cudaGraph_t discarded = nullptr;
         cudaStreamEndCapture(body_stream_, &discarded);

@@ -1,0 +1,36 @@
+#!/bin/bash
+# compute-sanitizer on a small scene stepped by the CUDA backend: memcheck with the graph path (the
+# default) and racecheck and synccheck with WEFT_CUDA_GRAPHS=0 (racecheck cannot follow conditional
+# graph nodes). Exit 77 (ctest SKIP) where there is no GPU or no compute-sanitizer.
+#   tests/gpu/sanitize.sh WEFT_BINARY
+set -u
+weft=${1:?usage: sanitize.sh WEFT_BINARY}
+sanitizer=${COMPUTE_SANITIZER:-}
+[ -z "$sanitizer" ] && sanitizer=$(command -v compute-sanitizer || true)
+[ -z "$sanitizer" ] && [ -x /usr/local/cuda/bin/compute-sanitizer ] && sanitizer=/usr/local/cuda/bin/compute-sanitizer
+if [ -z "$sanitizer" ]; then
+    echo "SKIP: compute-sanitizer not found"
+    exit 77
+fi
+if ! "$weft" info | grep -E '^  cuda ' | grep -qv unavailable; then
+    echo "SKIP: no CUDA device: $("$weft" info | grep -E '^  cuda ')"
+    exit 77
+fi
+status=0
+run() {
+    local tool=$1; shift
+    echo "== $tool: $*"
+    if ! "$sanitizer" --tool "$tool" --error-exitcode 9 "$@"; then
+        echo "FAILED: compute-sanitizer --tool $tool $*"
+        status=1
+    fi
+}
+# hanging: pins; drape: collider contacts; flag: wind, gusts and a capsule.
+for scene in hanging drape flag; do
+    run memcheck "$weft" run "$scene" --backend cuda --frames 3 --quiet --set 'solver.cg_max_iterations=200'
+done
+export WEFT_CUDA_GRAPHS=0
+run racecheck "$weft" run drape --backend cuda --frames 2 --quiet --set 'solver.cg_max_iterations=100'
+run synccheck "$weft" run drape --backend cuda --frames 2 --quiet --set 'solver.cg_max_iterations=100'
+run initcheck "$weft" run flag --backend cuda --frames 2 --quiet --set 'solver.cg_max_iterations=100'
+exit $status
