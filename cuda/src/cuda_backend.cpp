@@ -41,13 +41,24 @@ public:
         // conditional graph nodes (compute-sanitizer's racecheck) and for comparing the two paths.
         if (const char* env = std::getenv("WEFT_CUDA_GRAPHS"); env != nullptr && std::string_view(env) == "0")
             solver_->set_use_graph(false);
+        // WEFT_CUDA_ASSEMBLY=rows|colors picks an assembly strategy for benchmarks and A/B runs.
+        if (const char* env = std::getenv("WEFT_CUDA_ASSEMBLY"); env != nullptr) {
+            const std::string_view v(env);
+            if (v == "rows")
+                solver_->set_assembly(AssemblyStrategy::RowGather);
+            else if (v == "colors")
+                solver_->set_assembly(AssemblyStrategy::ColorPasses);
+            else if (v != "auto")
+                throw Error("WEFT_CUDA_ASSEMBLY='" + std::string(v) + "': expected rows, colors or auto");
+        }
     }
 
     std::string_view name() const override { return "cuda"; }
 
     std::string device_description() const override {
         return info_.name + " (sm_" + std::to_string(info_.compute_major) + std::to_string(info_.compute_minor) + ", " +
-               format_gib(info_.memory_bytes) + "), float" + (solver_->graph_active() ? ", CUDA graph" : "");
+               format_gib(info_.memory_bytes) + "), float" + (solver_->graph_active() ? ", CUDA graph" : "") +
+               (solver_->row_gather() ? ", row-gather assembly" : ", colour-pass assembly");
     }
 
     void build(const Model& model) override {
@@ -74,6 +85,7 @@ public:
     std::size_t vertex_count() const override { return flat_.vertex_count; }
     void set_use_graph(bool enabled) override { solver_->set_use_graph(enabled); }
     bool graph_active() const override { return solver_->graph_active(); }
+    void set_assembly(AssemblyStrategy strategy) override { solver_->set_assembly(strategy); }
     std::vector<std::pair<std::string, std::size_t>> memory_breakdown() const override { return solver_->ledger().entries(); }
 
     DeviceSolver& solver() { return *solver_; }

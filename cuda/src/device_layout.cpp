@@ -81,39 +81,55 @@ EllLayout make_ell_layout(const BlockPattern& pattern) {
     return ell;
 }
 
+namespace {
+
+// CSR of (element, corner) incidences per vertex: entry 4·element + corner, elements in order.
+void incidence(const std::uint32_t* ids, std::size_t corners, std::size_t count, std::size_t vertex_count,
+               std::vector<std::uint32_t>& start, std::vector<std::uint32_t>& entries) {
+    if (count >= (std::size_t{1} << 30)) throw Error("CUDA backend: more than 2^30 elements in one world");
+    start.assign(vertex_count + 1, 0);
+    for (std::size_t e = 0; e < count * corners; ++e) ++start[ids[e] + 1];
+    for (std::size_t i = 0; i < vertex_count; ++i) start[i + 1] += start[i];
+    entries.resize(count * corners);
+    std::vector<std::uint32_t> fill(start.begin(), start.end() - 1);
+    for (std::size_t e = 0; e < count; ++e)
+        for (std::size_t a = 0; a < corners; ++a)
+            entries[fill[ids[corners * e + a]]++] = static_cast<std::uint32_t>(4 * e + a);
+}
+
+}  // namespace
+
 DeviceLayout make_device_layout(const FlatModel& flat) {
     DeviceLayout d;
     d.ell = make_ell_layout(flat.pattern);
+    for (std::size_t s = 0; s < d.ell.slices(); ++s) d.max_row_width = std::max(d.max_row_width, d.ell.width(s));
     const std::size_t nt = flat.triangle_count(), nh = flat.hinge_count();
     std::vector<std::uint32_t> ids(3 * nt);
     for (std::size_t t = 0; t < nt; ++t)
         for (int a = 0; a < 3; ++a) ids[3 * t + a] = flat.triangles[t].v[a];
     d.triangle_colors = color_elements(ids, 3, flat.vertex_count);
+    // Triangles in colour order from here on: positions and incidence use colour-order ids.
+    std::vector<std::uint32_t> ordered(3 * nt);
+    d.triangle_positions.resize(9 * nt);
+    for (std::size_t j = 0; j < nt; ++j) {
+        const std::uint32_t t = d.triangle_colors.order[j];
+        for (int a = 0; a < 3; ++a) ordered[3 * j + a] = flat.triangles[t].v[a];
+        for (int e = 0; e < 9; ++e) d.triangle_positions[9 * j + e] = d.ell.slot_position[flat.pattern.triangle_slots[9 * t + e]];
+    }
+    incidence(ordered.data(), 3, nt, flat.vertex_count, d.vertex_triangle_start, d.vertex_triangle);
+
     ids.resize(4 * nh);
     for (std::size_t k = 0; k < nh; ++k)
         for (int a = 0; a < 4; ++a) ids[4 * k + a] = flat.hinges[k].v[a];
     d.hinge_colors = color_elements(ids, 4, flat.vertex_count);
-
-    d.triangle_positions.resize(9 * nt);
-    for (std::size_t j = 0; j < nt; ++j) {
-        const std::uint32_t t = d.triangle_colors.order[j];
-        for (int e = 0; e < 9; ++e) d.triangle_positions[9 * j + e] = d.ell.slot_position[flat.pattern.triangle_slots[9 * t + e]];
-    }
+    ordered.resize(4 * nh);
     d.hinge_positions.resize(16 * nh);
     for (std::size_t j = 0; j < nh; ++j) {
         const std::uint32_t k = d.hinge_colors.order[j];
+        for (int a = 0; a < 4; ++a) ordered[4 * j + a] = flat.hinges[k].v[a];
         for (int e = 0; e < 16; ++e) d.hinge_positions[16 * j + e] = d.ell.slot_position[flat.pattern.hinge_slots[16 * k + e]];
     }
-
-    d.vertex_triangle_start.assign(flat.vertex_count + 1, 0);
-    for (const Triangle& t : flat.triangles)
-        for (std::uint32_t v : t.v) ++d.vertex_triangle_start[v + 1];
-    for (std::size_t i = 0; i < flat.vertex_count; ++i) d.vertex_triangle_start[i + 1] += d.vertex_triangle_start[i];
-    d.vertex_triangle.resize(3 * nt);
-    std::vector<std::uint32_t> fill(d.vertex_triangle_start.begin(), d.vertex_triangle_start.end() - 1);
-    for (std::size_t t = 0; t < nt; ++t)
-        for (std::uint32_t v : flat.triangles[t].v) d.vertex_triangle[fill[v]++] = static_cast<std::uint32_t>(t);
+    incidence(ordered.data(), 4, nh, flat.vertex_count, d.vertex_hinge_start, d.vertex_hinge);
     return d;
 }
-
 }  // namespace weft::cuda

@@ -7,10 +7,15 @@
 //   the k-th block of every row of a slice is stored next to the k-th block of its neighbours. A warp
 //   computing 32 rows of A·x then reads one contiguous run of blocks per k: the SpMV, which bounds
 //   the whole solve, streams the matrix at full memory bandwidth.
-// - Elements are coloured so that no two elements of one colour share a vertex, and sorted by colour.
-//   Assembly then runs one launch per colour and adds each element's blocks straight into the matrix
-//   with plain read-modify-writes: no atomics, no per-element scratch (which would cost more than
-//   1 KB per triangle), and a fixed summation order, so the result has the same bits on every run.
+// - Assembly needs no atomics and no per-element scratch (which would cost more than 1 KB per
+//   triangle), in one of two ways (DeviceSolver picks by size; docs/architecture.md measures both):
+//   * row gather: each vertex lists the (element, corner) pairs that touch it, and one warp per row
+//     evaluates those elements and sums the row's blocks: one launch, each block written once, but
+//     every element evaluated once per corner. Best for small and mid-size cloth (latency-bound).
+//   * colour passes: elements are coloured so that no two of one colour share a vertex and sorted
+//     by colour; one launch per colour adds element blocks with plain read-modify-writes. Each element
+//     is evaluated once, but every pass streams the part of the matrix it touches. Best for large cloth.
+//   Both sum in a fixed order, so each gives the same bits on every run.
 
 #include <cstdint>
 #include <vector>
@@ -54,17 +59,22 @@ inline std::uint32_t ell_position(std::uint32_t slice_start, std::uint32_t row, 
 
 [[nodiscard]] EllLayout make_ell_layout(const BlockPattern& pattern);
 
-/// Everything the device solver uploads, in device order.
+/// Everything the device solver uploads beyond the model's own arrays. The device stores elements in
+/// colour order (`triangle_colors.order`, `hinge_colors.order`); every element id below is a
+/// colour-order id.
 struct DeviceLayout {
     EllLayout ell;
     Coloring triangle_colors;
     Coloring hinge_colors;
-    /// Per coloured triangle (in `triangle_colors.order` order): 9 ELL positions, [a*3+b].
+    /// Per triangle: 9 ELL positions, [a*3+b] → block (v_a, v_b).
     std::vector<std::uint32_t> triangle_positions;
-    /// Per coloured hinge: 16 ELL positions, [a*4+b].
+    /// Per hinge: 16 ELL positions, [a*4+b].
     std::vector<std::uint32_t> hinge_positions;
-    /// Vertex → incident triangles (original ids) for normals, CSR.
+    /// Vertex → incident triangle corners, CSR; each entry is 4·triangle + corner, in id order.
     std::vector<std::uint32_t> vertex_triangle_start, vertex_triangle;
+    /// Vertex → incident hinge corners, CSR; each entry is 4·hinge + corner, in id order.
+    std::vector<std::uint32_t> vertex_hinge_start, vertex_hinge;
+    std::uint32_t max_row_width = 0;  ///< blocks in the longest row
 };
 
 [[nodiscard]] DeviceLayout make_device_layout(const FlatModel& flat);

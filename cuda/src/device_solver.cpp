@@ -97,12 +97,11 @@ void DeviceSolver::build(const FlatModel& flat, const Model& model) {
     slice_start_.upload(layout_.ell.slice_start, ledger_, "matrix structure");
     diagonal_.upload(layout_.ell.diagonal, ledger_, "matrix structure");
 
-    // Elements in colour order.
-    std::vector<std::uint32_t> ids(3 * nt), cloth(nt), color_index(nt);
+    // Elements in colour order (device_layout.h); the incidence lists already use colour-order ids.
+    std::vector<std::uint32_t> ids(3 * nt), cloth(nt);
     std::vector<float> rest(5 * nt);
     for (std::size_t j = 0; j < nt; ++j) {
         const std::uint32_t t = layout_.triangle_colors.order[j];
-        color_index[t] = static_cast<std::uint32_t>(j);
         for (int a = 0; a < 3; ++a) ids[3 * j + a] = flat.triangles[t].v[a];
         const TriangleRest& r = flat.triangle_rest[t];
         rest[5 * j + 0] = static_cast<float>(r.dm_inv[0][0]);
@@ -116,10 +115,6 @@ void DeviceSolver::build(const FlatModel& flat, const Model& model) {
     triangle_rest_.upload(rest, ledger_, "triangles");
     triangle_cloth_.upload(cloth, ledger_, "triangles");
     triangle_positions_.upload(layout_.triangle_positions, ledger_, "element slot maps");
-    std::vector<std::uint32_t> vertex_triangle(layout_.vertex_triangle.size());
-    for (std::size_t e = 0; e < vertex_triangle.size(); ++e) vertex_triangle[e] = color_index[layout_.vertex_triangle[e]];
-    vertex_triangle_start_.upload(layout_.vertex_triangle_start, ledger_, "normals adjacency");
-    vertex_triangle_.upload(vertex_triangle, ledger_, "normals adjacency");
 
     ids.assign(4 * nh, 0);
     cloth.assign(nh, 0);
@@ -135,6 +130,11 @@ void DeviceSolver::build(const FlatModel& flat, const Model& model) {
     hinge_rest_.upload(rest, ledger_, "hinges");
     hinge_cloth_.upload(cloth, ledger_, "hinges");
     hinge_positions_.upload(layout_.hinge_positions, ledger_, "element slot maps");
+    // The triangle incidence also serves the normals; the hinge incidence only the row gather.
+    vertex_triangle_start_.upload(layout_.vertex_triangle_start, ledger_, "vertex incidence");
+    vertex_triangle_.upload(layout_.vertex_triangle, ledger_, "vertex incidence");
+    vertex_hinge_start_.upload(layout_.vertex_hinge_start, ledger_, "vertex incidence");
+    vertex_hinge_.upload(layout_.vertex_hinge, ledger_, "vertex incidence");
     pin_vertex_.upload(flat.pin_vertex, ledger_, "pins");
 
     // The per-substep parameter block: header, then cloths, shapes, shape friction, pin targets.
@@ -192,12 +192,31 @@ void DeviceSolver::build(const FlatModel& flat, const Model& model) {
     d.hinge_positions = hinge_positions_.get();
     d.vertex_triangle_start = vertex_triangle_start_.get();
     d.vertex_triangle = vertex_triangle_.get();
+    d.vertex_hinge_start = vertex_hinge_start_.get();
+    d.vertex_hinge = vertex_hinge_.get();
     d.pin_vertex = pin_vertex_.get();
     d.staging = staging_.get();
     d.control = control_.get();
     d.stats = stats_.get();
     d.partials = partials_.get();
+    choose_assembly();
     WEFT_CUDA_CHECK(cudaDeviceSynchronize());
+}
+
+void DeviceSolver::choose_assembly() {
+    // Measured on an H200 (docs/results.md, forces ms per 60 Hz frame): the row gather wins below
+    // about 20K vertices (0.12 against 1.39 ms at 1K vertices, 0.66 against 1.96 at 8.8K) and the
+    // colour passes above (2.13 against 2.56 at 40K, 5.1 against 18.5 at 600K).
+    constexpr std::uint32_t kRowGatherMaxVertices = 20000;
+    const bool gather = assembly_ == AssemblyStrategy::RowGather ||
+                        (assembly_ == AssemblyStrategy::Auto && view_.n <= kRowGatherMaxVertices);
+    if (gather != row_gather_) destroy_graph();
+    row_gather_ = gather;
+}
+
+void DeviceSolver::set_assembly(AssemblyStrategy strategy) {
+    assembly_ = strategy;
+    choose_assembly();
 }
 
 void DeviceSolver::fill_staging(const Model& model, double t, double h) {
@@ -332,13 +351,10 @@ void DeviceSolver::record(cudaStream_t stream, bool capturing) {
     mark();
     for (int it = 0; it < newton; ++it) {
         launch_begin_newton(view_, stream);
-        launch_vertex_terms(view_, stream);
-        const Coloring& tc = layout_.triangle_colors;
-        for (std::size_t c = 0; c < tc.color_count(); ++c)
-            launch_triangle_terms(view_, tc.color_start[c], tc.color_start[c + 1], stream);
-        const Coloring& hc = layout_.hinge_colors;
-        for (std::size_t c = 0; c < hc.color_count(); ++c)
-            launch_hinge_terms(view_, hc.color_start[c], hc.color_start[c + 1], stream);
+        if (row_gather_)
+            launch_assemble_rows(view_, stream);
+        else
+            launch_assemble_colors(view_, layout_.triangle_colors, layout_.hinge_colors, stream);
         mark();
         launch_pcg_setup(view_, it == 0, stream);
         record_pcg_loop(stream, capturing, it);

@@ -12,6 +12,7 @@
 #include "device_layout.h"
 #include "device_params.h"
 #include "device_view.h"
+#include "weft/cuda/cuda_backend.h"
 #include "weft/flat_model.h"
 #include "weft/model.h"
 #include "weft/stats.h"
@@ -36,6 +37,9 @@ public:
     void set_stream(cudaStream_t stream);
     void set_output(void* device_buffer, std::size_t stride);
     void set_use_graph(bool enabled);
+    void set_assembly(AssemblyStrategy strategy);
+    /// Whether assembly runs as the row gather (else colour passes).
+    [[nodiscard]] bool row_gather() const { return row_gather_; }
     [[nodiscard]] bool graph_active() const { return graph_active_; }
     [[nodiscard]] std::size_t memory_bytes() const { return ledger_.total(); }
     [[nodiscard]] const MemoryLedger& ledger() const { return ledger_; }
@@ -53,6 +57,7 @@ private:
     void record_pcg_loop(cudaStream_t stream, bool capturing, int newton);
     void fill_staging(const Model& model, double t, double h);
     void capture_graph();
+    void choose_assembly();
     void destroy_graph();
     [[nodiscard]] cudaStream_t active_stream() const { return user_stream_ != nullptr ? user_stream_ : stream_; }
 
@@ -76,7 +81,7 @@ private:
     DeviceArray<float> triangle_rest_;
     DeviceArray<std::uint32_t> hinge_vertices_, hinge_cloth_, hinge_positions_;
     DeviceArray<float> hinge_rest_;
-    DeviceArray<std::uint32_t> vertex_triangle_start_, vertex_triangle_;
+    DeviceArray<std::uint32_t> vertex_triangle_start_, vertex_triangle_, vertex_hinge_start_, vertex_hinge_;
     DeviceArray<std::uint32_t> pin_vertex_;
     DeviceArray<unsigned char> staging_;
     DeviceArray<PcgControl> control_;
@@ -95,6 +100,8 @@ private:
     std::vector<cudaEvent_t> events_;
     int recorded_newton_ = 0;
 
+    AssemblyStrategy assembly_ = AssemblyStrategy::Auto;
+    bool row_gather_ = true;
     bool use_graph_ = true;
     bool graph_active_ = false;
     bool graph_unsupported_ = false;

@@ -25,7 +25,7 @@ struct DeviceView {
     const std::uint32_t* column = nullptr;
     const std::uint32_t* slice_start = nullptr;
     const std::uint32_t* diagonal = nullptr;
-    // Triangles and hinges in colour order.
+    // Triangles and hinges, in the flat model's order.
     const std::uint32_t* triangle_vertices = nullptr;  ///< 3 per triangle
     const float* triangle_rest = nullptr;              ///< Dm⁻¹ (4, row-major) and area, 5 per triangle
     const std::uint32_t* triangle_cloth = nullptr;
@@ -34,9 +34,11 @@ struct DeviceView {
     const float* hinge_rest = nullptr;                 ///< weight and rest angle, 2 per hinge
     const std::uint32_t* hinge_cloth = nullptr;
     const std::uint32_t* hinge_positions = nullptr;    ///< 16 ELL positions per hinge
-    // Vertex → incident triangles (colour-order ids), for normals.
+    // Vertex → incident (element, corner) pairs, entries 4·element + corner (device_layout.h).
     const std::uint32_t* vertex_triangle_start = nullptr;
     const std::uint32_t* vertex_triangle = nullptr;
+    const std::uint32_t* vertex_hinge_start = nullptr;
+    const std::uint32_t* vertex_hinge = nullptr;
     const std::uint32_t* pin_vertex = nullptr;
     // Per-substep parameters, CG control, stats and reduction scratch.
     const unsigned char* staging = nullptr;

@@ -1,11 +1,12 @@
 #pragma once
 // Host-side launchers of the solver kernels (one .cu file per concept: state_kernels.cu,
-// force_kernels.cu, pcg_kernels.cu). Each launches on `stream` and checks the launch.
+// assembly_kernels.cu, pcg_kernels.cu). Each launches on `stream` and checks the launch.
 
 #include <cuda_runtime_api.h>
 
 #include <cstdint>
 
+#include "device_layout.h"
 #include "device_view.h"
 
 namespace weft::cuda {
@@ -28,13 +29,12 @@ void launch_commit(const DeviceView& d, cudaStream_t stream);
 void launch_write_output(const DeviceView& d, void* out, std::size_t stride, cudaStream_t stream);
 
 // ---- forces and assembly (force_kernels.cu) -------------------------------------------------------
-/// Per vertex: inertia, gravity, mass damping and collider contacts into b and the diagonal block;
-/// zeroes the rest of the row.
-void launch_vertex_terms(const DeviceView& d, cudaStream_t stream);
-/// Triangles [first, last) of one colour: membrane, stiffness damping and wind, added into A and b.
-void launch_triangle_terms(const DeviceView& d, std::uint32_t first, std::uint32_t last, cudaStream_t stream);
-/// Hinges [first, last) of one colour: bending, added into A and b.
-void launch_hinge_terms(const DeviceView& d, std::uint32_t first, std::uint32_t last, cudaStream_t stream);
+/// The whole system A·Δv = b (assembly_kernels.cu): inertia, gravity, mass damping and collider
+/// contacts of each vertex, membrane, damping and wind of each triangle, bending of each hinge.
+/// Row gather: one launch, one warp per row (device_layout.h says when each strategy wins).
+void launch_assemble_rows(const DeviceView& d, cudaStream_t stream);
+/// Colour passes: a vertex launch, then one launch per triangle colour and per hinge colour.
+void launch_assemble_colors(const DeviceView& d, const Coloring& triangles, const Coloring& hinges, cudaStream_t stream);
 
 // ---- PCG (pcg_kernels.cu) --------------------------------------------------------------------------
 /// Block-Jacobi inverse, Δv initialised (prescribed on filtered vertices; on the others the last

@@ -68,7 +68,7 @@ __global__ void write_output_kernel(DeviceView d, unsigned char* out, std::size_
     // Area-weighted vertex normal: the sum of the incident faces' cross products, in a fixed order.
     V3 normal{};
     for (std::uint32_t e = d.vertex_triangle_start[i]; e < d.vertex_triangle_start[i + 1]; ++e) {
-        const std::uint32_t t = d.vertex_triangle[e];
+        const std::uint32_t t = d.vertex_triangle[e] >> 2;
         const V3 a = load3(d.x, d.triangle_vertices[3 * t], d.n);
         const V3 b = load3(d.x, d.triangle_vertices[3 * t + 1], d.n);
         const V3 c = load3(d.x, d.triangle_vertices[3 * t + 2], d.n);

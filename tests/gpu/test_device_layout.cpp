@@ -1,5 +1,6 @@
 // The CUDA backend's host-side layout rules (cuda/src/device_layout.h), checked without a GPU: the
-// element colouring that makes assembly race-free and deterministic, and the sliced-ELL positions
+// element colouring that makes the colour passes race-free and deterministic, the per-vertex
+// incidence lists the row gather walks, and the sliced-ELL positions
 // the matrix, the SpMV and the element slot maps share. A mistake here corrupts the device matrix
 // silently (two threads adding into one block, a block landing in another row), so every property
 // the kernels rely on is checked directly rather than through a simulation.
@@ -294,19 +295,47 @@ TEST(DeviceLayout, ElementPositionsFollowTheSlotMaps) {
     }
 }
 
-TEST(DeviceLayout, VertexTriangleAdjacencyListsEveryIncidentTriangle) {
-    // The output kernel's normals sum these lists: a missing or repeated triangle skews them.
-    const FlatModel f = flag_model();
-    const DeviceLayout d = make_device_layout(f);
-    ASSERT_EQ(d.vertex_triangle_start.size(), f.vertex_count + 1);
-    std::vector<std::multiset<std::uint32_t>> expected(f.vertex_count);
-    for (std::uint32_t t = 0; t < f.triangle_count(); ++t)
-        for (std::uint32_t v : f.triangles[t].v) expected[v].insert(t);
-    for (std::size_t i = 0; i < f.vertex_count; ++i) {
-        const std::multiset<std::uint32_t> got(d.vertex_triangle.begin() + d.vertex_triangle_start[i],
-                                               d.vertex_triangle.begin() + d.vertex_triangle_start[i + 1]);
+/// Checks one incidence CSR: vertex i lists exactly the (element, corner) pairs whose corner is i,
+/// as 4·element + corner, in increasing element order (the fixed summation order of the row gather).
+void expect_incidence(const std::vector<std::uint32_t>& ids, std::size_t corners, std::size_t vertex_count,
+                      const std::vector<std::uint32_t>& start, const std::vector<std::uint32_t>& entries) {
+    ASSERT_EQ(start.size(), vertex_count + 1);
+    ASSERT_EQ(entries.size(), ids.size());
+    std::vector<std::vector<std::uint32_t>> expected(vertex_count);
+    for (std::size_t e = 0; e < ids.size() / corners; ++e)
+        for (std::size_t a = 0; a < corners; ++a)
+            expected[ids[corners * e + a]].push_back(static_cast<std::uint32_t>(4 * e + a));
+    for (std::size_t i = 0; i < vertex_count; ++i) {
+        const std::vector<std::uint32_t> got(entries.begin() + start[i], entries.begin() + start[i + 1]);
         ASSERT_EQ(got, expected[i]) << "vertex " << i;
     }
+}
+
+/// Element vertex ids in colour order (the order the device stores elements in).
+std::vector<std::uint32_t> in_color_order(const std::vector<std::uint32_t>& ids, std::size_t corners, const Coloring& c) {
+    std::vector<std::uint32_t> out;
+    for (std::uint32_t e : c.order) out.insert(out.end(), ids.begin() + corners * e, ids.begin() + corners * (e + 1));
+    return out;
+}
+
+TEST(DeviceLayout, IncidenceListsEveryElementCornerOnceInOrder) {
+    // The row gather sums each row over these lists and the normals sum the triangle list: an element
+    // missing or repeated skews the matrix and the normals.
+    const FlatModel f = flag_model();
+    const DeviceLayout d = make_device_layout(f);
+    expect_incidence(in_color_order(triangle_ids(f), 3, d.triangle_colors), 3, f.vertex_count, d.vertex_triangle_start,
+                     d.vertex_triangle);
+    expect_incidence(in_color_order(hinge_ids(f), 4, d.hinge_colors), 4, f.vertex_count, d.vertex_hinge_start,
+                     d.vertex_hinge);
+}
+
+TEST(DeviceLayout, MaxRowWidthIsTheWidestRow) {
+    const FlatModel f = flag_model();
+    const DeviceLayout d = make_device_layout(f);
+    std::uint32_t widest = 0;
+    for (std::size_t i = 0; i < f.vertex_count; ++i)
+        widest = std::max(widest, f.pattern.row_start[i + 1] - f.pattern.row_start[i]);
+    EXPECT_EQ(d.max_row_width, widest);
 }
 
 }  // namespace

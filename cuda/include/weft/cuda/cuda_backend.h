@@ -46,6 +46,14 @@ struct OutputVertex {
     float normal[3];
 };
 
+/// How the CUDA backend assembles A·Δv = b (docs/architecture.md, "The CUDA backend"). Both give
+/// the same physics and differ only in float rounding order.
+enum class AssemblyStrategy : std::uint8_t {
+    Auto,        ///< row gather up to 20,000 vertices, colour passes above (measured crossover)
+    RowGather,   ///< one warp per matrix row; one launch; elements evaluated once per corner
+    ColorPasses, ///< one launch per element colour; elements evaluated once; the matrix streamed per pass
+};
+
 /// The CUDA-specific part of the backend. Obtain it with `as_cuda(world.backend())`.
 class CudaBackendApi {
 public:
@@ -64,6 +72,8 @@ public:
     virtual void set_use_graph(bool enabled) = 0;
     /// Whether the last substep ran as a graph with the CG loop on the device.
     [[nodiscard]] virtual bool graph_active() const = 0;
+    /// Chooses the assembly strategy (default Auto); takes effect at the next substep.
+    virtual void set_assembly(AssemblyStrategy strategy) = 0;
     /// Device memory held by the solver, bytes, split by purpose (for benchmarks and stats).
     [[nodiscard]] virtual std::vector<std::pair<std::string, std::size_t>> memory_breakdown() const = 0;
 };
