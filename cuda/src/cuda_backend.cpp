@@ -51,6 +51,16 @@ public:
             else if (v != "auto")
                 throw Error("WEFT_CUDA_ASSEMBLY='" + std::string(v) + "': expected rows, colors or auto");
         }
+        // WEFT_CUDA_PCG=one|kernels picks how the CG loop runs.
+        if (const char* env = std::getenv("WEFT_CUDA_PCG"); env != nullptr) {
+            const std::string_view v(env);
+            if (v == "one")
+                solver_->set_pcg_loop(PcgLoop::OneLaunch);
+            else if (v == "kernels")
+                solver_->set_pcg_loop(PcgLoop::PerKernel);
+            else if (v != "auto")
+                throw Error("WEFT_CUDA_PCG='" + std::string(v) + "': expected one, kernels or auto");
+        }
     }
 
     std::string_view name() const override { return "cuda"; }
@@ -58,7 +68,8 @@ public:
     std::string device_description() const override {
         return info_.name + " (sm_" + std::to_string(info_.compute_major) + std::to_string(info_.compute_minor) + ", " +
                format_gib(info_.memory_bytes) + "), float" + (solver_->graph_active() ? ", CUDA graph" : "") +
-               (solver_->row_gather() ? ", row-gather assembly" : ", colour-pass assembly");
+               (solver_->row_gather() ? ", row-gather assembly" : ", colour-pass assembly") +
+               (solver_->persistent_grid() > 0 ? ", one-launch CG" : ", per-kernel CG");
     }
 
     void build(const Model& model) override {
@@ -86,6 +97,7 @@ public:
     void set_use_graph(bool enabled) override { solver_->set_use_graph(enabled); }
     bool graph_active() const override { return solver_->graph_active(); }
     void set_assembly(AssemblyStrategy strategy) override { solver_->set_assembly(strategy); }
+    void set_pcg_loop(PcgLoop loop) override { solver_->set_pcg_loop(loop); }
     std::vector<std::pair<std::string, std::size_t>> memory_breakdown() const override { return solver_->ledger().entries(); }
 
     DeviceSolver& solver() { return *solver_; }

@@ -155,7 +155,8 @@ void DeviceSolver::build(const FlatModel& flat, const Model& model) {
 
     control_.allocate(1, ledger_, "CG control and stats");
     stats_.allocate(1, ledger_, "CG control and stats");
-    partials_.allocate(std::max(1u, grid_for(static_cast<std::uint32_t>(n))), ledger_, "CG control and stats");
+    // Two sets of block partials: the one-launch CG loop alternates between them.
+    partials_.allocate(2 * std::max(1u, grid_for(static_cast<std::uint32_t>(n))), ledger_, "CG control and stats");
     WEFT_CUDA_CHECK(cudaMemset(control_.get(), 0, sizeof(PcgControl)));
     WEFT_CUDA_CHECK(cudaMemset(stats_.get(), 0, sizeof(DeviceStats)));
 
@@ -200,7 +201,25 @@ void DeviceSolver::build(const FlatModel& flat, const Model& model) {
     d.stats = stats_.get();
     d.partials = partials_.get();
     choose_assembly();
+    choose_pcg_loop();
     WEFT_CUDA_CHECK(cudaDeviceSynchronize());
+}
+
+void DeviceSolver::choose_pcg_loop() {
+    // Measured on an H200 (docs/results.md, solve ms per frame): one cooperative launch per solve is
+    // 1.6× faster than a kernel per step up to 40K vertices and 1.2× at 100K; from 216K vertices on
+    // the two are within 5% either way (bandwidth, not launches, bounds the iteration there).
+    constexpr std::uint32_t kOneLaunchMaxVertices = 200000;
+    int grid = 0;
+    if (pcg_loop_ == PcgLoop::OneLaunch || (pcg_loop_ == PcgLoop::Auto && view_.n <= kOneLaunchMaxVertices))
+        grid = view_.n > 0 ? pcg_persistent_grid(view_, device_) : 0;
+    if (grid != persistent_grid_) destroy_graph();
+    persistent_grid_ = grid;
+}
+
+void DeviceSolver::set_pcg_loop(PcgLoop loop) {
+    pcg_loop_ = loop;
+    choose_pcg_loop();
 }
 
 void DeviceSolver::choose_assembly() {
@@ -292,6 +311,12 @@ void DeviceSolver::fill_staging(const Model& model, double t, double h) {
 
 void DeviceSolver::record_pcg_loop(cudaStream_t stream, bool capturing, int newton) {
     (void)newton;
+    if (persistent_grid_ > 0) {
+        // The whole loop is one cooperative kernel, in a graph or not.
+        launch_pcg_residual(view_, 0, stream);
+        launch_pcg_persistent(view_, persistent_grid_, stream);
+        return;
+    }
     if (!capturing) {
         launch_pcg_residual(view_, 0, stream);
         // Host-driven loop: batches of iterations, then the `running` flag back.

@@ -38,6 +38,9 @@ public:
     void set_output(void* device_buffer, std::size_t stride);
     void set_use_graph(bool enabled);
     void set_assembly(AssemblyStrategy strategy);
+    void set_pcg_loop(PcgLoop loop);
+    /// Blocks of the one-launch CG loop, 0 when the loop runs a kernel per step.
+    [[nodiscard]] int persistent_grid() const { return persistent_grid_; }
     /// Whether assembly runs as the row gather (else colour passes).
     [[nodiscard]] bool row_gather() const { return row_gather_; }
     [[nodiscard]] bool graph_active() const { return graph_active_; }
@@ -58,6 +61,7 @@ private:
     void fill_staging(const Model& model, double t, double h);
     void capture_graph();
     void choose_assembly();
+    void choose_pcg_loop();
     void destroy_graph();
     [[nodiscard]] cudaStream_t active_stream() const { return user_stream_ != nullptr ? user_stream_ : stream_; }
 
@@ -102,6 +106,8 @@ private:
 
     AssemblyStrategy assembly_ = AssemblyStrategy::Auto;
     bool row_gather_ = true;
+    PcgLoop pcg_loop_ = PcgLoop::Auto;
+    int persistent_grid_ = 0;
     bool use_graph_ = true;
     bool graph_active_ = false;
     bool graph_unsupported_ = false;

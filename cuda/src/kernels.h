@@ -46,6 +46,13 @@ void launch_pcg_residual(const DeviceView& d, unsigned long long handle, cudaStr
 /// One CG iteration: q = filter(A c) with cᵀq (fused), then the axpy pair with P⁻¹ and rᵀs (fused),
 /// then the new direction. Every kernel does nothing once the loop has stopped.
 void launch_pcg_iteration(const DeviceView& d, unsigned long long handle, cudaStream_t stream);
+/// Blocks for the one-launch CG loop on `device`: as many as fit at once (at most one per 256 rows),
+/// 0 if the device cannot launch cooperative kernels.
+[[nodiscard]] int pcg_persistent_grid(const DeviceView& d, int device);
+/// The whole CG loop after the residual kernel, in one cooperative launch of `grid` blocks (grid-wide
+/// barriers instead of kernel boundaries). Same algorithm and stopping rule; different summation order
+/// of the dots than the per-iteration kernels.
+void launch_pcg_persistent(const DeviceView& d, int grid, cudaStream_t stream);
 /// Folds the finished solve into the stats.
 void launch_pcg_finish(const DeviceView& d, cudaStream_t stream);
 /// y = A·x over the whole matrix (benchmarks; the solver's SpMV is fused with its dot product).

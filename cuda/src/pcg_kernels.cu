@@ -9,6 +9,7 @@
 //   3. c = filter(s + βc), which needs every row's new s first (the SpMV reads neighbours).
 // The reductions are deterministic (device_math.cuh, grid_sum), so a solve gives the same bits on
 // every run and whether or not it runs inside a graph.
+#include <cooperative_groups.h>
 #include <cuda_runtime.h>
 
 #include "cuda_check.h"
@@ -162,6 +163,80 @@ __global__ void pcg_finish_kernel(DeviceView d) {
     ++st.newton_iterations;
 }
 
+// ---- the whole loop in one cooperative launch (small and mid-size systems) ---------------------------
+// The same iteration, with grid-wide barriers instead of kernel boundaries: a grid no larger than the
+// device holds at once strides over the rows, and every block finishes each dot product itself from
+// the block partials (in index order, so all blocks get the same bits and take the same decisions).
+// Two partial arrays alternate so that a block still reading one dot's partials never sees the next
+// dot's. Used where launch latency, not bandwidth, bounds an iteration.
+__device__ double persistent_sum(double value, double* partials) {
+    namespace cg = cooperative_groups;
+    using Reduce = cub::BlockReduce<double, kBlockSize>;
+    __shared__ typename Reduce::TempStorage storage;
+    __shared__ double total;
+    const double block_sum = Reduce(storage).Sum(value);
+    if (threadIdx.x == 0) partials[blockIdx.x] = block_sum;
+    cg::this_grid().sync();
+    // Every block sums all partials with all its threads (a fixed assignment and CUB's fixed tree).
+    double acc = 0.0;
+    for (unsigned b = threadIdx.x; b < gridDim.x; b += blockDim.x) acc += __ldcg(&partials[b]);
+    __syncthreads();  // storage is reused
+    const double sum = Reduce(storage).Sum(acc);
+    if (threadIdx.x == 0) total = sum;
+    __syncthreads();
+    const double result = total;
+    __syncthreads();  // `total` and `storage` are reused by the next call
+    return result;
+}
+
+__global__ void pcg_persistent_kernel(DeviceView d) {
+    namespace cg = cooperative_groups;
+    const StepParams& sp = step_params(d);
+    PcgControl& ctl = *d.control;
+    if (!ctl.running) return;  // uniform: written by the residual kernel
+    double delta = ctl.delta;
+    const double delta0 = ctl.delta0;
+    int iterations = 0, converged = 0;
+    double* partials[2] = {d.partials, d.partials + gridDim.x};
+    const std::uint32_t stride = gridDim.x * blockDim.x;
+    for (;;) {
+        double local = 0.0;
+        for (std::uint32_t i = blockIdx.x * blockDim.x + threadIdx.x; i < d.n; i += stride) {
+            const V3 q = d.fixed[i] ? V3{} : row_times(d, i, d.c);
+            store3(d.q, i, d.n, q);
+            local += static_cast<double>(physics::dot(load3(d.c, i, d.n), q));
+        }
+        const double cq = persistent_sum(local, partials[0]);
+        if (!(cq > 0.0)) break;  // breakdown: reported as not converged
+        const float alpha = static_cast<float>(delta / cq);
+        local = 0.0;
+        for (std::uint32_t i = blockIdx.x * blockDim.x + threadIdx.x; i < d.n; i += stride) {
+            const V3 r = load3(d.r, i, d.n) - alpha * load3(d.q, i, d.n);
+            const V3 s = load_precond(d, i) * r;
+            store3(d.dv, i, d.n, load3(d.dv, i, d.n) + alpha * load3(d.c, i, d.n));
+            store3(d.r, i, d.n, r);
+            store3(d.s, i, d.n, s);
+            local += static_cast<double>(physics::dot(r, s));
+        }
+        const double delta_new = persistent_sum(local, partials[1]);
+        const float beta = static_cast<float>(delta_new / delta);
+        delta = delta_new;
+        ++iterations;
+        converged = delta_new <= sp.cg_eps2 * delta0;
+        if (converged || iterations >= sp.cg_max_iterations) break;
+        for (std::uint32_t i = blockIdx.x * blockDim.x + threadIdx.x; i < d.n; i += stride)
+            store3(d.c, i, d.n, d.fixed[i] ? V3{} : load3(d.s, i, d.n) + beta * load3(d.c, i, d.n));
+        cg::this_grid().sync();
+    }
+    cg::this_grid().sync();  // every block has read `running` before it is cleared
+    if (blockIdx.x == 0 && threadIdx.x == 0) {
+        ctl.delta = delta;
+        ctl.iterations = iterations;
+        ctl.converged = converged;
+        ctl.running = 0;
+    }
+}
+
 __global__ void spmv_kernel(DeviceView d, const float* x, float* y) {
     const std::uint32_t i = blockIdx.x * blockDim.x + threadIdx.x;
     if (i < d.n) store3(y, i, d.n, row_times(d, i, x));
@@ -186,6 +261,23 @@ void launch_pcg_iteration(const DeviceView& d, unsigned long long handle, cudaSt
     WEFT_CUDA_CHECK_LAUNCH("pcg_update_kernel");
     pcg_direction_kernel<<<grid_for(d.n), kBlockSize, 0, stream>>>(d);
     WEFT_CUDA_CHECK_LAUNCH("pcg_direction_kernel");
+}
+
+int pcg_persistent_grid(const DeviceView& d, int device) {
+    int per_sm = 0, sms = 0, cooperative = 0;
+    WEFT_CUDA_CHECK(cudaDeviceGetAttribute(&cooperative, cudaDevAttrCooperativeLaunch, device));
+    if (cooperative == 0) return 0;
+    WEFT_CUDA_CHECK(cudaDeviceGetAttribute(&sms, cudaDevAttrMultiProcessorCount, device));
+    WEFT_CUDA_CHECK(cudaOccupancyMaxActiveBlocksPerMultiprocessor(&per_sm, pcg_persistent_kernel, kBlockSize, 0));
+    const int needed = static_cast<int>(grid_for(d.n));
+    return std::min(needed, per_sm * sms);
+}
+
+void launch_pcg_persistent(const DeviceView& d, int grid, cudaStream_t stream) {
+    DeviceView view = d;
+    void* args[] = {&view};
+    WEFT_CUDA_CHECK(cudaLaunchCooperativeKernel(reinterpret_cast<const void*>(&pcg_persistent_kernel), dim3(grid),
+                                                dim3(kBlockSize), args, 0, stream));
 }
 
 void launch_pcg_finish(const DeviceView& d, cudaStream_t stream) {

@@ -54,6 +54,14 @@ enum class AssemblyStrategy : std::uint8_t {
     ColorPasses, ///< one launch per element colour; elements evaluated once; the matrix streamed per pass
 };
 
+/// How the CUDA backend drives the CG loop. Same algorithm and stopping rule; the dot products are
+/// summed in a different order, so the two differ in float rounding only.
+enum class PcgLoop : std::uint8_t {
+    Auto,       ///< one launch up to 200,000 vertices, per-iteration kernels above (measured crossover)
+    OneLaunch,  ///< the whole loop in one cooperative kernel with grid-wide barriers: least latency
+    PerKernel,  ///< three kernels per iteration under a graph while node: most bandwidth on large cloth
+};
+
 /// The CUDA-specific part of the backend. Obtain it with `as_cuda(world.backend())`.
 class CudaBackendApi {
 public:
@@ -74,6 +82,8 @@ public:
     [[nodiscard]] virtual bool graph_active() const = 0;
     /// Chooses the assembly strategy (default Auto); takes effect at the next substep.
     virtual void set_assembly(AssemblyStrategy strategy) = 0;
+    /// Chooses how the CG loop runs (default Auto); takes effect at the next substep.
+    virtual void set_pcg_loop(PcgLoop loop) = 0;
     /// Device memory held by the solver, bytes, split by purpose (for benchmarks and stats).
     [[nodiscard]] virtual std::vector<std::pair<std::string, std::size_t>> memory_breakdown() const = 0;
 };
