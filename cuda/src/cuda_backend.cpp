@@ -68,8 +68,9 @@ public:
     std::string device_description() const override {
         return info_.name + " (sm_" + std::to_string(info_.compute_major) + std::to_string(info_.compute_minor) + ", " +
                format_gib(info_.memory_bytes) + "), float" + (solver_->graph_active() ? ", CUDA graph" : "") +
-               (solver_->row_gather() ? ", row-gather assembly" : ", colour-pass assembly") +
-               (solver_->persistent_grid() > 0 ? ", one-launch CG" : ", per-kernel CG");
+               (flat_.vertex_count == 0 ? ""  // strategies are chosen by size at build
+                                        : std::string(solver_->row_gather() ? ", row-gather assembly" : ", colour-pass assembly") +
+                                              (solver_->persistent_grid() > 0 ? ", one-launch CG" : ", per-kernel CG"));
     }
 
     void build(const Model& model) override {
