@@ -81,12 +81,12 @@ public:
     void substep(const Model& model, double t, double h, StepStats& stats) override { solver_->substep(model, t, h, stats); }
 
     void read_state(std::size_t cloth, std::span<Vec3d> x, std::span<Vec3d> v) const override {
-        const auto [first, count] = range(cloth, x.size(), v.size());
+        const auto [first, count] = flat_.cloth_vertices(cloth, x.size(), v.size());
         solver_->read_state(first, count, x.data(), v.data());
     }
 
     void write_state(std::size_t cloth, std::span<const Vec3d> x, std::span<const Vec3d> v) override {
-        const auto [first, count] = range(cloth, x.size(), v.size());
+        const auto [first, count] = flat_.cloth_vertices(cloth, x.size(), v.size());
         solver_->write_state(first, count, x.data(), v.data());
     }
 
@@ -104,14 +104,6 @@ public:
     DeviceSolver& solver() { return *solver_; }
 
 private:
-    std::pair<std::size_t, std::size_t> range(std::size_t cloth, std::size_t nx, std::size_t nv) const {
-        if (cloth + 1 >= flat_.cloth_vertex_offset.size()) throw Error("cloth index " + std::to_string(cloth) + " out of range");
-        const std::size_t first = flat_.cloth_vertex_offset[cloth];
-        const std::size_t count = flat_.cloth_vertex_offset[cloth + 1] - first;
-        if (nx != count || nv != count) throw Error("cloth " + std::to_string(cloth) + ": state size mismatch");
-        return {first, count};
-    }
-
     DeviceInfo info_;
     FlatModel flat_;
     std::unique_ptr<DeviceSolver> solver_;

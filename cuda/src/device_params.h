@@ -5,6 +5,7 @@
 
 #include <cstdint>
 
+#include "weft/material.h"
 #include "weft/physics/collider_contact.h"
 #include "weft/physics/membrane.h"
 #include "weft/physics/vec.h"
@@ -15,11 +16,7 @@ using V3 = physics::Vec3<float>;
 using M3 = physics::Mat3<float>;
 
 /// One cloth's material in solver units (float).
-struct ClothParams {
-    physics::MembraneMaterial<float> membrane{};
-    float bending = 0, damping_mass = 0, damping_stiffness = 0;
-    float drag = 0, lift = 0, thickness = 0, friction = 0;
-};
+using ClothParams = MaterialTerms<float>;
 
 /// Everything that may change from one substep to the next, uploaded with one copy. The arrays
 /// (cloth parameters, shapes, their friction, pin targets) follow the header in the same buffer at

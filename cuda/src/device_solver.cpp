@@ -26,13 +26,6 @@ std::uint32_t align16(std::size_t bytes) { return static_cast<std::uint32_t>((by
 
 V3 to_float(const Vec3d& a) { return {static_cast<float>(a.x), static_cast<float>(a.y), static_cast<float>(a.z)}; }
 
-M3 to_float(const Mat3d& a) {
-    M3 m;
-    for (int r = 0; r < 3; ++r)
-        for (int c = 0; c < 3; ++c) m.m[r][c] = static_cast<float>(a.m[r][c]);
-    return m;
-}
-
 // Vertex arrays in the SoA layout: component c of vertex i at [c·n + i].
 void scatter_soa(std::vector<float>& out, std::size_t offset, std::size_t n, const std::vector<Vec3d>& in) {
     for (std::size_t i = 0; i < n; ++i)
@@ -264,16 +257,7 @@ void DeviceSolver::fill_staging(const Model& model, double t, double h) {
 
     auto* cloths = reinterpret_cast<ClothParams*>(base + p.cloth_offset);
     for (std::size_t c = 0; c < model.cloths.size(); ++c) {
-        const Material& m = model.cloths[c].material;
-        ClothParams& cp = cloths[c];
-        cp.membrane = physics::membrane_material(static_cast<float>(m.stretch_stiffness), static_cast<float>(m.poisson_ratio));
-        cp.bending = static_cast<float>(m.bending_stiffness);
-        cp.damping_mass = static_cast<float>(m.damping_mass);
-        cp.damping_stiffness = static_cast<float>(m.damping_stiffness);
-        cp.drag = static_cast<float>(m.drag_coefficient);
-        cp.lift = static_cast<float>(m.lift_coefficient);
-        cp.thickness = static_cast<float>(m.contact_thickness);
-        cp.friction = static_cast<float>(m.friction);
+        cloths[c] = material_terms<float>(model.cloths[c].material);
     }
     // Colliders take their pose at the end of the substep, as on the CPU (cpu_solver.cpp).
     const double t1 = t + h;
@@ -281,22 +265,7 @@ void DeviceSolver::fill_staging(const Model& model, double t, double h) {
     auto* friction = reinterpret_cast<float*>(base + p.friction_offset);
     for (std::size_t k = 0; k < model.colliders.size(); ++k) {
         const ColliderDesc& c = model.colliders[k];
-        const Transform frame = c.motion.at(t1);
-        physics::Shape<float>& s = shapes[k];
-        switch (c.shape) {
-            case ColliderShape::Sphere: s.kind = physics::ShapeKind::Sphere; break;
-            case ColliderShape::Capsule: s.kind = physics::ShapeKind::Capsule; break;
-            case ColliderShape::Box: s.kind = physics::ShapeKind::Box; break;
-            case ColliderShape::Plane:
-            default: s.kind = physics::ShapeKind::Plane; break;
-        }
-        s.rotation = to_float(frame.rotation);
-        s.origin = to_float(frame.translation);
-        s.radius = static_cast<float>(c.radius);
-        s.half_height = static_cast<float>(c.half_height);
-        s.half_extents = to_float(c.half_extents);
-        s.linear_velocity = to_float(c.motion.point_velocity(t1, frame.translation));
-        s.angular_velocity = to_float(c.motion.angular_velocity);
+        shapes[k] = shape_at<float>(c, t1);
         friction[k] = static_cast<float>(c.friction);
     }
     // Pin targets at t + h, evaluated in double on the host (a handful of vertices).

@@ -130,4 +130,16 @@ std::size_t FlatModel::memory_bytes() const {
            pin_motion.capacity() * sizeof(int) + vertex_pin.capacity() * sizeof(std::int32_t);
 }
 
+std::pair<std::size_t, std::size_t> FlatModel::cloth_vertices(std::size_t cloth, std::size_t positions,
+                                                             std::size_t velocities) const {
+    if (cloth + 1 >= cloth_vertex_offset.size()) throw Error("cloth index " + std::to_string(cloth) + " out of range");
+    const std::size_t first = cloth_vertex_offset[cloth];
+    const std::size_t count = cloth_vertex_offset[cloth + 1] - first;
+    if (positions != count || velocities != count)
+        throw Error("cloth " + std::to_string(cloth) + ": state size mismatch (" + std::to_string(count) +
+                    " vertices, got " + std::to_string(positions) + " positions and " + std::to_string(velocities) +
+                    " velocities)");
+    return {first, count};
+}
+
 }  // namespace weft

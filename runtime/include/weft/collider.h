@@ -6,6 +6,7 @@
 #include <string>
 
 #include "weft/motion.h"
+#include "weft/physics/collider_contact.h"
 
 namespace weft {
 
@@ -24,5 +25,28 @@ struct ColliderDesc {
     Vec3d half_extents{0.5, 0.5, 0.5};  ///< m (box)
     double friction = -1.0;     ///< Coulomb coefficient; negative: use the cloth material's
 };
+
+/// The collider at time `t` (s) as the physics functions see it, in scalar T: its pose, sizes and the
+/// velocity of its frame. Backends call this once per collider per substep.
+template <typename T>
+[[nodiscard]] physics::Shape<T> shape_at(const ColliderDesc& c, double t) {
+    const Transform frame = c.motion.at(t);
+    physics::Shape<T> s{};
+    switch (c.shape) {
+        case ColliderShape::Sphere: s.kind = physics::ShapeKind::Sphere; break;
+        case ColliderShape::Capsule: s.kind = physics::ShapeKind::Capsule; break;
+        case ColliderShape::Box: s.kind = physics::ShapeKind::Box; break;
+        case ColliderShape::Plane:
+        default: s.kind = physics::ShapeKind::Plane; break;
+    }
+    s.rotation = frame.rotation.template cast<T>();
+    s.origin = frame.translation.template cast<T>();
+    s.radius = static_cast<T>(c.radius);
+    s.half_height = static_cast<T>(c.half_height);
+    s.half_extents = c.half_extents.template cast<T>();
+    s.linear_velocity = c.motion.point_velocity(t, frame.translation).template cast<T>();
+    s.angular_velocity = c.motion.angular_velocity.template cast<T>();
+    return s;
+}
 
 }  // namespace weft

@@ -6,6 +6,7 @@
 /// backends build their state from this; it is rebuilt only when `Model::topology_version` changes.
 
 #include <cstdint>
+#include <utility>
 #include <vector>
 
 #include "weft/fabric.h"
@@ -47,6 +48,10 @@ struct FlatModel {
     [[nodiscard]] std::size_t triangle_count() const { return triangles.size(); }
     [[nodiscard]] std::size_t hinge_count() const { return hinges.size(); }
     [[nodiscard]] std::size_t memory_bytes() const;
+    /// First global vertex and vertex count of `cloth`, checked against the sizes of the caller's
+    /// position and velocity arrays (throws `weft::Error` naming the cloth on a mismatch).
+    [[nodiscard]] std::pair<std::size_t, std::size_t> cloth_vertices(std::size_t cloth, std::size_t positions,
+                                                                     std::size_t velocities) const;
 };
 
 /// Flattens `model` (throws `weft::Error` if a cloth has no fabric).

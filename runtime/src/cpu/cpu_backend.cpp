@@ -43,12 +43,12 @@ public:
     }
 
     void read_state(std::size_t cloth, std::span<Vec3d> x, std::span<Vec3d> v) const override {
-        const auto [first, count] = range(cloth, x.size(), v.size());
+        const auto [first, count] = flat_.cloth_vertices(cloth, x.size(), v.size());
         std::visit([&](const auto& s) { s.read_state(first, count, x.data(), v.data()); }, solver_);
     }
 
     void write_state(std::size_t cloth, std::span<const Vec3d> x, std::span<const Vec3d> v) override {
-        const auto [first, count] = range(cloth, x.size(), v.size());
+        const auto [first, count] = flat_.cloth_vertices(cloth, x.size(), v.size());
         std::visit([&](auto& s) { s.write_state(first, count, x.data(), v.data()); }, solver_);
     }
 
@@ -57,14 +57,6 @@ public:
     }
 
 private:
-    std::pair<std::size_t, std::size_t> range(std::size_t cloth, std::size_t nx, std::size_t nv) const {
-        if (cloth + 1 >= flat_.cloth_vertex_offset.size()) throw Error("cloth index " + std::to_string(cloth) + " out of range");
-        const std::size_t first = flat_.cloth_vertex_offset[cloth];
-        const std::size_t count = flat_.cloth_vertex_offset[cloth + 1] - first;
-        if (nx != count || nv != count) throw Error("cloth " + std::to_string(cloth) + ": state size mismatch");
-        return {first, count};
-    }
-
     // Changing precision live keeps the state (converted) and rebuilds the solver.
     void switch_precision(const Model& model) {
         std::vector<Vec3d> x(flat_.vertex_count), v(flat_.vertex_count);

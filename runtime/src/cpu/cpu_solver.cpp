@@ -85,16 +85,7 @@ void CpuSolver<T>::prepare_parameters(const Model& model, double t, double h) {
 
     cloth_params_.resize(model.cloths.size());
     for (std::size_t c = 0; c < model.cloths.size(); ++c) {
-        const Material& m = model.cloths[c].material;
-        ClothParams& p = cloth_params_[c];
-        p.membrane = physics::membrane_material(static_cast<T>(m.stretch_stiffness), static_cast<T>(m.poisson_ratio));
-        p.bending = static_cast<T>(m.bending_stiffness);
-        p.damping_mass = static_cast<T>(m.damping_mass);
-        p.damping_stiffness = static_cast<T>(m.damping_stiffness);
-        p.drag = static_cast<T>(m.drag_coefficient);
-        p.lift = static_cast<T>(m.lift_coefficient);
-        p.thickness = static_cast<T>(m.contact_thickness);
-        p.friction = static_cast<T>(m.friction);
+        cloth_params_[c] = material_terms<T>(model.cloths[c].material);
     }
 
     // Colliders take their pose at the end of the substep: the cloth must be clear of them then.
@@ -103,22 +94,7 @@ void CpuSolver<T>::prepare_parameters(const Model& model, double t, double h) {
     shape_friction_.resize(model.colliders.size());
     for (std::size_t k = 0; k < model.colliders.size(); ++k) {
         const ColliderDesc& c = model.colliders[k];
-        const Transform frame = c.motion.at(t1);
-        physics::Shape<T>& s = shapes_[k];
-        switch (c.shape) {
-            case ColliderShape::Plane: s.kind = physics::ShapeKind::Plane; break;
-            case ColliderShape::Sphere: s.kind = physics::ShapeKind::Sphere; break;
-            case ColliderShape::Capsule: s.kind = physics::ShapeKind::Capsule; break;
-            case ColliderShape::Box: s.kind = physics::ShapeKind::Box; break;
-            default: s.kind = physics::ShapeKind::Plane; break;
-        }
-        s.rotation = to<T>(frame.rotation);
-        s.origin = to<T>(frame.translation);
-        s.radius = static_cast<T>(c.radius);
-        s.half_height = static_cast<T>(c.half_height);
-        s.half_extents = to<T>(c.half_extents);
-        s.linear_velocity = to<T>(c.motion.point_velocity(t1, frame.translation));
-        s.angular_velocity = to<T>(c.motion.angular_velocity);
+        shapes_[k] = shape_at<T>(c, t1);
         shape_friction_[k] = static_cast<T>(c.friction);
     }
 

@@ -30,14 +30,7 @@ public:
     [[nodiscard]] std::size_t memory_bytes() const;
 
 private:
-    struct ClothParams {
-        physics::MembraneMaterial<T> membrane{};
-        T bending = T(0);
-        T damping_mass = T(0);
-        T damping_stiffness = T(0);
-        T drag = T(0), lift = T(0);
-        T thickness = T(0), friction = T(0);
-    };
+    using ClothParams = MaterialTerms<T>;
     struct TriangleRestT {
         T dm_inv[2][2];
         T area;
