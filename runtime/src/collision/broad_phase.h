@@ -1,0 +1,140 @@
+#pragma once
+/// @file
+/// CPU reference broad phase for cloth collisions: a sorted spatial hash (Teschner et al. 2003;
+/// ALGORITHMS.md §4) over the swept, thickness-inflated bounds of vertices, edges and triangles. It
+/// returns every vertex–face and edge–edge pair whose bounds overlap, minus topologically adjacent
+/// ones, as sorted unique lists that are bit-identical on any thread count. The narrow phase
+/// (proximity and CCD) and the GPU broad phase are checked against this.
+
+#include <tbb/enumerable_thread_specific.h>
+
+#include <compare>
+#include <cstddef>
+#include <cstdint>
+#include <span>
+#include <vector>
+
+#include "weft/types.h"
+
+namespace weft::collision {
+
+/// An undirected mesh edge; `v[0] < v[1]` (global vertex ids).
+struct Edge {
+    std::uint32_t v[2]{};
+};
+
+/// The unique edges of `triangles`, each with v[0] < v[1], sorted by (v[0], v[1]). Deterministic.
+/// Throws `weft::Error` for a triangle with a repeated vertex.
+[[nodiscard]] std::vector<Edge> build_edges(std::span<const Triangle> triangles);
+
+/// A vertex whose bound overlaps a triangle's bound (indices into the positions and triangles).
+struct VertexFacePair {
+    std::uint32_t vertex = 0;
+    std::uint32_t triangle = 0;
+    friend auto operator<=>(const VertexFacePair&, const VertexFacePair&) = default;
+};
+
+/// Two edges whose bounds overlap; `a < b` (indices into the edge list).
+struct EdgeEdgePair {
+    std::uint32_t a = 0;
+    std::uint32_t b = 0;
+    friend auto operator<=>(const EdgeEdgePair&, const EdgeEdgePair&) = default;
+};
+
+/// What the broad phase looks at. The spans must stay valid for the call only.
+struct BroadPhaseInput {
+    std::span<const Vec3d> x0;            ///< positions at the start of the step, m
+    std::span<const Vec3d> x1;            ///< positions at the end of the step (same size as x0), m
+    std::span<const Triangle> triangles;  ///< global vertex ids
+    std::span<const Edge> edges;          ///< unique edges, normally `build_edges(triangles)`
+    /// Cloth of each triangle (optional: empty means one cloth). Only read when `self_pairs` is
+    /// false; a vertex or edge takes the cloth of a triangle it belongs to.
+    std::span<const std::uint32_t> triangle_cloth;
+    /// Every bound (vertex, edge, triangle) is grown by this much on each side, m; two primitives
+    /// therefore pair when they come within 2·thickness of each other along every axis.
+    double thickness = 0.0;
+    /// Hash cell edge, m. 0 picks the median extent (longest axis) of the edges' bounds, a robust
+    /// average edge length that includes the motion and the thickness (ALGORITHMS.md §4: cells about
+    /// as large as the primitives keep both the entries per primitive and the occupants per cell
+    /// small).
+    double cell_size = 0.0;
+    /// Pairs within one cloth. Always true for now; false keeps cloth–cloth pairs only.
+    bool self_pairs = true;
+};
+
+/// Work counters of one call (for the step statistics, issue 4 item 8).
+struct BroadPhaseCounters {
+    double cell_size = 0.0;            ///< cell edge used, m
+    std::size_t primitives = 0;        ///< vertices + edges + triangles with finite bounds
+    std::size_t nonfinite = 0;         ///< primitives skipped because a position is NaN or infinite
+    std::size_t oversized = 0;         ///< primitives too large to hash, tested against all partners
+    std::size_t entries = 0;           ///< (cell, primitive) entries hashed
+    std::size_t cells_occupied = 0;    ///< distinct cells holding at least one entry
+    std::size_t max_cell_entries = 0;  ///< occupants of the fullest cell
+    std::size_t tested_pairs = 0;      ///< compatible pairs sharing a cell, counted once per shared cell
+    std::size_t candidate_pairs = 0;   ///< of those, overlapping and not adjacent: output before dedup
+    std::size_t vf_pairs = 0;          ///< vertex–face pairs out
+    std::size_t ee_pairs = 0;          ///< edge–edge pairs out
+};
+
+/// Output of one call: sorted, unique pair lists and the counters.
+struct BroadPhaseResult {
+    std::vector<VertexFacePair> vf;
+    std::vector<EdgeEdgePair> ee;
+    BroadPhaseCounters counters;
+};
+
+/// The spatial hash. Keeps its scratch between calls so that a step does not allocate once sizes
+/// have settled; one object per thread of control (`find` is not reentrant).
+class BroadPhase {
+public:
+    /// Fills `out` with every vertex–face pair (v, t) whose bounds overlap where v is not a corner
+    /// of t, and every edge–edge pair whose bounds overlap where the edges share no vertex. A bound
+    /// is the box around the primitive's vertices at x0 and x1, grown by the thickness. Primitives
+    /// with a non-finite position (or a bound that overflows) are skipped and counted. Throws
+    /// `weft::Error` for mismatched sizes, out-of-range indices or a negative thickness or cell size.
+    void find(const BroadPhaseInput& in, BroadPhaseResult& out);
+
+    /// A primitive overlapping more cells than this is not hashed but tested against every partner
+    /// directly, so that one exploding vertex cannot flood the hash (the result is the same).
+    static constexpr std::uint64_t kMaxCellsPerPrimitive = 512;
+
+private:
+    /// Sorts `entries_` by cell, stably, on the low `bits` bits of the key.
+    void radix_sort(int bits);
+
+    struct Box {
+        Vec3d lo, hi;
+    };
+    struct Entry {
+        std::uint64_t cell;  // packed cell coordinates (exact, so different cells never share a key)
+        std::uint32_t prim;
+    };
+    // Pairs and counters one thread found; merged and sorted at the end, so the thread count and
+    // the order the work ran in do not show in the result.
+    struct Local {
+        std::vector<VertexFacePair> vf;
+        std::vector<EdgeEdgePair> ee;
+        std::size_t tested = 0;
+        std::size_t candidates = 0;
+        // The current cell's occupants.
+        std::vector<std::uint32_t> prim;
+        std::vector<Box> box;
+        std::vector<std::uint64_t> cell_lo;
+    };
+
+    // Primitives live in one index space: vertices [0, n), edges [n, n+E), triangles [n+E, n+E+T).
+    std::vector<Box> box_;
+    std::vector<std::uint64_t> cell_lo_, cell_hi_;  // packed cell coordinates of each bound's corners
+    std::vector<std::size_t> offset_;               // first entry of each primitive (size P+1)
+    std::vector<std::uint32_t> oversized_;
+    std::vector<std::uint32_t> vertex_cloth_;
+    std::vector<Entry> entries_, sorted_;  // sorted_: the radix sort's other buffer
+    std::vector<std::size_t> histogram_;   // radix sort: bucket counts, then offsets, per chunk
+    std::vector<std::size_t> cell_start_;
+    std::vector<double> extent_;       // edge bound extents, for the automatic cell size
+    std::vector<std::uint8_t> state_;  // per primitive: hashed, non-finite or oversized
+    tbb::enumerable_thread_specific<Local> local_;
+};
+
+}  // namespace weft::collision
