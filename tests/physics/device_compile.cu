@@ -3,11 +3,13 @@
 // compile for the device (host-only library calls, exceptions, std::min, non-constexpr globals, …).
 #include "weft/physics/aerodynamics.h"
 #include "weft/physics/bending.h"
+#include "weft/physics/ccd.h"
 #include "weft/physics/collider_contact.h"
 #include "weft/physics/damping.h"
 #include "weft/physics/eigen_sym.h"
 #include "weft/physics/hessian.h"
 #include "weft/physics/membrane.h"
+#include "weft/physics/proximity.h"
 
 namespace weft::physics {
 
@@ -73,6 +75,24 @@ __device__ void exercise(DeviceProbe<T>& p) {
     for (int a = 0; a < 4; ++a)
         for (int b = 0; b < 4; ++b) p.mat[14 + b] += h4[a][b];
     for (int a = 0; a < 4; ++a) p.vec[7 + a] = g4[a];
+    // proximity
+    const PointSegmentProximity<T> ps = point_segment_proximity(p.x[0], p.x[1], p.x[2]);
+    const PointTriangleProximity<T> pt = point_triangle_proximity(p.x[0], p.x[1], p.x[2], p.x[3]);
+    const EdgeEdgeProximity<T> pe = edge_edge_proximity(p.x[0], p.x[1], p.x[2], p.x[3]);
+    p.vec[11] = ps.normal + ps.closest;
+    p.vec[12] = pt.normal + pt.closest;
+    p.vec[13] = pe.normal + pe.closest_e + pe.closest_f;
+    p.scalar[6] = ps.distance + ps.s + pt.distance + pt.u + pt.v + pe.distance + pe.u + pe.v;
+    // continuous collision detection (start positions in x, end positions in v)
+    const CcdResult<T> cv =
+        vertex_face_ccd(p.x[0], p.x[1], p.x[2], p.x[3], p.v[0], p.v[1], p.v[2], p.v[3], p.scalar[3]);
+    CcdOptions<T> co{};
+    co.max_iterations = 256;
+    const CcdResult<T> ce =
+        edge_edge_ccd<T, 16>(p.x[0], p.x[1], p.x[2], p.x[3], p.v[0], p.v[1], p.v[2], p.v[3], p.scalar[3], co);
+    p.scalar[7] = cv.toi + cv.u + cv.diag.distance_bound + ce.toi + ce.v + ce.diag.error_bound +
+                  T(cv.diag.iterations + ce.diag.max_queue) + (cv.hit && ce.hit ? T(1) : T(0));
+    p.vec[14] = Vec3<T>{T(static_cast<int>(cv.diag.status)), T(static_cast<int>(ce.diag.status)), T(0)};
 }
 
 __global__ void physics_device_compile_float(DeviceProbe<float>* p) { exercise(*p); }
