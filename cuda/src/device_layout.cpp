@@ -99,37 +99,41 @@ void incidence(const std::uint32_t* ids, std::size_t corners, std::size_t count,
 
 }  // namespace
 
+namespace {
+
+// Colours elements of `corners` vertices each (`ids`, element-major), and, in colour order, maps each
+// element's corner pairs to ELL positions through its CSR `slots` and lists its corners per vertex.
+void lay_out_elements(const std::vector<std::uint32_t>& ids, std::size_t corners, const std::vector<std::uint32_t>& slots,
+                      const EllLayout& ell, std::size_t vertex_count, Coloring& colors,
+                      std::vector<std::uint32_t>& positions, std::vector<std::uint32_t>& start,
+                      std::vector<std::uint32_t>& entries) {
+    const std::size_t count = ids.size() / corners, blocks = corners * corners;
+    colors = color_elements(ids, corners, vertex_count);
+    std::vector<std::uint32_t> ordered(ids.size());
+    positions.resize(blocks * count);
+    for (std::size_t j = 0; j < count; ++j) {
+        const std::uint32_t e = colors.order[j];
+        for (std::size_t a = 0; a < corners; ++a) ordered[corners * j + a] = ids[corners * e + a];
+        for (std::size_t b = 0; b < blocks; ++b) positions[blocks * j + b] = ell.slot_position[slots[blocks * e + b]];
+    }
+    incidence(ordered.data(), corners, count, vertex_count, start, entries);
+}
+
+}  // namespace
+
 DeviceLayout make_device_layout(const FlatModel& flat) {
     DeviceLayout d;
     d.ell = make_ell_layout(flat.pattern);
     for (std::size_t s = 0; s < d.ell.slices(); ++s) d.max_row_width = std::max(d.max_row_width, d.ell.width(s));
-    const std::size_t nt = flat.triangle_count(), nh = flat.hinge_count();
-    std::vector<std::uint32_t> ids(3 * nt);
-    for (std::size_t t = 0; t < nt; ++t)
-        for (int a = 0; a < 3; ++a) ids[3 * t + a] = flat.triangles[t].v[a];
-    d.triangle_colors = color_elements(ids, 3, flat.vertex_count);
-    // Triangles in colour order from here on: positions and incidence use colour-order ids.
-    std::vector<std::uint32_t> ordered(3 * nt);
-    d.triangle_positions.resize(9 * nt);
-    for (std::size_t j = 0; j < nt; ++j) {
-        const std::uint32_t t = d.triangle_colors.order[j];
-        for (int a = 0; a < 3; ++a) ordered[3 * j + a] = flat.triangles[t].v[a];
-        for (int e = 0; e < 9; ++e) d.triangle_positions[9 * j + e] = d.ell.slot_position[flat.pattern.triangle_slots[9 * t + e]];
-    }
-    incidence(ordered.data(), 3, nt, flat.vertex_count, d.vertex_triangle_start, d.vertex_triangle);
-
-    ids.resize(4 * nh);
-    for (std::size_t k = 0; k < nh; ++k)
-        for (int a = 0; a < 4; ++a) ids[4 * k + a] = flat.hinges[k].v[a];
-    d.hinge_colors = color_elements(ids, 4, flat.vertex_count);
-    ordered.resize(4 * nh);
-    d.hinge_positions.resize(16 * nh);
-    for (std::size_t j = 0; j < nh; ++j) {
-        const std::uint32_t k = d.hinge_colors.order[j];
-        for (int a = 0; a < 4; ++a) ordered[4 * j + a] = flat.hinges[k].v[a];
-        for (int e = 0; e < 16; ++e) d.hinge_positions[16 * j + e] = d.ell.slot_position[flat.pattern.hinge_slots[16 * k + e]];
-    }
-    incidence(ordered.data(), 4, nh, flat.vertex_count, d.vertex_hinge_start, d.vertex_hinge);
+    // Elements in colour order from here on: positions and incidence use colour-order ids.
+    std::vector<std::uint32_t> ids;
+    for (const Triangle& t : flat.triangles) ids.insert(ids.end(), t.v, t.v + 3);
+    lay_out_elements(ids, 3, flat.pattern.triangle_slots, d.ell, flat.vertex_count, d.triangle_colors,
+                     d.triangle_positions, d.vertex_triangle_start, d.vertex_triangle);
+    ids.clear();
+    for (const Hinge& h : flat.hinges) ids.insert(ids.end(), h.v, h.v + 4);
+    lay_out_elements(ids, 4, flat.pattern.hinge_slots, d.ell, flat.vertex_count, d.hinge_colors, d.hinge_positions,
+                     d.vertex_hinge_start, d.vertex_hinge);
     return d;
 }
 }  // namespace weft::cuda
