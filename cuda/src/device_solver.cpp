@@ -248,7 +248,8 @@ void DeviceSolver::fill_staging(const Model& model, double t, double h) {
     p.turbulence_frequency = static_cast<float>(w.wind.turbulence_frequency);
     p.turbulence_scale = static_cast<float>(w.wind.turbulence_scale);
     p.contact_stiffness = static_cast<float>(w.solver.contact_stiffness);
-    p.shape_count = static_cast<int>(model.colliders.size());
+    p.shape_count = static_cast<int>(
+        std::count_if(model.colliders.begin(), model.colliders.end(), [](const ColliderDesc& c) { return c.is_analytic(); }));
     p.pin_count = static_cast<int>(flat_->pin_vertex.size());
     p.cg_max_iterations = w.solver.cg_max_iterations;
     p.cg_warm_start = w.solver.cg_warm_start ? 1 : 0;
@@ -263,10 +264,12 @@ void DeviceSolver::fill_staging(const Model& model, double t, double h) {
     const double t1 = t + h;
     auto* shapes = reinterpret_cast<physics::Shape<float>*>(base + p.shape_offset);
     auto* friction = reinterpret_cast<float*>(base + p.friction_offset);
-    for (std::size_t k = 0; k < model.colliders.size(); ++k) {
-        const ColliderDesc& c = model.colliders[k];
-        shapes[k] = shape_at<float>(c, t1);
-        friction[k] = static_cast<float>(c.friction);
+    int analytic = 0;
+    for (const ColliderDesc& c : model.colliders) {
+        if (!c.is_analytic()) continue;  // mesh colliders: not handled by this backend yet (see cuda_backend.cpp)
+        shapes[analytic] = shape_at<float>(c, t1);
+        friction[analytic] = static_cast<float>(c.friction);
+        ++analytic;
     }
     // Pin targets at t + h, evaluated in double on the host (a handful of vertices).
     auto* targets = reinterpret_cast<V3*>(base + p.pin_target_offset);

@@ -3,14 +3,20 @@
 /// Analytic colliders: plane, sphere, capsule and box, static or following a `Motion`.
 
 #include <cstdint>
+#include <memory>
 #include <string>
+
+#include "weft/fabric.h"
 
 #include "weft/motion.h"
 #include "weft/physics/collider_contact.h"
 
 namespace weft {
 
-enum class ColliderShape : std::uint8_t { Plane, Sphere, Capsule, Box };
+/// Plane, sphere, capsule and box are analytic (penalty contacts in the solve); a mesh collider is a
+/// triangle mesh (a body, a chair) that goes through the cloth collision pipeline (proximity
+/// contacts, CCD and impact zones) as kinematic geometry.
+enum class ColliderShape : std::uint8_t { Plane, Sphere, Capsule, Box, Mesh };
 
 /// An analytic collider. Its local frame follows `motion` (origin, rotation, animation).
 /// Plane: passes through the frame origin with normal = local +Y.
@@ -24,10 +30,15 @@ struct ColliderDesc {
     double half_height = 0.5;   ///< m (capsule)
     Vec3d half_extents{0.5, 0.5, 0.5};  ///< m (box)
     double friction = -1.0;     ///< Coulomb coefficient; negative: use the cloth material's
+    /// Mesh colliders only: the triangles in the collider's local frame (m), placed at time t by
+    /// `motion.at(t)`. Closed or open; the cloth keeps its contact thickness from either side.
+    std::shared_ptr<const MeshData> mesh;
+    [[nodiscard]] bool is_analytic() const { return shape != ColliderShape::Mesh; }
 };
 
 /// The collider at time `t` (s) as the physics functions see it, in scalar T: its pose, sizes and the
-/// velocity of its frame. Backends call this once per collider per substep.
+/// velocity of its frame. Backends call this once per analytic collider per substep (never for a
+/// mesh collider: see `is_analytic`).
 template <typename T>
 [[nodiscard]] physics::Shape<T> shape_at(const ColliderDesc& c, double t) {
     const Transform frame = c.motion.at(t);

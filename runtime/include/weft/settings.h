@@ -46,11 +46,43 @@ struct SolverSettings {
     int threads = 0;               ///< CPU worker threads; 0 = all cores. Results do not depend on it.
 };
 
+/// How the broad phase prunes pairs within one cloth (a speed knob that never changes the result).
+enum class CollisionCulling : std::uint8_t {
+    None,        ///< every pair whose bounds overlap is tested
+    NormalCone,  ///< pairs inside one self-collision-free patch are never generated (PSCC; docs/collisions.md)
+};
+
+/// Cloth collisions beyond the analytic colliders (docs/collisions.md): self-contact, cloth against
+/// cloth and cloth against triangle-mesh colliders. Analytic colliders (plane, sphere, capsule, box)
+/// are always handled by penalty contacts in the solve; mesh colliders always go through this
+/// pipeline. Only the stages a scene needs are built: with `self_collision` off and no mesh collider
+/// nothing here runs.
+struct CollisionSettings {
+    /// Cloth against itself and against the other cloths.
+    bool self_collision = false;
+    /// After the solve, continuous collision detection and impact zones make every substep free of
+    /// intersections. Off: proximity forces only (faster; fast or thin motion may pass through).
+    bool continuous = true;
+    CollisionCulling culling = CollisionCulling::NormalCone;
+    /// Gap kept between cloth surfaces, m. 0: the larger of the two cloths' material contact_thickness.
+    /// Valid range [0, 0.1].
+    double thickness = 0.0;
+    /// Stiffness of the proximity springs, N/m. 0: 100·m/h² from the pair's effective mass m and the
+    /// substep h (the rule the analytic colliders use). Valid range [0, 1e9].
+    double stiffness = 0.0;
+    /// Impact-zone rounds per substep before the rigid-zone fallback takes over. Valid range [1, 1000].
+    int max_impact_iterations = 32;
+    /// Run the exact triangle–triangle intersection check after every step and report the count in
+    /// `StepStats::collision.remaining_intersections` (also `weft run --check`). Costly: for tests.
+    bool check = false;
+};
+
 /// Everything that applies to the whole world.
 struct WorldDesc {
     Vec3d gravity{0.0, -9.81, 0.0};  ///< m/s²
     WindDesc wind{};
     SolverSettings solver{};
+    CollisionSettings collision{};
 };
 
 }  // namespace weft

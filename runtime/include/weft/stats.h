@@ -10,9 +10,40 @@
 namespace weft {
 
 /// The stages of a substep, in order (docs/architecture.md, "the step in detail").
-enum class Stage : std::uint8_t { Kinematics, Forces, Assembly, Solve, Update, Count };
+/// The collision stages (broad phase to check) run only when the scene has collisions to handle.
+enum class Stage : std::uint8_t {
+    Kinematics,
+    Forces,
+    Assembly,
+    Solve,
+    Update,
+    BroadPhase,   ///< spatial hash over the (swept) bounds, for proximity contacts and for CCD
+    Culling,      ///< normal-cone BVH refit and test front
+    NarrowPhase,  ///< proximity tests and the contact terms of the solve
+    Ccd,          ///< continuous collision detection on the candidates
+    ImpactZones,  ///< impact-zone solves and their re-checks
+    Check,        ///< exact intersection check (only when asked for)
+    Count
+};
 inline constexpr std::array<std::string_view, static_cast<int>(Stage::Count)> kStageNames{
-    "kinematics", "forces", "assembly", "solve", "update"};
+    "kinematics", "forces", "assembly", "solve", "update", "broad_phase", "culling", "narrow_phase", "ccd",
+    "impact_zones", "check"};
+
+/// Collision work and outcome of one step (all zero when the scene has no cloth collisions).
+/// Pair counts are summed over the step's substeps and impact-zone rounds.
+struct CollisionStats {
+    std::int64_t candidate_pairs = 0;   ///< vertex–face + edge–edge pairs the broad phase produced
+    std::int64_t culled_pairs = 0;      ///< pairs normal-cone culling removed (candidates without culling = both)
+    int contacts = 0;                   ///< proximity contacts in the last substep's solve
+    std::int64_t ccd_tests = 0;         ///< CCD queries run
+    std::int64_t ccd_hits = 0;          ///< of those, reported as colliding (false positives included)
+    int impact_zones = 0;               ///< zones formed in the step (summed over substeps)
+    int impact_iterations = 0;          ///< largest number of impact-zone rounds one substep needed
+    int rigid_zones = 0;                ///< zones that fell back to rigid motion (the cap was hit)
+    int frozen_vertices = 0;            ///< vertices the last-resort fallback held at their start position
+    int unresolved_substeps = 0;        ///< substeps that ended with a collision still detected (must be 0)
+    std::int64_t remaining_intersections = -1;  ///< exact check after the step; −1 when not run
+};
 
 struct StepStats {
     int substeps = 0;
@@ -22,10 +53,15 @@ struct StepStats {
     double cg_residual = 0.0;      ///< largest final relative residual sqrt(δ/δ₀) of the step's solves
     int cg_not_converged = 0;      ///< solves that hit the iteration cap
     int collider_contacts = 0;     ///< vertex–collider contacts active in the last substep
+    CollisionStats collision{};
     bool non_finite = false;       ///< a NaN or Inf appeared; the state was restored to the last good one
     std::array<double, static_cast<int>(Stage::Count)> stage_ms{};  ///< wall time per stage, ms
     double step_ms = 0.0;          ///< wall time of the whole step, ms
-    [[nodiscard]] bool ok() const { return !non_finite && cg_not_converged == 0; }
+    /// No NaN, every solve converged, no collision left unresolved and no intersection found.
+    [[nodiscard]] bool ok() const {
+        return !non_finite && cg_not_converged == 0 && collision.unresolved_substeps == 0 &&
+               collision.remaining_intersections <= 0;
+    }
     [[nodiscard]] double& ms(Stage s) { return stage_ms[static_cast<int>(s)]; }
     [[nodiscard]] double ms(Stage s) const { return stage_ms[static_cast<int>(s)]; }
 };

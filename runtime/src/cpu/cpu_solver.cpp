@@ -90,12 +90,12 @@ void CpuSolver<T>::prepare_parameters(const Model& model, double t, double h) {
 
     // Colliders take their pose at the end of the substep: the cloth must be clear of them then.
     const double t1 = t + h;
-    shapes_.resize(model.colliders.size());
-    shape_friction_.resize(model.colliders.size());
-    for (std::size_t k = 0; k < model.colliders.size(); ++k) {
-        const ColliderDesc& c = model.colliders[k];
-        shapes_[k] = shape_at<T>(c, t1);
-        shape_friction_[k] = static_cast<T>(c.friction);
+    shapes_.clear();
+    shape_friction_.clear();
+    for (const ColliderDesc& c : model.colliders) {
+        if (!c.is_analytic()) continue;  // mesh colliders go through the collision pipeline
+        shapes_.push_back(shape_at<T>(c, t1));
+        shape_friction_.push_back(static_cast<T>(c.friction));
     }
 
     // Pins: the velocity that lands each pinned vertex on its target at t + h.
