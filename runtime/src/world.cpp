@@ -1,6 +1,8 @@
 // World: owns the model and drives the backend one frame at a time.
 #include "weft/world.h"
 
+#include "collision/world_check.h"
+
 #include <chrono>
 #include <cmath>
 #include <string>
@@ -105,6 +107,15 @@ const StepStats& World::step() {
         ++stats_.substeps;
     }
     ++steps_;
+    if (model_.settings.collision.check) {
+        const auto check_start = std::chrono::steady_clock::now();
+        std::vector<std::vector<Vec3d>> x(model_.cloths.size());
+        for (std::size_t c = 0; c < x.size(); ++c) x[c] = positions(c);
+        stats_.collision.remaining_intersections =
+            static_cast<std::int64_t>(collision::check_world_intersections(model_, x, time_).intersecting_pairs);
+        stats_.ms(Stage::Check) +=
+            std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - check_start).count();
+    }
     stats_.step_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
     return stats_;
 }

@@ -141,7 +141,8 @@ bool apply_simulation_flag(std::string_view command, SimulationOptions& sim, std
 }
 
 constexpr FlagSpec kRunFlags[] = {{"--backend", true}, {"--threads", true}, {"--set", true},   {"--frames", true},
-                                  {"--out", true},     {"--format", true},  {"--stats", true}, {"--quiet", false}};
+                                  {"--out", true},     {"--format", true},  {"--stats", true}, {"--quiet", false},
+                                  {"--check", false}};
 
 constexpr FlagSpec kBenchFlags[] = {{"--backend", true}, {"--threads", true}, {"--set", true},
                                     {"--frames", true},  {"--warmup", true},  {"--json", true}};
@@ -175,6 +176,8 @@ Invocation parse_run(std::span<const std::string_view> args) {
             run.stats_file = std::filesystem::path(value);
         } else if (name == "--quiet") {
             run.quiet = true;
+        } else if (name == "--check") {
+            run.check = true;
         }
     });
     if (!positionals) return help_for(cmd);

@@ -20,6 +20,7 @@ inline constexpr int kExitOk = 0;
 inline constexpr int kExitError = 1;          ///< bad scene, unreadable mesh, unwritable output
 inline constexpr int kExitUsage = 2;          ///< wrong flags or values
 inline constexpr int kExitNonFinite = 3;      ///< the simulation produced NaN or Inf at least once
+inline constexpr int kExitCollision = 4;      ///< a collision stayed unresolved, or --check found intersections
 inline constexpr int kExitInterrupted = 130;  ///< Ctrl-C (128 + SIGINT, as shells report it); stats still written
 
 /// A command-line mistake. `what()` is one line without the program name; `command` names the
@@ -51,6 +52,7 @@ struct RunOptions {
     MeshFormat format = MeshFormat::Ply;
     std::filesystem::path stats_file;  ///< empty: write no stats JSON
     bool quiet = false;
+    bool check = false;  ///< exact intersection check after every frame (collision.check)
 };
 
 struct BenchOptions {

@@ -40,6 +40,7 @@ int run_command(const RunOptions& options, std::ostream& out, std::ostream& err)
     require_backend("run", options.sim.backend);
     LoadedScene loaded = load_world(options.scene, options.sim);
     World& world = *loaded.world;
+    if (options.check) world.settings().collision.check = true;
     const int frames = options.frames.value_or(loaded.desc.frames);
 
     std::vector<std::string> cloth_names;
@@ -104,6 +105,13 @@ int run_command(const RunOptions& options, std::ostream& out, std::ostream& err)
         err << "weft: the simulation produced non-finite values (NaN/Inf) in " << summary.non_finite_frames
             << " frames; exit code " << kExitNonFinite << std::endl;
         return kExitNonFinite;
+    }
+    const auto& col = summary.collisions;
+    if (col.unresolved_substeps > 0 || col.frames_with_intersections > 0) {
+        err << "weft: collisions: " << col.unresolved_substeps << " unresolved substeps, intersections after "
+            << col.frames_with_intersections << " of " << col.checked_frames << " checked frames; exit code "
+            << kExitCollision << std::endl;
+        return kExitCollision;
     }
     return kExitOk;
 }

@@ -31,7 +31,7 @@ RunSummary summarize(std::span<const StepStats> frames) {
     RunSummary s;
     s.frames = frames.size();
     std::array<std::vector<double>, kStageCount> stage;
-    std::vector<double> step, cg, contacts;
+    std::vector<double> step, cg, contacts, pairs, culled, pair_contacts;
     for (auto& v : stage) v.reserve(frames.size());
     step.reserve(frames.size());
     cg.reserve(frames.size());
@@ -52,7 +52,32 @@ RunSummary summarize(std::span<const StepStats> frames) {
             if (s.non_finite_frames == 0) s.first_non_finite_frame = static_cast<long long>(f) + 1;
             ++s.non_finite_frames;
         }
+        const CollisionStats& c = st.collision;
+        auto& sc = s.collisions;
+        sc.active = sc.active || c.candidate_pairs > 0 || c.ccd_tests > 0 || c.remaining_intersections >= 0 ||
+                    st.ms(Stage::BroadPhase) > 0.0;
+        pairs.push_back(static_cast<double>(c.candidate_pairs));
+        culled.push_back(static_cast<double>(c.culled_pairs));
+        pair_contacts.push_back(c.contacts);
+        sc.ccd_tests += c.ccd_tests;
+        sc.ccd_hits += c.ccd_hits;
+        sc.impact_zones += c.impact_zones;
+        sc.impact_iterations_max = std::max(sc.impact_iterations_max, c.impact_iterations);
+        sc.rigid_zones += c.rigid_zones;
+        sc.frozen_vertices += c.frozen_vertices;
+        sc.unresolved_substeps += c.unresolved_substeps;
+        if (c.remaining_intersections >= 0) {
+            ++sc.checked_frames;
+            sc.remaining_intersections_max = std::max<long long>(sc.remaining_intersections_max, c.remaining_intersections);
+            if (c.remaining_intersections > 0) {
+                if (sc.frames_with_intersections == 0) sc.first_intersecting_frame = static_cast<long long>(f) + 1;
+                ++sc.frames_with_intersections;
+            }
+        }
     }
+    s.collisions.candidate_pairs = distribution(std::move(pairs));
+    s.collisions.culled_pairs = distribution(std::move(culled));
+    s.collisions.contacts = distribution(std::move(pair_contacts));
     for (std::size_t k = 0; k < kStageCount; ++k) s.stage_ms[k] = distribution(std::move(stage[k]));
     s.step_ms = distribution(std::move(step));
     s.cg_iterations = distribution(std::move(cg));
@@ -111,6 +136,22 @@ std::vector<std::string> run_warnings(const RunContext& context, const RunSummar
                       "; the state was rolled back each time, so the motion is wrong from there on "
                       "(try a smaller time step or more substeps)");
     }
+    const auto& c = summary.collisions;
+    if (c.unresolved_substeps > 0) {
+        out.push_back(std::to_string(c.unresolved_substeps) +
+                      " substeps ended with a collision the impact zones could not resolve (raise "
+                      "collision.max_impact_iterations or the substeps)");
+    }
+    if (c.frames_with_intersections > 0) {
+        out.push_back("the exact check found intersecting triangles after " +
+                      std::to_string(c.frames_with_intersections) + " of " + std::to_string(c.checked_frames) +
+                      " frames, first after frame " + std::to_string(c.first_intersecting_frame) + ", at most " +
+                      std::to_string(c.remaining_intersections_max) + " pairs");
+    }
+    if (c.rigid_zones > 0 || c.frozen_vertices > 0) {
+        out.push_back("impact-zone fallbacks used: " + std::to_string(c.rigid_zones) + " rigid zones, " +
+                      std::to_string(c.frozen_vertices) + " frozen vertices (the motion there is damped)");
+    }
     for (const std::string& w : context.cook_warnings) out.push_back(w);
     return out;
 }
@@ -158,8 +199,27 @@ void write_summary_fields(JsonWriter& json, const RunContext& c, const RunSummar
     json.field("non_finite_frames", s.non_finite_frames);
 
     json.key("contacts").begin_object().field("mean", s.contacts.mean).field("max", s.contacts.max).end_object();
-    json.field("impact_zones", 0);               // impact zones come with CCD (a later issue)
-    json.key("remaining_intersections").null();  // not computed yet: null, not a misleading 0
+    const auto& col = s.collisions;
+    json.key("collisions").begin_object();
+    json.field("active", col.active);
+    json.key("candidate_pairs");
+    write_distribution(json, col.candidate_pairs);
+    json.key("culled_pairs");
+    write_distribution(json, col.culled_pairs);
+    json.key("contacts");
+    write_distribution(json, col.contacts);
+    json.field("ccd_tests", col.ccd_tests).field("ccd_hits", col.ccd_hits);
+    json.field("impact_zones", col.impact_zones).field("impact_iterations_max", col.impact_iterations_max);
+    json.field("rigid_zones", col.rigid_zones).field("frozen_vertices", col.frozen_vertices);
+    json.field("unresolved_substeps", col.unresolved_substeps);
+    json.field("checked_frames", col.checked_frames);
+    json.end_object();
+    json.field("impact_zones", col.impact_zones);
+    // null when the exact check did not run: not a misleading 0.
+    if (col.checked_frames > 0)
+        json.field("remaining_intersections", col.remaining_intersections_max);
+    else
+        json.key("remaining_intersections").null();
     json.key("memory_bytes").begin_object();
     json.field("backend", c.backend_memory_bytes)
         .field("fabric", c.fabric_memory_bytes)
@@ -209,6 +269,8 @@ void print_run_summary(std::ostream& out, const RunContext& c, const RunSummary&
     TextTable table({{"stage", TextTable::Align::Left}, {"median ms"}, {"max ms"}, {"mean ms"}});
     for (std::size_t k = 0; k < kStageCount; ++k) {
         const Distribution& d = s.stage_ms[k];
+        // Collision stages only where the scene has collisions (the check only where it ran).
+        if (k >= static_cast<std::size_t>(Stage::BroadPhase) && !(d.max > 0.0)) continue;
         table.add_row(
             {std::string(kStageNames[k]), format_fixed(d.median, 3), format_fixed(d.max, 3), format_fixed(d.mean, 3)});
     }
@@ -222,6 +284,19 @@ void print_run_summary(std::ostream& out, const RunContext& c, const RunSummary&
     out << "  NaN/Inf        " << s.non_finite_frames << " frames\n";
     out << "  contacts       mean " << format_fixed(s.contacts.mean, 1) << ", max " << format_fixed(s.contacts.max, 0)
         << "\n";
+    const auto& col = s.collisions;
+    if (col.active) {
+        out << "  collisions     pairs/frame median " << format_fixed(col.candidate_pairs.median, 0) << " (culled "
+            << format_fixed(col.culled_pairs.median, 0) << "), contacts median " << format_fixed(col.contacts.median, 0)
+            << ", CCD " << col.ccd_hits << " hits in " << col.ccd_tests << " tests\n";
+        out << "  impact zones   " << col.impact_zones << " zones, at most " << col.impact_iterations_max
+            << " rounds per substep; fallbacks: " << col.rigid_zones << " rigid, " << col.frozen_vertices
+            << " frozen; unresolved substeps " << col.unresolved_substeps << "\n";
+    }
+    if (col.checked_frames > 0) {
+        out << "  intersections  " << col.frames_with_intersections << " of " << col.checked_frames
+            << " checked frames intersecting (max " << col.remaining_intersections_max << " pairs)\n";
+    }
     out << "  memory         " << format_bytes(static_cast<double>(c.memory_bytes())) << " (backend "
         << format_bytes(static_cast<double>(c.backend_memory_bytes)) << " + fabric "
         << format_bytes(static_cast<double>(c.fabric_memory_bytes)) << "; "

@@ -50,9 +50,28 @@ struct RunSummary {
     std::size_t non_finite_frames = 0;
     long long first_non_finite_frame = -1;  ///< 1-based frame number, -1 if none
     Distribution contacts;                  ///< collider contacts per frame
+    /// Cloth collisions (docs/collisions.md), over all frames.
+    struct Collisions {
+        bool active = false;                  ///< any collision stage ran
+        Distribution candidate_pairs;         ///< per frame
+        Distribution culled_pairs;            ///< per frame
+        Distribution contacts;                ///< proximity contacts in a frame's last substep
+        long long ccd_tests = 0, ccd_hits = 0;
+        long long impact_zones = 0;
+        int impact_iterations_max = 0;
+        long long rigid_zones = 0, frozen_vertices = 0;
+        long long unresolved_substeps = 0;
+        std::size_t checked_frames = 0;       ///< frames the exact check ran after
+        long long remaining_intersections_max = 0;
+        std::size_t frames_with_intersections = 0;
+        long long first_intersecting_frame = -1;  ///< 1-based, -1 if none
+    } collisions;
     double simulation_seconds = 0.0;        ///< sum of step times, s
     double fps = 0.0;                       ///< frames per second of simulation time (I/O excluded)
-    [[nodiscard]] bool ok() const { return cg_not_converged == 0 && non_finite_frames == 0; }
+    [[nodiscard]] bool ok() const {
+        return cg_not_converged == 0 && non_finite_frames == 0 && collisions.unresolved_substeps == 0 &&
+               collisions.frames_with_intersections == 0;
+    }
 };
 [[nodiscard]] RunSummary summarize(std::span<const StepStats> frames);
 

@@ -37,9 +37,12 @@ Options:
   --set KEY=VALUE    override a scene key, as if written in the file; repeatable
                      e.g. --set solver.substeps=4 --set 'wind.velocity=[2, 0, 0]'
   --quiet            no progress bar and no summary table (warnings are still printed)
+  --check            after every frame, test every pair of triangles exactly for intersection
+                     (costly; the count is in the summary and the stats JSON)
   -h, --help         this text
 
-Exit code 3 means the solver met non-finite values (NaN/Inf) at least once.
+Exit code 3 means the solver met non-finite values (NaN/Inf) at least once; 4 that a collision
+was left unresolved or --check found intersecting triangles.
 )";
 
 constexpr std::string_view kBench = R"(Usage: weft bench SCENE... [options]

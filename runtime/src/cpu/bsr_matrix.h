@@ -19,6 +19,8 @@ struct BsrMatrix {
         blocks.assign(p.block_count(), physics::Mat3<T>{});
     }
     [[nodiscard]] std::size_t rows() const { return pattern->diagonal.size(); }
+    /// The 3×3 diagonal block of row i (what block-Jacobi inverts).
+    [[nodiscard]] physics::Mat3<T> diagonal_block(std::size_t i) const { return blocks[pattern->diagonal[i]]; }
 
     /// y = A x, one block row per task.
     void multiply(const std::vector<physics::Vec3<T>>& x, std::vector<physics::Vec3<T>>& y) const {

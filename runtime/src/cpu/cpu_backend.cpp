@@ -31,9 +31,9 @@ public:
         precision_ = model.settings.solver.precision;
         arena_.execute([&] {
             if (precision_ == Precision::Double)
-                solver_.emplace<CpuSolver<double>>().build(flat_);
+                solver_.emplace<CpuSolver<double>>().build(flat_, model);
             else
-                solver_.emplace<CpuSolver<float>>().build(flat_);
+                solver_.emplace<CpuSolver<float>>().build(flat_, model);
         });
     }
 
@@ -64,9 +64,9 @@ private:
         precision_ = model.settings.solver.precision;
         arena_.execute([&] {
             if (precision_ == Precision::Double)
-                solver_.emplace<CpuSolver<double>>().build(flat_);
+                solver_.emplace<CpuSolver<double>>().build(flat_, model);
             else
-                solver_.emplace<CpuSolver<float>>().build(flat_);
+                solver_.emplace<CpuSolver<float>>().build(flat_, model);
         });
         std::visit([&](auto& s) { s.write_state(0, flat_.vertex_count, x.data(), v.data()); }, solver_);
     }

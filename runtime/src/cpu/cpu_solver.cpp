@@ -29,7 +29,7 @@ physics::Mat3<T> to(const Mat3d& a) {
 }  // namespace
 
 template <typename T>
-void CpuSolver<T>::build(const FlatModel& flat) {
+void CpuSolver<T>::build(const FlatModel& flat, const Model& model) {
     flat_ = &flat;
     n_ = flat.vertex_count;
     x_.resize(n_);
@@ -67,6 +67,7 @@ void CpuSolver<T>::build(const FlatModel& flat) {
     contacts_.assign(n_, 0);
     A_.resize(flat.pattern);
     pcg_.resize(n_);
+    collisions_.build(flat, model);
 }
 
 template <typename T>
@@ -268,16 +269,22 @@ void CpuSolver<T>::substep(const Model& model, double t, double h_double, StepSt
     std::fill(wk_.begin(), wk_.end(), V3{});
     prepare_parameters(model, t, h_double);
     stats.ms(Stage::Kinematics) += ms_since(clock);
+    const bool collide = collisions_.active();
+    if (collide) collisions_.begin_substep(model, t, h_double, x0_, v0_, stats);
+    ContactTerms<T>* contacts = collide ? &collisions_.terms() : nullptr;
 
     const SolverSettings& solver = model.settings.solver;
     for (int newton = 0; newton < solver.newton_iterations; ++newton) {
         clock = Clock::now();
         evaluate_elements(model, t, h);
         stats.collider_contacts = evaluate_vertices(model, h);
+        if (contacts != nullptr)
+            contacts->evaluate(h, x0_, wk_, vk_, collisions_.kinematic_x1(), collisions_.kinematic_v());
         stats.ms(Stage::Forces) += ms_since(clock);
 
         clock = Clock::now();
         assemble();
+        if (contacts != nullptr) contacts->add_rhs(b_);
         // Filtered vertices get their prescribed change z = v_target − v_k. The rest start at 0, or in
         // the first Newton iteration from the last substep's velocity change (warm start).
         const bool warm = solver.cg_warm_start && newton == 0;
@@ -286,7 +293,8 @@ void CpuSolver<T>::substep(const Model& model, double t, double h_double, StepSt
         stats.ms(Stage::Assembly) += ms_since(clock);
 
         clock = Clock::now();
-        const PcgResult r = pcg_.solve(A_, b_, fixed_, dv_, solver.cg_tolerance, solver.cg_max_iterations);
+        const PcgResult r = pcg_.solve(SystemOperator<T>{A_, contacts}, b_, fixed_, dv_, solver.cg_tolerance,
+                                       solver.cg_max_iterations);
         stats.cg_iterations += r.iterations;
         stats.cg_iterations_max = std::max(stats.cg_iterations_max, r.iterations);
         stats.cg_residual = std::max(stats.cg_residual, r.relative_residual);
@@ -323,6 +331,13 @@ void CpuSolver<T>::substep(const Model& model, double t, double h_double, StepSt
         stats.non_finite = true;
     }
     stats.ms(Stage::Update) += ms_since(clock);
+    if (collide && bad == 0.0) {
+        // CCD and impact zones from x0 to x1; vertices they move get the velocity of the new motion.
+        collisions_.end_substep(model, h_double, x0_, x_, v_, stats);
+        parallel_chunks(n_, [&](std::size_t lo, std::size_t hi) {
+            for (std::size_t i = lo; i < hi; ++i) dv_previous_[i] = v_[i] - v0_[i];
+        });
+    }
 }
 
 template <typename T>
@@ -350,7 +365,7 @@ std::size_t CpuSolver<T>::memory_bytes() const {
     return vec3 * sizeof(V3) + (element_blocks_.capacity() + vertex_blocks_.capacity() + A_.blocks.capacity()) * sizeof(M3) +
            mass_.capacity() * sizeof(T) + triangle_rest_.capacity() * sizeof(TriangleRestT) +
            hinge_rest_.capacity() * sizeof(HingeRestT) + fixed_.capacity() + contacts_.capacity() * sizeof(int) +
-           pcg_.memory_bytes();
+           pcg_.memory_bytes() + collisions_.memory_bytes();
 }
 
 template class CpuSolver<float>;

@@ -5,6 +5,7 @@
 #include <vector>
 
 #include "cpu/bsr_matrix.h"
+#include "cpu/cpu_collisions.h"
 #include "cpu/pcg.h"
 #include "weft/flat_model.h"
 #include "weft/model.h"
@@ -22,8 +23,9 @@ public:
     using V3 = physics::Vec3<T>;
     using M3 = physics::Mat3<T>;
 
-    /// Allocates all state for `flat` (kept by reference: it must outlive the solver).
-    void build(const FlatModel& flat);
+    /// Allocates all state for `flat` (kept by reference: it must outlive the solver) and the
+    /// collision stages `model` needs.
+    void build(const FlatModel& flat, const Model& model);
     void substep(const Model& model, double t, double h, StepStats& stats);
     void read_state(std::size_t first, std::size_t count, Vec3d* x, Vec3d* v) const;
     void write_state(std::size_t first, std::size_t count, const Vec3d* x, const Vec3d* v);
@@ -67,6 +69,7 @@ private:
     std::vector<double> partials_;
     BsrMatrix<T> A_;
     Pcg<T> pcg_;
+    CpuCollisions<T> collisions_;
     std::vector<ClothParams> cloth_params_;
     std::vector<physics::Shape<T>> shapes_;
     std::vector<T> shape_friction_;

@@ -33,14 +33,16 @@ public:
     }
 
     /// Solves A·dv = b. On entry dv holds z (the prescribed values on filtered vertices, zero
-    /// elsewhere); `fixed[i]` != 0 filters vertex i out completely.
-    PcgResult solve(const BsrMatrix<T>& A, const std::vector<V3>& b, const std::vector<std::uint8_t>& fixed,
+    /// elsewhere); `fixed[i]` != 0 filters vertex i out completely. `A` is any symmetric operator
+    /// with `multiply(x, y)` (y = A·x) and `diagonal_block(i)`: the fabric's BSR matrix alone, or the
+    /// fabric plus the substep's contact springs (cpu_solver.cpp).
+    template <typename Operator>
+    PcgResult solve(const Operator& A, const std::vector<V3>& b, const std::vector<std::uint8_t>& fixed,
                     std::vector<V3>& dv, double tolerance, int max_iterations) {
         const std::size_t n = b.size();
-        const auto& diag = A.pattern->diagonal;
         // Block-Jacobi preconditioner. Diagonal blocks are SPD (mass + PSD stiffness), so invertible.
         parallel_chunks(n, [&](std::size_t lo, std::size_t hi) {
-            for (std::size_t i = lo; i < hi; ++i) precond_[i] = physics::inverse(A.blocks[diag[i]]);
+            for (std::size_t i = lo; i < hi; ++i) precond_[i] = physics::inverse(A.diagonal_block(i));
         });
         // δ₀ = filter(b)ᵀ P⁻¹ filter(b): the scale the residual is measured against.
         const double delta0_b = sum(n, [&](std::size_t i) {

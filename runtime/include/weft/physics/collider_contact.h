@@ -14,6 +14,7 @@
 #include <cmath>
 
 #include "weft/physics/eigen_sym.h"
+#include "weft/physics/friction.h"
 #include "weft/physics/hessian.h"
 #include "weft/physics/host_device.h"
 #include "weft/physics/scalar.h"
@@ -205,19 +206,9 @@ WEFT_HD inline ContactResult<T> collider_contact(const Shape<T>& s, ContactParam
                 for (int j = 0; j < 3; ++j) res.dfdx.m[i][j] = -a[i][j];
         }
     }
-    if (c.friction > T(0)) {
-        const Vec3<T> u = v - shape_point_velocity(s, x);
-        const Vec3<T> ut = u - dot(u, n) * n;
-        const T sl = sqrt(length_squared(ut) + c.slip_velocity * c.slip_velocity);
-        if (sl > T(0)) {
-            const T mf = c.friction * fn;
-            res.force += (-mf / sl) * ut;
-            if (want_jac) {
-                const Mat3<T> P = Mat3<T>::identity() - nn;
-                res.dfdv = (-mf / sl) * P + (mf / (sl * sl * sl)) * Mat3<T>::outer(ut, ut);
-            }
-        }
-    }
+    if (c.friction > T(0))
+        add_coulomb_friction(n, v - shape_point_velocity(s, x), fn, c.friction, c.slip_velocity, res.force,
+                             want_jac ? &res.dfdv : nullptr);
     return res;
 }
 

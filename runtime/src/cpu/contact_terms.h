@@ -1,0 +1,171 @@
+#pragma once
+// The proximity contacts of one substep inside the CPU solve: P-Cloth's dynamic part of the matrix
+// (A = A_fabric + A_contact) kept in factored form. A pair couples four vertices with the blocks
+// w_i·w_j·C (pair_contact.h), so it stores one 3×3 C and four weights instead of 16 blocks, and
+// A_contact·x is two passes: per pair s = C·Σ_j w_j x_j, then per vertex a gather Σ w_i s over the
+// pairs touching it (a fixed incidence list in pair order: deterministic, no atomics; the GPU port
+// uses the same two passes).
+
+#include <array>
+#include <cstdint>
+#include <span>
+#include <vector>
+
+#include "collision/proximity_contacts.h"
+#include "cpu/bsr_matrix.h"
+#include "cpu/parallel.h"
+#include "weft/physics/pair_contact.h"
+
+namespace weft::cpu {
+
+template <typename T>
+class ContactTerms {
+public:
+    using V3 = physics::Vec3<T>;
+    using M3 = physics::Mat3<T>;
+
+    /// Takes the substep's contacts. Vertex ids ≥ `cloth_vertices` are kinematic (collider meshes):
+    /// they move as prescribed and are not unknowns of the solve.
+    void set(std::span<const collision::ProximityContact> contacts, std::size_t cloth_vertices) {
+        n_ = cloth_vertices;
+        const std::size_t m = contacts.size();
+        ids_.resize(m);
+        weight_.resize(m);
+        normal_.resize(m);
+        params_.resize(m);
+        block_.resize(m);
+        rhs_.resize(m);
+        scratch_.resize(m);
+        for (std::size_t p = 0; p < m; ++p) {
+            const collision::ProximityContact& c = contacts[p];
+            for (int i = 0; i < 4; ++i) {
+                ids_[p][i] = c.vertex[i];
+                weight_[p][i] = static_cast<T>(c.weight[i]);
+            }
+            normal_[p] = c.normal.template cast<T>();
+            params_[p] = {static_cast<T>(c.stiffness), static_cast<T>(c.thickness), static_cast<T>(c.friction),
+                          T(1e-3)};
+        }
+        // Incidence of cloth vertices, counting sort in pair order.
+        start_.assign(n_ + 1, 0);
+        for (const auto& ids : ids_)
+            for (std::uint32_t v : ids)
+                if (v < n_) ++start_[v + 1];
+        for (std::size_t i = 0; i < n_; ++i) start_[i + 1] += start_[i];
+        entry_.resize(start_[n_]);
+        std::vector<std::uint32_t>& fill = fill_;
+        fill.assign(start_.begin(), start_.end() - 1);
+        for (std::size_t p = 0; p < m; ++p)
+            for (std::uint32_t i = 0; i < 4; ++i)
+                if (ids_[p][i] < n_) entry_[fill[ids_[p][i]]++] = static_cast<std::uint32_t>(4 * p + i);
+        diagonal_.assign(n_, M3{});
+    }
+
+    [[nodiscard]] std::size_t size() const { return ids_.size(); }
+
+    /// Evaluates every spring at the Newton linearisation point: cloth vertex i at x0 + h·w_k
+    /// moving with v_k (d = v_k − w_k is how far the iterate is from the linearisation), kinematic
+    /// vertex j at its pose at t + h moving with its velocity. Fills the per-pair right-hand side
+    /// h·F + h²·K·Σ w_j d_j and system block C = −h·D − h²·K (Baraff–Witkin's linearisation, as
+    /// cpu_solver.cpp does for the analytic colliders), and the per-vertex diagonal Σ w_i²·C.
+    void evaluate(T h, const std::vector<V3>& x0, const std::vector<V3>& wk, const std::vector<V3>& vk,
+                  std::span<const V3> kinematic_x1, std::span<const V3> kinematic_v) {
+        const T h2 = h * h;
+        parallel_chunks(ids_.size(), [&](std::size_t lo, std::size_t hi) {
+            for (std::size_t p = lo; p < hi; ++p) {
+                V3 g{}, u{}, d{};
+                for (int i = 0; i < 4; ++i) {
+                    const std::uint32_t v = ids_[p][i];
+                    const T w = weight_[p][i];
+                    if (v < n_) {
+                        g += w * (x0[v] + h * wk[v]);
+                        u += w * vk[v];
+                        d += w * (vk[v] - wk[v]);
+                    } else {
+                        g += w * kinematic_x1[v - n_];
+                        u += w * kinematic_v[v - n_];
+                    }
+                }
+                const physics::PairContactForce<T> f = physics::pair_contact(normal_[p], g, u, params_[p]);
+                rhs_[p] = h * f.force + h2 * (f.dfdx * d);
+                block_[p] = T(-1) * h * f.dfdv + T(-1) * h2 * f.dfdx;
+            }
+        });
+        parallel_chunks(n_, [&](std::size_t lo, std::size_t hi) {
+            for (std::size_t i = lo; i < hi; ++i) {
+                M3 acc{};
+                for (std::uint32_t e = start_[i]; e < start_[i + 1]; ++e) {
+                    const T w = weight_[entry_[e] / 4][entry_[e] % 4];
+                    acc += (w * w) * block_[entry_[e] / 4];
+                }
+                diagonal_[i] = acc;
+            }
+        });
+    }
+
+    /// b_i += Σ_pairs w_i·(pair right-hand side).
+    void add_rhs(std::vector<V3>& b) const {
+        parallel_chunks(n_, [&](std::size_t lo, std::size_t hi) {
+            for (std::size_t i = lo; i < hi; ++i)
+                for (std::uint32_t e = start_[i]; e < start_[i + 1]; ++e)
+                    b[i] += weight_[entry_[e] / 4][entry_[e] % 4] * rhs_[entry_[e] / 4];
+        });
+    }
+
+    /// Σ_pairs w_i²·C: what the contacts add to the diagonal block of row i.
+    [[nodiscard]] const M3& diagonal(std::size_t i) const { return diagonal_[i]; }
+
+    /// y += A_contact·x over the cloth vertices (kinematic vertices are not unknowns: they add nothing).
+    void multiply_add(const std::vector<V3>& x, std::vector<V3>& y) const {
+        parallel_chunks(ids_.size(), [&](std::size_t lo, std::size_t hi) {
+            for (std::size_t p = lo; p < hi; ++p) {
+                V3 s{};
+                for (int i = 0; i < 4; ++i)
+                    if (ids_[p][i] < n_) s += weight_[p][i] * x[ids_[p][i]];
+                scratch_[p] = block_[p] * s;
+            }
+        });
+        parallel_chunks(n_, [&](std::size_t lo, std::size_t hi) {
+            for (std::size_t i = lo; i < hi; ++i)
+                for (std::uint32_t e = start_[i]; e < start_[i + 1]; ++e)
+                    y[i] += weight_[entry_[e] / 4][entry_[e] % 4] * scratch_[entry_[e] / 4];
+        });
+    }
+
+    [[nodiscard]] std::size_t memory_bytes() const {
+        return ids_.capacity() * sizeof(ids_[0]) + weight_.capacity() * sizeof(weight_[0]) +
+               (normal_.capacity() + rhs_.capacity() + scratch_.capacity()) * sizeof(V3) +
+               params_.capacity() * sizeof(params_[0]) + (block_.capacity() + diagonal_.capacity()) * sizeof(M3) +
+               (start_.capacity() + entry_.capacity() + fill_.capacity()) * sizeof(std::uint32_t);
+    }
+
+private:
+    std::size_t n_ = 0;
+    std::vector<std::array<std::uint32_t, 4>> ids_;
+    std::vector<std::array<T, 4>> weight_;
+    std::vector<V3> normal_;
+    std::vector<physics::PairContactParams<T>> params_;
+    std::vector<M3> block_;
+    std::vector<V3> rhs_;
+    mutable std::vector<V3> scratch_;  // per-pair C·Σ w_j x_j of the current product
+    std::vector<std::uint32_t> start_, entry_, fill_;
+    std::vector<M3> diagonal_;
+};
+
+/// The operator the CPU solve hands to PCG: the fabric's BSR matrix plus the contact springs.
+template <typename T>
+struct SystemOperator {
+    const BsrMatrix<T>& fabric;
+    const ContactTerms<T>* contacts;  // null or empty: the fabric alone
+    void multiply(const std::vector<physics::Vec3<T>>& x, std::vector<physics::Vec3<T>>& y) const {
+        fabric.multiply(x, y);
+        if (contacts != nullptr && contacts->size() > 0) contacts->multiply_add(x, y);
+    }
+    [[nodiscard]] physics::Mat3<T> diagonal_block(std::size_t i) const {
+        physics::Mat3<T> d = fabric.diagonal_block(i);
+        if (contacts != nullptr && contacts->size() > 0) d += contacts->diagonal(i);
+        return d;
+    }
+};
+
+}  // namespace weft::cpu

@@ -1,0 +1,83 @@
+#pragma once
+// The collision stages of a CPU substep (docs/collisions.md): before the solve, proximity contacts
+// from the broad phase over the predicted motion; after it, CCD and impact zones that leave the
+// substep free of intersections. Cloth vertices come first in the collision index space, then the
+// vertices of the mesh colliders (kinematic: they follow their motion and are never moved).
+// Built only when the scene needs it: self-collision on, or a mesh collider present.
+
+#include <cstdint>
+#include <vector>
+
+#include "collision/broad_phase.h"
+// TEMPORARY (removed when the impact-zone solver lands in this series): lets the tree build meanwhile.
+#if __has_include("collision/impact_zones.h")
+#include "collision/impact_zones.h"
+#define WEFT_HAVE_IMPACT_ZONES 1
+#endif
+#include "collision/proximity_contacts.h"
+#include "cpu/contact_terms.h"
+#include "weft/flat_model.h"
+#include "weft/model.h"
+#include "weft/stats.h"
+
+namespace weft::cpu {
+
+template <typename T>
+class CpuCollisions {
+public:
+    using V3 = physics::Vec3<T>;
+
+    /// Builds the collision geometry for `flat` and the mesh colliders of `model`.
+    void build(const FlatModel& flat, const Model& model);
+    /// True when the scene has anything for these stages to do.
+    [[nodiscard]] bool active() const { return active_; }
+
+    /// Finds the substep's proximity contacts from the start state (x0, v0) of the cloth and the
+    /// colliders' poses at t and t + h, and hands them to `terms()`.
+    void begin_substep(const Model& model, double t, double h, const std::vector<V3>& x0, const std::vector<V3>& v0,
+                       StepStats& stats);
+    /// The contact springs of the current substep (for the solve).
+    [[nodiscard]] ContactTerms<T>& terms() { return terms_; }
+    [[nodiscard]] std::span<const V3> kinematic_x1() const { return kinematic_x1_t_; }
+    [[nodiscard]] std::span<const V3> kinematic_v() const { return kinematic_v_t_; }
+
+    /// After the solve: makes x0 → x1 free of collisions (CCD and impact zones) when continuous
+    /// collisions are on, and sets v = (x1 − x0)/h for every vertex it moved.
+    void end_substep(const Model& model, double h, const std::vector<V3>& x0, std::vector<V3>& x1, std::vector<V3>& v,
+                     StepStats& stats);
+
+    [[nodiscard]] std::size_t memory_bytes() const;
+
+private:
+    struct MeshCollider {
+        std::size_t collider = 0;       // index in Model::colliders
+        std::uint32_t first_vertex = 0;  // in the kinematic range (0-based within it)
+    };
+    void place_kinematic(const Model& model, double t, std::vector<Vec3d>& out) const;
+
+    bool active_ = false;
+    bool self_ = false;
+    std::size_t cloth_vertices_ = 0;
+    std::vector<MeshCollider> meshes_;
+    std::vector<Vec3d> kinematic_local_;      // mesh collider vertices in their collider's frame
+    std::vector<Triangle> triangles_;         // cloth then kinematic, collision vertex ids
+    std::vector<std::uint32_t> triangle_group_;  // cloth id, or cloths + mesh collider index
+    std::vector<collision::Edge> edges_;
+    std::vector<double> inverse_mass_, thickness_, friction_;
+    double max_thickness_ = 0.0;
+    // Per substep.
+    std::vector<Vec3d> x0_, x1_, kinematic_x0_, kinematic_x1_;
+    std::vector<V3> kinematic_x1_t_, kinematic_v_t_;
+    collision::BroadPhase broad_;
+    collision::BroadPhaseResult pairs_;
+    std::vector<collision::ProximityContact> contacts_;
+#ifdef WEFT_HAVE_IMPACT_ZONES
+    collision::ImpactZoneSolver zones_;
+#endif
+    ContactTerms<T> terms_;
+};
+
+extern template class CpuCollisions<float>;
+extern template class CpuCollisions<double>;
+
+}  // namespace weft::cpu
