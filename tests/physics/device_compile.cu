@@ -9,7 +9,9 @@
 #include "weft/physics/eigen_sym.h"
 #include "weft/physics/hessian.h"
 #include "weft/physics/membrane.h"
+#include "weft/physics/pair_contact.h"
 #include "weft/physics/proximity.h"
+#include "weft/physics/swept_collider.h"
 
 namespace weft::physics {
 
@@ -93,6 +95,14 @@ __device__ void exercise(DeviceProbe<T>& p) {
     p.scalar[7] = cv.toi + cv.u + cv.diag.distance_bound + ce.toi + ce.v + ce.diag.error_bound +
                   T(cv.diag.iterations + ce.diag.max_queue) + (cv.hit && ce.hit ? T(1) : T(0));
     p.vec[14] = Vec3<T>{T(static_cast<int>(cv.diag.status)), T(static_cast<int>(ce.diag.status)), T(0)};
+    // cloth–cloth pair springs and the swept test against fast colliders
+    const PairContactForce<T> pc =
+        pair_contact(p.vec[0], p.x[2], p.v[2], PairContactParams<T>{T(1e3), T(0.01), T(0.3), T(1e-3)});
+    p.mat[30] = pc.dfdx + pc.dfdv;
+    p.vec[15] = pc.force;
+    const SweptContact<T> sc = swept_shape_contact(p.shape, p.shape, T(0.01), p.x[0], p.v[0], T(0.005), 64);
+    p.vec[15] += sc.position;
+    p.scalar[7] += sc.tau + T(sc.samples) + (sc.hit ? T(1) : T(0));
 }
 
 __global__ void physics_device_compile_float(DeviceProbe<float>* p) { exercise(*p); }

@@ -41,6 +41,7 @@ struct CollisionStats {
     int impact_iterations = 0;          ///< largest number of impact-zone rounds one substep needed
     int rigid_zones = 0;                ///< zones that fell back to rigid motion (the cap was hit)
     int frozen_vertices = 0;            ///< vertices the last-resort fallback held at their start position
+    int swept_collider_hits = 0;        ///< vertices a fast analytic collider hit mid-substep and carried along
     int unresolved_substeps = 0;        ///< substeps that ended with a collision still detected (must be 0)
     std::int64_t remaining_intersections = -1;  ///< exact check after the step; −1 when not run
 };

@@ -6,6 +6,7 @@
 #include <cmath>
 
 #include "weft/physics/aerodynamics.h"
+#include "weft/physics/swept_collider.h"
 
 namespace weft::cpu {
 namespace {
@@ -92,10 +93,12 @@ void CpuSolver<T>::prepare_parameters(const Model& model, double t, double h) {
     // Colliders take their pose at the end of the substep: the cloth must be clear of them then.
     const double t1 = t + h;
     shapes_.clear();
+    shapes_start_.clear();
     shape_friction_.clear();
     for (const ColliderDesc& c : model.colliders) {
         if (!c.is_analytic()) continue;  // mesh colliders go through the collision pipeline
         shapes_.push_back(shape_at<T>(c, t1));
+        shapes_start_.push_back(shape_at<T>(c, t));
         shape_friction_.push_back(static_cast<T>(c.friction));
     }
 
@@ -260,6 +263,30 @@ void CpuSolver<T>::assemble() {
 }
 
 template <typename T>
+int CpuSolver<T>::sweep_fast_colliders(T h) {
+    // Vertices a fast collider ran into during the substep ride along with it (swept_collider.h);
+    // slow colliders cost one comparison per vertex.
+    const FlatModel& f = *flat_;
+    const double hits = deterministic_sum(n_, partials_, [&](std::size_t lo, std::size_t hi) {
+        double count = 0.0;
+        for (std::size_t i = lo; i < hi; ++i) {
+            if (fixed_[i]) continue;
+            const T thickness = cloth_params_[f.vertex_cloth[i]].thickness;
+            for (std::size_t s = 0; s < shapes_.size(); ++s) {
+                const physics::SweptContact<T> c =
+                    physics::swept_shape_contact(shapes_start_[s], shapes_[s], h, x0_[i], x_[i], thickness);
+                if (!c.hit) continue;
+                x_[i] = c.position;
+                v_[i] = (x_[i] - x0_[i]) / h;
+                count += 1.0;
+            }
+        }
+        return count;
+    });
+    return static_cast<int>(hits);
+}
+
+template <typename T>
 void CpuSolver<T>::substep(const Model& model, double t, double h_double, StepStats& stats) {
     const T h = static_cast<T>(h_double);
     auto clock = Clock::now();
@@ -330,10 +357,13 @@ void CpuSolver<T>::substep(const Model& model, double t, double h_double, StepSt
         std::fill(dv_previous_.begin(), dv_previous_.end(), V3{});
         stats.non_finite = true;
     }
+    int swept = 0;
+    if (bad == 0.0 && !shapes_.empty()) swept = sweep_fast_colliders(h);
+    stats.collision.swept_collider_hits += swept;
     stats.ms(Stage::Update) += ms_since(clock);
-    if (collide && bad == 0.0) {
-        // CCD and impact zones from x0 to x1; vertices they move get the velocity of the new motion.
-        collisions_.end_substep(model, h_double, x0_, x_, v_, stats);
+    // CCD and impact zones from x0 to x1; vertices they move get the velocity of the new motion.
+    if (collide && bad == 0.0) collisions_.end_substep(model, h_double, x0_, x_, v_, stats);
+    if ((collide || swept > 0) && bad == 0.0) {
         parallel_chunks(n_, [&](std::size_t lo, std::size_t hi) {
             for (std::size_t i = lo; i < hi; ++i) dv_previous_[i] = v_[i] - v0_[i];
         });

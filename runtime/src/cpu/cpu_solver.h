@@ -46,6 +46,7 @@ private:
     void evaluate_elements(const Model& model, double t, T h);
     int evaluate_vertices(const Model& model, T h);
     void assemble();
+    int sweep_fast_colliders(T h);
 
     const FlatModel* flat_ = nullptr;
     std::size_t n_ = 0;
@@ -71,7 +72,8 @@ private:
     Pcg<T> pcg_;
     CpuCollisions<T> collisions_;
     std::vector<ClothParams> cloth_params_;
-    std::vector<physics::Shape<T>> shapes_;
+    std::vector<physics::Shape<T>> shapes_;        // analytic colliders at the end of the substep
+    std::vector<physics::Shape<T>> shapes_start_;  // and at its start (for the swept test)
     std::vector<T> shape_friction_;
     physics::HessianKind hessian_ = physics::HessianKind::Fast;
     V3 gravity_{};
