@@ -24,6 +24,15 @@ std::string format_gib(std::size_t bytes) {
     return buf;
 }
 
+/// The cloth collision pipeline (self-contact, mesh colliders) runs on the CPU backend only so far:
+/// a scene that needs it is refused here, with the way out, rather than run without collisions.
+void refuse_cloth_collisions(const Model& model) {
+    if (!needs_cloth_collisions(model)) return;
+    throw Error(
+        "the cuda backend does not handle cloth collisions yet (self-collision or a mesh collider in this scene); "
+        "run it with --backend cpu, or set collision.self=false without mesh colliders");
+}
+
 class CudaBackend final : public Backend, public CudaBackendApi {
 public:
     explicit CudaBackend(const BackendOptions& options) {
@@ -74,11 +83,15 @@ public:
     }
 
     void build(const Model& model) override {
+        refuse_cloth_collisions(model);
         flat_ = flatten(model);
         solver_->build(flat_, model);
     }
 
-    void substep(const Model& model, double t, double h, StepStats& stats) override { solver_->substep(model, t, h, stats); }
+    void substep(const Model& model, double t, double h, StepStats& stats) override {
+        refuse_cloth_collisions(model);  // self-collision may be switched on live
+        solver_->substep(model, t, h, stats);
+    }
 
     void read_state(std::size_t cloth, std::span<Vec3d> x, std::span<Vec3d> v) const override {
         const auto [first, count] = flat_.cloth_vertices(cloth, x.size(), v.size());

@@ -436,6 +436,22 @@ TEST(CudaBackend, AsCudaIsNullForTheCpuBackend) {
     EXPECT_EQ(as_cuda(world->backend()), nullptr);
 }
 
+TEST(CudaBackend, RefusesClothCollisionsItCannotHandleYet) {
+    WEFT_REQUIRE_GPU();
+    // Self-collision runs on the CPU backend only so far: the cuda backend must say so, not run the
+    // scene without it; and switching it on live must be caught at the next step.
+    try {
+        (void)make_world("hanging", "cuda", {"collision.self=true"});
+        ADD_FAILURE() << "a self-collision scene was built on the cuda backend";
+    } catch (const Error& e) {
+        EXPECT_NE(std::string(e.what()).find("--backend cpu"), std::string::npos) << e.what();
+    }
+    const auto world = make_world("hanging", "cuda");
+    (void)world->step();
+    world->settings().collision.self_collision = true;
+    EXPECT_THROW((void)world->step(), Error);
+}
+
 TEST(CudaBackend, MissingDeviceIsAnErrorNamingIt) {
     WEFT_REQUIRE_GPU();
     try {

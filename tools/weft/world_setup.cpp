@@ -9,8 +9,10 @@
 
 namespace weft::cli {
 
-std::string resolve_backend(std::string_view backend) {
+std::string resolve_backend(std::string_view backend, const SceneDesc* scene) {
     if (backend != "auto") return std::string(backend);
+    // Cloth collisions run on the CPU backend only so far (the cuda backend refuses them).
+    if (scene != nullptr && needs_cloth_collisions(scene->world, scene->colliders)) return "cpu";
     // The CUDA backend when it is compiled in and a device answers; the CPU otherwise.
     const std::vector<std::string> names = backend_names();
     if (std::find(names.begin(), names.end(), "cuda") != names.end()) {
@@ -38,7 +40,7 @@ LoadedScene load_world(std::string_view scene, const SimulationOptions& sim) {
     loaded.desc = load_scene(find_scene(scene), sim.overrides);
     BackendOptions options;
     options.threads = sim.threads;
-    loaded.world = build_world(loaded.desc, resolve_backend(sim.backend), options);
+    loaded.world = build_world(loaded.desc, resolve_backend(sim.backend, &loaded.desc), options);
     return loaded;
 }
 

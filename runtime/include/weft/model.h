@@ -3,7 +3,9 @@
 /// The complete description a backend simulates: settings, cloths, colliders and motions. The
 /// `World` owns one and hands it to its backend; backends never see the world itself.
 
+#include <algorithm>
 #include <cstdint>
+#include <span>
 #include <vector>
 
 #include "weft/cloth.h"
@@ -22,5 +24,14 @@ struct Model {
     /// at every substep.
     std::uint64_t topology_version = 0;
 };
+
+/// True when `settings` and `colliders` ask for the cloth collision pipeline (docs/collisions.md):
+/// self-collision, or a mesh collider. A backend without that pipeline refuses such a model instead
+/// of silently letting cloth pass through itself.
+[[nodiscard]] inline bool needs_cloth_collisions(const WorldDesc& settings, std::span<const ColliderDesc> colliders) {
+    return settings.collision.self_collision ||
+           std::any_of(colliders.begin(), colliders.end(), [](const ColliderDesc& c) { return !c.is_analytic(); });
+}
+[[nodiscard]] inline bool needs_cloth_collisions(const Model& m) { return needs_cloth_collisions(m.settings, m.colliders); }
 
 }  // namespace weft
