@@ -166,6 +166,14 @@ void BroadPhase::find(const BroadPhaseInput& in, BroadPhaseResult& out) {
         throw Error("broad phase: " + std::to_string(in.triangle_cloth.size()) + " triangle cloth ids for " +
                     std::to_string(nt) + " triangles");
 
+    // Culling is on when any patch list is given; then all three must match the primitives.
+    const bool cull = !in.vertex_patch.empty() || !in.edge_patch.empty() || !in.triangle_patch.empty();
+    if (cull && (in.vertex_patch.size() != n || in.edge_patch.size() != ne || in.triangle_patch.size() != nt))
+        throw Error("broad phase: patch ids for " + std::to_string(in.vertex_patch.size()) + " vertices, " +
+                    std::to_string(in.edge_patch.size()) + " edges and " + std::to_string(in.triangle_patch.size()) +
+                    " triangles; expected " + std::to_string(n) + ", " + std::to_string(ne) + " and " +
+                    std::to_string(nt));
+
     const std::size_t edge0 = n, tri0 = n + ne, prims = n + ne + nt;
     const auto edge_of = [&](std::uint32_t p) -> const Edge& { return in.edges[p - edge0]; };
     const auto triangle_of = [&](std::uint32_t p) -> const Triangle& { return in.triangles[p - tri0]; };
@@ -189,6 +197,19 @@ void BroadPhase::find(const BroadPhaseInput& in, BroadPhaseResult& out) {
         if (!filter_cloth) return false;
         const std::uint32_t ca = cloth_of(a);
         return ca != kNoCloth && ca == cloth_of(b);
+    };
+
+    // Patch of each primitive for the optional culling (only read when `cull`).
+    const auto patch_of = [&](std::uint32_t p) -> std::uint32_t {
+        if (p < edge0) return in.vertex_patch[p];
+        if (p < tri0) return in.edge_patch[p - edge0];
+        return in.triangle_patch[p - tri0];
+    };
+    // True when the pair lies inside one self-collision-free patch.
+    const auto same_patch = [&](std::uint32_t a, std::uint32_t b) {
+        if (!cull) return false;
+        const std::uint32_t pa = patch_of(a);
+        return pa != kNoPatch && pa == patch_of(b);
     };
 
     // ---- Bounds ---------------------------------------------------------------------------------
@@ -347,7 +368,7 @@ void BroadPhase::find(const BroadPhaseInput& in, BroadPhaseResult& out) {
     for (Local& l : local_) {
         l.vf.clear();
         l.ee.clear();
-        l.tested = l.candidates = 0;
+        l.tested = l.candidates = l.culled = 0;
     }
     // Pair tests: true when the bounds overlap and the primitives are neither adjacent nor filtered
     // out, i.e. a candidate (counted before the dedup rule decides who reports it).
@@ -363,12 +384,75 @@ void BroadPhase::find(const BroadPhaseInput& in, BroadPhaseResult& out) {
         ++l.candidates;
         return true;
     };
+    // Culled pairs: counted when they would have been candidates (count_culled), never emitted.
+    const auto vf_culled = [&](Local& l, std::uint32_t v, std::uint32_t t, const Box& bv, const Box& bt) {
+        if (in.count_culled && overlap(bv, bt) && !is_corner(v, triangle_of(t)) && !filtered(v, t)) ++l.culled;
+    };
+    const auto ee_culled = [&](Local& l, std::uint32_t a, std::uint32_t b, const Box& ba, const Box& bb) {
+        if (in.count_culled && overlap(ba, bb) && !shares_vertex(edge_of(a), edge_of(b)) && !filtered(a, b)) ++l.culled;
+    };
     const auto add_vf = [&](Local& l, std::uint32_t v, std::uint32_t t) {
         l.vf.push_back({v, static_cast<std::uint32_t>(t - tri0)});
     };
     const auto add_ee = [&](Local& l, std::uint32_t a, std::uint32_t b) {
         const auto ia = static_cast<std::uint32_t>(a - edge0), ib = static_cast<std::uint32_t>(b - edge0);
         l.ee.push_back({std::min(ia, ib), std::max(ia, ib)});
+    };
+    // One cell with culling: the occupants are regrouped by (kind, patch, index), the cell key
+    // extended with the cone id (PSCC), and only pairs across patch groups are formed; a vertex's
+    // own group of triangles and an edge's own group of edges are skipped as whole ranges (and only
+    // bound-tested to be counted). kNoPatch sorts last and is never skipped. The dedup rule and the
+    // pair tests are those of the plain loops below. (On the device the key would be (cell, patch)
+    // and the per-cell workload Σ_{i≠j} n_i·n_j over patch groups, PSCC's workload table.)
+    const auto cull_cell = [&](Local& l, std::uint64_t key, std::size_t count, std::size_t first_edge,
+                               std::size_t first_tri) {
+        auto& occ = l.occ;
+        occ.resize(count);
+        for (std::size_t i = 0; i < count; ++i) occ[i] = {l.box[i], l.cell_lo[i], l.prim[i], patch_of(l.prim[i])};
+        const auto by_patch = [](const Local::Occupant& a, const Local::Occupant& b) {
+            return a.patch != b.patch ? a.patch < b.patch : a.prim < b.prim;
+        };
+        const auto at = [&](std::size_t i) { return occ.begin() + static_cast<std::ptrdiff_t>(i); };
+        std::sort(at(0), at(first_edge), by_patch);
+        std::sort(at(first_edge), at(first_tri), by_patch);
+        std::sort(at(first_tri), at(count), by_patch);
+        const auto vf = [&](std::size_t i, std::size_t j) {
+            if (vf_candidate(l, occ[i].prim, occ[j].prim, occ[i].box, occ[j].box) &&
+                packing.max(occ[i].cell_lo, occ[j].cell_lo) == key)
+                add_vf(l, occ[i].prim, occ[j].prim);
+        };
+        const auto ee = [&](std::size_t i, std::size_t j) {
+            if (ee_candidate(l, occ[i].prim, occ[j].prim, occ[i].box, occ[j].box) &&
+                packing.max(occ[i].cell_lo, occ[j].cell_lo) == key)
+                add_ee(l, occ[i].prim, occ[j].prim);
+        };
+        // Vertex–face: triangles [group_begin, group_end) share the vertex's patch.
+        std::size_t group_begin = first_tri;
+        for (std::size_t i = 0; i < first_edge; ++i) {
+            const std::uint32_t p = occ[i].patch;
+            while (group_begin < count && occ[group_begin].patch < p) ++group_begin;
+            std::size_t group_end = group_begin;
+            if (p != kNoPatch)
+                while (group_end < count && occ[group_end].patch == p) ++group_end;
+            for (std::size_t j = first_tri; j < group_begin; ++j) vf(i, j);
+            for (std::size_t j = group_end; j < count; ++j) vf(i, j);
+            for (std::size_t j = group_begin; j < group_end; ++j)
+                vf_culled(l, occ[i].prim, occ[j].prim, occ[i].box, occ[j].box);
+        }
+        // Edge–edge: edges [i + 1, group_end) share edge i's patch.
+        std::size_t group_end = first_edge;
+        for (std::size_t i = first_edge; i < first_tri; ++i) {
+            const std::uint32_t p = occ[i].patch;
+            if (p == kNoPatch) {
+                group_end = i + 1;
+            } else if (group_end <= i) {
+                group_end = i + 1;
+                while (group_end < first_tri && occ[group_end].patch == p) ++group_end;
+            }
+            for (std::size_t j = group_end; j < first_tri; ++j) ee(i, j);
+            for (std::size_t j = i + 1; j < group_end; ++j)
+                ee_culled(l, occ[i].prim, occ[j].prim, occ[i].box, occ[j].box);
+        }
     };
     const std::size_t cells = c.cells_occupied;
     // Work stealing balances crowded cells; the grain keeps the per-task overhead small.
@@ -391,6 +475,10 @@ void BroadPhase::find(const BroadPhaseInput& in, BroadPhaseResult& out) {
                 if (p >= tri0 && first_tri == count) first_tri = i;
             }
             first_edge = std::min(first_edge, first_tri);
+            if (cull) {
+                cull_cell(l, key, count, first_edge, first_tri);
+                continue;
+            }
             // Overlapping bounds share every cell of their intersection; the pair is reported only
             // in the cell of the intersection's minimum corner, the per-axis max of the two minimum
             // cells (cell_coord is monotone).
@@ -415,7 +503,12 @@ void BroadPhase::find(const BroadPhaseInput& in, BroadPhaseResult& out) {
                 Local& l = local_.local();
                 for (std::size_t i = b; i < e; ++i) {
                     const auto t = static_cast<std::uint32_t>(tri0 + i);
-                    if (state_[t] != kNonFinite && vf_candidate(l, p, t, box_[p], box_[t])) add_vf(l, p, t);
+                    if (state_[t] == kNonFinite) continue;
+                    if (same_patch(p, t)) {
+                        vf_culled(l, p, t, box_[p], box_[t]);
+                    } else if (vf_candidate(l, p, t, box_[p], box_[t])) {
+                        add_vf(l, p, t);
+                    }
                 }
             });
         } else if (p < tri0) {
@@ -424,7 +517,11 @@ void BroadPhase::find(const BroadPhaseInput& in, BroadPhaseResult& out) {
                 for (std::size_t i = b; i < e; ++i) {
                     const auto q = static_cast<std::uint32_t>(edge0 + i);
                     if (q == p || state_[q] == kNonFinite || (state_[q] == kOversized && q < p)) continue;
-                    if (ee_candidate(l, p, q, box_[p], box_[q])) add_ee(l, p, q);
+                    if (same_patch(p, q)) {
+                        ee_culled(l, p, q, box_[p], box_[q]);
+                    } else if (ee_candidate(l, p, q, box_[p], box_[q])) {
+                        add_ee(l, p, q);
+                    }
                 }
             });
         } else {
@@ -432,7 +529,12 @@ void BroadPhase::find(const BroadPhaseInput& in, BroadPhaseResult& out) {
                 Local& l = local_.local();
                 for (std::size_t i = b; i < e; ++i) {
                     const auto v = static_cast<std::uint32_t>(i);
-                    if (state_[v] == kHashed && vf_candidate(l, v, p, box_[v], box_[p])) add_vf(l, v, p);
+                    if (state_[v] != kHashed) continue;
+                    if (same_patch(v, p)) {
+                        vf_culled(l, v, p, box_[v], box_[p]);
+                    } else if (vf_candidate(l, v, p, box_[v], box_[p])) {
+                        add_vf(l, v, p);
+                    }
                 }
             });
         }
@@ -445,6 +547,7 @@ void BroadPhase::find(const BroadPhaseInput& in, BroadPhaseResult& out) {
         ee_total += l.ee.size();
         c.tested_pairs += l.tested;
         c.candidate_pairs += l.candidates;
+        c.culled_pairs += l.culled;
     }
     out.vf.clear();
     out.ee.clear();

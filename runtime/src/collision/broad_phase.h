@@ -41,6 +41,9 @@ struct EdgeEdgePair {
     friend auto operator<=>(const EdgeEdgePair&, const EdgeEdgePair&) = default;
 };
 
+/// "No patch": a primitive with this patch id is never culled.
+inline constexpr std::uint32_t kNoPatch = 0xFFFFFFFFU;
+
 /// What the broad phase looks at. The spans must stay valid for the call only.
 struct BroadPhaseInput {
     std::span<const Vec3d> x0;            ///< positions at the start of the step, m
@@ -60,6 +63,19 @@ struct BroadPhaseInput {
     double cell_size = 0.0;
     /// Pairs within one cloth. Always true for now; false keeps cloth–cloth pairs only.
     bool self_pairs = true;
+    /// Self-collision culling (ALGORITHMS.md §5; PSCC's cone ids), optional: either all three empty
+    /// (no culling) or sized like the vertices, edges and triangles. The patch id of each primitive,
+    /// normally `NormalConeFront`'s: a pair whose two primitives carry the same id (other than
+    /// kNoPatch) is never generated, because the patch is proven free of self-collision over the
+    /// step (normal_cone_front.h says why skipping it is conservative). Within a cell the occupants
+    /// are grouped by (kind, patch, index) — the cell key extended with the cone id — and only
+    /// pairs across groups are formed.
+    std::span<const std::uint32_t> vertex_patch;
+    std::span<const std::uint32_t> edge_patch;
+    std::span<const std::uint32_t> triangle_patch;
+    /// With culling, also count the pairs it removed (`BroadPhaseCounters::culled_pairs`) by testing
+    /// their bounds, without emitting them. false skips them untested and leaves the count at 0.
+    bool count_culled = true;
 };
 
 /// Work counters of one call (for the step statistics, issue 4 item 8).
@@ -75,6 +91,11 @@ struct BroadPhaseCounters {
     std::size_t candidate_pairs = 0;   ///< of those, overlapping and not adjacent: output before dedup
     std::size_t vf_pairs = 0;          ///< vertex–face pairs out
     std::size_t ee_pairs = 0;          ///< edge–edge pairs out
+    /// Same-patch pairs that culling removed and that would otherwise have been candidates, counted
+    /// like `candidate_pairs` (once per shared cell, before dedup): the candidates without culling
+    /// are candidate_pairs + culled_pairs. 0 without culling or with `count_culled` false. Not
+    /// included in `tested_pairs`.
+    std::size_t culled_pairs = 0;
 };
 
 /// Output of one call: sorted, unique pair lists and the counters.
@@ -117,10 +138,18 @@ private:
         std::vector<EdgeEdgePair> ee;
         std::size_t tested = 0;
         std::size_t candidates = 0;
+        std::size_t culled = 0;
         // The current cell's occupants.
         std::vector<std::uint32_t> prim;
         std::vector<Box> box;
         std::vector<std::uint64_t> cell_lo;
+        // With culling: the occupants grouped by (kind, patch, index).
+        struct Occupant {
+            Box box;
+            std::uint64_t cell_lo;
+            std::uint32_t prim, patch;
+        };
+        std::vector<Occupant> occ;
     };
 
     // Primitives live in one index space: vertices [0, n), edges [n, n+E), triangles [n+E, n+E+T).

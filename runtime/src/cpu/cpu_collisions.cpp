@@ -50,6 +50,16 @@ void CpuCollisions<T>::build(const FlatModel& flat, const Model& model) {
         kinematic_local_.insert(kinematic_local_.end(), mesh.positions.begin(), mesh.positions.end());
     }
     edges_ = collision::build_edges(triangles_);
+    if (self_) {
+        // Built over every triangle (mesh colliders too: their patches only ever meet cloth patches
+        // of other groups, which are never culled); the positions only guide the splits.
+        std::vector<Vec3d> rest(flat.initial_positions);
+        for (const MeshCollider& mc : meshes_)
+            for (const Vec3d& p : model.colliders[mc.collider].mesh->positions) rest.push_back(p);
+        hierarchy_ = std::make_unique<collision::PatchHierarchy>(
+            collision::build_patch_hierarchy(rest, triangles_, edges_, triangle_group_));
+        front_ = std::make_unique<collision::NormalConeFront>(*hierarchy_);
+    }
 
     const std::size_t n = cloth_vertices_ + kinematic_local_.size();
     inverse_mass_.assign(n, 0.0);
@@ -119,8 +129,12 @@ void CpuCollisions<T>::begin_substep(const Model& model, double t, double h, con
     in.triangle_cloth = triangle_group_;
     in.thickness = thickness;
     in.self_pairs = self_;
+    stats.ms(Stage::BroadPhase) += ms_since(clock);
+    cull(model, x0_, x1_, in, stats);
+    clock = Clock::now();
     broad_.find(in, pairs_);
     stats.collision.candidate_pairs += static_cast<std::int64_t>(pairs_.vf.size() + pairs_.ee.size());
+    stats.collision.culled_pairs += static_cast<std::int64_t>(pairs_.counters.culled_pairs);
     stats.ms(Stage::BroadPhase) += ms_since(clock);
 
     clock = Clock::now();
@@ -148,9 +162,6 @@ void CpuCollisions<T>::end_substep(const Model& model, double h, const std::vect
                                    std::vector<V3>& v, StepStats& stats) {
     const CollisionSettings& settings = model.settings.collision;
     if (!settings.continuous) return;
-#ifndef WEFT_HAVE_IMPACT_ZONES
-    (void)h, (void)x0, (void)x1, (void)v, (void)stats;
-#else
     parallel_chunks(cloth_vertices_, [&](std::size_t lo, std::size_t hi) {
         for (std::size_t i = lo; i < hi; ++i) x1_[i] = x1[i].template cast<double>();
     });
@@ -165,6 +176,9 @@ void CpuCollisions<T>::end_substep(const Model& model, double h, const std::vect
     in.self_pairs = self_;
     in.thickness = settings.thickness > 0.0 ? settings.thickness : max_thickness_;
     in.max_iterations = settings.max_impact_iterations;
+    // The zones move x1 between detections, so the cones are refitted before each one: a cone
+    // bounded over an older motion could cull a pair that now collides.
+    in.refresh_broad_phase = [&](int /*detection*/, collision::BroadPhaseInput& b) { cull(model, b.x0, b.x1, b, stats); };
     const collision::ImpactZoneReport r = zones_.resolve(in);
     CollisionStats& c = stats.collision;
     c.candidate_pairs += r.candidate_pairs;
@@ -188,7 +202,25 @@ void CpuCollisions<T>::end_substep(const Model& model, double h, const std::vect
             v[i] = (corrected - x0[i]) * inv_h;
         }
     });
-#endif
+}
+
+template <typename T>
+void CpuCollisions<T>::cull(const Model& model, std::span<const Vec3d> x0, std::span<const Vec3d> x1,
+                            collision::BroadPhaseInput& in, StepStats& stats) {
+    const CollisionSettings& settings = model.settings.collision;
+    in.count_culled = settings.count_culled;
+    if (!front_ || settings.culling != CollisionCulling::NormalCone) {
+        in.vertex_patch = {};
+        in.edge_patch = {};
+        in.triangle_patch = {};
+        return;
+    }
+    const auto clock = Clock::now();
+    front_->update(x0, x1);
+    in.vertex_patch = front_->vertex_patch();
+    in.edge_patch = front_->edge_patch();
+    in.triangle_patch = front_->triangle_patch();
+    stats.ms(Stage::Culling) += ms_since(clock);
 }
 
 template <typename T>

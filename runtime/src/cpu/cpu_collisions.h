@@ -6,14 +6,13 @@
 // Built only when the scene needs it: self-collision on, or a mesh collider present.
 
 #include <cstdint>
+#include <memory>
 #include <vector>
 
 #include "collision/broad_phase.h"
-// TEMPORARY (removed when the impact-zone solver lands in this series): lets the tree build meanwhile.
-#if __has_include("collision/impact_zones.h")
 #include "collision/impact_zones.h"
-#define WEFT_HAVE_IMPACT_ZONES 1
-#endif
+#include "collision/normal_cone_front.h"
+#include "collision/patch_hierarchy.h"
 #include "collision/proximity_contacts.h"
 #include "cpu/contact_terms.h"
 #include "weft/flat_model.h"
@@ -31,6 +30,9 @@ public:
     void build(const FlatModel& flat, const Model& model);
     /// True when the scene has anything for these stages to do.
     [[nodiscard]] bool active() const { return active_; }
+    /// True when `model`'s collision settings no longer match what was built (self-collision
+    /// switched on or off live): call `build` again.
+    [[nodiscard]] bool stale(const Model& model) const { return model.settings.collision.self_collision != self_; }
 
     /// Finds the substep's proximity contacts from the start state (x0, v0) of the cloth and the
     /// colliders' poses at t and t + h, and hands them to `terms()`.
@@ -71,9 +73,13 @@ private:
     collision::BroadPhase broad_;
     collision::BroadPhaseResult pairs_;
     std::vector<collision::ProximityContact> contacts_;
-#ifdef WEFT_HAVE_IMPACT_ZONES
     collision::ImpactZoneSolver zones_;
-#endif
+    // Normal-cone culling of self pairs (PSCC): the hierarchy over the fixed topology, built once,
+    // and the test front kept across substeps. Null without self-collision or with culling off.
+    std::unique_ptr<collision::PatchHierarchy> hierarchy_;
+    std::unique_ptr<collision::NormalConeFront> front_;
+    void cull(const Model& model, std::span<const Vec3d> x0, std::span<const Vec3d> x1,
+              collision::BroadPhaseInput& in, StepStats& stats);
     ContactTerms<T> terms_;
 };
 

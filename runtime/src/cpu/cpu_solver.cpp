@@ -296,6 +296,7 @@ void CpuSolver<T>::substep(const Model& model, double t, double h_double, StepSt
     std::fill(wk_.begin(), wk_.end(), V3{});
     prepare_parameters(model, t, h_double);
     stats.ms(Stage::Kinematics) += ms_since(clock);
+    if (collisions_.stale(model)) collisions_.build(*flat_, model);  // self-collision toggled live
     const bool collide = collisions_.active();
     if (collide) collisions_.begin_substep(model, t, h_double, x0_, v0_, stats);
     ContactTerms<T>* contacts = collide ? &collisions_.terms() : nullptr;

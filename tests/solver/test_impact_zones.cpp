@@ -1,0 +1,574 @@
+// Impact zones: after `resolve`, a brute-force CCD sweep over every vertex–face and edge–edge pair
+// (not the broad phase) finds nothing at eta and the exact intersection check finds nothing, on a
+// vertex through a triangle, an edge through an edge, two sheets driven through each other, a sheet
+// pushed through a fixed mesh and a crumpled sheet; the projection's answer on the single contacts
+// against the closed form; fixed vertices never move and untouched ones keep x1 bit for bit; the
+// fallbacks (rigid zones, freezing, carrying by a kinematic mesh) end clean and are counted; rigid
+// zones keep their linear momentum and shape; the result is the same on any thread count.
+#include <gtest/gtest.h>
+#include <tbb/blocked_range.h>
+#include <tbb/global_control.h>
+#include <tbb/parallel_for.h>
+#include <tbb/task_arena.h>
+
+#include <algorithm>
+#include <atomic>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <cstring>
+#include <map>
+#include <numbers>
+#include <random>
+#include <vector>
+
+#include "weft/error.h"
+#include "weft/mesh.h"
+#include "weft/physics/ccd.h"
+
+#include "collision/broad_phase.h"
+#include "collision/impact_zones.h"
+#include "collision/intersection_check.h"
+
+namespace weft::collision {
+namespace {
+
+// ---- Scenes ----------------------------------------------------------------------------------------
+
+struct Scene {
+    std::vector<Vec3d> x0, x1;
+    std::vector<double> inverse_mass;
+    std::vector<Triangle> triangles;
+    std::vector<Edge> edges;
+    double thickness = 1e-3;
+
+    /// Appends a mesh with its vertices at x0 = x1 = positions; returns its first vertex.
+    std::uint32_t add(const std::vector<Vec3d>& positions, const std::vector<Triangle>& tris, double inv_mass) {
+        const auto first = static_cast<std::uint32_t>(x0.size());
+        for (const Vec3d& p : positions) {
+            x0.push_back(p);
+            x1.push_back(p);
+            inverse_mass.push_back(inv_mass);
+        }
+        for (Triangle t : tris) {
+            for (std::uint32_t& v : t.v) v += first;
+            triangles.push_back(t);
+        }
+        edges = build_edges(triangles);
+        return first;
+    }
+    std::uint32_t add(const MeshData& mesh, double inv_mass) { return add(mesh.positions, mesh.triangles, inv_mass); }
+
+    [[nodiscard]] double eta() const { return ImpactZoneInput{}.separation_ratio * thickness; }
+};
+
+/// A horizontal grid (XZ plane) centred on `centre`.
+MeshData grid(double size, int cells, Vec3d centre) {
+    MeshData m = make_grid(size, size, cells, cells, GridPlane::XZ);
+    for (Vec3d& p : m.positions) p += centre;
+    return m;
+}
+
+// ---- Checks ----------------------------------------------------------------------------------------
+
+struct Resolved {
+    std::vector<Vec3d> x1;
+    ImpactZoneReport report;
+    std::vector<VertexOutcome> outcome;
+    std::vector<std::uint32_t> zone;
+    double ms = 0.0;
+};
+
+Resolved resolve(const Scene& s, int max_iterations = 32, ImpactZoneSolver* reuse = nullptr) {
+    Resolved r;
+    r.x1 = s.x1;
+    ImpactZoneSolver local;
+    ImpactZoneSolver& solver = reuse != nullptr ? *reuse : local;
+    ImpactZoneInput in;
+    in.x0 = s.x0;
+    in.x1 = r.x1;
+    in.inverse_mass = s.inverse_mass;
+    in.triangles = s.triangles;
+    in.edges = s.edges;
+    in.thickness = s.thickness;
+    in.max_iterations = max_iterations;
+    const auto t0 = std::chrono::steady_clock::now();
+    r.report = solver.resolve(in);
+    r.ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+    r.outcome.assign(solver.outcome().begin(), solver.outcome().end());
+    r.zone.assign(solver.zone_of_vertex().begin(), solver.zone_of_vertex().end());
+    return r;
+}
+
+struct Collisions {
+    std::size_t vf = 0, ee = 0;
+    [[nodiscard]] std::size_t total() const { return vf + ee; }
+};
+
+/// CCD at eta on every vertex–face pair (vertex not a corner) and every edge–edge pair (no shared
+/// vertex) from x0 to x1, skipping only pairs with no movable vertex. Independent of the broad phase.
+Collisions brute_force_ccd(const Scene& s, const std::vector<Vec3d>& x1, double eta) {
+    std::atomic<std::size_t> vf{0}, ee{0};
+    const auto fixed = [&](std::uint32_t v) { return s.inverse_mass[v] == 0.0; };
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, s.x0.size()), [&](const tbb::blocked_range<std::size_t>& r) {
+        std::size_t found = 0;
+        for (std::size_t i = r.begin(); i != r.end(); ++i) {
+            const auto p = static_cast<std::uint32_t>(i);
+            for (const Triangle& t : s.triangles) {
+                if (p == t.v[0] || p == t.v[1] || p == t.v[2]) continue;
+                if (fixed(p) && fixed(t.v[0]) && fixed(t.v[1]) && fixed(t.v[2])) continue;
+                const auto c = physics::vertex_face_ccd(s.x0[p], s.x0[t.v[0]], s.x0[t.v[1]], s.x0[t.v[2]], x1[p],
+                                                        x1[t.v[0]], x1[t.v[1]], x1[t.v[2]], eta);
+                found += c.hit ? 1 : 0;
+            }
+        }
+        vf += found;
+    });
+    const std::size_t ne = s.edges.size();
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, ne), [&](const tbb::blocked_range<std::size_t>& r) {
+        std::size_t found = 0;
+        for (std::size_t a = r.begin(); a != r.end(); ++a)
+            for (std::size_t b = a + 1; b < ne; ++b) {
+                const Edge &e = s.edges[a], &f = s.edges[b];
+                if (e.v[0] == f.v[0] || e.v[0] == f.v[1] || e.v[1] == f.v[0] || e.v[1] == f.v[1]) continue;
+                if (fixed(e.v[0]) && fixed(e.v[1]) && fixed(f.v[0]) && fixed(f.v[1])) continue;
+                const auto c = physics::edge_edge_ccd(s.x0[e.v[0]], s.x0[e.v[1]], s.x0[f.v[0]], s.x0[f.v[1]],
+                                                      x1[e.v[0]], x1[e.v[1]], x1[f.v[0]], x1[f.v[1]], eta);
+                found += c.hit ? 1 : 0;
+            }
+        ee += found;
+    });
+    return {vf.load(), ee.load()};
+}
+
+bool same_bits(const Vec3d& a, const Vec3d& b) { return std::memcmp(&a, &b, sizeof(Vec3d)) == 0; }
+
+/// The scene is a real test: x0 clean and separated, the motion colliding, and x1 intersecting unless
+/// the surfaces pass through each other completely (tunnelling, which only CCD sees).
+void expect_meaningful(const Scene& s, bool x1_intersects = true) {
+    EXPECT_TRUE(check_intersections(s.x0, s.triangles).clean()) << "x0 must be free of intersections";
+    EXPECT_EQ(brute_force_ccd(s, s.x0, s.eta()).total(), 0U) << "x0 → x0 must be collision free";
+    EXPECT_GT(brute_force_ccd(s, s.x1, s.eta()).total(), 0U) << "x0 → x1 must collide";
+    EXPECT_EQ(check_intersections(s.x1, s.triangles).clean(), !x1_intersects) << "x1 intersecting";
+}
+
+/// Everything `resolve` promises about its output.
+void expect_clean(const Scene& s, const Resolved& r) {
+    const ImpactZoneReport& rep = r.report;
+    EXPECT_TRUE(rep.resolved);
+    EXPECT_EQ(rep.remaining_hits, 0);
+    EXPECT_EQ(rep.eta, s.eta());
+    const Collisions c = brute_force_ccd(s, r.x1, rep.eta);
+    EXPECT_EQ(c.vf, 0U) << "vertex-face collisions left";
+    EXPECT_EQ(c.ee, 0U) << "edge-edge collisions left";
+    const IntersectionReport ic = check_intersections(r.x1, s.triangles);
+    EXPECT_TRUE(ic.clean()) << ic.intersecting_pairs << " intersecting triangle pairs left";
+    std::size_t fixed_moved = 0, untouched_moved = 0, frozen_off = 0, nonfinite = 0, zone_mismatch = 0;
+    int frozen = 0, carried = 0;
+    for (std::size_t v = 0; v < s.x0.size(); ++v) {
+        nonfinite += physics::is_finite(r.x1[v]) ? 0 : 1;
+        const VertexOutcome o = r.outcome[v];
+        if (s.inverse_mass[v] == 0.0) {
+            EXPECT_EQ(o, VertexOutcome::Fixed);
+            fixed_moved += same_bits(r.x1[v], s.x1[v]) ? 0 : 1;
+        }
+        if (o == VertexOutcome::Untouched) untouched_moved += same_bits(r.x1[v], s.x1[v]) ? 0 : 1;
+        if (o == VertexOutcome::Frozen) frozen_off += same_bits(r.x1[v], s.x0[v]) ? 0 : 1;
+        frozen += o == VertexOutcome::Frozen ? 1 : 0;
+        carried += o == VertexOutcome::Carried ? 1 : 0;
+        // In a zone exactly when moved by one.
+        const bool zoned = o != VertexOutcome::Fixed && o != VertexOutcome::Untouched;
+        zone_mismatch += zoned == (r.zone[v] != kNoZone) ? 0 : 1;
+    }
+    EXPECT_EQ(nonfinite, 0U);
+    EXPECT_EQ(fixed_moved, 0U) << "vertices of inverse mass 0 moved";
+    EXPECT_EQ(untouched_moved, 0U) << "vertices in no zone changed";
+    EXPECT_EQ(frozen_off, 0U) << "frozen vertices not at x0";
+    EXPECT_EQ(zone_mismatch, 0U);
+    EXPECT_EQ(rep.frozen_vertices, frozen);
+    EXPECT_EQ(rep.carried_vertices, carried);
+}
+
+/// Σ m (x1 − x0) over `vertices`.
+Vec3d momentum(const Scene& s, const std::vector<Vec3d>& x1, const std::vector<std::uint32_t>& vertices) {
+    Vec3d p{};
+    for (std::uint32_t v : vertices) p += (1.0 / s.inverse_mass[v]) * (x1[v] - s.x0[v]);
+    return p;
+}
+
+/// Vertices of `points` that lie over a triangle of `surface` in the horizontal (x, z) projection of
+/// the positions `x` but on the wrong side of it: below it when `above` (else above it).
+std::size_t wrong_side(const std::vector<Vec3d>& x, const std::vector<std::uint32_t>& points,
+                       std::span<const Triangle> surface, bool above) {
+    std::size_t wrong = 0;
+    for (std::uint32_t p : points) {
+        for (const Triangle& t : surface) {
+            const Vec3d a = x[t.v[0]], b = x[t.v[1]], c = x[t.v[2]], q = x[p];
+            const double det = (b.x - a.x) * (c.z - a.z) - (c.x - a.x) * (b.z - a.z);
+            if (std::fabs(det) < 1e-12) continue;
+            const double u = ((q.x - a.x) * (c.z - a.z) - (c.x - a.x) * (q.z - a.z)) / det;
+            const double v = ((b.x - a.x) * (q.z - a.z) - (q.x - a.x) * (b.z - a.z)) / det;
+            if (u < 0.0 || v < 0.0 || u + v > 1.0) continue;
+            const double y = a.y + u * (b.y - a.y) + v * (c.y - a.y);
+            wrong += (above ? q.y < y : q.y > y) ? 1 : 0;
+            break;
+        }
+    }
+    return wrong;
+}
+
+void print(const char* what, const Resolved& r) {
+    const ImpactZoneReport& p = r.report;
+    std::printf(
+        "%s: resolved %d, rounds %d, zones %d (max %d vertices), constraints %d, rigid zones %d (%d rounds), frozen "
+        "%d, carried %d, QP sweeps %lld (%d unconverged), detections %d, candidates %lld, CCD %lld tests / %lld hits; "
+        "%.1f ms (broad %.1f, CCD %.1f, zones %.1f)\n",
+        what, p.resolved ? 1 : 0, p.iterations, p.zones, p.max_zone_vertices, p.constraints, p.rigid_zones,
+        p.rigid_rounds, p.frozen_vertices, p.carried_vertices, static_cast<long long>(p.qp_sweeps), p.qp_unconverged,
+        p.detections, static_cast<long long>(p.candidate_pairs), static_cast<long long>(p.ccd_tests),
+        static_cast<long long>(p.ccd_hits), r.ms, p.broad_phase_ms, p.ccd_ms, p.zones_ms);
+}
+
+/// Two sheets of `cells`² cells, the upper driven down through the lower and the lower up, offset
+/// in the plane so that no vertex lands exactly on another primitive; masses vary by 4×.
+Scene two_sheets(int cells, unsigned seed) {
+    Scene s;
+    const double size = 0.2, h = size / cells;
+    const std::uint32_t a = s.add(grid(size, cells, {0.0, 0.01, 0.0}), 1.0);
+    const std::uint32_t b = s.add(grid(size, cells, {0.3 * h, -0.01, 0.45 * h}), 1.0);
+    std::mt19937 rng(seed);
+    std::uniform_real_distribution<double> inv(500.0, 2000.0), wobble(-0.1 * h, 0.1 * h);
+    for (std::size_t v = 0; v < s.x0.size(); ++v) {
+        s.inverse_mass[v] = inv(rng);
+        const double dy = v < b ? -0.02 : 0.02;
+        s.x1[v] = s.x0[v] + Vec3d{wobble(rng), dy + wobble(rng), wobble(rng)};
+    }
+    (void)a;
+    return s;
+}
+
+/// A flat sheet of `cells`² cells of 1 cm, crumpled: a smooth random displacement whose lateral
+/// part folds the sheet over itself (gradient beyond −1) while the vertical part stacks the folds
+/// at different heights, plus a little per-vertex noise.
+Scene crumpled_sheet(int cells, unsigned seed) {
+    Scene s;
+    const double h = 0.01, size = h * cells;
+    s.add(grid(size, cells, {}), 1.0);
+    std::mt19937 rng(seed);
+    std::uniform_real_distribution<double> unit(0.0, 1.0), noise(-0.15 * h, 0.15 * h), inv(500.0, 2000.0);
+    struct Mode {
+        double kx, kz, phase;
+        Vec3d amplitude;
+    };
+    std::vector<Mode> modes;
+    for (int m = 0; m < 8; ++m) {
+        const double angle = 2.0 * std::numbers::pi * unit(rng);
+        const double k = 2.0 * std::numbers::pi / (h * (5.0 + 7.0 * unit(rng)));
+        const double lateral = h * (1.0 + 1.5 * unit(rng));
+        modes.push_back({k * std::cos(angle),
+                         k * std::sin(angle),
+                         2.0 * std::numbers::pi * unit(rng),
+                         {lateral * std::cos(angle), h * (0.5 + 1.5 * unit(rng)), lateral * std::sin(angle)}});
+    }
+    for (std::size_t v = 0; v < s.x0.size(); ++v) {
+        s.inverse_mass[v] = inv(rng);
+        const Vec3d p = s.x0[v];
+        Vec3d d{noise(rng), noise(rng), noise(rng)};
+        for (const Mode& m : modes) d += std::sin(m.kx * p.x + m.kz * p.z + m.phase) * m.amplitude;
+        s.x1[v] = p + d;
+    }
+    return s;
+}
+
+// ---- Single contacts, against the closed form ------------------------------------------------------------
+
+TEST(ImpactZones, VertexDrivenHeadOnThroughTriangle) {
+    // Triangle A in the plane y = 0 with its centroid at the origin; the tip p of a vertical dart
+    // goes from 1 cm above the centroid to 1 cm below; all masses 1 kg. The one constraint is
+    // p_y − (a_y + b_y + c_y)/3 ≥ δ, violated by δ + 1 cm at the prediction; with weights
+    // (1, −⅓, −⅓, −⅓) and equal masses the closest feasible point moves p up by ¾ of that and each
+    // corner down by ¼ (x = x̂ + M⁻¹Jᵀλ with λ·(1 + 3·⅑) = violation).
+    Scene s;
+    s.add({{-0.05, 0.0, -0.05}, {0.1, 0.0, -0.05}, {-0.05, 0.0, 0.1}}, {{{0, 1, 2}}}, 1.0);
+    const std::uint32_t dart = s.add({{0.0, 0.01, 0.0}, {0.01, 0.06, 0.0}, {-0.01, 0.06, 0.0}}, {{{0, 1, 2}}}, 1.0);
+    s.x1[dart] = {0.0, -0.01, 0.0};
+    expect_meaningful(s);
+    const Resolved r = resolve(s);
+    print("vertex through triangle", r);
+    expect_clean(s, r);
+    const double violation = s.thickness + 0.01;
+    const double tol = 1e-4 * s.thickness + 1e-12;
+    EXPECT_NEAR(r.x1[dart].y - s.x1[dart].y, 0.75 * violation, tol);
+    for (std::uint32_t v = 0; v < 3; ++v) EXPECT_NEAR(r.x1[v].y - s.x1[v].y, -0.25 * violation, tol);
+    EXPECT_NEAR(r.x1[dart].x, 0.0, 1e-12);  // the normal is vertical: no sideways push
+    EXPECT_EQ(r.outcome[dart + 1], VertexOutcome::Untouched);
+    EXPECT_EQ(r.outcome[dart + 2], VertexOutcome::Untouched);
+    EXPECT_EQ(r.report.zones, 1);
+    EXPECT_EQ(r.report.max_zone_vertices, 4);
+    EXPECT_EQ(r.report.rigid_zones, 0);
+    EXPECT_EQ(r.report.frozen_vertices, 0);
+}
+
+TEST(ImpactZones, EdgeCrossingEdge) {
+    // Edge e (along x, y = 0) hangs a vertical triangle below it; edge f (along z, y = +1 cm) carries
+    // a vertical triangle above it and drops 2 cm. Weights (½, ½, −½, −½): the four endpoints share
+    // the violation δ + 1 cm equally, e down and f up by half of it each.
+    Scene s;
+    s.add({{-0.05, 0.0, 0.0}, {0.05, 0.0, 0.0}, {0.0, -0.05, 0.0}}, {{{0, 1, 2}}}, 1.0);
+    const std::uint32_t top = s.add({{0.0, 0.01, -0.05}, {0.0, 0.01, 0.05}, {0.0, 0.06, 0.0}}, {{{0, 1, 2}}}, 1.0);
+    for (std::uint32_t v = top; v < top + 3; ++v) s.x1[v].y -= 0.02;
+    expect_meaningful(s);
+    const Resolved r = resolve(s);
+    print("edge through edge", r);
+    expect_clean(s, r);
+    const double half = 0.5 * (s.thickness + 0.01), tol = 1e-4 * s.thickness + 1e-12;
+    for (std::uint32_t v : {0U, 1U}) EXPECT_NEAR(r.x1[v].y - s.x1[v].y, -half, tol);
+    for (std::uint32_t v : {top, top + 1}) EXPECT_NEAR(r.x1[v].y - s.x1[v].y, half, tol);
+    EXPECT_EQ(r.outcome[2], VertexOutcome::Untouched);
+    EXPECT_EQ(r.outcome[top + 2], VertexOutcome::Untouched);
+}
+
+// ---- Sheets --------------------------------------------------------------------------------------------
+
+TEST(ImpactZones, TwoSheetsDrivenThroughEachOther) {
+    const Scene s = two_sheets(14, 3);
+    expect_meaningful(s, false);  // the sheets swap sides completely
+    const Resolved r = resolve(s);
+    print("two sheets", r);
+    expect_clean(s, r);
+    EXPECT_EQ(r.report.rigid_zones, 0);
+    EXPECT_EQ(r.report.frozen_vertices, 0);
+    EXPECT_EQ(r.report.qp_unconverged, 0);
+    // No vertex of inverse mass 0: the constraint impulses are internal (weights sum to zero), so the
+    // total momentum of the motion is that of the prediction.
+    std::vector<std::uint32_t> all(s.x0.size());
+    for (std::uint32_t v = 0; v < all.size(); ++v) all[v] = v;
+    const Vec3d p0 = momentum(s, s.x1, all), p1 = momentum(s, r.x1, all);
+    EXPECT_NEAR(p1.y, p0.y, 1e-12);
+    // The upper sheet stays above the lower one wherever they overlap (the meeting height varies
+    // with the local masses), and the lower below the upper.
+    const auto cells = static_cast<std::uint32_t>(s.triangles.size() / 2);
+    std::vector<std::uint32_t> upper, lower;
+    for (std::uint32_t v = 0; v < s.x0.size(); ++v) (s.x0[v].y > 0.0 ? upper : lower).push_back(v);
+    const std::span<const Triangle> tris(s.triangles);
+    EXPECT_EQ(wrong_side(r.x1, upper, tris.subspan(cells), true), 0U);
+    EXPECT_EQ(wrong_side(r.x1, lower, tris.first(cells), false), 0U);
+    EXPECT_GT(wrong_side(s.x1, upper, tris.subspan(cells), true), 100U);  // as predicted, they swapped
+}
+
+TEST(ImpactZones, SheetPushedThroughFixedMesh) {
+    // A 24×24 cloth 30 cm wide falls 1.4 cm into a fixed bumpy patch 10 cm wide (inverse mass 0), to
+    // the middle of its bumps. The cloth's rim, far from the patch, falls freely and must keep its x1
+    // exactly.
+    Scene s;
+    const std::uint32_t cloth = s.add(grid(0.3, 24, {0.0, 0.01, 0.0}), 1000.0);
+    MeshData patch = grid(0.1, 5, {0.003, 0.0, -0.002});
+    for (Vec3d& p : patch.positions) p.y = 0.004 * std::sin(60.0 * p.x) * std::cos(50.0 * p.z) - 0.004;
+    const std::uint32_t fixed = s.add(patch, 0.0);
+    for (std::uint32_t v = cloth; v < fixed; ++v) s.x1[v].y -= 0.014;
+    expect_meaningful(s);
+    const Resolved r = resolve(s);
+    print("sheet through fixed mesh", r);
+    expect_clean(s, r);
+    EXPECT_EQ(r.report.frozen_vertices, 0);
+    std::size_t far = 0, far_untouched = 0;
+    for (std::uint32_t v = cloth; v < fixed; ++v) {
+        if (std::max(std::fabs(s.x0[v].x), std::fabs(s.x0[v].z)) < 0.12) continue;
+        ++far;
+        far_untouched += r.outcome[v] == VertexOutcome::Untouched && same_bits(r.x1[v], s.x1[v]) ? 1 : 0;
+    }
+    EXPECT_GT(far, 100U);
+    EXPECT_EQ(far_untouched, far);
+    // The cloth ends above the patch wherever it is over it.
+    std::vector<std::uint32_t> cloth_vertices;
+    for (std::uint32_t v = cloth; v < fixed; ++v) cloth_vertices.push_back(v);
+    const auto patch_triangles = std::span<const Triangle>(s.triangles).subspan(2 * 24 * 24);
+    EXPECT_EQ(wrong_side(r.x1, cloth_vertices, patch_triangles, true), 0U);
+    EXPECT_GT(wrong_side(s.x1, cloth_vertices, patch_triangles, true), 10U);  // as predicted, it sank in
+}
+
+TEST(ImpactZones, CrumplingSheet) {
+    const Scene s = crumpled_sheet(22, 7);
+    expect_meaningful(s);
+    const Resolved r = resolve(s);
+    print("crumpled sheet", r);
+    expect_clean(s, r);
+    EXPECT_GT(r.report.zones, 0);
+    EXPECT_EQ(r.report.rigid_zones, 0);  // the projection alone resolves it
+    EXPECT_EQ(r.report.frozen_vertices, 0);
+}
+
+// ---- Fallbacks -----------------------------------------------------------------------------------------
+
+TEST(ImpactZones, RigidFallbackKeepsMomentumAndShape) {
+    // One projection round on a hard case, then rigid zones (no vertex of inverse mass 0 here).
+    const Scene s = crumpled_sheet(22, 7);
+    const Resolved r = resolve(s, 1);
+    print("crumpled sheet, 1 round", r);
+    expect_clean(s, r);
+    EXPECT_EQ(r.report.iterations, 1);
+    EXPECT_GT(r.report.rigid_zones, 0);
+    EXPECT_GT(r.report.rigid_rounds, 0);
+    // Each rigid zone: the momentum of its motion is the prediction's (the projection's impulses
+    // were internal, the rigid motion keeps it), and its vertices keep their distances.
+    std::map<std::uint32_t, std::vector<std::uint32_t>> rigid;
+    for (std::uint32_t v = 0; v < s.x0.size(); ++v)
+        if (r.outcome[v] == VertexOutcome::Rigid) rigid[r.zone[v]].push_back(v);
+    EXPECT_EQ(static_cast<int>(rigid.size()), r.report.rigid_zones);
+    for (const auto& [label, vertices] : rigid) {
+        double scale = 0.0;
+        for (std::uint32_t v : vertices) scale += (1.0 / s.inverse_mass[v]) * (physics::length(s.x0[v]) + 0.1);
+        const Vec3d p_hat = momentum(s, s.x1, vertices), p = momentum(s, r.x1, vertices);
+        EXPECT_LE(physics::length(p - p_hat), 1e-13 * scale)
+            << "zone " << label << ", " << vertices.size() << " vertices";
+        double worst = 0.0;
+        for (std::size_t i = 0; i < vertices.size(); ++i)
+            for (std::size_t j = i + 1; j < vertices.size(); ++j) {
+                const std::uint32_t a = vertices[i], b = vertices[j];
+                worst =
+                    std::max(worst, std::fabs(physics::length(r.x1[a] - r.x1[b]) - physics::length(s.x0[a] - s.x0[b])));
+            }
+        EXPECT_LE(worst, 1e-12) << "zone " << label << " is not rigid";
+    }
+}
+
+TEST(ImpactZones, FreezingZonesThatTouchFixedVertices) {
+    // No projection round: the zones touch the fixed patch, so they cannot move rigidly and are held
+    // at x0 instead.
+    Scene s;
+    const std::uint32_t cloth = s.add(grid(0.2, 16, {0.0, 0.01, 0.0}), 1000.0);
+    const std::uint32_t fixed = s.add(grid(0.1, 4, {0.002, 0.0, 0.003}), 0.0);
+    for (std::uint32_t v = cloth; v < fixed; ++v) s.x1[v].y -= 0.03;
+    expect_meaningful(s, false);  // the cloth ends below the patch
+    const Resolved r = resolve(s, 0);
+    print("sheet through fixed mesh, 0 rounds", r);
+    expect_clean(s, r);
+    EXPECT_EQ(r.report.iterations, 0);
+    EXPECT_EQ(r.report.rigid_zones, 0);
+    EXPECT_GT(r.report.frozen_vertices, 0);
+}
+
+TEST(ImpactZones, KinematicMeshCarriesFrozenCloth) {
+    // A collider plate (inverse mass 0) rises 3 cm through a cloth at rest, with no projection round:
+    // the cloth is frozen at x0, the plate still drives into it, so the cloth it meets moves with it.
+    Scene s;
+    const std::uint32_t cloth = s.add(grid(0.1, 8, {0.0, 0.0, 0.0}), 1000.0);
+    const std::uint32_t plate = s.add(grid(0.3, 3, {0.004, -0.01, 0.002}), 0.0);
+    const Vec3d lift{0.001, 0.03, 0.0};
+    for (std::uint32_t v = plate; v < s.x0.size(); ++v) s.x1[v] += lift;
+    expect_meaningful(s, false);  // the plate ends above the cloth
+    const Resolved r = resolve(s, 0);
+    print("plate through frozen cloth", r);
+    expect_clean(s, r);
+    EXPECT_GT(r.report.carried_vertices, 0);
+    for (std::uint32_t v = cloth; v < plate; ++v) {
+        if (r.outcome[v] != VertexOutcome::Carried) continue;
+        EXPECT_NEAR(physics::length(r.x1[v] - s.x0[v] - lift), 0.0, 1e-15);
+    }
+    // With the normal path the plate lifts the cloth instead, by projection alone.
+    const Resolved p = resolve(s);
+    print("plate through cloth", p);
+    expect_clean(s, p);
+    EXPECT_EQ(p.report.frozen_vertices, 0);
+    EXPECT_EQ(p.report.carried_vertices, 0);
+}
+
+// ---- Determinism, options, timing -------------------------------------------------------------------------
+
+TEST(ImpactZones, SameResultOnAnyThreadCount) {
+    const Scene s = crumpled_sheet(16, 11);
+    tbb::global_control allow(tbb::global_control::max_allowed_parallelism, 4);
+    const auto run = [&](int threads, int rounds) {
+        Resolved r;
+        tbb::task_arena arena(threads);
+        arena.execute([&] { r = resolve(s, rounds); });
+        return r;
+    };
+    for (int rounds : {32, 1}) {  // 1: the rigid fallback runs too
+        const Resolved one = run(1, rounds);
+        for (int threads : {2, 4}) {
+            const Resolved many = run(threads, rounds);
+            EXPECT_EQ(std::memcmp(one.x1.data(), many.x1.data(), one.x1.size() * sizeof(Vec3d)), 0)
+                << threads << " threads, " << rounds << " rounds";
+            EXPECT_TRUE(one.outcome == many.outcome);
+            EXPECT_TRUE(one.zone == many.zone);
+            const ImpactZoneReport &a = one.report, &b = many.report;
+            EXPECT_EQ(a.iterations, b.iterations);
+            EXPECT_EQ(a.zones, b.zones);
+            EXPECT_EQ(a.constraints, b.constraints);
+            EXPECT_EQ(a.qp_sweeps, b.qp_sweeps);
+            EXPECT_EQ(a.candidate_pairs, b.candidate_pairs);
+            EXPECT_EQ(a.ccd_hits, b.ccd_hits);
+            EXPECT_EQ(a.rigid_zones, b.rigid_zones);
+            EXPECT_EQ(a.frozen_vertices, b.frozen_vertices);
+        }
+        // A reused solver (warm scratch from another scene) gives the same again.
+        ImpactZoneSolver solver;
+        (void)resolve(two_sheets(8, 1), 32, &solver);
+        const Resolved again = resolve(s, rounds, &solver);
+        EXPECT_EQ(std::memcmp(one.x1.data(), again.x1.data(), one.x1.size() * sizeof(Vec3d)), 0);
+    }
+}
+
+TEST(ImpactZones, NothingToDoLeavesEverythingAlone) {
+    // Two sheets 2 cm apart moving in parallel (and an empty scene): one detection, no zone, x1 kept.
+    Scene s = two_sheets(6, 2);
+    for (std::size_t v = 0; v < s.x0.size(); ++v) s.x1[v] = s.x0[v] + Vec3d{0.003, -0.004, 0.001};
+    const Resolved r = resolve(s);
+    EXPECT_TRUE(r.report.resolved);
+    EXPECT_EQ(r.report.detections, 1);
+    EXPECT_EQ(r.report.iterations, 0);
+    EXPECT_EQ(r.report.zones, 0);
+    EXPECT_EQ(r.report.ccd_hits, 0);
+    EXPECT_GT(r.report.ccd_tests, 0);  // the sheets' own neighbours are tested
+    EXPECT_EQ(std::memcmp(r.x1.data(), s.x1.data(), s.x1.size() * sizeof(Vec3d)), 0);
+    for (VertexOutcome o : r.outcome) EXPECT_EQ(o, VertexOutcome::Untouched);
+    const Resolved empty = resolve(Scene{});
+    EXPECT_TRUE(empty.report.resolved);
+    EXPECT_EQ(empty.report.candidate_pairs, 0);
+}
+
+TEST(ImpactZones, RejectsBadInput) {
+    const Scene s = two_sheets(2, 1);
+    std::vector<Vec3d> x1 = s.x1;
+    ImpactZoneSolver solver;
+    ImpactZoneInput in{.x0 = s.x0,
+                       .x1 = x1,
+                       .inverse_mass = s.inverse_mass,
+                       .triangles = s.triangles,
+                       .edges = s.edges,
+                       .thickness = 1e-3};
+    EXPECT_NO_THROW((void)solver.resolve(in));
+    ImpactZoneInput bad = in;
+    bad.thickness = 0.0;
+    EXPECT_THROW((void)solver.resolve(bad), Error);
+    bad = in;
+    bad.inverse_mass = std::span<const double>(s.inverse_mass).first(3);
+    EXPECT_THROW((void)solver.resolve(bad), Error);
+    std::vector<double> negative = s.inverse_mass;
+    negative[1] = -1.0;
+    bad = in;
+    bad.inverse_mass = negative;
+    EXPECT_THROW((void)solver.resolve(bad), Error);
+}
+
+// Not run by default (about 10 s on 2 cores): --gtest_also_run_disabled_tests.
+TEST(ImpactZones, DISABLED_TimingLargerCrumple) {
+    // 48×48 cells (4608 triangles). Checked with the exact intersection test only (the brute-force
+    // sweep would dominate the test's time); prints the time, asserts none.
+    const Scene s = crumpled_sheet(48, 5);
+    EXPECT_FALSE(check_intersections(s.x1, s.triangles).clean());
+    ImpactZoneSolver solver;
+    const Resolved cold = resolve(s, 32, &solver);
+    const Resolved warm = resolve(s, 32, &solver);
+    print("crumpled 48x48, cold", cold);
+    print("crumpled 48x48, warm", warm);
+    std::printf("  %zu vertices, %zu triangles, %d threads\n", s.x0.size(), s.triangles.size(),
+                tbb::this_task_arena::max_concurrency());
+    EXPECT_TRUE(warm.report.resolved);
+    EXPECT_TRUE(check_intersections(warm.x1, s.triangles).clean());
+    EXPECT_EQ(std::memcmp(cold.x1.data(), warm.x1.data(), cold.x1.size() * sizeof(Vec3d)), 0);
+}
+
+}  // namespace
+}  // namespace weft::collision
