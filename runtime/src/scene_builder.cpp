@@ -86,6 +86,47 @@ std::vector<std::uint32_t> select(const PinSelection& pin, const SceneCloth& clo
     return out;
 }
 
+// The triangles of a mesh collider in its local frame: the file's coordinates times `scale`. Unlike a
+// cloth, whose cooking drops zero-area triangles and reports them, a collider mesh is taken as it is
+// or refused: its triangles are the surface the cloth is kept out of, a zero-area one has no normal
+// to push along, and a collider has no cook report through which a dropped triangle would be seen.
+std::shared_ptr<const MeshData> load_collider_mesh(const ColliderMeshSource& src, const std::string& where) {
+    MeshData mesh;
+    try {
+        mesh = load_mesh_file(src.file);
+    } catch (const Error& e) {
+        throw Error(where + ": " + e.what());
+    }
+    const std::string file = src.file.string();
+    if (mesh.triangles.empty()) throw Error(where + ": " + file + ": the mesh has no triangles");
+    for (Vec3d& p : mesh.positions) {
+        p = src.scale * p;
+        if (!physics::is_finite(p)) throw Error(where + ": " + file + ": a vertex position is not finite");
+    }
+    std::size_t degenerate = 0, first = 0;
+    for (std::size_t k = 0; k < mesh.triangles.size(); ++k) {
+        const Triangle& t = mesh.triangles[k];
+        if (t.v[0] >= mesh.positions.size() || t.v[1] >= mesh.positions.size() || t.v[2] >= mesh.positions.size())
+            throw Error(where + ": " + file + ": triangle " + std::to_string(k) + " has a vertex index out of range");
+        const Vec3d a = mesh.positions[t.v[0]], b = mesh.positions[t.v[1]], c = mesh.positions[t.v[2]];
+        // The rule Fabric::cook uses: twice the area against the longest edge squared (scale-free).
+        const double area2 = physics::length(physics::cross(b - a, c - a));
+        const double longest = std::max({physics::length_squared(b - a), physics::length_squared(c - b),
+                                         physics::length_squared(a - c)});
+        if (t.v[0] == t.v[1] || t.v[1] == t.v[2] || t.v[0] == t.v[2] || longest == 0.0 || !(area2 > 1e-10 * longest)) {
+            if (degenerate == 0) first = k;
+            ++degenerate;
+        }
+    }
+    if (degenerate > 0)
+        throw Error(where + ": " + file + ": " + std::to_string(degenerate) + " of " +
+                    std::to_string(mesh.triangles.size()) + " triangles have zero area, the first is triangle " +
+                    std::to_string(first) +
+                    " (expected a collider mesh without degenerate triangles: remove them where the mesh is made)");
+    mesh.source = file;
+    return std::make_shared<const MeshData>(std::move(mesh));
+}
+
 }  // namespace
 
 std::unique_ptr<World> build_world(const SceneDesc& scene, std::string_view backend, const BackendOptions& options) {
@@ -101,14 +142,21 @@ std::unique_ptr<World> build_world(const SceneDesc& scene, std::string_view back
         return it->second;
     };
 
+    // Copies made by `repeat` are adjacent and identical up to their placement: they share one fabric.
+    std::shared_ptr<const Fabric> shared;
     for (std::size_t c = 0; c < scene.cloths.size(); ++c) {
         const SceneCloth& cloth = scene.cloths[c];
-        const std::string where = file + ": cloth[" + std::to_string(c) + "] '" + cloth.desc.name + "'";
+        const std::string where = file + ": cloth[" + std::to_string(cloth.entry) + "] '" + cloth.desc.name + "'";
         ClothDesc desc = cloth.desc;
-        try {
-            desc.fabric = Fabric::cook(make_mesh(cloth), cloth.fabric);
-        } catch (const Error& e) {
-            throw Error(where + ": " + e.what());
+        if (c > 0 && scene.cloths[c - 1].entry == cloth.entry && shared) {
+            desc.fabric = shared;
+        } else {
+            try {
+                desc.fabric = Fabric::cook(make_mesh(cloth), cloth.fabric);
+            } catch (const Error& e) {
+                throw Error(where + ": " + e.what());
+            }
+            shared = desc.fabric;
         }
         // A vertex selected by several rules keeps the first rule's motion.
         std::set<std::uint32_t> pinned;
@@ -121,7 +169,21 @@ std::unique_ptr<World> build_world(const SceneDesc& scene, std::string_view back
         }
         world->add_cloth(desc);
     }
-    for (const ColliderDesc& collider : scene.colliders) world->add_collider(collider);
+    // Colliders that name the same file at the same scale share one mesh.
+    std::map<std::pair<std::filesystem::path, double>, std::shared_ptr<const MeshData>> meshes;
+    for (std::size_t k = 0; k < scene.colliders.size(); ++k) {
+        ColliderDesc collider = scene.colliders[k];
+        if (collider.shape == ColliderShape::Mesh && !collider.mesh) {
+            const std::string where = file + ": collider[" + std::to_string(k) + "] '" + collider.name + "'";
+            if (k >= scene.collider_meshes.size() || scene.collider_meshes[k].file.empty())
+                throw Error(where + ": a mesh collider without a mesh file");
+            const ColliderMeshSource& src = scene.collider_meshes[k];
+            auto& mesh = meshes[{src.file, src.scale}];
+            if (!mesh) mesh = load_collider_mesh(src, where);
+            collider.mesh = mesh;
+        }
+        world->add_collider(collider);
+    }
     return world;
 }
 

@@ -5,6 +5,7 @@
 #include <fstream>
 #include <map>
 #include <numbers>
+#include <optional>
 #include <set>
 #include <sstream>
 
@@ -107,6 +108,20 @@ void read_world(Table& root, WorldDesc& w) {
     }
 }
 
+void read_collision(Table& root, CollisionSettings& c) {
+    auto t = root.table("collision");
+    if (!t) return;
+    c.self_collision = t->boolean("self", c.self_collision);
+    c.continuous = t->boolean("continuous", c.continuous);
+    if (auto k = t->choice("culling", {"normal_cone", "none"}))
+        c.culling = *k == 0 ? CollisionCulling::NormalCone : CollisionCulling::None;
+    c.thickness = t->number("thickness", c.thickness, {0.0, 0.1});
+    c.stiffness = t->number("stiffness", c.stiffness, {0.0, 1e9});
+    c.max_impact_iterations = t->integer("max_impact_iterations", c.max_impact_iterations, 1, 1000);
+    c.check = t->boolean("check", c.check);
+    t->finish();
+}
+
 void read_motions(Table& root, SceneDesc& scene) {
     std::set<std::string> names;
     for (Table& t : root.array_of_tables("motion")) {
@@ -140,6 +155,20 @@ void read_material(Table& cloth, Material& m) {
     m.contact_thickness = t->number("contact_thickness", m.contact_thickness, {1e-5, 0.1});
     m.friction = t->number("friction", m.friction, {0.0, 10.0});
     t->finish();
+}
+
+// A mesh file named by `key`, resolved relative to the scene file; it must exist now, so that a typo
+// in a path is reported with the line it is on rather than when the world is built.
+std::filesystem::path mesh_file(Table& t, std::string_view key, const std::filesystem::path& scene_path) {
+    const toml::node* node = t.find(key);
+    const std::string file = t.required_string(key, "a mesh file path, relative to the scene file");
+    std::filesystem::path p(file);
+    if (p.is_relative()) p = scene_path.parent_path() / p;
+    p = p.lexically_normal();
+    std::error_code ec;
+    if (!std::filesystem::is_regular_file(p, ec))
+        t.fail(key, node, "mesh file not found: " + p.string() + " (expected a path relative to the scene file)");
+    return p;
 }
 
 void read_mesh(Table& cloth, ClothSource& src, const std::filesystem::path& scene_path) {
@@ -184,15 +213,7 @@ void read_mesh(Table& cloth, ClothSource& src, const std::filesystem::path& scen
         grid->finish();
     } else {
         src.kind = ClothSource::Kind::File;
-        const toml::node* file_node = mesh->find("file");
-        const std::string file = mesh->required_string("file", "a mesh file path, relative to the scene file");
-        std::filesystem::path p(file);
-        if (p.is_relative()) p = scene_path.parent_path() / p;
-        p = p.lexically_normal();
-        std::error_code ec;
-        if (!std::filesystem::is_regular_file(p, ec))
-            mesh->fail("file", file_node, "mesh file not found: " + p.string() + " (expected a path relative to the scene file)");
-        src.file = p;
+        src.file = mesh_file(*mesh, "file", scene_path);
         src.scale = mesh->number("scale", src.scale, {0.0, 1e6, true});
     }
     mesh->finish();
@@ -260,25 +281,69 @@ PinSelection read_pin(Table& t, const ClothSource& src, const std::vector<SceneM
     return pin;
 }
 
+// `repeat = { count, offset, rotation_step }`: copies of one cloth for stacks of sheets at any count.
+struct Repeat {
+    int count = 1;
+    Vec3d offset{};         // m, added once per copy
+    Vec3d rotation_step{};  // degrees, added to the Euler angles once per copy
+};
+
+std::optional<Repeat> read_repeat(Table& cloth) {
+    auto t = cloth.table("repeat");
+    if (!t) return std::nullopt;
+    Repeat r;
+    if (!t->has("count"))
+        t->fail_here("count", "missing required key (expected an integer in [1, 10000], the number of copies)");
+    r.count = t->integer("count", r.count, 1, 10000);
+    r.offset = t->vec3("offset", r.offset);
+    r.rotation_step = t->vec3("rotation_step", r.rotation_step);
+    t->finish();  // a misspelt offset is reported as such, not as a missing one
+    if (r.count > 1 && r.offset == Vec3d{} && r.rotation_step == Vec3d{})
+        t->fail("offset", t->find("offset"),
+                "the copies would all lie on the first (expected a non-zero offset or rotation_step)");
+    const Vec3d last = static_cast<double>(r.count - 1) * r.offset;
+    if (!physics::is_finite(last))
+        t->fail("offset", t->find("offset"), "the last copy's offset is not finite (expected a smaller offset)");
+    return r;
+}
+
 void read_cloths(Table& root, SceneDesc& scene) {
-    std::set<std::string> names;
+    std::set<std::string> entry_names;  // of the [[cloth]] tables: what `--set cloth.NAME…` selects
+    std::set<std::string> cloth_names;  // of the cloths, the copies that repeat makes included
     auto tables = root.array_of_tables("cloth");
     if (tables.empty())
         root.fail_here("cloth", "the scene has no cloth (expected at least one [[cloth]] section)");
     for (std::size_t i = 0; i < tables.size(); ++i) {
         Table& t = tables[i];
         SceneCloth c;
-        c.desc.name = unique_name(t, "cloth" + std::to_string(i), names);
+        c.entry = i;
+        const std::string name = unique_name(t, "cloth" + std::to_string(i), entry_names);
         read_mesh(t, c.source, scene.path);
-        c.desc.transform.translation = t.vec3("position", {});
-        c.desc.transform.rotation = rotation_from_euler_degrees(t.vec3("rotation", {}));
+        const Vec3d position = t.vec3("position", {});
+        const Vec3d rotation = t.vec3("rotation", {});
         c.desc.initial_velocity = t.vec3("initial_velocity", {});
         c.fabric.density = t.number("density", c.fabric.density, {0.0, 100.0, true});
         c.fabric.flat_rest_bending = t.boolean("flat_rest_bending", c.fabric.flat_rest_bending);
         read_material(t, c.desc.material);
         for (Table& p : t.array_of_tables("pin")) c.pins.push_back(read_pin(p, c.source, scene.motions));
+        const std::optional<Repeat> repeat = read_repeat(t);
+        // Copy k is named NAME<k> and placed at position + k·offset, turned by rotation + k·rotation_step;
+        // a cloth without repeat is the single copy 0 under its own name.
+        const int copies = repeat ? repeat->count : 1;
+        for (int k = 0; k < copies; ++k) {
+            SceneCloth copy = c;
+            copy.desc.name = repeat ? name + std::to_string(k) : name;
+            const double steps = static_cast<double>(k);
+            copy.desc.transform.translation = repeat ? position + steps * repeat->offset : position;
+            copy.desc.transform.rotation =
+                rotation_from_euler_degrees(repeat ? rotation + steps * repeat->rotation_step : rotation);
+            if (!cloth_names.insert(copy.desc.name).second)
+                t.fail("name", t.find("name"),
+                       "duplicate name '" + copy.desc.name +
+                           "' (expected a unique name; repeat names its copies NAME0, NAME1, …)");
+            scene.cloths.push_back(std::move(copy));
+        }
         t.finish();
-        scene.cloths.push_back(std::move(c));
     }
 }
 
@@ -288,11 +353,14 @@ void read_colliders(Table& root, SceneDesc& scene) {
     for (std::size_t i = 0; i < tables.size(); ++i) {
         Table& t = tables[i];
         ColliderDesc c;
+        ColliderMeshSource mesh;
         c.name = unique_name(t, "collider" + std::to_string(i), names);
-        const auto shape = t.choice("shape", {"plane", "sphere", "capsule", "box"});
-        if (!shape) t.fail_here("shape", "missing required key (expected one of \"plane\", \"sphere\", \"capsule\", \"box\")");
+        const auto shape = t.choice("shape", {"plane", "sphere", "capsule", "box", "mesh"});
+        if (!shape)
+            t.fail_here("shape",
+                        "missing required key (expected one of \"plane\", \"sphere\", \"capsule\", \"box\", \"mesh\")");
         constexpr ColliderShape shapes[] = {ColliderShape::Plane, ColliderShape::Sphere, ColliderShape::Capsule,
-                                            ColliderShape::Box};
+                                            ColliderShape::Box, ColliderShape::Mesh};
         c.shape = shapes[*shape];
         const std::string shape_name = std::string(t.raw().get("shape")->as_string()->get());
         const bool round = c.shape == ColliderShape::Sphere || c.shape == ColliderShape::Capsule;
@@ -310,6 +378,14 @@ void read_colliders(Table& root, SceneDesc& scene) {
         } else {
             t.reject("half_extents", "a " + shape_name + " collider has no half_extents (expected half_extents only for box)");
         }
+        if (c.shape == ColliderShape::Mesh) {
+            // The triangles are read by build_world(), as a cloth's mesh file is; the file must exist now.
+            mesh.file = mesh_file(t, "file", scene.path);
+            mesh.scale = t.number("scale", mesh.scale, {0.0, 1e6, true});
+        } else {
+            t.reject("file", "a " + shape_name + " collider has no file (expected file only for shape = \"mesh\")");
+            t.reject("scale", "a " + shape_name + " collider has no scale (expected scale only for shape = \"mesh\")");
+        }
         if (auto f = t.optional_number("friction", {0.0, 10.0})) c.friction = *f;
         const std::string motion = motion_reference(t, scene.motions);
         if (!motion.empty()) {
@@ -326,6 +402,7 @@ void read_colliders(Table& root, SceneDesc& scene) {
         t.finish();
         scene.colliders.push_back(std::move(c));
         scene.collider_motions.push_back(motion);
+        scene.collider_meshes.push_back(std::move(mesh));
     }
 }
 
@@ -360,6 +437,7 @@ SceneDesc parse_scene(std::string_view toml_text, const std::filesystem::path& n
     read_scene_section(root, scene);
     read_solver(root, scene.world.solver);
     read_world(root, scene.world);
+    read_collision(root, scene.world.collision);
     read_motions(root, scene);  // before cloths and colliders, which refer to motions by name
     read_cloths(root, scene);
     read_colliders(root, scene);

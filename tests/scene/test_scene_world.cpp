@@ -1,9 +1,11 @@
 // build_world: every shipped scene becomes a world with the right cloths, pins and colliders, and
 // pin selections resolve to the vertices they describe.
 #include <cmath>
+#include <filesystem>
 #include <fstream>
 #include <set>
 #include <sstream>
+#include <string>
 
 #include "scene_test_util.h"
 #include "weft/scene.h"
@@ -16,21 +18,40 @@ using test::scene_file;
 
 struct Expected {
     const char* name;
+    std::size_t cloths;
     std::size_t pins;       // pinned vertices of cloth 0
     std::size_t colliders;
     bool needs_loader;
 };
 
+// Every scene in assets/scenes/, with what it must build into.
+constexpr Expected kShipped[] = {
+    {"flag", 1, 25, 2, false},        // left edge of a 40×24 grid
+    {"hanging", 1, 2, 0, false},      // two top corners
+    {"drape", 1, 0, 2, false},
+    {"cantilever", 1, 18, 0, false},  // two columns of a 48×8 strip: the clamp
+    {"skirt", 1, 48, 1, true},        // the waist ring of a 48-segment skirt
+    {"sphere", 1, 0, 2, false},
+    {"twist", 1, 80, 0, false},       // left and right edges of 40×40 vertices
+    {"falling", 4, 0, 2, false},      // one [[cloth]] repeated 4 times
+    {"layers", 4, 0, 2, false},
+    {"projectile", 1, 33, 1, false},  // top edge of a 32×32 grid
+    {"garment", 1, 48, 2, true},      // the skirt's waist ring; a mesh body and a floor
+};
+
+TEST(SceneWorld, EveryShippedSceneIsListed) {
+    std::set<std::string> listed;
+    for (const Expected& e : kShipped) listed.insert(e.name);
+    for (const auto& entry : std::filesystem::directory_iterator(test::source_dir() / "assets" / "scenes"))
+        if (entry.path().extension() == ".toml") {
+            EXPECT_TRUE(listed.contains(entry.path().stem().string()))
+                << entry.path() << " is not in kShipped: add what it must build into";
+        }
+}
+
 TEST(SceneWorld, ShippedScenesBuildAndStep) {
     const bool loader = test::install_loader();
-    const Expected cases[] = {
-        {"flag", 25, 2, false},       // left edge of a 40×24 grid
-        {"hanging", 2, 0, false},     // two top corners
-        {"drape", 0, 2, false},
-        {"cantilever", 18, 0, false},  // two columns of a 48×8 strip: the clamp
-        {"skirt", 48, 1, true},       // the waist ring of a 48-segment skirt
-    };
-    for (const Expected& e : cases) {
+    for (const Expected& e : kShipped) {
         SCOPED_TRACE(e.name);
         if (e.needs_loader && !loader) continue;
         const SceneDesc scene = load_scene(scene_file(e.name));
@@ -38,6 +59,7 @@ TEST(SceneWorld, ShippedScenesBuildAndStep) {
         ASSERT_NE(world, nullptr);
         const Model& model = world->model();
         ASSERT_EQ(model.cloths.size(), scene.cloths.size());
+        EXPECT_EQ(model.cloths.size(), e.cloths);
         const ClothDesc& cloth = model.cloths[0];
         ASSERT_NE(cloth.fabric, nullptr);
         EXPECT_GT(cloth.fabric->vertex_count(), 0U);
@@ -46,9 +68,17 @@ TEST(SceneWorld, ShippedScenesBuildAndStep) {
         EXPECT_EQ(model.colliders.size(), e.colliders);
         EXPECT_EQ(model.motions.size(), scene.motions.size());
         EXPECT_EQ(cloth.name, scene.cloths[0].desc.name);
+        // Mesh colliders arrive with their mesh, analytic ones without.
+        for (const ColliderDesc& c : model.colliders) {
+            EXPECT_EQ(c.mesh != nullptr, c.shape == ColliderShape::Mesh) << c.name;
+            if (c.mesh) {
+                EXPECT_GT(c.mesh->triangles.size(), 0U) << c.name;
+            }
+        }
         // One frame runs and stays finite.
         (void)world->step();
-        for (const Vec3d& p : world->positions(0)) ASSERT_TRUE(physics::is_finite(p));
+        for (std::size_t c = 0; c < model.cloths.size(); ++c)
+            for (const Vec3d& p : world->positions(c)) ASSERT_TRUE(physics::is_finite(p));
     }
 }
 
@@ -159,6 +189,8 @@ TEST(SceneWorld, DocumentationExampleBuilds) {
     const SceneDesc scene = parse_scene(example, doc);
     EXPECT_EQ(scene.name, "cape");
     EXPECT_EQ(scene.colliders.size(), 4U);
+    EXPECT_TRUE(scene.world.collision.self_collision);
+    EXPECT_EQ(scene.world.collision.culling, CollisionCulling::NormalCone);
     const auto world = build_world(scene);
     EXPECT_EQ(world->model().cloths[0].pins.size(), 33U);  // the top edge of a 32-cell-wide grid
     for (const PinDesc& p : world->model().cloths[0].pins) EXPECT_EQ(p.motion, 0);

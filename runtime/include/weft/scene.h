@@ -37,6 +37,17 @@ struct SceneCloth {
     ClothSource source;
     FabricDesc fabric;
     std::vector<PinSelection> pins;
+    /// Index of the `[[cloth]]` table this cloth comes from. A table with `repeat` makes several
+    /// cloths (copies of one mesh, one pin set and one material, placed apart); they share the table's
+    /// index and, once built, one cooked `Fabric`.
+    std::size_t entry = 0;
+};
+
+/// Where a mesh collider's triangles come from: a mesh file that build_world() reads through
+/// `load_mesh_file()`, as it reads a cloth's mesh file.
+struct ColliderMeshSource {
+    std::filesystem::path file;  ///< resolved relative to the scene file; empty for analytic shapes
+    double scale = 1.0;          ///< applied to file positions, giving the collider's local frame (m)
 };
 
 struct CameraDesc {
@@ -59,6 +70,9 @@ struct SceneDesc {
     std::vector<ColliderDesc> colliders;
     std::vector<SceneMotion> motions;
     std::vector<std::string> collider_motions;  ///< per collider: motion name or empty
+    /// Per collider: the mesh file of a mesh collider (its `ColliderDesc::mesh` stays empty until
+    /// build_world() loads it), an empty path for analytic shapes.
+    std::vector<ColliderMeshSource> collider_meshes;
     CameraDesc camera{};
     int frames = 300;  ///< frames `weft run` simulates unless told otherwise
 };
@@ -72,7 +86,11 @@ struct SceneDesc {
 [[nodiscard]] SceneDesc parse_scene(std::string_view toml_text, const std::filesystem::path& name,
                                     std::span<const std::string> overrides = {});
 
-/// Cooks the fabrics (loading mesh files), resolves pins and motions and creates the world.
+/// Cooks the fabrics (loading mesh files), loads the meshes of mesh colliders, resolves pins and
+/// motions and creates the world. Copies made by `repeat` share one cooked fabric. Throws
+/// `weft::Error` naming the scene file and the cloth or collider for meshes it cannot use: a cloth
+/// mesh that cooking rejects, a collider mesh with no triangles, non-finite positions or zero-area
+/// triangles (docs/scene-format.md says why those are errors for colliders).
 [[nodiscard]] std::unique_ptr<World> build_world(const SceneDesc& scene, std::string_view backend = "cpu",
                                                  const BackendOptions& options = {});
 
