@@ -25,6 +25,13 @@ inline std::filesystem::path scene_file(std::string_view name) {
 }
 inline std::filesystem::path data_file(std::string_view name) { return source_dir() / "tests" / "scene" / "data" / name; }
 
+/// The smallest valid cloth table: scenes in the tests append what they exercise to it.
+inline const std::string kSheet = R"(
+[[cloth]]
+name = "sheet"
+mesh = { grid = { width = 1.0, height = 1.0, cells = [4, 4] } }
+)";
+
 /// Installs the assimp loader when the assets library is built; false when it is not.
 inline bool install_loader() {
 #if WEFT_TEST_HAVE_ASSETS

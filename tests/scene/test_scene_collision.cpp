@@ -16,11 +16,7 @@ using test::data_file;
 using test::expect_error;
 using test::scene_file;
 
-const std::string kSheet = R"(
-[[cloth]]
-name = "sheet"
-mesh = { grid = { width = 1.0, height = 1.0, cells = [4, 4] } }
-)";
+using test::kSheet;
 
 SceneDesc parse(std::string_view text, std::vector<std::string> overrides = {}) {
     return parse_scene(text, "inline.toml", overrides);

@@ -36,9 +36,8 @@ ClothDesc sheet(const char* name, const std::shared_ptr<const Fabric>& fabric, V
 
 ColliderDesc floor_plane() { return ColliderDesc{.name = "floor", .shape = ColliderShape::Plane}; }
 
-// Two sheets dropped one above the other onto a ball and the floor: they drape over each other.
-TEST(ClothCollisions, StackedSheetsOnABallStayApart) {
-    World world(collision_world(true));
+// Two sheets dropped one above the other onto a ball and the floor.
+void add_stacked_sheets_on_a_ball(World& world) {
     const auto fabric = Fabric::cook(make_grid(0.6, 0.6, 12, 12, GridPlane::XZ), {.density = 0.2});
     world.add_cloth(sheet("low", fabric, {0.0, 0.35, 0.0}));
     world.add_cloth(sheet("high", fabric, {0.03, 0.40, 0.02}));
@@ -47,6 +46,12 @@ TEST(ClothCollisions, StackedSheetsOnABallStayApart) {
     ball.motion.origin = {0.0, 0.15, 0.0};
     world.add_collider(ball);
     world.add_collider(floor_plane());
+}
+
+// The two sheets drape over each other.
+TEST(ClothCollisions, StackedSheetsOnABallStayApart) {
+    World world(collision_world(true));
+    add_stacked_sheets_on_a_ball(world);
     int contacts = 0;
     for (int frame = 0; frame < 45; ++frame) {
         const StepStats& s = world.step();
@@ -88,14 +93,7 @@ TEST(ClothCollisions, SheetFoldingOverABarDoesNotPassThroughItself) {
 // the check says so. (Without this, a check that always answered 0 would pass the tests above.)
 TEST(ClothCollisions, WithoutCollisionsTheCheckFindsIntersections) {
     World world(collision_world(false));
-    const auto fabric = Fabric::cook(make_grid(0.6, 0.6, 12, 12, GridPlane::XZ), {.density = 0.2});
-    world.add_cloth(sheet("low", fabric, {0.0, 0.35, 0.0}));
-    world.add_cloth(sheet("high", fabric, {0.03, 0.40, 0.02}));
-    ColliderDesc ball{.name = "ball", .shape = ColliderShape::Sphere};
-    ball.radius = 0.15;
-    ball.motion.origin = {0.0, 0.15, 0.0};
-    world.add_collider(ball);
-    world.add_collider(floor_plane());
+    add_stacked_sheets_on_a_ball(world);
     std::int64_t worst = 0;
     for (int frame = 0; frame < 45; ++frame) worst = std::max(worst, world.step().collision.remaining_intersections);
     EXPECT_GT(worst, 0);
