@@ -24,6 +24,15 @@ public:
             }
         entries_.emplace_back(purpose, bytes);
     }
+    /// Replaces the total of `purpose` (for buffers that are reallocated as they grow).
+    void set(const std::string& purpose, std::size_t bytes) {
+        for (auto& [name, total] : entries_)
+            if (name == purpose) {
+                total = bytes;
+                return;
+            }
+        entries_.emplace_back(purpose, bytes);
+    }
     void clear() { entries_.clear(); }
     [[nodiscard]] std::size_t total() const {
         std::size_t sum = 0;

@@ -58,6 +58,7 @@ struct DeviceStats {
     int newton_iterations;
     int contacts;
     int non_finite;
+    int proximity_contacts;  ///< pairs of the contact list in this substep's solve
 };
 
 }  // namespace weft::cuda

@@ -65,6 +65,7 @@ void DeviceSolver::build(const FlatModel& flat, const Model& model) {
     warm_ = false;
     flat_ = &flat;
     ledger_.clear();
+    contacts_.release();  // vertex ids of the old model mean nothing in the new one
     layout_ = make_device_layout(flat);
     const std::size_t n = flat.vertex_count, nt = flat.triangle_count(), nh = flat.hinge_count();
     if (n > 0x7fffffffu / 9 || layout_.ell.positions() > 0x7fffffffu / 9)
@@ -231,6 +232,28 @@ void DeviceSolver::set_assembly(AssemblyStrategy strategy) {
     choose_assembly();
 }
 
+void DeviceSolver::reserve_contacts(std::size_t pairs, std::size_t kinematic) {
+    WEFT_CUDA_CHECK(cudaSetDevice(device_));
+    if (view_.n == 0) throw Error("CUDA backend: reserve_contacts before build");
+    if (contacts_.reserve(pairs, kinematic, view_.n, active_stream())) contacts_resized();
+}
+
+void DeviceSolver::set_contacts(std::span<const weft::collision::ProximityContact> contacts,
+                                std::span<const Vec3d> kinematic_x1, std::span<const Vec3d> kinematic_v) {
+    WEFT_CUDA_CHECK(cudaSetDevice(device_));
+    if (view_.n == 0) throw Error("CUDA backend: set_contacts before build");
+    if (contacts_.upload(contacts, kinematic_x1, kinematic_v, view_.n, active_stream())) contacts_resized();
+}
+
+void DeviceSolver::contacts_resized() {
+    // New arrays: the view every kernel (and the captured graph) holds changed, and the one-launch
+    // loop switches to its contact variant, whose grid may differ.
+    view_.contacts = contacts_.view();
+    ledger_.set("proximity contacts", contacts_.bytes());
+    destroy_graph();
+    choose_pcg_loop();
+}
+
 void DeviceSolver::fill_staging(const Model& model, double t, double h) {
     const WorldDesc& w = model.settings;
     unsigned char* base = host_staging_.get();
@@ -345,6 +368,9 @@ void DeviceSolver::record(cudaStream_t stream, bool capturing) {
     mark();
     launch_begin_substep(view_, stream);
     launch_pin_velocities(view_, stream);
+    const bool contacts = view_.contacts.capacity > 0;
+    // The incidence of this substep's contacts (timed with the substep's start, as "kinematics").
+    if (contacts) launch_contact_incidence(view_, contacts_.scan_storage(), contacts_.scan_storage_bytes(), stream);
     mark();
     for (int it = 0; it < newton; ++it) {
         launch_begin_newton(view_, stream);
@@ -352,6 +378,7 @@ void DeviceSolver::record(cudaStream_t stream, bool capturing) {
             launch_assemble_rows(view_, stream);
         else
             launch_assemble_colors(view_, layout_.triangle_colors, layout_.hinge_colors, stream);
+        if (contacts) launch_contact_evaluate(view_, stream);  // gathered by the PCG setup
         mark();
         launch_pcg_setup(view_, it == 0, stream);
         record_pcg_loop(stream, capturing, it);
@@ -384,6 +411,7 @@ void DeviceSolver::capture_graph() {
         graph_exec_ = nullptr;
         throw_cuda_error(err, "cudaGraphInstantiate", __FILE__, __LINE__);
     }
+    ++graph_captures_;
     graph_newton_ = recorded_newton_;
     graph_output_ = output_;
     graph_output_stride_ = output_stride_;
@@ -440,6 +468,7 @@ void DeviceSolver::substep(const Model& model, double t, double h, StepStats& st
     stats.cg_not_converged += ds.cg_not_converged;
     stats.newton_iterations += ds.newton_iterations;
     stats.collider_contacts = ds.contacts;
+    if (view_.contacts.capacity > 0) stats.collision.contacts = ds.proximity_contacts;
     if (ds.non_finite > 0) stats.non_finite = true;
 
     auto elapsed = [&](std::size_t a, std::size_t b) {

@@ -5,10 +5,12 @@
 #include <cuda_runtime_api.h>
 
 #include <cstdint>
+#include <span>
 #include <string>
 #include <vector>
 
 #include "device_array.h"
+#include "device_contacts.h"
 #include "device_layout.h"
 #include "device_params.h"
 #include "device_view.h"
@@ -39,6 +41,25 @@ public:
     void set_use_graph(bool enabled);
     void set_assembly(AssemblyStrategy strategy);
     void set_pcg_loop(PcgLoop loop);
+
+    // ---- proximity contacts (docs/collisions.md, step 1) ------------------------------------------
+    // The solve adds the pair springs of a device contact list (device_contacts.h) to A and b. The
+    // list persists across substeps until replaced; its count lives on the device, so it may change
+    // every substep under one graph, and only a larger capacity re-captures the graph.
+    /// Makes room for `pairs` contacts and `kinematic` kinematic vertices (allocates: call outside
+    /// the step; a capacity above 0 switches the contact path on for good, until the next build).
+    void reserve_contacts(std::size_t pairs, std::size_t kinematic);
+    /// Internal, until the GPU narrow phase fills the list on the device: every later substep solves
+    /// with `contacts` (vertex ids: cloth vertices of the flat model first, then kinematic ones),
+    /// kinematic vertex k at `kinematic_x1[k]` (its pose at t + h) moving with `kinematic_v[k]`. One
+    /// host-to-device copy on the solver's stream; grows the list first when it does not fit. An
+    /// empty list with no capacity reserved leaves the contact path off.
+    void set_contacts(std::span<const weft::collision::ProximityContact> contacts, std::span<const Vec3d> kinematic_x1 = {},
+                      std::span<const Vec3d> kinematic_v = {});
+    /// Pairs the device list holds room for (0: no contact path).
+    [[nodiscard]] std::size_t contact_capacity() const { return contacts_.capacity(); }
+    /// Graphs captured so far (tests: a changing contact count must not re-capture).
+    [[nodiscard]] int graph_captures() const { return graph_captures_; }
     /// Blocks of the one-launch CG loop, 0 when the loop runs a kernel per step.
     [[nodiscard]] int persistent_grid() const { return persistent_grid_; }
     /// Whether assembly runs as the row gather (else colour passes).
@@ -63,6 +84,7 @@ private:
     void choose_assembly();
     void choose_pcg_loop();
     void destroy_graph();
+    void contacts_resized();
     [[nodiscard]] cudaStream_t active_stream() const { return user_stream_ != nullptr ? user_stream_ : stream_; }
 
     int device_ = 0;
@@ -91,6 +113,7 @@ private:
     DeviceArray<PcgControl> control_;
     DeviceArray<DeviceStats> stats_;
     DeviceArray<double> partials_;
+    DeviceContacts contacts_;
 
     PinnedArray<unsigned char> host_staging_;
     PinnedArray<DeviceStats> host_stats_;
@@ -113,6 +136,7 @@ private:
     bool graph_unsupported_ = false;
     bool warm_ = false;
     cudaGraphExec_t graph_exec_ = nullptr;
+    int graph_captures_ = 0;
     int graph_newton_ = 0;            // settings the graph was captured with
     void* graph_output_ = nullptr;
     std::size_t graph_output_stride_ = 0;

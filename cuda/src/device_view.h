@@ -5,6 +5,7 @@
 
 #include <cstdint>
 
+#include "device_contacts.h"
 #include "device_params.h"
 
 namespace weft::cuda {
@@ -45,6 +46,8 @@ struct DeviceView {
     PcgControl* control = nullptr;
     DeviceStats* stats = nullptr;
     double* partials = nullptr;
+    // Proximity contacts (device_contacts.h); capacity 0 leaves the solve as it is without them.
+    ContactView contacts;
 };
 
 }  // namespace weft::cuda

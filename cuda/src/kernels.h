@@ -1,9 +1,10 @@
 #pragma once
 // Host-side launchers of the solver kernels (one .cu file per concept: state_kernels.cu,
-// assembly_kernels.cu, pcg_kernels.cu). Each launches on `stream` and checks the launch.
+// assembly_kernels.cu, contact_kernels.cu, pcg_kernels.cu). Each launches on `stream` and checks the launch.
 
 #include <cuda_runtime_api.h>
 
+#include <cstddef>
 #include <cstdint>
 
 #include "device_layout.h"
@@ -36,15 +37,35 @@ void launch_assemble_rows(const DeviceView& d, cudaStream_t stream);
 /// Colour passes: a vertex launch, then one launch per triangle colour and per hinge colour.
 void launch_assemble_colors(const DeviceView& d, const Coloring& triangles, const Coloring& hinges, cudaStream_t stream);
 
+// ---- proximity contacts (contact_kernels.cu) ------------------------------------------------------
+// Every launch is sized by the list's capacity (the pair kernels stride, with at most 1024 blocks) and
+// reads the pair count from device memory, so a graph captured once serves any count up to the
+// capacity. None of them is called when the capacity is 0.
+/// Bytes of scratch the incidence build's device-wide scan needs for `n` vertices.
+[[nodiscard]] std::size_t contact_scan_storage_bytes(std::uint32_t n);
+/// Per substep: the incidence of the cloth vertices (vertex → 4·pair + corner, in pair order) by a
+/// counting sort: integer-atomic histogram, exclusive scan, scatter, then each vertex's short list
+/// sorted (the scatter's order depends on scheduling, the sorted list does not).
+void launch_contact_incidence(const DeviceView& d, void* scan_storage, std::size_t scan_bytes, cudaStream_t stream);
+/// Per Newton iteration: each pair's block C = −h·D − h²·K and right-hand side at the linearisation
+/// point (gathered into b and the diagonal blocks by the PCG setup).
+void launch_contact_evaluate(const DeviceView& d, cudaStream_t stream);
+/// First pass of the contact SpMV: per pair C·Σ_j w_j x_j. `in_cg_loop`: do nothing once the CG loop
+/// has stopped (the per-iteration kernels run on after convergence until the host or graph notices).
+void launch_contact_product(const DeviceView& d, const float* x, bool in_cg_loop, cudaStream_t stream);
+
 // ---- PCG (pcg_kernels.cu) --------------------------------------------------------------------------
 /// Block-Jacobi inverse, Δv initialised (prescribed on filtered vertices; on the others the last
-/// substep's change when `first_newton` and warm starts are on, else 0), δ₀ of b.
+/// substep's change when `first_newton` and warm starts are on, else 0), δ₀ of b. With contacts it
+/// first gathers them into the row: b_i += Σ w_i·rhs_pair, diagonal block += Σ w_i²·C_pair.
 void launch_pcg_setup(const DeviceView& d, bool first_newton, cudaStream_t stream);
-/// r = filter(b − AΔv), c = P⁻¹r, δ; decides whether the loop runs. `handle` (0: none) is the
+/// r = filter(b − AΔv), c = P⁻¹r, δ; decides whether the loop runs (with contacts, A includes them:
+/// the pair pass over Δv is launched first). `handle` (0: none) is the
 /// graph's while-node condition, set to the loop's `running` flag.
 void launch_pcg_residual(const DeviceView& d, unsigned long long handle, cudaStream_t stream);
-/// One CG iteration: q = filter(A c) with cᵀq (fused), then the axpy pair with P⁻¹ and rᵀs (fused),
-/// then the new direction. Every kernel does nothing once the loop has stopped.
+/// One CG iteration: q = filter(A c) with cᵀq (fused; with contacts the pair pass over c comes first
+/// and the SpMV gathers it), then the axpy pair with P⁻¹ and rᵀs (fused), then the new direction.
+/// Every kernel does nothing once the loop has stopped.
 void launch_pcg_iteration(const DeviceView& d, unsigned long long handle, cudaStream_t stream);
 /// Blocks for the one-launch CG loop on `device`: as many as fit at once (at most one per 256 rows),
 /// 0 if the device cannot launch cooperative kernels.
@@ -55,7 +76,8 @@ void launch_pcg_iteration(const DeviceView& d, unsigned long long handle, cudaSt
 void launch_pcg_persistent(const DeviceView& d, int grid, cudaStream_t stream);
 /// Folds the finished solve into the stats.
 void launch_pcg_finish(const DeviceView& d, cudaStream_t stream);
-/// y = A·x over the whole matrix (benchmarks; the solver's SpMV is fused with its dot product).
+/// y = A·x over the fabric matrix (benchmarks; the solver's SpMV is fused with its dot product and
+/// adds the contacts).
 void launch_spmv(const DeviceView& d, const float* x, float* y, cudaStream_t stream);
 
 }  // namespace weft::cuda

@@ -9,9 +9,16 @@
 //   3. c = filter(s + βc), which needs every row's new s first (the SpMV reads neighbours).
 // The reductions are deterministic (device_math.cuh, grid_sum), so a solve gives the same bits on
 // every run and whether or not it runs inside a graph.
+//
+// Proximity contacts (contact_terms.cuh) add A_contact = Σ_pairs w wᵀ ⊗ C to A. Its product is a pass
+// per pair (launched before each SpMV, or a phase of the one-launch loop) and a gather per row, fused
+// here into the kernels that already form the row's product; the PCG setup gathers the pairs' share of
+// b and of the diagonal blocks. Each kernel that does is compiled twice (kContacts): without a contact
+// list the solver runs exactly the kernels it ran before contacts existed.
 #include <cooperative_groups.h>
 #include <cuda_runtime.h>
 
+#include "contact_terms.cuh"
 #include "cuda_check.h"
 #include "device_math.cuh"
 
@@ -40,11 +47,31 @@ __device__ inline V3 row_times(const DeviceView& d, std::uint32_t i, const float
     return acc;
 }
 
+template <bool kContacts>
 __global__ void pcg_setup_kernel(DeviceView d, int first_newton) {
     const std::uint32_t i = blockIdx.x * blockDim.x + threadIdx.x;
     double value = 0.0;
     if (i < d.n) {
-        const M3 P = physics::inverse(load_block(d.blocks, d.diagonal[i]));
+        M3 diagonal = load_block(d.blocks, d.diagonal[i]);
+        if constexpr (kContacts) {
+            // As the CPU: b_i += Σ w_i·rhs_pair (add_rhs), and the preconditioner inverts the fabric's
+            // diagonal block plus Σ w_i²·C_pair (SystemOperator::diagonal_block).
+            const ContactView& ct = d.contacts;
+            const std::uint32_t first = ct.start[i], last = ct.start[i + 1];
+            if (first < last) {
+                V3 b = load3(d.b, i, d.n);
+                M3 acc{};
+                for (std::uint32_t e = first; e < last; ++e) {
+                    const std::uint32_t entry = ct.entries[e];
+                    const float w = contact_weight(ct, entry);
+                    b += w * load3(ct.rhs, entry >> 2, ct.capacity);
+                    acc += (w * w) * load_contact_block(ct, entry >> 2);
+                }
+                store3(d.b, i, d.n, b);
+                diagonal += acc;
+            }
+        }
+        const M3 P = physics::inverse(diagonal);
         for (int e = 0; e < 9; ++e) d.precond[e * d.n + i] = P.m[e / 3][e % 3];
         const bool fixed = d.fixed[i] != 0;
         // Filtered vertices get their prescribed change z = v_target − v_k; the rest start at 0 or,
@@ -60,13 +87,18 @@ __global__ void pcg_setup_kernel(DeviceView d, int first_newton) {
     grid_sum(value, d, [&](double total) { d.control->delta0_b = total; });
 }
 
+template <bool kContacts>
 __global__ void pcg_residual_kernel(DeviceView d, unsigned long long handle) {
     const std::uint32_t i = blockIdx.x * blockDim.x + threadIdx.x;
     double value = 0.0;
     if (i < d.n) {
         V3 r{}, c{};
         if (!d.fixed[i]) {
-            r = load3(d.b, i, d.n) - row_times(d, i, d.dv);
+            V3 product = row_times(d, i, d.dv);
+            if constexpr (kContacts) {
+                if (contact_count(d.contacts) > 0) product = contact_gather(d.contacts, i, d.contacts.product, product);
+            }
+            r = load3(d.b, i, d.n) - product;
             c = load_precond(d, i) * r;
             value = static_cast<double>(physics::dot(r, c));
         }
@@ -91,12 +123,21 @@ __global__ void pcg_residual_kernel(DeviceView d, unsigned long long handle) {
     });
 }
 
+template <bool kContacts>
 __global__ void pcg_spmv_dot_kernel(DeviceView d, unsigned long long handle) {
     if (!d.control->running) return;
     const std::uint32_t i = blockIdx.x * blockDim.x + threadIdx.x;
     double value = 0.0;
     if (i < d.n) {
-        const V3 q = d.fixed[i] ? V3{} : row_times(d, i, d.c);
+        V3 q{};
+        if (!d.fixed[i]) {
+            q = row_times(d, i, d.c);
+            if constexpr (kContacts) {
+                // An empty list skips the incidence reads (two dependent loads a row, measurable on
+                // small cloth where a CG iteration is a few microseconds).
+                if (contact_count(d.contacts) > 0) q = contact_gather(d.contacts, i, d.contacts.product, q);
+            }
+        }
         store3(d.q, i, d.n, q);
         value = static_cast<double>(physics::dot(load3(d.c, i, d.n), q));
     }
@@ -189,6 +230,7 @@ __device__ double persistent_sum(double value, double* partials) {
     return result;
 }
 
+template <bool kContacts>
 __global__ void pcg_persistent_kernel(DeviceView d) {
     namespace cg = cooperative_groups;
     const StepParams& sp = step_params(d);
@@ -199,10 +241,29 @@ __global__ void pcg_persistent_kernel(DeviceView d) {
     int iterations = 0, converged = 0;
     double* partials[2] = {d.partials, d.partials + gridDim.x};
     const std::uint32_t stride = gridDim.x * blockDim.x;
+    // Fixed for the whole solve, and the same in every block: the contact phase and its barrier are
+    // skipped uniformly when the substep has no pairs.
+    const std::uint32_t pairs = kContacts ? contact_count(d.contacts) : 0u;
     for (;;) {
+        if constexpr (kContacts) {
+            if (pairs > 0) {
+                // The pair pass of A_contact·c. c is complete (the barrier that ended the last
+                // iteration, or the residual kernel before this launch); the gather below waits for
+                // every pair behind one more barrier.
+                for (std::uint32_t p = blockIdx.x * blockDim.x + threadIdx.x; p < pairs; p += stride)
+                    contact_pair_product(d.contacts, p, d.c, d.n);
+                cg::this_grid().sync();
+            }
+        }
         double local = 0.0;
         for (std::uint32_t i = blockIdx.x * blockDim.x + threadIdx.x; i < d.n; i += stride) {
-            const V3 q = d.fixed[i] ? V3{} : row_times(d, i, d.c);
+            V3 q{};
+            if (!d.fixed[i]) {
+                q = row_times(d, i, d.c);
+                if constexpr (kContacts) {
+                    if (pairs > 0) q = contact_gather(d.contacts, i, d.contacts.product, q);
+                }
+            }
             store3(d.q, i, d.n, q);
             local += static_cast<double>(physics::dot(load3(d.c, i, d.n), q));
         }
@@ -245,17 +306,33 @@ __global__ void spmv_kernel(DeviceView d, const float* x, float* y) {
 }  // namespace
 
 void launch_pcg_setup(const DeviceView& d, bool first_newton, cudaStream_t stream) {
-    pcg_setup_kernel<<<grid_for(d.n), kBlockSize, 0, stream>>>(d, first_newton ? 1 : 0);
+    if (d.contacts.capacity > 0)
+        pcg_setup_kernel<true><<<grid_for(d.n), kBlockSize, 0, stream>>>(d, first_newton ? 1 : 0);
+    else
+        pcg_setup_kernel<false><<<grid_for(d.n), kBlockSize, 0, stream>>>(d, first_newton ? 1 : 0);
     WEFT_CUDA_CHECK_LAUNCH("pcg_setup_kernel");
 }
 
 void launch_pcg_residual(const DeviceView& d, unsigned long long handle, cudaStream_t stream) {
-    pcg_residual_kernel<<<grid_for(d.n), kBlockSize, 0, stream>>>(d, handle);
+    if (d.contacts.capacity > 0) {
+        launch_contact_product(d, d.dv, false, stream);
+        pcg_residual_kernel<true><<<grid_for(d.n), kBlockSize, 0, stream>>>(d, handle);
+    } else {
+        pcg_residual_kernel<false><<<grid_for(d.n), kBlockSize, 0, stream>>>(d, handle);
+    }
     WEFT_CUDA_CHECK_LAUNCH("pcg_residual_kernel");
 }
 
 void launch_pcg_iteration(const DeviceView& d, unsigned long long handle, cudaStream_t stream) {
-    pcg_spmv_dot_kernel<<<grid_for(d.n), kBlockSize, 0, stream>>>(d, handle);
+    // The pair pass cannot join the direction kernel before it: it reads c at four arbitrary rows, so
+    // every row's new c must be written first (a kernel boundary). It is one small launch over the
+    // contact capacity that returns at once past the pair count.
+    if (d.contacts.capacity > 0) {
+        launch_contact_product(d, d.c, true, stream);
+        pcg_spmv_dot_kernel<true><<<grid_for(d.n), kBlockSize, 0, stream>>>(d, handle);
+    } else {
+        pcg_spmv_dot_kernel<false><<<grid_for(d.n), kBlockSize, 0, stream>>>(d, handle);
+    }
     WEFT_CUDA_CHECK_LAUNCH("pcg_spmv_dot_kernel");
     pcg_update_kernel<<<grid_for(d.n), kBlockSize, 0, stream>>>(d, handle);
     WEFT_CUDA_CHECK_LAUNCH("pcg_update_kernel");
@@ -268,7 +345,11 @@ int pcg_persistent_grid(const DeviceView& d, int device) {
     WEFT_CUDA_CHECK(cudaDeviceGetAttribute(&cooperative, cudaDevAttrCooperativeLaunch, device));
     if (cooperative == 0) return 0;
     WEFT_CUDA_CHECK(cudaDeviceGetAttribute(&sms, cudaDevAttrMultiProcessorCount, device));
-    WEFT_CUDA_CHECK(cudaOccupancyMaxActiveBlocksPerMultiprocessor(&per_sm, pcg_persistent_kernel, kBlockSize, 0));
+    // The variant the solver will launch: with contacts it may hold more registers, so fewer blocks.
+    if (d.contacts.capacity > 0)
+        WEFT_CUDA_CHECK(cudaOccupancyMaxActiveBlocksPerMultiprocessor(&per_sm, pcg_persistent_kernel<true>, kBlockSize, 0));
+    else
+        WEFT_CUDA_CHECK(cudaOccupancyMaxActiveBlocksPerMultiprocessor(&per_sm, pcg_persistent_kernel<false>, kBlockSize, 0));
     const int needed = static_cast<int>(grid_for(d.n));
     return std::min(needed, per_sm * sms);
 }
@@ -276,8 +357,9 @@ int pcg_persistent_grid(const DeviceView& d, int device) {
 void launch_pcg_persistent(const DeviceView& d, int grid, cudaStream_t stream) {
     DeviceView view = d;
     void* args[] = {&view};
-    WEFT_CUDA_CHECK(cudaLaunchCooperativeKernel(reinterpret_cast<const void*>(&pcg_persistent_kernel), dim3(grid),
-                                                dim3(kBlockSize), args, 0, stream));
+    const void* kernel = d.contacts.capacity > 0 ? reinterpret_cast<const void*>(&pcg_persistent_kernel<true>)
+                                                 : reinterpret_cast<const void*>(&pcg_persistent_kernel<false>);
+    WEFT_CUDA_CHECK(cudaLaunchCooperativeKernel(kernel, dim3(grid), dim3(kBlockSize), args, 0, stream));
 }
 
 void launch_pcg_finish(const DeviceView& d, cudaStream_t stream) {

@@ -299,7 +299,9 @@ void CpuSolver<T>::substep(const Model& model, double t, double h_double, StepSt
     if (collisions_.stale(model)) collisions_.build(*flat_, model);  // self-collision toggled live
     const bool collide = collisions_.active();
     if (collide) collisions_.begin_substep(model, t, h_double, x0_, v0_, stats);
-    ContactTerms<T>* contacts = collide ? &collisions_.terms() : nullptr;
+    ContactTerms<T>* contacts = collide ? &collisions_.terms() : has_test_contacts_ ? &test_contacts_ : nullptr;
+    const std::span<const V3> kinematic_x1 = collide ? collisions_.kinematic_x1() : std::span<const V3>(test_kinematic_x1_);
+    const std::span<const V3> kinematic_v = collide ? collisions_.kinematic_v() : std::span<const V3>(test_kinematic_v_);
 
     const SolverSettings& solver = model.settings.solver;
     for (int newton = 0; newton < solver.newton_iterations; ++newton) {
@@ -307,7 +309,7 @@ void CpuSolver<T>::substep(const Model& model, double t, double h_double, StepSt
         evaluate_elements(model, t, h);
         stats.collider_contacts = evaluate_vertices(model, h);
         if (contacts != nullptr)
-            contacts->evaluate(h, x0_, wk_, vk_, collisions_.kinematic_x1(), collisions_.kinematic_v());
+            contacts->evaluate(h, x0_, wk_, vk_, kinematic_x1, kinematic_v);
         stats.ms(Stage::Forces) += ms_since(clock);
 
         clock = Clock::now();

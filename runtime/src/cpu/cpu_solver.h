@@ -2,6 +2,7 @@
 // The CPU implementation of one implicit substep (docs/architecture.md, "the step in detail").
 
 #include <cstdint>
+#include <span>
 #include <vector>
 
 #include "cpu/bsr_matrix.h"
@@ -30,6 +31,18 @@ public:
     void read_state(std::size_t first, std::size_t count, Vec3d* x, Vec3d* v) const;
     void write_state(std::size_t first, std::size_t count, const Vec3d* x, const Vec3d* v);
     [[nodiscard]] std::size_t memory_bytes() const;
+
+    /// Test hook (tests/gpu/test_cuda_contacts.cpp holds the CUDA contact solve against this one):
+    /// every later substep solves with `contacts` as if the collision stages had found them, kinematic
+    /// vertex k at `kinematic_x1[k]` moving with `kinematic_v[k]`; no CCD or impact zones follow. A
+    /// scene whose collision stages are active keeps its own contacts.
+    void set_contacts_for_test(std::span<const collision::ProximityContact> contacts, std::span<const V3> kinematic_x1,
+                               std::span<const V3> kinematic_v) {
+        test_contacts_.set(contacts, n_);
+        test_kinematic_x1_.assign(kinematic_x1.begin(), kinematic_x1.end());
+        test_kinematic_v_.assign(kinematic_v.begin(), kinematic_v.end());
+        has_test_contacts_ = true;
+    }
 
 private:
     using ClothParams = MaterialTerms<T>;
@@ -82,6 +95,9 @@ private:
     T turbulence_ = T(0), turbulence_frequency_ = T(0), turbulence_scale_ = T(1), air_density_ = T(0);
     T contact_stiffness_ = T(0);
     T time_ = T(0);
+    ContactTerms<T> test_contacts_;  // set_contacts_for_test
+    std::vector<V3> test_kinematic_x1_, test_kinematic_v_;
+    bool has_test_contacts_ = false;
 };
 
 extern template class CpuSolver<float>;

@@ -1,0 +1,107 @@
+#pragma once
+// The proximity contacts of one substep on the device (docs/collisions.md, step 1): the list the
+// narrow phase fills (pair springs, weft/physics/pair_contact.h) and what the solve derives from it,
+// P-Cloth's "dynamic matrix" in the factored form of the CPU (runtime/src/cpu/contact_terms.h): per
+// pair one 3×3 block C and its right-hand side, per cloth vertex its incidence list in pair order.
+//
+// Sizes. Every array is sized by a host-side capacity and the number of pairs in use lives in device
+// memory, so launches are sized by the capacity and kernels stop at the count: a substep with more or
+// fewer contacts replays the same CUDA graph. Only a larger capacity re-captures it. With capacity 0
+// (the default: a scene without contacts) nothing is allocated and nothing is launched.
+//
+// Host synchronisation: none in the step (the incidence build, the evaluation and the products are
+// stream-ordered kernels). Growing waits for the stream before it frees the old arrays, and the
+// interim host upload waits for it before it rewrites its pinned mirror (the stream is idle then
+// anyway: every substep ends with the stats read-back).
+
+#include <cuda_runtime_api.h>
+
+#include <cstddef>
+#include <cstdint>
+#include <span>
+
+#include "device_array.h"
+#include "device_params.h"
+#include "weft/types.h"
+
+namespace weft::collision {
+struct ProximityContact;
+}
+
+namespace weft::cuda {
+
+/// One contact, 64 bytes: the gap vector g = Σ_j weight[j]·x[vertex[j]] held along `normal`. The
+/// layout of the GPU narrow phase's output (cuda/src/collision/proximity_gpu.h), so that it can write
+/// straight into this list; four 16-byte loads read a whole contact.
+struct DeviceContact {
+    std::uint32_t vertex[4];  ///< cloth vertices < n, kinematic vertices n + k
+    float weight[4];          ///< vertex–face (1, −(1−u−v), −u, −v); edge–edge (1−a, a, −(1−b), −b)
+    float normal[3];          ///< unit, from the second primitive towards the first
+    float gap;                ///< n·g at the start of the substep, m (not read by the solve)
+    float thickness;          ///< m
+    float stiffness;          ///< N/m
+    float friction;           ///< Coulomb coefficient
+    std::uint32_t pair;       ///< index of the candidate it came from (not read by the solve)
+};
+static_assert(sizeof(DeviceContact) == 64, "four 16-byte loads per contact");
+
+/// The contact arrays as raw pointers, inside DeviceView (passed by value to every kernel).
+struct ContactView {
+    std::uint32_t capacity = 0;            ///< pairs the arrays hold; 0: the solve has no contact path
+    std::uint32_t kinematic_capacity = 0;  ///< component stride of the kinematic arrays
+    const DeviceContact* list = nullptr;
+    const std::uint32_t* count = nullptr;  ///< pairs in use this substep (clamped to the capacity)
+    /// Kinematic vertices (mesh colliders) at t + h and their velocities, SoA with stride
+    /// `kinematic_capacity`: component c of kinematic vertex k at [c·kinematic_capacity + k].
+    const float* kinematic_x1 = nullptr;
+    const float* kinematic_v = nullptr;
+    // Incidence of the cloth vertices, rebuilt every substep: vertex i's entries 4·pair + corner at
+    // [start[i], start[i + 1]), in pair order. `fill` (n + 1 counters) is zero between substeps.
+    std::uint32_t* start = nullptr;
+    std::uint32_t* fill = nullptr;
+    std::uint32_t* entries = nullptr;  ///< 4·capacity
+    // Per pair, written at each Newton iteration (SoA, stride capacity): C = −h·D − h²·K (9 floats,
+    // row-major), its right-hand side h·F + h²·K·Σ w_j (v_k − w_k)_j (3), and the product
+    // C·Σ_j w_j x_j of the current SpMV (3).
+    float* block = nullptr;
+    float* rhs = nullptr;
+    float* product = nullptr;
+};
+
+/// Owns the contact arrays of one DeviceSolver. Grows, never shrinks; growing is an allocation (so
+/// it happens outside the step, when a caller reserves or uploads more than fits).
+class DeviceContacts {
+public:
+    /// Makes room for `pairs` contacts and `kinematic` kinematic vertices over `n` cloth vertices;
+    /// returns true when it had to reallocate (the caller's view and graph are then stale). Contents
+    /// are kept only where nothing was reallocated; the count is 0 after a reallocation.
+    bool reserve(std::size_t pairs, std::size_t kinematic, std::uint32_t n, cudaStream_t stream);
+    /// Uploads `contacts` (vertex ids < n + kinematic count) and the kinematic poses at t + h and
+    /// velocities, in one host-to-device copy on `stream`; grows first if needed (returns true then).
+    /// Throws weft::Error for a vertex id out of range or mismatched kinematic arrays.
+    bool upload(std::span<const weft::collision::ProximityContact> contacts, std::span<const Vec3d> kinematic_x1,
+                std::span<const Vec3d> kinematic_v, std::uint32_t n, cudaStream_t stream);
+    /// Frees everything (the model was rebuilt: vertex ids changed meaning).
+    void release();
+
+    [[nodiscard]] ContactView view() const { return view_; }
+    [[nodiscard]] std::size_t capacity() const { return view_.capacity; }
+    [[nodiscard]] std::size_t bytes() const { return ledger_.total(); }
+    /// Scratch the device-wide scan of the incidence build needs (sized for n + 1 counters).
+    [[nodiscard]] void* scan_storage() const { return scan_storage_.get(); }
+    [[nodiscard]] std::size_t scan_storage_bytes() const { return scan_storage_.bytes(); }
+
+private:
+    MemoryLedger ledger_;
+    ContactView view_{};
+    // The list, the count and the kinematic arrays in one block, mirrored in pinned host memory, so
+    // that an upload is one copy.
+    DeviceArray<unsigned char> input_;
+    PinnedArray<unsigned char> host_input_;
+    std::size_t count_offset_ = 0, kinematic_offset_ = 0;
+    DeviceArray<std::uint32_t> start_, fill_, entries_;
+    DeviceArray<float> per_pair_;  // block, rhs, product: 15 floats a pair
+    DeviceArray<unsigned char> scan_storage_;
+};
+
+}  // namespace weft::cuda
