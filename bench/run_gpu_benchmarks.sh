@@ -14,6 +14,12 @@
 #   flag_1200k_cuda       weft bench flag, cells [1000,600] = 1,200,000 triangles, dt 0.004 s, 1 substep
 #                         (P-Cloth's setting: one implicit step of 1/250 s per frame)
 #   flag_80k_cpu, flag_200k_cpu   the same scenes on --backend cpu --threads 16, few frames
+#   collide_twist_cuda    weft bench twist, 317 x 317 vertices (200K triangles), cloth collisions on the GPU
+#   collide_sphere_cuda   weft bench sphere, cells [316,316] (200K triangles)
+#   collide_falling_cuda  weft bench falling, cells [147,147] (4 x 43K = 173K triangles)
+#   collide_layers_cuda   weft bench layers, 50 sheets of cells [69,69] (476K triangles)
+#                         (the scenes' Try: sizes; impact zones still run on the host, see
+#                         cuda/src/device_collisions.h; COLLIDE_FRAMES frames each)
 # then prints a summary (summary.txt). Exit status: the number of stages that failed (0: all ran).
 set -uo pipefail
 
@@ -38,6 +44,8 @@ LARGE_WARMUP=${LARGE_WARMUP:-5}
 CPU_FRAMES=${CPU_FRAMES:-5}        # CPU: ~2.7 s/frame at 80K on 2 cores; fewer with 16
 CPU_WARMUP=${CPU_WARMUP:-1}
 CPU_THREADS=${CPU_THREADS:-16}
+COLLIDE_FRAMES=${COLLIDE_FRAMES:-10}  # collision scenes at their Try: sizes on the GPU
+COLLIDE_WARMUP=${COLLIDE_WARMUP:-2}
 
 CELLS_80K='cloth.flag.mesh.grid.cells=[250,160]'
 CELLS_200K='cloth.flag.mesh.grid.cells=[400,250]'
@@ -94,6 +102,18 @@ stage flag_80k_cpu 45 "$WEFT" bench flag --backend cpu --threads "$CPU_THREADS" 
     --frames "$CPU_FRAMES" --warmup "$CPU_WARMUP" --json "$OUT/flag_80k_cpu.json"
 stage flag_200k_cpu 75 "$WEFT" bench flag --backend cpu --threads "$CPU_THREADS" --set "$CELLS_200K" \
     --frames "$CPU_FRAMES" --warmup "$CPU_WARMUP" --json "$OUT/flag_200k_cpu.json"
+
+# (d) collision scenes at their Try: sizes on the CUDA backend (per-stage times in the summary).
+stage collide_twist_cuda 90 "$WEFT" bench twist --backend cuda --set 'cloth.sheet.mesh.grid.cells=[316,316]' \
+    --set cloth.sheet.mesh.grid.width=3.16 --set cloth.sheet.mesh.grid.height=3.16 \
+    --frames "$COLLIDE_FRAMES" --warmup "$COLLIDE_WARMUP" --json "$OUT/collide_twist_cuda.json"
+stage collide_sphere_cuda 90 "$WEFT" bench sphere --backend cuda --set 'cloth.sheet.mesh.grid.cells=[316,316]' \
+    --frames "$COLLIDE_FRAMES" --warmup "$COLLIDE_WARMUP" --json "$OUT/collide_sphere_cuda.json"
+stage collide_falling_cuda 90 "$WEFT" bench falling --backend cuda --set 'cloth.sheet.mesh.grid.cells=[147,147]' \
+    --frames "$COLLIDE_FRAMES" --warmup "$COLLIDE_WARMUP" --json "$OUT/collide_falling_cuda.json"
+stage collide_layers_cuda 120 "$WEFT" bench layers --backend cuda --set cloth.sheets.repeat.count=50 \
+    --set 'cloth.sheets.mesh.grid.cells=[69,69]' \
+    --frames "$COLLIDE_FRAMES" --warmup "$COLLIDE_WARMUP" --json "$OUT/collide_layers_cuda.json"
 
 # ---- summary --------------------------------------------------------------------------------------
 summarize() {
@@ -166,6 +186,17 @@ for size in ("80k", "200k"):
     g, c = fps(f"flag_{size}_cuda"), fps(f"flag_{size}_cpu")
     if g and c:
         print(f"speed-up CUDA / CPU ({size}): {g / c:.1f}x")
+print()
+print("collision scenes on the CUDA backend, median ms per step by stage:")
+for name in ("collide_twist_cuda", "collide_sphere_cuda", "collide_falling_cuda", "collide_layers_cuda"):
+    r = load(name)
+    if not r:
+        print(f"  {name:<22} no results")
+        continue
+    r = r[0]
+    st = r["stage_ms"]
+    parts = "  ".join(f"{k} {v['median']:.2f}" for k, v in st.items() if v.get("median", 0) > 0)
+    print(f"  {name:<22} {r['triangles']:>8} tri  {parts}")
 PY
 }
 

@@ -24,13 +24,14 @@ std::string format_gib(std::size_t bytes) {
     return buf;
 }
 
-/// The cloth collision pipeline (self-contact, mesh colliders) runs on the CPU backend only so far:
-/// a scene that needs it is refused here, with the way out, rather than run without collisions.
-void refuse_cloth_collisions(const Model& model) {
-    if (!needs_cloth_collisions(model)) return;
-    throw Error(
-        "the cuda backend does not handle cloth collisions yet (self-collision or a mesh collider in this scene); "
-        "run it with --backend cpu, or set collision.self=false without mesh colliders");
+/// Fast analytic colliders are swept per vertex on the CPU backend only so far
+/// (weft/physics/swept_collider.h): one that moves more than a quarter of its smallest width in a
+/// substep could pass through cloth here, so it is refused with the way out instead.
+void refuse_fast_colliders(const Model& model, double t, double h) {
+    for (const ColliderDesc& c : model.colliders)
+        if (is_fast_collider(c, t, h))
+            throw Error("collider '" + c.name + "' moves more than a quarter of its width in one substep: the cuda backend "
+                        "does not sweep fast colliders yet; run with --backend cpu or more substeps");
 }
 
 class CudaBackend final : public Backend, public CudaBackendApi {
@@ -82,14 +83,16 @@ public:
                                               (solver_->persistent_grid() > 0 ? ", one-launch CG" : ", per-kernel CG"));
     }
 
+    // Cloth collisions (self-collision, mesh colliders) run in the device solver's collision stages
+    // (device_collisions.h; impact zones on the host for now); self-collision switched on or off live
+    // rebuilds them at the next substep.
     void build(const Model& model) override {
-        refuse_cloth_collisions(model);
         flat_ = flatten(model);
         solver_->build(flat_, model);
     }
 
     void substep(const Model& model, double t, double h, StepStats& stats) override {
-        refuse_cloth_collisions(model);  // self-collision may be switched on live
+        refuse_fast_colliders(model, t, h);
         solver_->substep(model, t, h, stats);
     }
 

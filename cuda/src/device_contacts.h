@@ -68,6 +68,18 @@ struct ContactView {
     float* product = nullptr;
 };
 
+/// Writable device pointers into the inputs of the contact list, for producers on the device (the GPU
+/// narrow phase, device_collisions.h): the count, the list, the kinematic arrays (SoA with stride
+/// `kinematic_capacity`; null when it is 0).
+struct ContactInputs {
+    std::uint32_t* count = nullptr;
+    DeviceContact* list = nullptr;
+    float* kinematic_x1 = nullptr;
+    float* kinematic_v = nullptr;
+    std::uint32_t capacity = 0;
+    std::uint32_t kinematic_capacity = 0;
+};
+
 /// Owns the contact arrays of one DeviceSolver. Grows, never shrinks; growing is an allocation (so
 /// it happens outside the step, when a caller reserves or uploads more than fits).
 class DeviceContacts {
@@ -85,6 +97,12 @@ public:
     void release();
 
     [[nodiscard]] ContactView view() const { return view_; }
+    /// The same arrays, writable (they live in device memory this object owns).
+    [[nodiscard]] ContactInputs inputs() {
+        return {const_cast<std::uint32_t*>(view_.count), const_cast<DeviceContact*>(view_.list),
+                const_cast<float*>(view_.kinematic_x1), const_cast<float*>(view_.kinematic_v), view_.capacity,
+                view_.kinematic_capacity};
+    }
     [[nodiscard]] std::size_t capacity() const { return view_.capacity; }
     [[nodiscard]] std::size_t bytes() const { return ledger_.total(); }
     /// Scratch the device-wide scan of the incidence build needs (sized for n + 1 counters).

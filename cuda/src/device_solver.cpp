@@ -66,6 +66,7 @@ void DeviceSolver::build(const FlatModel& flat, const Model& model) {
     flat_ = &flat;
     ledger_.clear();
     contacts_.release();  // vertex ids of the old model mean nothing in the new one
+    collisions_.release();
     layout_ = make_device_layout(flat);
     const std::size_t n = flat.vertex_count, nt = flat.triangle_count(), nh = flat.hinge_count();
     if (n > 0x7fffffffu / 9 || layout_.ell.positions() > 0x7fffffffu / 9)
@@ -196,7 +197,21 @@ void DeviceSolver::build(const FlatModel& flat, const Model& model) {
     d.partials = partials_.get();
     choose_assembly();
     choose_pcg_loop();
+    build_collisions(model);
     WEFT_CUDA_CHECK(cudaDeviceSynchronize());
+}
+
+void DeviceSolver::build_collisions(const Model& model) {
+    const bool was_active = collisions_.active();
+    collisions_.build(*flat_, model);
+    if (collisions_.active() && view_.n > 0) {
+        // The contact path on for good (the graph is captured with it), room for the kinematic arrays.
+        reserve_contacts(1, collisions_.kinematic_count());
+    } else if (was_active && contacts_.capacity() > 0) {
+        // Switched off live: the last substep's contacts must not stay in the solve.
+        WEFT_CUDA_CHECK(cudaMemsetAsync(contacts_.inputs().count, 0, sizeof(std::uint32_t), active_stream()));
+    }
+    ledger_.set("cloth collisions", collisions_.memory_bytes());
 }
 
 void DeviceSolver::choose_pcg_loop() {
@@ -289,7 +304,7 @@ void DeviceSolver::fill_staging(const Model& model, double t, double h) {
     auto* friction = reinterpret_cast<float*>(base + p.friction_offset);
     int analytic = 0;
     for (const ColliderDesc& c : model.colliders) {
-        if (!c.is_analytic()) continue;  // mesh colliders: not handled by this backend yet (see cuda_backend.cpp)
+        if (!c.is_analytic()) continue;  // mesh colliders: the collision stages (device_collisions.h)
         shapes[analytic] = shape_at<float>(c, t1);
         friction[analytic] = static_cast<float>(c.friction);
         ++analytic;
@@ -426,6 +441,15 @@ void DeviceSolver::substep(const Model& model, double t, double h, StepStats& st
     WEFT_CUDA_CHECK(cudaMemcpyAsync(staging_.get(), host_staging_.get(), host_staging_.size(), cudaMemcpyHostToDevice, stream));
     const double host_ms = std::chrono::duration<double, std::milli>(Clock::now() - host_start).count();
 
+    // Collision detection before the solve, outside the graph on the same stream (it reads overflow
+    // counters back): the contacts go straight into the solve's device list.
+    if (collisions_.stale(model)) build_collisions(model);  // self-collision toggled live
+    if (collisions_.active()) {
+        const std::size_t found = collisions_.detect(model, t, h, view_.x, view_.v, stream, stats);
+        reserve_contacts(found, collisions_.kinematic_count());  // grows (and re-captures) only when needed
+        collisions_.publish(contacts_.inputs(), stream, stats);
+    }
+
     recorded_newton_ = model.settings.solver.newton_iterations;
     const std::size_t event_count = 3 + 3 * static_cast<std::size_t>(recorded_newton_);
     if (events_.size() < event_count) {
@@ -468,7 +492,8 @@ void DeviceSolver::substep(const Model& model, double t, double h, StepStats& st
     stats.cg_not_converged += ds.cg_not_converged;
     stats.newton_iterations += ds.newton_iterations;
     stats.collider_contacts = ds.contacts;
-    if (view_.contacts.capacity > 0) stats.collision.contacts = ds.proximity_contacts;
+    // With the collision stages on, `detect` reported the list's size, as the CPU does.
+    if (view_.contacts.capacity > 0 && !collisions_.active()) stats.collision.contacts = ds.proximity_contacts;
     if (ds.non_finite > 0) stats.non_finite = true;
 
     auto elapsed = [&](std::size_t a, std::size_t b) {
@@ -485,6 +510,15 @@ void DeviceSolver::substep(const Model& model, double t, double h, StepStats& st
         stats.ms(Stage::Update) += elapsed(e + 2, e + 3);
     }
     stats.ms(Stage::Update) += elapsed(e, e + 1);
+
+    // After the solve: CCD on the device; on a hit, the interim host impact zones (device_collisions.h).
+    if (collisions_.active() && ds.non_finite == 0) {
+        if (collisions_.resolve(model, h, view_.x, view_.v, stream, stats) && output_ != nullptr) {
+            launch_write_output(view_, output_, output_stride_, stream);
+            WEFT_CUDA_CHECK(cudaStreamSynchronize(stream));
+        }
+        ledger_.set("cloth collisions", collisions_.memory_bytes());  // the detection buffers grow on use
+    }
 }
 
 void DeviceSolver::read_state(std::size_t first, std::size_t count, Vec3d* x, Vec3d* v) const {

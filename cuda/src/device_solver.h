@@ -10,6 +10,7 @@
 #include <vector>
 
 #include "device_array.h"
+#include "device_collisions.h"
 #include "device_contacts.h"
 #include "device_layout.h"
 #include "device_params.h"
@@ -56,6 +57,10 @@ public:
     /// empty list with no capacity reserved leaves the contact path off.
     void set_contacts(std::span<const weft::collision::ProximityContact> contacts, std::span<const Vec3d> kinematic_x1 = {},
                       std::span<const Vec3d> kinematic_v = {});
+    /// The collision stages (device_collisions.h), active when the model needs cloth collisions:
+    /// before each substep's solve they fill the contact list on the device; after it, CCD and (for
+    /// now on the host) impact zones.
+    [[nodiscard]] const DeviceCollisions& collisions() const { return collisions_; }
     /// Pairs the device list holds room for (0: no contact path).
     [[nodiscard]] std::size_t contact_capacity() const { return contacts_.capacity(); }
     /// Graphs captured so far (tests: a changing contact count must not re-capture).
@@ -80,6 +85,7 @@ private:
     void record(cudaStream_t stream, bool capturing);
     void record_pcg_loop(cudaStream_t stream, bool capturing, int newton);
     void fill_staging(const Model& model, double t, double h);
+    void build_collisions(const Model& model);
     void capture_graph();
     void choose_assembly();
     void choose_pcg_loop();
@@ -114,6 +120,7 @@ private:
     DeviceArray<DeviceStats> stats_;
     DeviceArray<double> partials_;
     DeviceContacts contacts_;
+    DeviceCollisions collisions_;
 
     PinnedArray<unsigned char> host_staging_;
     PinnedArray<DeviceStats> host_stats_;

@@ -54,6 +54,15 @@ void launch_contact_evaluate(const DeviceView& d, cudaStream_t stream);
 /// has stopped (the per-iteration kernels run on after convergence until the host or graph notices).
 void launch_contact_product(const DeviceView& d, const float* x, bool in_cg_loop, cudaStream_t stream);
 
+// ---- collision positions (collision_state_kernels.cu) ----------------------------------------------
+// The collision stages read positions in their own index space (cloth vertices, then kinematic ones;
+// SoA with component stride `stride`), filled from the solver's state (SoA, stride n).
+/// x0c = x, x1c = x + h·v for the n cloth vertices (rounded as the CPU: the product, then the sum).
+void launch_collision_predict(const float* x, const float* v, std::uint32_t n, float h, float* x0c, float* x1c,
+                              std::uint32_t stride, cudaStream_t stream);
+/// x1c = x for the n cloth vertices (the solved end of the substep).
+void launch_collision_gather(const float* x, std::uint32_t n, float* x1c, std::uint32_t stride, cudaStream_t stream);
+
 // ---- PCG (pcg_kernels.cu) --------------------------------------------------------------------------
 /// Block-Jacobi inverse, Δv initialised (prescribed on filtered vertices; on the others the last
 /// substep's change when `first_newton` and warm starts are on, else 0), δ₀ of b. With contacts it

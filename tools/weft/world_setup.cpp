@@ -9,10 +9,8 @@
 
 namespace weft::cli {
 
-std::string resolve_backend(std::string_view backend, const SceneDesc* scene) {
+std::string resolve_backend(std::string_view backend) {
     if (backend != "auto") return std::string(backend);
-    // Cloth collisions run on the CPU backend only so far (the cuda backend refuses them).
-    if (scene != nullptr && needs_cloth_collisions(scene->world, scene->colliders)) return "cpu";
     // The CUDA backend when it is compiled in and a device answers; the CPU otherwise.
     const std::vector<std::string> names = backend_names();
     if (std::find(names.begin(), names.end(), "cuda") != names.end()) {
@@ -40,7 +38,17 @@ LoadedScene load_world(std::string_view scene, const SimulationOptions& sim) {
     loaded.desc = load_scene(find_scene(scene), sim.overrides);
     BackendOptions options;
     options.threads = sim.threads;
-    loaded.world = build_world(loaded.desc, resolve_backend(sim.backend, &loaded.desc), options);
+    const std::string backend = resolve_backend(sim.backend);
+    loaded.world = build_world(loaded.desc, backend, options);
+    // The cuda backend does not sweep fast analytic colliders yet (it refuses them at the step):
+    // `auto` gives such a scene to the CPU, judged on the first substep.
+    if (sim.backend == "auto" && backend == "cuda") {
+        const Model& model = loaded.world->model();
+        const double h = model.settings.solver.dt / model.settings.solver.substeps;
+        if (std::any_of(model.colliders.begin(), model.colliders.end(),
+                        [&](const ColliderDesc& c) { return is_fast_collider(c, 0.0, h); }))
+            loaded.world = build_world(loaded.desc, "cpu", options);
+    }
     return loaded;
 }
 

@@ -10,6 +10,7 @@
 
 #include "weft/motion.h"
 #include "weft/physics/collider_contact.h"
+#include "weft/physics/swept_collider.h"
 
 namespace weft {
 
@@ -58,6 +59,20 @@ template <typename T>
     s.linear_velocity = c.motion.point_velocity(t, frame.translation).template cast<T>();
     s.angular_velocity = c.motion.angular_velocity.template cast<T>();
     return s;
+}
+
+/// True when analytic collider `c` moves more than a quarter of its smallest width during the
+/// substep [t, t + h]: fast enough to pass through cloth between two penalty evaluations, so the
+/// vertex paths must be swept against it (weft/physics/swept_collider.h). Planes never are.
+[[nodiscard]] inline bool is_fast_collider(const ColliderDesc& c, double t, double h) {
+    if (!c.is_analytic()) return false;
+    const physics::Shape<double> s0 = shape_at<double>(c, t);
+    const physics::Shape<double> s1 = shape_at<double>(c, t + h);
+    const double width = physics::shape_min_width(s0);
+    if (!(width > 0.0)) return false;
+    const double travel = physics::length(s1.origin - s0.origin) +
+                          physics::length(s0.angular_velocity) * h * physics::shape_bounding_radius(s0);
+    return travel > 0.25 * width;
 }
 
 }  // namespace weft
