@@ -19,6 +19,7 @@
 #include "weft/world.h"
 
 #include "collision/broad_phase.h"
+#include "random_geometry.h"
 
 namespace weft::collision {
 
@@ -144,35 +145,14 @@ struct Soup {
     }
 };
 
-/// Triangles between random neighbours of a jittered L³ lattice (spacing 1), so that many share
-/// vertices and edges; every vertex moves by a normal step of `motion` per axis, and a fraction
-/// `outliers` jump by up to 30 (bounds far larger than a cell, the oversized path).
+/// A random soup (random_geometry.h) with its edges.
 Soup random_soup(unsigned seed, int lattice, std::size_t triangles, double motion, double outliers) {
     std::mt19937 rng(seed);
-    std::uniform_real_distribution<double> jitter(-0.3, 0.3), unit(0.0, 1.0), jump(-30.0, 30.0);
-    std::normal_distribution<double> step(0.0, 1.0);
-    std::uniform_int_distribution<int> pick(0, lattice - 1), offset(-1, 1);
+    test::RandomSoup r = test::random_soup(rng, lattice, triangles, motion, outliers);
     Soup s;
-    const auto id = [&](int i, int j, int k) { return static_cast<std::uint32_t>((k * lattice + j) * lattice + i); };
-    for (int k = 0; k < lattice; ++k)
-        for (int j = 0; j < lattice; ++j)
-            for (int i = 0; i < lattice; ++i) s.x0.push_back({i + jitter(rng), j + jitter(rng), k + jitter(rng)});
-    for (const Vec3d& p : s.x0) {
-        Vec3d d{motion * step(rng), motion * step(rng), motion * step(rng)};
-        if (unit(rng) < outliers) d = {jump(rng), jump(rng), jump(rng)};
-        s.x1.push_back(p + d);
-    }
-    while (s.triangles.size() < triangles) {
-        const int i = pick(rng), j = pick(rng), k = pick(rng);
-        std::uint32_t v[3] = {id(i, j, k), 0, 0};
-        for (int c = 1; c < 3; ++c) {
-            const int a = std::clamp(i + offset(rng), 0, lattice - 1), b = std::clamp(j + offset(rng), 0, lattice - 1),
-                      d = std::clamp(k + offset(rng), 0, lattice - 1);
-            v[c] = id(a, b, d);
-        }
-        if (v[0] == v[1] || v[1] == v[2] || v[0] == v[2]) continue;
-        s.triangles.push_back({{v[0], v[1], v[2]}});
-    }
+    s.x0 = std::move(r.x0);
+    s.x1 = std::move(r.x1);
+    s.triangles = std::move(r.triangles);
     s.edges = build_edges(s.triangles);
     return s;
 }

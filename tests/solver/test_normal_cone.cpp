@@ -26,6 +26,7 @@
 #include "collision/normal_cone.h"
 #include "collision/normal_cone_front.h"
 #include "collision/patch_hierarchy.h"
+#include "random_geometry.h"
 
 namespace weft::collision {
 namespace {
@@ -66,31 +67,7 @@ Scene grid_scene(int cx, int cy) {
     return s;
 }
 
-/// A smooth random displacement field: a few sinusoids per coordinate.
-struct Field {
-    struct Wave {
-        double kx, ky, phase, amp[3];
-    };
-    std::vector<Wave> waves;
-    Field(std::mt19937& rng, double amplitude, double min_wavelength, double max_wavelength, int count = 4) {
-        std::uniform_real_distribution<double> unit(0.0, 1.0);
-        for (int i = 0; i < count; ++i) {
-            const double wl = min_wavelength + (max_wavelength - min_wavelength) * unit(rng);
-            const double dir = 2.0 * kPi * unit(rng), k = 2.0 * kPi / wl;
-            Wave w{k * std::cos(dir), k * std::sin(dir), 2.0 * kPi * unit(rng), {}};
-            for (double& a : w.amp) a = amplitude * (2.0 * unit(rng) - 1.0);
-            waves.push_back(w);
-        }
-    }
-    [[nodiscard]] Vec3d at(const Vec3d& p) const {
-        Vec3d d{};
-        for (const Wave& w : waves) {
-            const double s = std::sin(w.kx * p.x + w.ky * p.y + w.phase);
-            d += Vec3d{w.amp[0] * s, w.amp[1] * s, w.amp[2] * s};
-        }
-        return d;
-    }
-};
+using Field = test::SmoothField;
 
 /// Folds the part of a flat sheet beyond the line u = u_fold (u = x cos α + y sin α) by θ about it.
 Vec3d fold(const Vec3d& p, double alpha, double u_fold, double theta) {

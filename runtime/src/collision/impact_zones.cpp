@@ -603,4 +603,19 @@ ImpactZoneReport ImpactZoneSolver::resolve(const ImpactZoneInput& in) {
     return report;
 }
 
+void add_to_stats(const ImpactZoneReport& r, StepStats& stats) {
+    CollisionStats& c = stats.collision;
+    c.candidate_pairs += r.candidate_pairs;
+    c.ccd_tests += r.ccd_tests;
+    c.ccd_hits += r.ccd_hits;
+    c.impact_zones += r.zones;
+    c.impact_iterations = std::max(c.impact_iterations, r.iterations);
+    c.rigid_zones += r.rigid_zones;
+    c.frozen_vertices += r.frozen_vertices;
+    if (!r.resolved) ++c.unresolved_substeps;
+    stats.ms(Stage::BroadPhase) += r.broad_phase_ms;
+    stats.ms(Stage::Ccd) += r.ccd_ms;
+    stats.ms(Stage::ImpactZones) += r.zones_ms;
+}
+
 }  // namespace weft::collision

@@ -29,6 +29,7 @@
 #include <span>
 #include <vector>
 
+#include "weft/stats.h"
 #include "weft/types.h"
 
 #include "collision/broad_phase.h"
@@ -204,5 +205,8 @@ private:
     std::vector<std::size_t> cursor_;        // counting-sort scratch
     std::vector<VertexOutcome> outcome_;
 };
+
+/// Adds a `resolve` report to the step's collision statistics and stage times (both backends).
+void add_to_stats(const ImpactZoneReport& report, StepStats& stats);
 
 }  // namespace weft::collision

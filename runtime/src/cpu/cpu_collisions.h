@@ -10,6 +10,7 @@
 #include <vector>
 
 #include "collision/broad_phase.h"
+#include "collision/collision_geometry.h"
 #include "collision/impact_zones.h"
 #include "collision/normal_cone_front.h"
 #include "collision/patch_hierarchy.h"
@@ -32,7 +33,7 @@ public:
     [[nodiscard]] bool active() const { return active_; }
     /// True when `model`'s collision settings no longer match what was built (self-collision
     /// switched on or off live): call `build` again.
-    [[nodiscard]] bool stale(const Model& model) const { return model.settings.collision.self_collision != self_; }
+    [[nodiscard]] bool stale(const Model& model) const { return model.settings.collision.self_collision != geometry_.self; }
 
     /// Finds the substep's proximity contacts from the start state (x0, v0) of the cloth and the
     /// colliders' poses at t and t + h, and hands them to `terms()`.
@@ -51,24 +52,10 @@ public:
     [[nodiscard]] std::size_t memory_bytes() const;
 
 private:
-    struct MeshCollider {
-        std::size_t collider = 0;       // index in Model::colliders
-        std::uint32_t first_vertex = 0;  // in the kinematic range (0-based within it)
-    };
-    void place_kinematic(const Model& model, double t, std::vector<Vec3d>& out) const;
-
     bool active_ = false;
-    bool self_ = false;
-    std::size_t cloth_vertices_ = 0;
-    std::vector<MeshCollider> meshes_;
-    std::vector<Vec3d> kinematic_local_;      // mesh collider vertices in their collider's frame
-    std::vector<Triangle> triangles_;         // cloth then kinematic, collision vertex ids
-    std::vector<std::uint32_t> triangle_group_;  // cloth id, or cloths + mesh collider index
-    std::vector<collision::Edge> edges_;
-    std::vector<double> inverse_mass_, thickness_, friction_;
-    double max_thickness_ = 0.0;
+    collision::CollisionGeometry geometry_;
     // Per substep.
-    std::vector<Vec3d> x0_, x1_, kinematic_x0_, kinematic_x1_;
+    std::vector<Vec3d> x0_, x1_;  // collision vertices (kinematic ones at the tail) at t and t + h
     std::vector<V3> kinematic_x1_t_, kinematic_v_t_;
     collision::BroadPhase broad_;
     collision::BroadPhaseResult pairs_;
