@@ -1,8 +1,8 @@
 // GPU collision detection benchmark (cuda/src/collision/): the broad phase stage by stage, the
 // proximity contacts and the CCD on two procedural scenes of about 200K triangles, timed with CUDA
 // events (median of the timed runs after warm-up), with and without normal-cone culling (patch ids
-// from the CPU's NormalConeFront, computed on the host and uploaded), and the CPU broad phase on the
-// same state for reference.
+// computed on the device every run by GpuNormalConeCulling, whose own time is reported), and the CPU
+// broad phase (with the CPU NormalConeFront's patch ids) on the same state for reference.
 //   twist  a 317×317-vertex sheet at 1 cm (199,712 triangles) twisted about the axis through the
 //          midpoints of two opposite edges, which turn at π/3 rad/s in opposite directions (the
 //          normal-cone tests' twist field), at t = 3 s, one step of 10 ms, lightly crumpled
@@ -37,11 +37,13 @@
 #include "collision/broad_phase_gpu.h"
 #include "collision/ccd_gpu.h"
 #include "collision/normal_cone_front.h"
+#include "collision/normal_cone_gpu.h"
 #include "collision/patch_hierarchy.h"
 #include "collision/proximity_gpu.h"
 #include "cuda_check.h"
 #include "device_array.h"
 #include "json_writer.h"
+#include "random_geometry.h"
 #include "text_table.h"
 #include "weft/cuda/cuda_backend.h"
 #include "weft/error.h"
@@ -173,30 +175,11 @@ void add_grid(Scene& s, int nx, int ny, double h, std::uint32_t cloth,
         }
 }
 
-/// Smooth random displacement: a few sinusoids per coordinate.
-struct Field {
-    struct Wave {
-        double kx, ky, phase, amp[3];
-    };
-    std::vector<Wave> waves;
-    Field(std::mt19937& rng, double amplitude, double wavelength) {
-        std::uniform_real_distribution<double> unit(0.0, 1.0);
-        for (int i = 0; i < 4; ++i) {
-            const double wl = wavelength * (0.7 + 0.6 * unit(rng)), dir = 2.0 * kPi * unit(rng), k = 2.0 * kPi / wl;
-            Wave w{k * std::cos(dir), k * std::sin(dir), 2.0 * kPi * unit(rng), {}};
-            for (double& a : w.amp) a = amplitude * (2.0 * unit(rng) - 1.0);
-            waves.push_back(w);
-        }
-    }
-    [[nodiscard]] Vec3d at(double x, double y) const {
-        Vec3d d{};
-        for (const Wave& w : waves) {
-            const double s = std::sin(w.kx * x + w.ky * y + w.phase);
-            d += Vec3d{w.amp[0] * s, w.amp[1] * s, w.amp[2] * s};
-        }
-        return d;
-    }
-};
+/// Smooth random displacement (random_geometry.h): four sinusoids of wavelengths within ±30 % of
+/// `wavelength` (m) and amplitudes up to `amplitude` (m) per coordinate.
+test::SmoothField field(std::mt19937& rng, double amplitude, double wavelength) {
+    return {rng, amplitude, 0.7 * wavelength, 1.3 * wavelength};
+}
 
 void snap(Scene& s) {
     for (auto* xs : {&s.x0, &s.x1})
@@ -208,7 +191,7 @@ Scene twist_scene(int n) {
     Scene s;
     s.name = "twist";
     std::mt19937 rng(1);
-    const Field f0(rng, 0.0005, 0.08), f1(rng, 0.0005, 0.08);
+    const test::SmoothField f0 = field(rng, 0.0005, 0.08), f1 = field(rng, 0.0005, 0.08);
     const double L = (n - 1) * 0.01, t = 3.0, dt = 0.01;
     add_grid(s, n, n, 0.01, 0, [&](double x, double y, int step) {
         const double phi = kPi / 3.0 * (t + step * dt) * (2.0 * x / L);
@@ -230,7 +213,7 @@ Scene stack_scene() {
         // Layers 6 mm apart (just above the 5 mm contact thickness, as a settled stack rests) with waves
         // of ±1 mm; during the step each layer slides up to 2 mm, its waves travel with it, and it
         // falls 2 mm plus 0.3 mm per layer (the stack settling).
-        const Field f(rng, 0.001, 0.25);
+        const test::SmoothField f = field(rng, 0.001, 0.25);
         std::uniform_real_distribution<double> slide(-0.002, 0.002);
         const double sx = slide(rng), sy = slide(rng), off = 0.0033 * k;
         add_grid(s, kN, kN, 0.01, static_cast<std::uint32_t>(k), [&, sx, sy, off, k](double x, double y, int step) {
@@ -281,7 +264,11 @@ struct Result {
     int reruns = 0;
     double cpu_ms = 0.0;  ///< CPU broad phase, median of a few warm calls
     std::size_t cpu_pairs = 0, cpu_culled = 0;
-    std::size_t patches = 0;
+    std::size_t patches = 0;      ///< normal-cone patches of the GPU ids (the device's front)
+    std::size_t cpu_patches = 0;  ///< of the CPU's NormalConeFront::rebuild on the same state
+    double cpu_front_ms = 0.0;    ///< that rebuild (refit + front + ids), median of a few calls
+    Dist cones;                   ///< GPU normal-cone pass (refit, tests, ids) per call, ms
+    gpu::GpuNormalConeCounters cone_counters{};
 };
 
 std::vector<float> soa(const std::vector<Vec3d>& x) {
@@ -301,16 +288,24 @@ Result measure(const Options& opt, const Scene& s, bool cull, cudaStream_t strea
     r.triangles = s.triangles.size();
     const std::size_t n = s.x0.size();
 
-    // Patch ids from the CPU's normal-cone front (host), uploaded.
+    // The hierarchy (once per topology), and the CPU front's patch ids for the CPU reference; the GPU
+    // broad phase below takes the ids the device computes itself.
+    collision::PatchHierarchy h;
     std::vector<std::uint32_t> vp, ep, tp;
     if (cull) {
-        const collision::PatchHierarchy h = collision::build_patch_hierarchy(s.rest, s.triangles, s.edges, s.triangle_cloth);
+        h = collision::build_patch_hierarchy(s.rest, s.triangles, s.edges, s.triangle_cloth);
         collision::NormalConeFront front(h);
-        front.rebuild(s.x0, s.x1);
+        std::vector<double> ms;
+        for (int k = 0; k < 3; ++k) {
+            const auto t0 = Clock::now();
+            front.rebuild(s.x0, s.x1);
+            ms.push_back(std::chrono::duration<double, std::milli>(Clock::now() - t0).count());
+        }
+        r.cpu_front_ms = distribution(ms).median;
         vp.assign(front.vertex_patch().begin(), front.vertex_patch().end());
         ep.assign(front.edge_patch().begin(), front.edge_patch().end());
         tp.assign(front.triangle_patch().begin(), front.triangle_patch().end());
-        r.patches = front.front().size();
+        r.cpu_patches = front.front().size();
     }
 
     // CPU reference: same state, same filters.
@@ -337,7 +332,7 @@ Result measure(const Options& opt, const Scene& s, bool cull, cudaStream_t strea
     // Device data.
     cuda::MemoryLedger ledger;
     cuda::DeviceArray<float> x0, x1, inverse_mass, thickness, friction;
-    cuda::DeviceArray<std::uint32_t> tri, edge, dvp, dep, dtp;
+    cuda::DeviceArray<std::uint32_t> tri, edge;
     x0.upload(soa(s.x0), ledger, "x0");
     x1.upload(soa(s.x1), ledger, "x1");
     inverse_mass.upload(std::vector<float>(n, 1.0F), ledger, "inverse mass");
@@ -348,9 +343,14 @@ Result measure(const Options& opt, const Scene& s, bool cull, cudaStream_t strea
     for (const collision::Edge& x : s.edges) e.insert(e.end(), x.v, x.v + 2);
     tri.upload(t, ledger, "triangles");
     edge.upload(e, ledger, "edges");
-    dvp.upload(vp, ledger, "patches");
-    dep.upload(ep, ledger, "patches");
-    dtp.upload(tp, ledger, "patches");
+    gpu::GpuNormalConeCulling cones;
+    if (cull) {
+        gpu::GpuNormalConeLayout layout;
+        layout.vertex_count = layout.cloth_vertices = static_cast<std::uint32_t>(n);
+        layout.edge_count = layout.cloth_edges = static_cast<std::uint32_t>(s.edges.size());
+        layout.triangle_count = layout.cloth_triangles = static_cast<std::uint32_t>(s.triangles.size());
+        cones.build(h, layout);
+    }
 
     gpu::GpuBroadPhaseInput bin;
     bin.x0 = x0.get();
@@ -362,9 +362,9 @@ Result measure(const Options& opt, const Scene& s, bool cull, cudaStream_t strea
     bin.edge_count = static_cast<std::uint32_t>(s.edges.size());
     bin.thickness = opt.thickness;
     if (cull) {
-        bin.vertex_patch = dvp.get();
-        bin.edge_patch = dep.get();
-        bin.triangle_patch = dtp.get();
+        bin.vertex_patch = cones.vertex_patch();
+        bin.edge_patch = cones.edge_patch();
+        bin.triangle_patch = cones.triangle_patch();
     }
     gpu::GpuProximityInput pin;
     pin.x0 = x0.get();
@@ -390,17 +390,21 @@ Result measure(const Options& opt, const Scene& s, bool cull, cudaStream_t strea
     gpu::GpuCcd ccd;
     // Warm-up: sizes settle (first-use allocation, reruns), caches and clocks warm up.
     for (int k = 0; k < opt.warmup; ++k) {
+        if (cull) cones.enqueue(bin.x0, bin.x1, bin.vertex_count, stream);
         bp.find(bin, stream);
         prox.find(pin, bp.pairs(), stream);
         ccd.find(cin, bp.pairs(), stream);
     }
     r.reruns = bp.reruns();
     bp.set_stage_timing(true);
-    Event start, after_broad, after_proximity, after_ccd;
+    Event before_cones, start, after_broad, after_proximity, after_ccd;
     std::vector<std::vector<double>> stage(gpu::GpuBroadPhase::kStageCount);
-    std::vector<double> broad, proximity, narrow, wall;
+    std::vector<double> cone_ms, broad, proximity, narrow, wall;
     for (int k = 0; k < opt.runs; ++k) {
         const auto t0 = Clock::now();
+        WEFT_CUDA_CHECK(cudaEventRecord(before_cones.e, stream));
+        // The patch ids of this state, on the device, right before the broad phase that reads them.
+        if (cull) cones.enqueue(bin.x0, bin.x1, bin.vertex_count, stream);
         WEFT_CUDA_CHECK(cudaEventRecord(start.e, stream));
         bp.enqueue(bin, stream);
         WEFT_CUDA_CHECK(cudaEventRecord(after_broad.e, stream));
@@ -417,15 +421,18 @@ Result measure(const Options& opt, const Scene& s, bool cull, cudaStream_t strea
             throw Error("a buffer overflowed after warm-up (the state does not change between runs)");
         const auto ms = bp.stage_ms();
         for (int st = 0; st < gpu::GpuBroadPhase::kStageCount; ++st) stage[st].push_back(ms[st]);
-        float a = 0, b = 0, d = 0;
+        float a = 0, b = 0, d = 0, q = 0;
+        WEFT_CUDA_CHECK(cudaEventElapsedTime(&q, before_cones.e, start.e));
         WEFT_CUDA_CHECK(cudaEventElapsedTime(&a, start.e, after_broad.e));
         WEFT_CUDA_CHECK(cudaEventElapsedTime(&b, after_broad.e, after_proximity.e));
         WEFT_CUDA_CHECK(cudaEventElapsedTime(&d, after_proximity.e, after_ccd.e));
+        if (cull) cone_ms.push_back(q);
         broad.push_back(a);
         proximity.push_back(b);
         narrow.push_back(d);
     }
     for (int st = 0; st < gpu::GpuBroadPhase::kStageCount; ++st) r.stage[st] = distribution(stage[st]);
+    r.cones = distribution(cone_ms);
     r.broad = distribution(broad);
     r.proximity = distribution(proximity);
     r.ccd = distribution(narrow);
@@ -436,7 +443,11 @@ Result measure(const Options& opt, const Scene& s, bool cull, cudaStream_t strea
     r.ccd_box_rejected = ccd.counters().box_rejected;
     r.ccd_hits = ccd.counters().hits;
     r.ccd_conservative = ccd.counters().conservative;
-    r.memory = bp.memory_bytes() + prox.memory_bytes() + ccd.memory_bytes();
+    r.memory = bp.memory_bytes() + prox.memory_bytes() + ccd.memory_bytes() + cones.memory_bytes();
+    if (cull) {
+        r.cone_counters = cones.read_back(stream);
+        r.patches = r.cone_counters.front_size;
+    }
     return r;
 }
 
@@ -453,6 +464,7 @@ void print(std::ostream& out, const std::vector<Result>& results) {
                       {"cell ranges"},
                       {"pair gen"},
                       {"canonical"},
+                      {"cones"},
                       {"broad total"},
                       {"proximity"},
                       {"CCD"},
@@ -463,10 +475,12 @@ void print(std::ostream& out, const std::vector<Result>& results) {
         const auto m = [&](int s) { return r.stage[static_cast<std::size_t>(s)].median; };
         stages.add_row({r.scene, r.culling, f(m(S::Bounds) + m(S::CellSize) + m(S::Count)), f(m(S::PatchOrder)), f(m(S::Scan)),
                         f(m(S::Sort)), f(m(S::Ranges)), f(m(S::Workload) + m(S::Pairs)), f(m(S::Canonical)),
-                        f(r.broad.median), f(r.proximity.median), f(r.ccd.median), f(r.wall.median), f(r.cpu_ms)});
+                        r.culling == "none" ? "-" : f(r.cones.median), f(r.broad.median), f(r.proximity.median),
+                        f(r.ccd.median), f(r.wall.median), f(r.cpu_ms)});
     }
     out << "\nms per call (median; CUDA events; AABB+count = bounds + cell size + count, pair gen = workload table +"
-           " pairs; wall = host time of the three enqueues and the one read-back; CPU broad = "
+           " pairs; cones = the GPU normal-cone pass that computes the culled run's patch ids, not part of broad"
+           " total; wall = host time of the enqueues and the one read-back; CPU broad = "
         << tbb::info::default_concurrency() << " threads, no narrow phase)\n";
     stages.print(out);
 
@@ -504,8 +518,31 @@ void print(std::ostream& out, const std::vector<Result>& results) {
                         std::to_string(r.contacts), std::to_string(r.ccd_tests), std::to_string(r.ccd_hits),
                         format_fixed(static_cast<double>(r.memory) / (1024.0 * 1024.0), 0)});
     }
-    out << "\ncounts (slots = pair tests enumerated from the workload table; CPU pairs = the CPU reference's)\n";
+    out << "\ncounts (patches = the GPU's; slots = pair tests enumerated from the workload table; CPU pairs = the CPU "
+           "reference's, culled with the CPU front's ids)\n";
     counts.print(out);
+
+    TextTable cones({{"scene", TextTable::Align::Left},
+                     {"GPU ms"},
+                     {"min"},
+                     {"max"},
+                     {"patches"},
+                     {"contour tests"},
+                     {"refused"},
+                     {"tile pairs"},
+                     {"CPU patches"},
+                     {"CPU front ms"}});
+    for (const Result& r : results) {
+        if (r.culling == "none") continue;
+        const gpu::GpuNormalConeCounters& c = r.cone_counters;
+        cones.add_row({r.scene, f(r.cones.median), f(r.cones.min), f(r.cones.max), std::to_string(c.front_size),
+                       std::to_string(c.contour_tests), std::to_string(c.contour_failed), std::to_string(c.contour_items),
+                       std::to_string(r.cpu_patches), f(r.cpu_front_ms)});
+    }
+    out << "\nnormal cones on the GPU (refit + pass tests + patch ids per call, CUDA events, median/min/max of the timed "
+           "runs) against the CPU's NormalConeFront::rebuild on the same state ("
+        << tbb::info::default_concurrency() << " threads)\n";
+    cones.print(out);
     for (std::size_t i = 0; i + 1 < results.size(); i += 2) {
         const Result &a = results[i], &b = results[i + 1];
         const double pa = a.counters.pairs, pb = b.counters.pairs;
@@ -516,7 +553,7 @@ void print(std::ostream& out, const std::vector<Result>& results) {
                                                         : 0.0,
                             1)
             << " % of the slots; broad phase " << format_fixed(a.broad.median, 3) << " -> " << format_fixed(b.broad.median, 3)
-            << " ms\n";
+            << " ms, plus " << format_fixed(b.cones.median, 3) << " ms for the GPU normal cones\n";
     }
 }
 
@@ -553,6 +590,16 @@ void write_json(std::ostream& stream, const Options& opt, const cuda::DeviceInfo
         json.field("scene", r.scene).field("culling", r.culling);
         json.field("vertices", r.vertices).field("edges", r.edges).field("triangles", r.triangles);
         json.field("patches", r.patches);
+        if (r.culling != "none") {
+            json.key("normal_cones").begin_object();
+            json.key("gpu_ms");
+            write_dist(json, r.cones);
+            json.field("gpu_patches", r.cone_counters.front_size).field("contour_tests", r.cone_counters.contour_tests);
+            json.field("contour_refused", r.cone_counters.contour_failed);
+            json.field("contour_tile_pairs", r.cone_counters.contour_items);
+            json.field("cpu_patches", r.cpu_patches).field("cpu_front_ms", r.cpu_front_ms);
+            json.end_object();
+        }
         json.key("stage_ms").begin_object();
         for (int s = 0; s < gpu::GpuBroadPhase::kStageCount; ++s) {
             json.key(gpu::GpuBroadPhase::kStageNames[static_cast<std::size_t>(s)]);

@@ -10,16 +10,14 @@
 //   - the GPU broad phase over the predicted motion x0 → x0 + h·v0;
 //   - the GPU proximity contacts, copied device to device into the solver's contact list (same
 //     64-byte layout, asserted in device_collisions.cpp), with the kinematic poses at t + h and
-//     velocities. Normal-cone culling is not done on the GPU yet: every overlapping pair is tested
-//     (as `collision.culling = "none"`; same contacts, more work, culled pairs reported as 0).
-// After the solve, when continuous collisions are on:
-//   - the GPU CCD over x0 → x1 on a fresh broad phase. No hit: done, nothing leaves the device.
-//   - INTERIM (hybrid): on a hit, x0 and x1 of every collision vertex are downloaded and the CPU
-//     impact zones (collision::ImpactZoneSolver, the reference, with the inputs CpuCollisions gives
-//     it) correct x1 on the host; the moved cloth vertices are uploaded with v = (x1 − x0)/h.
-//     GPU impact zones replace this next.
-//
-// Not done here yet: the swept test of fast analytic colliders (CpuSolver::sweep_fast_colliders).
+//     velocities. With self-collision and `collision.culling = "normal_cone"`, the broad phase first
+//     gets the normal-cone patch ids of the motion (collision/normal_cone_gpu.h), so that pairs inside
+//     one self-collision-free patch are never generated (PSCC); the GPU does not count culled pairs.
+// After the solve, when continuous collisions are on: the GPU impact zones
+// (collision/impact_zones_gpu.h) over x0 → x1 — detection, projection rounds and fallbacks, all on
+// the device; the first detection is the substep's gate (no hit: nothing else runs). Every detection
+// recomputes the patch ids over the current motion first (the zones change x1 between detections).
+// The cloth vertices the zones moved take x1 and the velocity (x1 − x0)/h.
 
 #include <cuda_runtime_api.h>
 
@@ -30,6 +28,9 @@
 
 #include "collision/broad_phase_gpu.h"
 #include "collision/ccd_gpu.h"
+#include "collision/collision_geometry.h"
+#include "collision/impact_zones_gpu.h"
+#include "collision/normal_cone_gpu.h"
 #include "collision/proximity_gpu.h"
 #include "device_array.h"
 #include "device_contacts.h"
@@ -55,7 +56,8 @@ public:
     /// True when `model`'s collision settings no longer match what was built (self-collision switched
     /// on or off live, or a scene that did not need the stages now does): call `build` again.
     [[nodiscard]] bool stale(const Model& model) const {
-        return needs_cloth_collisions(model) != active_ || (active_ && model.settings.collision.self_collision != self_);
+        return needs_cloth_collisions(model) != active_ ||
+               (active_ && model.settings.collision.self_collision != geometry_.self);
     }
     [[nodiscard]] std::size_t kinematic_count() const { return kinematic_count_; }
 
@@ -69,36 +71,40 @@ public:
     /// ≥ the count `detect` returned, kinematic capacity ≥ kinematic_count()).
     void publish(const ContactInputs& list, cudaStream_t stream, StepStats& stats);
     /// After the solve (`x`, `v` the solved cloth state; the substep's start is what `detect` read):
-    /// CCD, and the interim CPU impact zones on a hit. Returns true when it changed x and v.
-    bool resolve(const Model& model, double h, float* x, float* v, cudaStream_t stream, StepStats& stats);
+    /// the GPU impact zones. The vertices they move get v = (x1 − x0)/h and, as on the CPU, the warm
+    /// start of the next substep's solve dv_previous = v − v0. Returns true when they changed anything.
+    bool resolve(const Model& model, double h, float* x, float* v, const float* v0, float* dv_previous,
+                 cudaStream_t stream, StepStats& stats);
 
     /// Device memory held, bytes.
     [[nodiscard]] std::size_t memory_bytes() const;
-    /// Substeps whose CCD reported a hit and that went to the CPU impact zones (since the build).
-    [[nodiscard]] int host_resolves() const { return host_resolves_; }
+    /// Substeps whose CCD gate reported a hit, so that the impact zones ran (since the build).
+    [[nodiscard]] int zone_substeps() const { return zone_substeps_; }
 
 private:
-    struct Host;  // the CPU-side geometry and the reference impact-zone solver (runtime/src types)
-    std::unique_ptr<Host> host_;
+    /// The broad-phase input over `x0c` → `x1c` with bounds grown by `thickness` (m).
+    [[nodiscard]] collision::GpuBroadPhaseInput broad_phase_input(double thickness) const;
+    /// With culling on: computes the patch ids over in.x0 → in.x1 and attaches them to `in`.
+    void cull(const Model& model, collision::GpuBroadPhaseInput& in, cudaStream_t stream);
+
+    weft::collision::CollisionGeometry geometry_;  // the index space, as the CPU backend builds it
+    std::vector<Vec3d> kinematic_x0_, kinematic_x1_;  // kinematic poses at t and t + h, m
     bool active_ = false;
-    bool self_ = false;
     std::uint32_t n_ = 0;               // cloth vertices
     std::size_t kinematic_count_ = 0;   // mesh collider vertices
     std::uint32_t vertices_ = 0;        // n + kinematic: the component stride of the position arrays
     std::uint32_t triangle_count_ = 0, edge_count_ = 0;
-    float max_thickness_ = 0.0F;
-    int host_resolves_ = 0;
+    int zone_substeps_ = 0;
 
     MemoryLedger ledger_;
     DeviceArray<float> positions_;  // x0 then x1, SoA with stride vertices_
     DeviceArray<std::uint32_t> triangles_, edges_, triangle_group_;
     DeviceArray<float> inverse_mass_, thickness_, friction_;
     PinnedArray<float> kinematic_host_;  // x(t), x(t + h), x(t + h) again for the solve, v: 3·nk each
-    collision::GpuBroadPhase broad_;      // over the predicted motion (proximity)
-    collision::GpuBroadPhase ccd_broad_;  // over the solved motion (CCD)
+    collision::GpuNormalConeCulling cones_;  // built with self-collision
+    collision::GpuBroadPhase broad_;  // over the predicted motion (proximity)
     collision::GpuProximityContacts proximity_;
-    collision::GpuCcd ccd_;
-    std::vector<float> download_;  // interim host path: x0, x1 of every collision vertex, v of the cloth
+    collision::GpuImpactZones zones_;  // over the solved motion (its own broad phase and CCD)
 };
 
 }  // namespace weft::cuda

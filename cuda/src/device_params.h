@@ -19,8 +19,9 @@ using M3 = physics::Mat3<float>;
 using ClothParams = MaterialTerms<float>;
 
 /// Everything that may change from one substep to the next, uploaded with one copy. The arrays
-/// (cloth parameters, shapes, their friction, pin targets) follow the header in the same buffer at
-/// the offsets the header gives (bytes from the start of the buffer).
+/// (cloth parameters, shapes at the end of the substep, their friction, pin targets, shapes at its
+/// start) follow the header in the same buffer at the offsets the header gives (bytes from the start
+/// of the buffer).
 struct StepParams {
     float h = 0, h2 = 0, time = 0;
     int hessian = 0;  ///< physics::HessianKind
@@ -29,11 +30,16 @@ struct StepParams {
     float air_density = 0, turbulence = 0, turbulence_frequency = 0, turbulence_scale = 1;
     float contact_stiffness = 0;
     int shape_count = 0;
+    /// Analytic colliders that a vertex can pass through (spheres, capsules, boxes; not planes). When
+    /// there are any, the commit records the largest displacement of a free vertex, from which the
+    /// host decides whether the swept collider test has to run (DeviceStats::largest_move_bits).
+    int bounded_shape_count = 0;
     int pin_count = 0;
     int cg_max_iterations = 0;
     int cg_warm_start = 0;
     double cg_eps2 = 0;
     std::uint32_t cloth_offset = 0, shape_offset = 0, friction_offset = 0, pin_target_offset = 0;
+    std::uint32_t shape_start_offset = 0;  ///< the shapes at the start of the substep (swept test)
 };
 
 /// The PCG state that lives on the device, so the loop needs no host round trip.
@@ -59,6 +65,10 @@ struct DeviceStats {
     int contacts;
     int non_finite;
     int proximity_contacts;  ///< pairs of the contact list in this substep's solve
+    /// Bits of the largest |x1 − x0| (m, a non-negative float, so its bits order like it) over the
+    /// free vertices, recorded by the commit when StepParams::bounded_shape_count > 0, else 0.
+    unsigned int largest_move_bits;
+    int swept_hits;  ///< vertices the swept collider test carried along (one per vertex and collider)
 };
 
 }  // namespace weft::cuda

@@ -4,12 +4,14 @@
 #include "device_solver.h"
 
 #include <algorithm>
+#include <bit>
 #include <chrono>
 #include <cstring>
 
 #include "kernels.h"
 #include "weft/error.h"
 #include "weft/physics/hessian.h"
+#include "weft/physics/swept_collider.h"
 
 namespace weft::cuda {
 namespace {
@@ -63,6 +65,7 @@ void DeviceSolver::build(const FlatModel& flat, const Model& model) {
     WEFT_CUDA_CHECK(cudaStreamSynchronize(active_stream()));
     destroy_graph();
     warm_ = false;
+    sweep_launches_ = 0;
     flat_ = &flat;
     ledger_.clear();
     contacts_.release();  // vertex ids of the old model mean nothing in the new one
@@ -132,7 +135,8 @@ void DeviceSolver::build(const FlatModel& flat, const Model& model) {
     vertex_hinge_.upload(layout_.vertex_hinge, ledger_, "vertex incidence");
     pin_vertex_.upload(flat.pin_vertex, ledger_, "pins");
 
-    // The per-substep parameter block: header, then cloths, shapes, shape friction, pin targets.
+    // The per-substep parameter block: header, then cloths, shapes, shape friction, pin targets, and
+    // the shapes again at the substep's start (for the swept test).
     StepParams& lp = layout_params_;
     lp = StepParams{};
     std::size_t offset = align16(sizeof(StepParams));
@@ -144,6 +148,8 @@ void DeviceSolver::build(const FlatModel& flat, const Model& model) {
     offset += align16(std::max<std::size_t>(1, model.colliders.size()) * sizeof(float));
     lp.pin_target_offset = static_cast<std::uint32_t>(offset);
     offset += align16(std::max<std::size_t>(1, flat.pin_vertex.size()) * sizeof(V3));
+    lp.shape_start_offset = static_cast<std::uint32_t>(offset);
+    offset += align16(std::max<std::size_t>(1, model.colliders.size()) * sizeof(physics::Shape<float>));
     staging_.allocate(offset, ledger_, "parameters");
     host_staging_.allocate(offset);
     std::memset(host_staging_.get(), 0, offset);
@@ -288,6 +294,9 @@ void DeviceSolver::fill_staging(const Model& model, double t, double h) {
     p.contact_stiffness = static_cast<float>(w.solver.contact_stiffness);
     p.shape_count = static_cast<int>(
         std::count_if(model.colliders.begin(), model.colliders.end(), [](const ColliderDesc& c) { return c.is_analytic(); }));
+    p.bounded_shape_count = static_cast<int>(std::count_if(model.colliders.begin(), model.colliders.end(), [](const ColliderDesc& c) {
+        return c.is_analytic() && c.shape != ColliderShape::Plane;
+    }));
     p.pin_count = static_cast<int>(flat_->pin_vertex.size());
     p.cg_max_iterations = w.solver.cg_max_iterations;
     p.cg_warm_start = w.solver.cg_warm_start ? 1 : 0;
@@ -298,14 +307,17 @@ void DeviceSolver::fill_staging(const Model& model, double t, double h) {
     for (std::size_t c = 0; c < model.cloths.size(); ++c) {
         cloths[c] = material_terms<float>(model.cloths[c].material);
     }
-    // Colliders take their pose at the end of the substep, as on the CPU (cpu_solver.cpp).
+    // Colliders take their pose at the end of the substep, as on the CPU (cpu_solver.cpp); the swept
+    // test also needs the pose at its start.
     const double t1 = t + h;
     auto* shapes = reinterpret_cast<physics::Shape<float>*>(base + p.shape_offset);
+    auto* shapes_start = reinterpret_cast<physics::Shape<float>*>(base + p.shape_start_offset);
     auto* friction = reinterpret_cast<float*>(base + p.friction_offset);
     int analytic = 0;
     for (const ColliderDesc& c : model.colliders) {
         if (!c.is_analytic()) continue;  // mesh colliders: the collision stages (device_collisions.h)
         shapes[analytic] = shape_at<float>(c, t1);
+        shapes_start[analytic] = shape_at<float>(c, t);
         friction[analytic] = static_cast<float>(c.friction);
         ++analytic;
     }
@@ -511,14 +523,55 @@ void DeviceSolver::substep(const Model& model, double t, double h, StepStats& st
     }
     stats.ms(Stage::Update) += elapsed(e, e + 1);
 
-    // After the solve: CCD on the device; on a hit, the interim host impact zones (device_collisions.h).
+    // After the solve and before CCD, as on the CPU: vertices that an analytic collider ran into
+    // during the substep ride along with it (outside the graph, which stays as captured).
+    if (ds.non_finite == 0) sweep_colliders(std::bit_cast<float>(ds.largest_move_bits), stream, stats);
+
+    // After the solve: CCD and the impact zones on the device (device_collisions.h).
     if (collisions_.active() && ds.non_finite == 0) {
-        if (collisions_.resolve(model, h, view_.x, view_.v, stream, stats) && output_ != nullptr) {
+        if (collisions_.resolve(model, h, view_.x, view_.v, view_.v0, view_.dv_previous, stream, stats) &&
+            output_ != nullptr) {
             launch_write_output(view_, output_, output_stride_, stream);
             WEFT_CUDA_CHECK(cudaStreamSynchronize(stream));
         }
         ledger_.set("cloth collisions", collisions_.memory_bytes());  // the detection buffers grow on use
     }
+}
+
+bool DeviceSolver::sweep_needed(float largest_move) const {
+    const unsigned char* base = host_staging_.get();
+    StepParams p{};
+    std::memcpy(&p, base, sizeof(p));
+    if (p.bounded_shape_count == 0) return false;
+    const auto* start = reinterpret_cast<const physics::Shape<float>*>(base + p.shape_start_offset);
+    const auto* end = reinterpret_cast<const physics::Shape<float>*>(base + p.shape_offset);
+    for (int s = 0; s < p.shape_count; ++s) {
+        const float width = physics::shape_min_width(start[s]);
+        if (!(width > 0.0f)) continue;  // a plane: never sampled
+        // The relative motion swept_shape_contact compares with a quarter of the width, with the
+        // vertex's own |x1 − x0| replaced by its largest value: in double, with a relative margin
+        // far above float rounding, so the device test never wanted to sample where this says no.
+        const double turn = static_cast<double>(p.h) * static_cast<double>(physics::shape_bounding_radius(start[s]));
+        const double relative = static_cast<double>(largest_move) +
+                                physics::length((end[s].origin - start[s].origin).template cast<double>()) +
+                                physics::length(start[s].angular_velocity.template cast<double>()) * turn;
+        if (relative * (1.0 + 1e-4) > 0.25 * static_cast<double>(width)) return true;
+    }
+    return false;
+}
+
+void DeviceSolver::sweep_colliders(float largest_move, cudaStream_t stream, StepStats& stats) {
+    if (!sweep_needed(largest_move)) return;
+    const auto start = Clock::now();
+    launch_sweep_colliders(view_, stream);
+    // The renderer's buffer was written by the graph before the sweep moved anything.
+    if (output_ != nullptr) launch_write_output(view_, output_, output_stride_, stream);
+    WEFT_CUDA_CHECK(cudaMemcpyAsync(&host_stats_[0].swept_hits, &stats_.get()->swept_hits, sizeof(int),
+                                    cudaMemcpyDeviceToHost, stream));
+    WEFT_CUDA_CHECK(cudaStreamSynchronize(stream));
+    ++sweep_launches_;
+    stats.collision.swept_collider_hits += host_stats_[0].swept_hits;
+    stats.ms(Stage::Update) += std::chrono::duration<double, std::milli>(Clock::now() - start).count();
 }
 
 void DeviceSolver::read_state(std::size_t first, std::size_t count, Vec3d* x, Vec3d* v) const {

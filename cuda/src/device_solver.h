@@ -65,6 +65,8 @@ public:
     [[nodiscard]] std::size_t contact_capacity() const { return contacts_.capacity(); }
     /// Graphs captured so far (tests: a changing contact count must not re-capture).
     [[nodiscard]] int graph_captures() const { return graph_captures_; }
+    /// Substeps that ran the swept collider test since the build (tests: a slow collider must not).
+    [[nodiscard]] int sweep_launches() const { return sweep_launches_; }
     /// Blocks of the one-launch CG loop, 0 when the loop runs a kernel per step.
     [[nodiscard]] int persistent_grid() const { return persistent_grid_; }
     /// Whether assembly runs as the row gather (else colour passes).
@@ -91,6 +93,16 @@ private:
     void choose_pcg_loop();
     void destroy_graph();
     void contacts_resized();
+    // ---- fast analytic colliders (weft/physics/swept_collider.h; docs/collisions.md, step 4) -------
+    // After the graph: the commit recorded the largest free-vertex displacement; from it and the
+    // colliders' motion the host decides, per substep, whether any vertex's relative motion may exceed
+    // a quarter of a collider's width. Only then is the swept test launched, on the same stream,
+    // and its hit count read back. With no sphere, capsule or box nothing of this runs at all.
+    /// True when some free vertex moving at most `largest_move` (m) in the substep may need the
+    /// swept test against some collider (the staged parameters of this substep).
+    [[nodiscard]] bool sweep_needed(float largest_move) const;
+    /// Runs the swept test when `sweep_needed`; adds its hits to `stats`. Synchronises `stream` then.
+    void sweep_colliders(float largest_move, cudaStream_t stream, StepStats& stats);
     [[nodiscard]] cudaStream_t active_stream() const { return user_stream_ != nullptr ? user_stream_ : stream_; }
 
     int device_ = 0;
@@ -144,6 +156,7 @@ private:
     bool warm_ = false;
     cudaGraphExec_t graph_exec_ = nullptr;
     int graph_captures_ = 0;
+    int sweep_launches_ = 0;
     int graph_newton_ = 0;            // settings the graph was captured with
     void* graph_output_ = nullptr;
     std::size_t graph_output_stride_ = 0;

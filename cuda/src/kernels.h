@@ -24,8 +24,15 @@ void launch_pin_velocities(const DeviceView& d, cudaStream_t stream);
 void launch_begin_newton(const DeviceView& d, cudaStream_t stream);
 /// v_k += Δv, w_k = v_k.
 void launch_newton_update(const DeviceView& d, cudaStream_t stream);
-/// x = x0 + h·v_k, v = v_k; counts non-finite values and restores x0, v0 if there are any.
+/// x = x0 + h·v_k, v = v_k; counts non-finite values and restores x0, v0 if there are any. With
+/// bounded analytic colliders it also records the largest free-vertex displacement in the stats.
 void launch_commit(const DeviceView& d, cudaStream_t stream);
+/// The swept test of every analytic collider against every free vertex's path x0 → x over the
+/// substep (weft/physics/swept_collider.h, as CpuSolver::sweep_fast_colliders): a vertex the
+/// collider ran into takes the corrected end position, v = (x − x0)/h and the matching previous Δv;
+/// the hits are added to DeviceStats::swept_hits. Launched after the commit, outside the graph,
+/// only in substeps where the host finds that some vertex may need it.
+void launch_sweep_colliders(const DeviceView& d, cudaStream_t stream);
 /// Writes position and area-weighted normal of every vertex to `out` (stride bytes apart).
 void launch_write_output(const DeviceView& d, void* out, std::size_t stride, cudaStream_t stream);
 
@@ -62,6 +69,12 @@ void launch_collision_predict(const float* x, const float* v, std::uint32_t n, f
                               std::uint32_t stride, cudaStream_t stream);
 /// x1c = x for the n cloth vertices (the solved end of the substep).
 void launch_collision_gather(const float* x, std::uint32_t n, float* x1c, std::uint32_t stride, cudaStream_t stream);
+/// After the impact zones: cloth vertices with a zone outcome (weft::collision::VertexOutcome per
+/// collision vertex) take x1c, v = (x1c − x0c)·inv_h and dv_previous = v − v0, in the solver's
+/// layout (stride n).
+void launch_collision_scatter(const float* x1c, const float* x0c, const std::uint8_t* outcome, std::uint32_t n,
+                              std::uint32_t stride, float inv_h, float* x, float* v, const float* v0,
+                              float* dv_previous, cudaStream_t stream);
 
 // ---- PCG (pcg_kernels.cu) --------------------------------------------------------------------------
 /// Block-Jacobi inverse, Δv initialised (prescribed on filtered vertices; on the others the last

@@ -1,10 +1,16 @@
 // Substep bookkeeping on the device: start-of-substep copies, pins, the Newton update, the commit
-// with its non-finite check and rollback, and the output of positions and normals.
+// with its non-finite check and rollback, the swept test of fast analytic colliders, and the output
+// of positions and normals.
 #include "cuda_check.h"
 #include "device_math.cuh"
+#include "weft/physics/swept_collider.h"
 
 namespace weft::cuda {
 namespace {
+
+struct FloatMax {
+    __device__ float operator()(float a, float b) const { return a < b ? b : a; }
+};
 
 __global__ void begin_substep_kernel(DeviceView d) {
     const std::uint32_t i = blockIdx.x * blockDim.x + threadIdx.x;
@@ -43,14 +49,29 @@ __global__ void newton_update_kernel(DeviceView d) {
 
 __global__ void commit_kernel(DeviceView d) {
     const std::uint32_t i = blockIdx.x * blockDim.x + threadIdx.x;
-    if (i >= d.n) return;
-    const float h = step_params(d).h;
-    const V3 v = load3(d.vk, i, d.n);
-    const V3 x = load3(d.x0, i, d.n) + h * v;
-    store3(d.v, i, d.n, v);
-    store3(d.x, i, d.n, x);
-    store3(d.dv_previous, i, d.n, v - load3(d.v0, i, d.n));
-    if (!physics::is_finite(x) || !physics::is_finite(v)) atomicAdd(&d.stats->non_finite, 1);
+    const StepParams& sp = step_params(d);
+    float moved = 0.0f;
+    if (i < d.n) {
+        const float h = sp.h;
+        const V3 v = load3(d.vk, i, d.n);
+        const V3 x0 = load3(d.x0, i, d.n);
+        const V3 x = x0 + h * v;
+        store3(d.v, i, d.n, v);
+        store3(d.x, i, d.n, x);
+        store3(d.dv_previous, i, d.n, v - load3(d.v0, i, d.n));
+        if (!physics::is_finite(x) || !physics::is_finite(v)) atomicAdd(&d.stats->non_finite, 1);
+        // The vertex's own share of the relative motion the swept test measures (swept_collider.h);
+        // pinned vertices are never swept, as on the CPU.
+        if (sp.bounded_shape_count > 0 && !d.fixed[i]) moved = physics::length(x - x0);
+    }
+    // The largest over the grid: one block reduction and one atomic per block (a float ≥ 0 orders
+    // like its bits). The condition is the same for the whole grid, so the barrier inside is safe.
+    if (sp.bounded_shape_count > 0) {
+        using Reduce = cub::BlockReduce<float, kBlockSize>;
+        __shared__ typename Reduce::TempStorage storage;
+        const float block_moved = Reduce(storage).Reduce(moved, FloatMax{});
+        if (threadIdx.x == 0 && block_moved > 0.0f) atomicMax(&d.stats->largest_move_bits, __float_as_uint(block_moved));
+    }
 }
 
 // A NaN or Inf anywhere rolls the whole substep back, as on the CPU; the stats say so.
@@ -60,6 +81,32 @@ __global__ void rollback_kernel(DeviceView d) {
     d.x[i] = d.x0[i];
     d.v[i] = d.v0[i];
     d.dv_previous[i] = 0.0f;
+}
+
+// The per-vertex loop of CpuSolver::sweep_fast_colliders, in float: every collider in the CPU's
+// order, each one tested against the path x0 → x as corrected by the ones before it.
+__global__ void sweep_colliders_kernel(DeviceView d) {
+    const std::uint32_t i = blockIdx.x * blockDim.x + threadIdx.x;
+    if (i >= d.n || d.fixed[i]) return;
+    const StepParams& sp = step_params(d);
+    const auto* start = staged<physics::Shape<float>>(d, sp.shape_start_offset);
+    const auto* end = staged<physics::Shape<float>>(d, sp.shape_offset);
+    const float thickness = staged<ClothParams>(d, sp.cloth_offset)[d.vertex_cloth[i]].thickness;
+    const V3 x0 = load3(d.x0, i, d.n);
+    V3 x = load3(d.x, i, d.n);
+    int hits = 0;
+    for (int s = 0; s < sp.shape_count; ++s) {
+        const physics::SweptContact<float> c = physics::swept_shape_contact(start[s], end[s], sp.h, x0, x, thickness);
+        if (!c.hit) continue;
+        x = c.position;
+        ++hits;
+    }
+    if (hits == 0) return;
+    const V3 v = (x - x0) / sp.h;
+    store3(d.x, i, d.n, x);
+    store3(d.v, i, d.n, v);
+    store3(d.dv_previous, i, d.n, v - load3(d.v0, i, d.n));  // the CPU's v − v0 after a sweep
+    atomicAdd(&d.stats->swept_hits, hits);  // integers, and only the few vertices hit: order-free
 }
 
 __global__ void write_output_kernel(DeviceView d, unsigned char* out, std::size_t stride) {
@@ -113,6 +160,11 @@ void launch_commit(const DeviceView& d, cudaStream_t stream) {
     WEFT_CUDA_CHECK_LAUNCH("commit_kernel");
     rollback_kernel<<<grid_for(3 * d.n), kBlockSize, 0, stream>>>(d);
     WEFT_CUDA_CHECK_LAUNCH("rollback_kernel");
+}
+
+void launch_sweep_colliders(const DeviceView& d, cudaStream_t stream) {
+    sweep_colliders_kernel<<<grid_for(d.n), kBlockSize, 0, stream>>>(d);
+    WEFT_CUDA_CHECK_LAUNCH("sweep_colliders_kernel");
 }
 
 void launch_write_output(const DeviceView& d, void* out, std::size_t stride, cudaStream_t stream) {

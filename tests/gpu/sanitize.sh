@@ -29,6 +29,10 @@ run() {
 for scene in hanging drape flag; do
     run memcheck "$weft" run "$scene" --backend cuda --frames 3 --quiet --set 'solver.cg_max_iterations=200'
 done
+# projectile at one substep, the ball 5 cm from the sheet: the swept collider test runs every substep
+# and carries cloth from the first frame.
+run memcheck "$weft" run projectile --backend cuda --frames 3 --quiet --set 'solver.substeps=1' \
+    --set 'motion.shot.origin=[0, 1, 0.1]' --set 'collision.self=false' --set 'solver.cg_max_iterations=200'
 export WEFT_CUDA_GRAPHS=0
 run racecheck "$weft" run drape --backend cuda --frames 2 --quiet --set 'solver.cg_max_iterations=100'
 run synccheck "$weft" run drape --backend cuda --frames 2 --quiet --set 'solver.cg_max_iterations=100'

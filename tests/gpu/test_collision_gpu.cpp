@@ -27,6 +27,7 @@
 #include <random>
 #include <sstream>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "collision/broad_phase.h"
@@ -37,6 +38,7 @@
 #include "cuda_check.h"
 #include "device_array.h"
 #include "gpu_test_util.h"
+#include "random_geometry.h"
 #include "weft/physics/ccd.h"
 #include "weft/physics/proximity.h"
 
@@ -84,63 +86,26 @@ struct Scene {
     }
 };
 
-/// Triangles between random neighbours of a jittered L³ lattice (spacing 1), so that many share
-/// vertices and edges; every vertex moves by a normal step of `motion` per axis, and a fraction
-/// `outliers` jump by up to 30 (bounds far larger than a cell: the oversized path).
+/// A random triangle soup (random_geometry.h: a jittered lattice, some vertices jumping far: the
+/// oversized path) with its edges and a random thickness, snapped to float.
 Scene random_soup(unsigned seed, int lattice, std::size_t triangles, double motion, double outliers) {
     std::mt19937 rng(seed);
-    std::uniform_real_distribution<double> jitter(-0.3, 0.3), unit(0.0, 1.0), jump(-30.0, 30.0);
-    std::normal_distribution<double> step(0.0, 1.0);
-    std::uniform_int_distribution<int> pick(0, lattice - 1), offset(-1, 1);
+    test::RandomSoup soup = test::random_soup(rng, lattice, triangles, motion, outliers);
     Scene s;
-    const auto id = [&](int i, int j, int k) { return static_cast<std::uint32_t>((k * lattice + j) * lattice + i); };
-    for (int k = 0; k < lattice; ++k)
-        for (int j = 0; j < lattice; ++j)
-            for (int i = 0; i < lattice; ++i) s.x0.push_back({i + jitter(rng), j + jitter(rng), k + jitter(rng)});
-    for (const Vec3d& p : s.x0) {
-        Vec3d d{motion * step(rng), motion * step(rng), motion * step(rng)};
-        if (unit(rng) < outliers) d = {jump(rng), jump(rng), jump(rng)};
-        s.x1.push_back(p + d);
-    }
-    while (s.triangles.size() < triangles) {
-        const int i = pick(rng), j = pick(rng), k = pick(rng);
-        std::uint32_t v[3] = {id(i, j, k), 0, 0};
-        for (int c = 1; c < 3; ++c)
-            v[c] = id(std::clamp(i + offset(rng), 0, lattice - 1), std::clamp(j + offset(rng), 0, lattice - 1),
-                      std::clamp(k + offset(rng), 0, lattice - 1));
-        if (v[0] == v[1] || v[1] == v[2] || v[0] == v[2]) continue;
-        s.triangles.push_back({{v[0], v[1], v[2]}});
-    }
+    s.x0 = std::move(soup.x0);
+    s.x1 = std::move(soup.x1);
+    s.triangles = std::move(soup.triangles);
     s.edges = build_edges(s.triangles);
     s.thickness = std::uniform_real_distribution<double>(0.0, 0.2)(rng);
     s.snap();
     return s;
 }
 
-/// A smooth random displacement field: a few sinusoids per coordinate.
-struct Field {
-    struct Wave {
-        double kx, ky, phase, amp[3];
-    };
-    std::vector<Wave> waves;
-    Field(std::mt19937& rng, double amplitude, double wavelength) {
-        std::uniform_real_distribution<double> unit(0.0, 1.0);
-        for (int i = 0; i < 4; ++i) {
-            const double wl = wavelength * (0.7 + 0.6 * unit(rng)), dir = 2.0 * kPi * unit(rng), k = 2.0 * kPi / wl;
-            Wave w{k * std::cos(dir), k * std::sin(dir), 2.0 * kPi * unit(rng), {}};
-            for (double& a : w.amp) a = amplitude * (2.0 * unit(rng) - 1.0);
-            waves.push_back(w);
-        }
-    }
-    [[nodiscard]] Vec3d at(double x, double y) const {
-        Vec3d d{};
-        for (const Wave& w : waves) {
-            const double s = std::sin(w.kx * x + w.ky * y + w.phase);
-            d += Vec3d{w.amp[0] * s, w.amp[1] * s, w.amp[2] * s};
-        }
-        return d;
-    }
-};
+/// A smooth random displacement field (random_geometry.h): four sinusoids of wavelengths within
+/// ±30 % of `wavelength` (m), amplitudes up to `amplitude` (m) per coordinate.
+test::SmoothField field(std::mt19937& rng, double amplitude, double wavelength) {
+    return {rng, amplitude, 0.7 * wavelength, 1.3 * wavelength};
+}
 
 /// Appends an nx × ny vertex grid of spacing h (in its own (u, w) plane coordinates, centred on 0)
 /// placed by `place(u, w, t)` at t = 0 (x0) and t = 1 (x1); returns the first vertex.
@@ -176,7 +141,7 @@ std::uint32_t add_grid(Scene& s, int nx, int ny, double h, const std::function<V
 Scene twisted_sheet(int n, double turns, double dturns, double crumple, unsigned seed) {
     Scene s;
     std::mt19937 rng(seed);
-    const Field f0(rng, crumple, 0.05), f1(rng, crumple, 0.05);
+    const test::SmoothField f0 = field(rng, crumple, 0.05), f1 = field(rng, crumple, 0.05);
     const double L = (n - 1) * 0.01;
     add_grid(s, n, n, 0.01, [&](double x, double y, int t) {
         const double phi = 2.0 * kPi * (turns + t * dturns) * x / L;
@@ -195,7 +160,8 @@ Scene twisted_sheet(int n, double turns, double dturns, double crumple, unsigned
 Scene two_cloths(int n, unsigned seed, double sink = 0.004) {
     Scene s;
     std::mt19937 rng(seed);
-    const Field a0(rng, 0.0003, 0.06), a1(rng, 0.0003, 0.06), b0(rng, 0.0003, 0.06), b1(rng, 0.0003, 0.06);
+    const test::SmoothField a0 = field(rng, 0.0003, 0.06), a1 = field(rng, 0.0003, 0.06), b0 = field(rng, 0.0003, 0.06),
+                            b1 = field(rng, 0.0003, 0.06);
     add_grid(s, n, n, 0.01, [&](double x, double y, int t) {
         const Vec3d d = (t == 0 ? a0 : a1).at(x, y);
         return Vec3d{x + 0.2 * d.x, y + 0.2 * d.y, d.z + t * 0.001};

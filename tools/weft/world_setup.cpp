@@ -40,15 +40,6 @@ LoadedScene load_world(std::string_view scene, const SimulationOptions& sim) {
     options.threads = sim.threads;
     const std::string backend = resolve_backend(sim.backend);
     loaded.world = build_world(loaded.desc, backend, options);
-    // The cuda backend does not sweep fast analytic colliders yet (it refuses them at the step):
-    // `auto` gives such a scene to the CPU, judged on the first substep.
-    if (sim.backend == "auto" && backend == "cuda") {
-        const Model& model = loaded.world->model();
-        const double h = model.settings.solver.dt / model.settings.solver.substeps;
-        if (std::any_of(model.colliders.begin(), model.colliders.end(),
-                        [&](const ColliderDesc& c) { return is_fast_collider(c, 0.0, h); }))
-            loaded.world = build_world(loaded.desc, "cpu", options);
-    }
     return loaded;
 }
 

@@ -21,8 +21,7 @@ struct LoadedScene {
 
 /// Throws `UsageError` (for `command`) when `backend` is not one of the compiled backends.
 /// "auto" → "cuda" when that backend is compiled in and a device is present, else "cpu"; any other
-/// name is returned unchanged. (`load_world` then gives a scene with a fast analytic collider to the
-/// CPU, which alone sweeps such colliders so far.)
+/// name is returned unchanged.
 [[nodiscard]] std::string resolve_backend(std::string_view backend);
 void require_backend(std::string_view command, std::string_view backend);
 

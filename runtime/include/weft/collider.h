@@ -62,8 +62,10 @@ template <typename T>
 }
 
 /// True when analytic collider `c` moves more than a quarter of its smallest width during the
-/// substep [t, t + h]: fast enough to pass through cloth between two penalty evaluations, so the
-/// vertex paths must be swept against it (weft/physics/swept_collider.h). Planes never are.
+/// substep [t, t + h] (s): fast enough by its own motion to pass through cloth between two penalty
+/// evaluations, so the vertex paths must be swept against it (weft/physics/swept_collider.h). Planes
+/// never are. The backends sweep on the relative motion, so a collider for which this is false is
+/// still swept against cloth that itself moves that far in the substep.
 [[nodiscard]] inline bool is_fast_collider(const ColliderDesc& c, double t, double h) {
     if (!c.is_analytic()) return false;
     const physics::Shape<double> s0 = shape_at<double>(c, t);

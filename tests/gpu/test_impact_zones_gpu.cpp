@@ -1,0 +1,374 @@
+// GPU impact zones (cuda/src/collision/impact_zones_gpu.h) held to the promises of the CPU reference
+// (tests/solver/test_impact_zones.cpp), on the same scenes rounded to float: after `resolve`, a
+// brute-force double CCD sweep over every pair finds nothing at eta and the exact intersection check
+// finds nothing; fixed vertices never move, untouched ones keep x1 bit for bit, frozen ones sit at x0;
+// the fallbacks (rigid zones, freezing, carrying by a kinematic mesh) end clean and are counted, rigid
+// zones keep their momentum and shape; the projection lands where the CPU's does (same QP: the
+// mass-weighted correction agrees); the same bits on every run. Every test skips without a GPU.
+#include <cuda_runtime_api.h>
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <cstring>
+#include <map>
+#include <vector>
+
+#include "collision/impact_zones.h"
+#include "collision/impact_zones_gpu.h"
+#include "collision/intersection_check.h"
+#include "cuda_check.h"
+#include "device_array.h"
+#include "gpu_test_util.h"
+#include "impact_zone_scenes.h"
+
+namespace weft::collision {
+namespace {
+
+using cuda::DeviceArray;
+using cuda::MemoryLedger;
+using cuda::collision::GpuImpactZoneInput;
+using cuda::collision::GpuImpactZones;
+using test::brute_force_ccd;
+using test::grid;
+using test::Scene;
+
+/// The scene with every position rounded to float (what the GPU sees), so that the double judges
+/// look at exactly the GPU's input.
+Scene rounded(Scene s) {
+    for (auto* xs : {&s.x0, &s.x1})
+        for (Vec3d& p : *xs)
+            for (int c = 0; c < 3; ++c) p[c] = static_cast<double>(static_cast<float>(p[c]));
+    return s;
+}
+
+struct Resolved {
+    std::vector<Vec3d> x1;
+    ImpactZoneReport report;
+    std::vector<VertexOutcome> outcome;
+    std::vector<std::uint32_t> zone;
+};
+
+Resolved resolve_gpu(const Scene& s, int max_iterations, GpuImpactZones& zones) {
+    const std::size_t n = s.x0.size();
+    std::vector<float> x0(3 * n), x1(3 * n), im(n);
+    for (std::size_t v = 0; v < n; ++v) {
+        for (int c = 0; c < 3; ++c) {
+            x0[static_cast<std::size_t>(c) * n + v] = static_cast<float>(s.x0[v][c]);
+            x1[static_cast<std::size_t>(c) * n + v] = static_cast<float>(s.x1[v][c]);
+        }
+        im[v] = static_cast<float>(s.inverse_mass[v]);
+    }
+    std::vector<std::uint32_t> tris, edges;
+    for (const Triangle& t : s.triangles) tris.insert(tris.end(), {t.v[0], t.v[1], t.v[2]});
+    for (const Edge& e : s.edges) edges.insert(edges.end(), {e.v[0], e.v[1]});
+    MemoryLedger ledger;
+    DeviceArray<float> d0, d1, dim;
+    DeviceArray<std::uint32_t> dt, de;
+    d0.upload(x0, ledger, "x0");
+    d1.upload(x1, ledger, "x1");
+    dim.upload(im, ledger, "inverse mass");
+    dt.upload(tris, ledger, "triangles");
+    de.upload(edges, ledger, "edges");
+    GpuImpactZoneInput in;
+    in.x0 = d0.get();
+    in.x1 = d1.get();
+    in.vertex_count = static_cast<std::uint32_t>(n);
+    in.inverse_mass = dim.get();
+    in.triangles = dt.get();
+    in.triangle_count = static_cast<std::uint32_t>(s.triangles.size());
+    in.edges = de.get();
+    in.edge_count = static_cast<std::uint32_t>(s.edges.size());
+    in.thickness = s.thickness;
+    in.max_iterations = max_iterations;
+    Resolved r;
+    r.report = zones.resolve(in, nullptr);
+    WEFT_CUDA_CHECK(cudaMemcpy(x1.data(), d1.get(), x1.size() * sizeof(float), cudaMemcpyDeviceToHost));
+    r.x1.resize(n);
+    for (std::size_t v = 0; v < n; ++v)
+        for (int c = 0; c < 3; ++c) r.x1[v][c] = x1[static_cast<std::size_t>(c) * n + v];
+    zones.download(r.outcome, r.zone, nullptr);
+    return r;
+}
+
+Resolved resolve_gpu(const Scene& s, int max_iterations = 32) {
+    GpuImpactZones zones;
+    return resolve_gpu(s, max_iterations, zones);
+}
+
+Resolved resolve_cpu(const Scene& s, int max_iterations = 32) {
+    Resolved r;
+    r.x1 = s.x1;
+    ImpactZoneSolver solver;
+    ImpactZoneInput in;
+    in.x0 = s.x0;
+    in.x1 = r.x1;
+    in.inverse_mass = s.inverse_mass;
+    in.triangles = s.triangles;
+    in.edges = s.edges;
+    in.thickness = s.thickness;
+    in.max_iterations = max_iterations;
+    r.report = solver.resolve(in);
+    r.outcome.assign(solver.outcome().begin(), solver.outcome().end());
+    return r;
+}
+
+void print(const char* what, const Resolved& r) {
+    const ImpactZoneReport& p = r.report;
+    std::printf(
+        "%s: resolved %d, rounds %d, zones %d (max %d vertices), constraints %d, rigid zones %d (%d rounds), frozen "
+        "%d, carried %d, sweeps %lld (%d unconverged), detections %d, candidates %lld, CCD %lld tests / %lld hits; "
+        "broad %.2f ms, CCD %.2f ms, zones %.2f ms\n",
+        what, p.resolved ? 1 : 0, p.iterations, p.zones, p.max_zone_vertices, p.constraints, p.rigid_zones,
+        p.rigid_rounds, p.frozen_vertices, p.carried_vertices, static_cast<long long>(p.qp_sweeps), p.qp_unconverged,
+        p.detections, static_cast<long long>(p.candidate_pairs), static_cast<long long>(p.ccd_tests),
+        static_cast<long long>(p.ccd_hits), p.broad_phase_ms, p.ccd_ms, p.zones_ms);
+}
+
+bool same_bits(const Vec3d& a, const Vec3d& b) { return std::memcmp(&a, &b, sizeof(Vec3d)) == 0; }
+
+/// Everything `resolve` promises (the CPU test's expect_clean, on the float-rounded scene).
+void expect_clean(const Scene& s, const Resolved& r) {
+    const ImpactZoneReport& rep = r.report;
+    EXPECT_TRUE(rep.resolved);
+    EXPECT_EQ(rep.remaining_hits, 0);
+    const test::Collisions c = brute_force_ccd(s, r.x1, s.eta());
+    EXPECT_EQ(c.vf, 0U) << "vertex-face collisions left";
+    EXPECT_EQ(c.ee, 0U) << "edge-edge collisions left";
+    const IntersectionReport ic = check_intersections(r.x1, s.triangles);
+    EXPECT_TRUE(ic.clean()) << ic.intersecting_pairs << " intersecting triangle pairs left";
+    std::size_t fixed_moved = 0, untouched_moved = 0, frozen_off = 0, nonfinite = 0, zone_mismatch = 0;
+    int frozen = 0, carried = 0;
+    ASSERT_EQ(r.outcome.size(), s.x0.size());
+    for (std::size_t v = 0; v < s.x0.size(); ++v) {
+        nonfinite += physics::is_finite(r.x1[v]) ? 0 : 1;
+        const VertexOutcome o = r.outcome[v];
+        if (s.inverse_mass[v] == 0.0) {
+            EXPECT_EQ(o, VertexOutcome::Fixed);
+            fixed_moved += same_bits(r.x1[v], s.x1[v]) ? 0 : 1;
+        }
+        if (o == VertexOutcome::Untouched) untouched_moved += same_bits(r.x1[v], s.x1[v]) ? 0 : 1;
+        if (o == VertexOutcome::Frozen) frozen_off += same_bits(r.x1[v], s.x0[v]) ? 0 : 1;
+        frozen += o == VertexOutcome::Frozen ? 1 : 0;
+        carried += o == VertexOutcome::Carried ? 1 : 0;
+        const bool zoned = o != VertexOutcome::Fixed && o != VertexOutcome::Untouched;
+        zone_mismatch += zoned == (r.zone[v] != kNoZone) ? 0 : 1;
+    }
+    EXPECT_EQ(nonfinite, 0U);
+    EXPECT_EQ(fixed_moved, 0U) << "vertices of inverse mass 0 moved";
+    EXPECT_EQ(untouched_moved, 0U) << "vertices in no zone changed";
+    EXPECT_EQ(frozen_off, 0U) << "frozen vertices not at x0";
+    EXPECT_EQ(zone_mismatch, 0U);
+    EXPECT_EQ(rep.frozen_vertices, frozen);
+    EXPECT_EQ(rep.carried_vertices, carried);
+}
+
+/// ½ Σ m |x1 − x̂|²: what the inelastic projection minimises.
+double correction(const Scene& s, const std::vector<Vec3d>& x1) {
+    double e = 0.0;
+    for (std::size_t v = 0; v < s.x0.size(); ++v)
+        if (s.inverse_mass[v] > 0.0) e += 0.5 / s.inverse_mass[v] * physics::length_squared(x1[v] - s.x1[v]);
+    return e;
+}
+
+Vec3d momentum(const Scene& s, const std::vector<Vec3d>& x1, const std::vector<std::uint32_t>& vertices) {
+    Vec3d p{};
+    for (std::uint32_t v : vertices) p += (1.0 / s.inverse_mass[v]) * (x1[v] - s.x0[v]);
+    return p;
+}
+
+TEST(GpuImpactZones, VertexDrivenHeadOnThroughTriangle) {
+    WEFT_REQUIRE_GPU();
+    // As the CPU test: the dart's tip p through the centroid of a triangle, all masses 1 kg. The
+    // closest feasible point moves p up by ¾ of the violation and each corner down by ¼.
+    Scene s;
+    s.add({{-0.05, 0.0, -0.05}, {0.1, 0.0, -0.05}, {-0.05, 0.0, 0.1}}, {{{0, 1, 2}}}, 1.0);
+    const std::uint32_t dart = s.add({{0.0, 0.01, 0.0}, {0.01, 0.06, 0.0}, {-0.01, 0.06, 0.0}}, {{{0, 1, 2}}}, 1.0);
+    s.x1[dart] = {0.0, -0.01, 0.0};
+    s = rounded(s);
+    const Resolved r = resolve_gpu(s);
+    print("vertex through triangle", r);
+    expect_clean(s, r);
+    const double violation = s.thickness + 0.01;
+    const double tol = 2e-2 * s.thickness;  // the projection's tolerance, 1 % of δ, and float rounding
+    EXPECT_NEAR(r.x1[dart].y - s.x1[dart].y, 0.75 * violation, tol);
+    for (std::uint32_t v = 0; v < 3; ++v) EXPECT_NEAR(r.x1[v].y - s.x1[v].y, -0.25 * violation, tol);
+}
+
+TEST(GpuImpactZones, TwoSheetsDrivenThroughEachOther) {
+    WEFT_REQUIRE_GPU();
+    const Scene s = rounded(test::two_sheets(14, 3));
+    const Resolved r = resolve_gpu(s);
+    print("two sheets (GPU)", r);
+    expect_clean(s, r);
+    EXPECT_EQ(r.report.rigid_zones, 0);
+    EXPECT_EQ(r.report.frozen_vertices, 0);
+    EXPECT_EQ(r.report.qp_unconverged, 0);
+    // Internal impulses only: the total momentum of the motion is the prediction's (up to float
+    // rounding of the positions, ~1e-7 m per vertex).
+    std::vector<std::uint32_t> all(s.x0.size());
+    for (std::uint32_t v = 0; v < all.size(); ++v) all[v] = v;
+    double mass = 0.0;
+    for (double im : s.inverse_mass) mass += 1.0 / im;
+    EXPECT_NEAR(momentum(s, r.x1, all).y, momentum(s, s.x1, all).y, 1e-6 * mass);
+    // Same QP as the CPU: the mass-weighted correction agrees (the constraint sets differ only where
+    // float and double CCD disagree at the margin).
+    const Resolved cpu = resolve_cpu(s);
+    const double e_gpu = correction(s, r.x1), e_cpu = correction(s, cpu.x1);
+    std::printf("correction: GPU %.6g, CPU %.6g (ratio %.4f)\n", e_gpu, e_cpu, e_gpu / e_cpu);
+    EXPECT_GT(e_gpu, 0.8 * e_cpu);
+    EXPECT_LT(e_gpu, 1.25 * e_cpu);
+}
+
+TEST(GpuImpactZones, SheetPushedThroughFixedMesh) {
+    WEFT_REQUIRE_GPU();
+    Scene s;
+    const std::uint32_t cloth = s.add(grid(0.3, 24, {0.0, 0.01, 0.0}), 1000.0);
+    MeshData patch = grid(0.1, 5, {0.003, 0.0, -0.002});
+    for (Vec3d& p : patch.positions) p.y = 0.004 * std::sin(60.0 * p.x) * std::cos(50.0 * p.z) - 0.004;
+    const std::uint32_t fixed = s.add(patch, 0.0);
+    for (std::uint32_t v = cloth; v < fixed; ++v) s.x1[v].y -= 0.014;
+    s = rounded(s);
+    const Resolved r = resolve_gpu(s);
+    print("sheet through fixed mesh (GPU)", r);
+    expect_clean(s, r);
+    EXPECT_EQ(r.report.frozen_vertices, 0);
+    std::size_t far = 0, far_untouched = 0;
+    for (std::uint32_t v = cloth; v < fixed; ++v) {
+        if (std::max(std::fabs(s.x0[v].x), std::fabs(s.x0[v].z)) < 0.12) continue;
+        ++far;
+        far_untouched += r.outcome[v] == VertexOutcome::Untouched && same_bits(r.x1[v], s.x1[v]) ? 1 : 0;
+    }
+    EXPECT_GT(far, 100U);
+    EXPECT_EQ(far_untouched, far);
+}
+
+TEST(GpuImpactZones, CrumplingSheet) {
+    WEFT_REQUIRE_GPU();
+    const Scene s = rounded(test::crumpled_sheet(22, 7));
+    const Resolved r = resolve_gpu(s);
+    print("crumpled sheet (GPU)", r);
+    expect_clean(s, r);
+    EXPECT_GT(r.report.zones, 0);
+    EXPECT_EQ(r.report.rigid_zones, 0);  // the projection alone resolves it, as on the CPU
+    EXPECT_EQ(r.report.frozen_vertices, 0);
+    const Resolved cpu = resolve_cpu(s);
+    print("crumpled sheet (CPU)", cpu);
+    const double e_gpu = correction(s, r.x1), e_cpu = correction(s, cpu.x1);
+    std::printf("correction: GPU %.6g, CPU %.6g (ratio %.4f)\n", e_gpu, e_cpu, e_gpu / e_cpu);
+    EXPECT_GT(e_gpu, 0.8 * e_cpu);
+    EXPECT_LT(e_gpu, 1.25 * e_cpu);
+}
+
+TEST(GpuImpactZones, RigidFallbackKeepsMomentumAndShape) {
+    WEFT_REQUIRE_GPU();
+    const Scene s = rounded(test::crumpled_sheet(22, 7));
+    const Resolved r = resolve_gpu(s, 1);
+    print("crumpled sheet, 1 round (GPU)", r);
+    expect_clean(s, r);
+    EXPECT_EQ(r.report.iterations, 1);
+    EXPECT_GT(r.report.rigid_zones, 0);
+    EXPECT_GT(r.report.rigid_rounds, 0);
+    std::map<std::uint32_t, std::vector<std::uint32_t>> rigid;
+    for (std::uint32_t v = 0; v < s.x0.size(); ++v)
+        if (r.outcome[v] == VertexOutcome::Rigid) rigid[r.zone[v]].push_back(v);
+    EXPECT_EQ(static_cast<int>(rigid.size()), r.report.rigid_zones);
+    for (const auto& [label, vertices] : rigid) {
+        // Float positions: the momentum and the distances hold to the rounding of the end positions.
+        double mass = 0.0;
+        for (std::uint32_t v : vertices) mass += 1.0 / s.inverse_mass[v];
+        const Vec3d p_hat = momentum(s, s.x1, vertices), p = momentum(s, r.x1, vertices);
+        EXPECT_LE(physics::length(p - p_hat), 1e-6 * mass) << "zone " << label << ", " << vertices.size() << " vertices";
+        double worst = 0.0;
+        for (std::size_t i = 0; i < vertices.size(); ++i)
+            for (std::size_t j = i + 1; j < vertices.size(); ++j) {
+                const std::uint32_t a = vertices[i], b = vertices[j];
+                worst =
+                    std::max(worst, std::fabs(physics::length(r.x1[a] - r.x1[b]) - physics::length(s.x0[a] - s.x0[b])));
+            }
+        EXPECT_LE(worst, 1e-6) << "zone " << label << " is not rigid";
+    }
+}
+
+TEST(GpuImpactZones, FreezingZonesThatTouchFixedVertices) {
+    WEFT_REQUIRE_GPU();
+    Scene s;
+    const std::uint32_t cloth = s.add(grid(0.2, 16, {0.0, 0.01, 0.0}), 1000.0);
+    const std::uint32_t fixed = s.add(grid(0.1, 4, {0.002, 0.0, 0.003}), 0.0);
+    for (std::uint32_t v = cloth; v < fixed; ++v) s.x1[v].y -= 0.03;
+    s = rounded(s);
+    const Resolved r = resolve_gpu(s, 0);
+    print("sheet through fixed mesh, 0 rounds (GPU)", r);
+    expect_clean(s, r);
+    EXPECT_EQ(r.report.iterations, 0);
+    EXPECT_EQ(r.report.rigid_zones, 0);
+    EXPECT_GT(r.report.frozen_vertices, 0);
+}
+
+TEST(GpuImpactZones, KinematicMeshCarriesFrozenCloth) {
+    WEFT_REQUIRE_GPU();
+    Scene s;
+    const std::uint32_t cloth = s.add(grid(0.1, 8, {0.0, 0.0, 0.0}), 1000.0);
+    const std::uint32_t plate = s.add(grid(0.3, 3, {0.004, -0.01, 0.002}), 0.0);
+    const Vec3d lift{0.001, 0.03, 0.0};
+    for (std::uint32_t v = plate; v < s.x0.size(); ++v) s.x1[v] += lift;
+    s = rounded(s);
+    const Resolved r = resolve_gpu(s, 0);
+    print("plate through frozen cloth (GPU)", r);
+    expect_clean(s, r);
+    EXPECT_GT(r.report.carried_vertices, 0);
+    for (std::uint32_t v = cloth; v < plate; ++v) {
+        if (r.outcome[v] != VertexOutcome::Carried) continue;
+        EXPECT_NEAR(physics::length(r.x1[v] - s.x0[v] - lift), 0.0, 1e-6);
+    }
+    const Resolved p = resolve_gpu(s);
+    print("plate through cloth (GPU)", p);
+    expect_clean(s, p);
+    EXPECT_EQ(p.report.frozen_vertices, 0);
+    EXPECT_EQ(p.report.carried_vertices, 0);
+}
+
+TEST(GpuImpactZones, SameBitsOnEveryRunAndNothingToDo) {
+    WEFT_REQUIRE_GPU();
+    const Scene s = rounded(test::crumpled_sheet(16, 11));
+    GpuImpactZones zones;  // reused: buffers kept between calls must not leak state
+    const Resolved a = resolve_gpu(s, 32, zones);
+    const Resolved b = resolve_gpu(s, 32, zones);
+    const Resolved c = resolve_gpu(s, 2);
+    const Resolved d = resolve_gpu(s, 2, zones);
+    ASSERT_EQ(a.x1.size(), b.x1.size());
+    std::size_t differ = 0, differ_fallback = 0;
+    for (std::size_t v = 0; v < a.x1.size(); ++v) {
+        differ += same_bits(a.x1[v], b.x1[v]) ? 0 : 1;
+        differ_fallback += same_bits(c.x1[v], d.x1[v]) ? 0 : 1;
+    }
+    EXPECT_EQ(differ, 0U);
+    EXPECT_EQ(differ_fallback, 0U);
+    EXPECT_EQ(a.outcome, b.outcome);
+    EXPECT_EQ(a.zone, b.zone);
+    // A motion without collisions: nothing changes, nothing is counted.
+    Scene still = s;
+    still.x1 = still.x0;
+    const Resolved n = resolve_gpu(still, 32, zones);
+    EXPECT_TRUE(n.report.resolved);
+    EXPECT_EQ(n.report.constraints, 0);
+    for (std::size_t v = 0; v < still.x0.size(); ++v) EXPECT_TRUE(same_bits(n.x1[v], still.x0[v]));
+}
+
+TEST(GpuImpactZones, RejectsBadInput) {
+    WEFT_REQUIRE_GPU();
+    GpuImpactZones zones;
+    GpuImpactZoneInput in;
+    EXPECT_THROW((void)zones.resolve(in, nullptr), Error);  // no arrays
+    const Scene s = test::two_sheets(2, 1);
+    Scene bad = s;
+    bad.thickness = -1.0;
+    EXPECT_THROW((void)resolve_gpu(bad), Error);
+    bad.thickness = std::nan("");
+    EXPECT_THROW((void)resolve_gpu(bad), Error);
+    EXPECT_THROW((void)resolve_gpu(s, -1), Error);
+}
+
+}  // namespace
+}  // namespace weft::collision
