@@ -4,6 +4,8 @@
 
 #include <algorithm>
 #include <chrono>
+#include <cstdio>
+#include <cstdlib>
 #include <cstddef>
 #include <string>
 
@@ -39,7 +41,11 @@ static_assert(static_cast<int>(weft::collision::VertexOutcome::Untouched) == 1);
 
 }  // namespace
 
-DeviceCollisions::DeviceCollisions() = default;
+// WEFT_CUDA_ZONES_TRACE=1: one line per substep in which the impact zones ran (diagnostics).
+DeviceCollisions::DeviceCollisions() {
+    const char* trace = std::getenv("WEFT_CUDA_ZONES_TRACE");
+    trace_zones_ = trace != nullptr && std::string(trace) == "1";
+}
 DeviceCollisions::~DeviceCollisions() = default;
 
 void DeviceCollisions::release() {
@@ -251,9 +257,20 @@ bool DeviceCollisions::resolve(const Model& model, double h, float* x, float* v,
     in.thickness = geometry_.gap(settings);
     in.max_iterations = settings.max_impact_iterations;
     in.refresh_broad_phase = [&](int, collision::GpuBroadPhaseInput& bp) { cull(model, bp, stream); };
+    if (settings.impact_tolerance > 0.0) in.tolerance_ratio = settings.impact_tolerance;
+    if (settings.max_impact_sweeps > 0) in.max_sweeps = settings.max_impact_sweeps;
     const weft::collision::ImpactZoneReport report = zones_.resolve(in, stream);
     weft::collision::add_to_stats(report, stats);
     if (report.constraints == 0) return false;  // the gate found nothing: x and v stand
+    if (trace_zones_)
+        std::fprintf(stderr,
+                     "weft: impact zones: contacts %d, rounds %d, detections %d, constraints %d, zones %d (max %d "
+                     "vertices), sweeps %lld (%d unconverged), rigid %d, frozen %d, carried %d, resolved %d; broad "
+                     "%.2f ms, CCD %.2f ms, zones %.2f ms\n",
+                     stats.collision.contacts, report.iterations, report.detections, report.constraints, report.zones,
+                     report.max_zone_vertices, static_cast<long long>(report.qp_sweeps), report.qp_unconverged,
+                     report.rigid_zones, report.frozen_vertices, report.carried_vertices, report.resolved ? 1 : 0,
+                     report.broad_phase_ms, report.ccd_ms, report.zones_ms);
     ++zone_substeps_;
     const auto clock = Clock::now();
     launch_collision_scatter(x1c, x0c, zones_.outcome(), n_, vertices_, static_cast<float>(1.0 / h), x, v, v0,

@@ -95,6 +95,7 @@ private:
     std::uint32_t vertices_ = 0;        // n + kinematic: the component stride of the position arrays
     std::uint32_t triangle_count_ = 0, edge_count_ = 0;
     int zone_substeps_ = 0;
+    bool trace_zones_ = false;
 
     MemoryLedger ledger_;
     DeviceArray<float> positions_;  // x0 then x1, SoA with stride vertices_

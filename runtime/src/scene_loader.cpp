@@ -118,6 +118,8 @@ void read_collision(Table& root, CollisionSettings& c) {
     c.thickness = t->number("thickness", c.thickness, {0.0, 0.1});
     c.stiffness = t->number("stiffness", c.stiffness, {0.0, 1e9});
     c.max_impact_iterations = t->integer("max_impact_iterations", c.max_impact_iterations, 1, 1000);
+    c.impact_tolerance = t->number("impact_tolerance", c.impact_tolerance, {0.0, 0.5});
+    c.max_impact_sweeps = t->integer("max_impact_sweeps", c.max_impact_sweeps, 0, 100000);
     c.check = t->boolean("check", c.check);
     t->finish();
 }

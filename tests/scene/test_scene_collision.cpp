@@ -53,6 +53,8 @@ culling = "none"
 thickness = 0.003
 stiffness = 2.5e5
 max_impact_iterations = 7
+impact_tolerance = 0.2
+max_impact_sweeps = 64
 check = true
 )" + kSheet);
     const CollisionSettings& c = s.world.collision;
@@ -65,6 +67,10 @@ check = true
     EXPECT_EQ(c.thickness, 0.003);
     EXPECT_EQ(c.stiffness, 2.5e5);
     EXPECT_EQ(c.max_impact_iterations, 7);
+    EXPECT_EQ(d.impact_tolerance, 0.0);  // the backend's default
+    EXPECT_EQ(c.impact_tolerance, 0.2);
+    EXPECT_EQ(d.max_impact_sweeps, 0);
+    EXPECT_EQ(c.max_impact_sweeps, 64);
     EXPECT_NE(d.check, true);
     EXPECT_TRUE(c.check);
     // The other choice of culling, and the range ends.
@@ -113,6 +119,10 @@ TEST(SceneCollisionErrors, OutOfRange) {
                 {"key 'collision.max_impact_iterations'", "value 0 is out of range", "[1, 1000]"});
     parse_error("[collision]\nmax_impact_iterations = 1001\n" + kSheet,
                 {"key 'collision.max_impact_iterations'", "value 1001 is out of range"});
+    parse_error("[collision]\nimpact_tolerance = 0.6\n" + kSheet,
+                {"key 'collision.impact_tolerance'", "out of range", "[0, 0.5]"});
+    parse_error("[collision]\nmax_impact_sweeps = -1\n" + kSheet,
+                {"key 'collision.max_impact_sweeps'", "value -1 is out of range"});
     parse_error("[collision]\nthickness = inf\n" + kSheet, {"key 'collision.thickness'", "not finite"});
 }
 

@@ -75,6 +75,17 @@ struct CollisionSettings {
     double stiffness = 0.0;
     /// Impact-zone rounds per substep before the rigid-zone fallback takes over. Valid range [1, 1000].
     int max_impact_iterations = 32;
+    /// Convergence tolerance of one impact zone's projection, as a fraction of the thickness: the
+    /// zone's constraints end violated by at most this (the gap restored is ≥ (1 − it)·thickness,
+    /// far above the CCD separation of 0.1·thickness either way). Larger is faster. 0: the backend's
+    /// default (cpu 0.01, the reference; cuda 0.1, measured on the 200K twist in docs/results.md).
+    /// Valid range [0, 0.5].
+    double impact_tolerance = 0.0;
+    /// Cap on the iterations of one zone's projection in one round (cpu: Gauss–Seidel sweeps; cuda:
+    /// parallel projected-gradient steps); an unconverged zone is detected again next round. Smaller
+    /// is faster per round but may need more rounds or the fallbacks. 0: the backend's default (cpu
+    /// 1000, cuda 200). Valid range [0, 100000].
+    int max_impact_sweeps = 0;
     /// Run the exact triangle–triangle intersection check after every step and report the count in
     /// `StepStats::collision.remaining_intersections` (also `weft run --check`). Costly: for tests.
     bool check = false;
