@@ -33,6 +33,8 @@ done
 # and carries cloth from the first frame.
 run memcheck "$weft" run projectile --backend cuda --frames 3 --quiet --set 'solver.substeps=1' \
     --set 'motion.shot.origin=[0, 1, 0.1]' --set 'collision.self=false' --set 'solver.cg_max_iterations=200'
+# twist: self-collision, so the normal cones, the broad phase, the contacts and the CCD gate run.
+run memcheck "$weft" run twist --backend cuda --frames 3 --quiet --set 'solver.cg_max_iterations=200'
 export WEFT_CUDA_GRAPHS=0
 run racecheck "$weft" run drape --backend cuda --frames 2 --quiet --set 'solver.cg_max_iterations=100'
 run synccheck "$weft" run drape --backend cuda --frames 2 --quiet --set 'solver.cg_max_iterations=100'

@@ -50,7 +50,7 @@ struct Resolved {
     std::vector<std::uint32_t> zone;
 };
 
-Resolved resolve_gpu(const Scene& s, int max_iterations, GpuImpactZones& zones) {
+Resolved resolve_gpu(const Scene& s, int max_iterations, GpuImpactZones& zones, std::uint32_t giant = GpuImpactZoneInput{}.giant_zone_constraints) {
     const std::size_t n = s.x0.size();
     std::vector<float> x0(3 * n), x1(3 * n), im(n);
     for (std::size_t v = 0; v < n; ++v) {
@@ -82,6 +82,7 @@ Resolved resolve_gpu(const Scene& s, int max_iterations, GpuImpactZones& zones) 
     in.edge_count = static_cast<std::uint32_t>(s.edges.size());
     in.thickness = s.thickness;
     in.max_iterations = max_iterations;
+    in.giant_zone_constraints = giant;
     Resolved r;
     r.report = zones.resolve(in, nullptr);
     WEFT_CUDA_CHECK(cudaMemcpy(x1.data(), d1.get(), x1.size() * sizeof(float), cudaMemcpyDeviceToHost));
@@ -259,6 +260,29 @@ TEST(GpuImpactZones, CrumplingSheet) {
     std::printf("correction: GPU %.6g, CPU %.6g (ratio %.4f)\n", e_gpu, e_cpu, e_gpu / e_cpu);
     EXPECT_GT(e_gpu, 0.8 * e_cpu);
     EXPECT_LT(e_gpu, 1.25 * e_cpu);
+}
+
+TEST(GpuImpactZones, GiantZonePathMatchesTheBlockPath) {
+    WEFT_REQUIRE_GPU();
+    // Every zone through the grid-wide projection (giant_zone_constraints = 1): the same promises,
+    // the same minimiser as the CPU (and so as the one-block path), the same bits on every run.
+    for (const Scene& s : {rounded(test::two_sheets(14, 3)), rounded(test::crumpled_sheet(22, 7))}) {
+        GpuImpactZones zones;
+        const Resolved r = resolve_gpu(s, 32, zones, 1);
+        print("grid-wide projection (GPU)", r);
+        expect_clean(s, r);
+        EXPECT_EQ(r.report.rigid_zones, 0);
+        EXPECT_EQ(r.report.frozen_vertices, 0);
+        const Resolved cpu = resolve_cpu(s);
+        const double e_gpu = correction(s, r.x1), e_cpu = correction(s, cpu.x1);
+        std::printf("correction: GPU %.6g, CPU %.6g (ratio %.4f)\n", e_gpu, e_cpu, e_gpu / e_cpu);
+        EXPECT_GT(e_gpu, 0.8 * e_cpu);
+        EXPECT_LT(e_gpu, 1.25 * e_cpu);
+        const Resolved again = resolve_gpu(s, 32, zones, 1);
+        std::size_t differ = 0;
+        for (std::size_t v = 0; v < s.x0.size(); ++v) differ += same_bits(r.x1[v], again.x1[v]) ? 0 : 1;
+        EXPECT_EQ(differ, 0U);
+    }
 }
 
 TEST(GpuImpactZones, RigidFallbackKeepsMomentumAndShape) {

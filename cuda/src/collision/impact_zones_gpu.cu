@@ -260,9 +260,11 @@ struct Constraints {
 
 /// x_v = x̂_v + m_v⁻¹ Σ_k w_kv n_k y_k for the zone's vertices: the primal point of the multipliers y
 /// (KKT: x = x̂ + M⁻¹ Jᵀ y), gathered in the fixed incidence order.
+/// Items [vb, ve) from `first` in steps of `step` (a block's threads, or the whole grid's).
 __device__ void gather_positions(const ZoneLists& z, const Constraints& c, std::uint32_t vb, std::uint32_t ve,
-                                 const float* x_hat, const float* inverse_mass, float* x1, std::uint32_t n) {
-    for (std::uint32_t i = vb + threadIdx.x; i < ve; i += blockDim.x) {
+                                 const float* x_hat, const float* inverse_mass, float* x1, std::uint32_t n,
+                                 std::uint32_t first, std::uint32_t step) {
+    for (std::uint32_t i = vb + first; i < ve; i += step) {
         const std::uint32_t u = z.vvalue[i];
         const std::uint32_t v = z.unique_vertex[u];
         const double im = inverse_mass[v];
@@ -286,6 +288,39 @@ struct MaxSumOp {
     __device__ MaxSum operator()(const MaxSum& a, const MaxSum& b) const { return {fmax(a.max, b.max), a.sum + b.sum}; }
 };
 
+/// One projected-gradient step of constraint k at the current x = x(y) (see project_kernel): λ⁺ into
+/// lambda (λ kept in previous); adds its KKT residual to r.max and its restart term to r.sum.
+__device__ inline void project_constraint(const Constraints& c, std::uint32_t k, const float* x1, std::uint32_t n,
+                                          double delta, MaxSum& r) {
+    const double s = c.scale[k];
+    if (!(s > 0.0)) return;
+    double f[3] = {0.0, 0.0, 0.0};
+    for (int j = 0; j < 4; ++j) {
+        const std::uint32_t v = c.vertex[4 * k + j];
+        const double w = c.weight[4 * k + j];
+        for (int a = 0; a < 3; ++a) f[a] += w * load(x1, v, n, a);
+    }
+    const double g = c.normal[3 * k] * f[0] + c.normal[3 * k + 1] * f[1] + c.normal[3 * k + 2] * f[2] - delta;
+    const double y = c.momentum[k], lambda = c.lambda[k];
+    r.max = fmax(r.max, y > 0.0 ? fabs(g) : fmax(0.0, -g));
+    const double next = fmax(0.0, y - s * g);
+    r.sum += (y - next) * (next - lambda);
+    c.previous[k] = lambda;
+    c.lambda[k] = next;
+}
+
+/// FISTA's momentum after a step: β = 0 on a restart (the momentum points uphill), else from t.
+__device__ inline double momentum_factor(double restart_term, double& t) {
+    if (restart_term > 0.0) {
+        t = 1.0;
+        return 0.0;
+    }
+    const double next_t = 0.5 * (1.0 + sqrt(1.0 + 4.0 * t * t));
+    const double beta = (t - 1.0) / next_t;
+    t = next_t;
+    return beta;
+}
+
 /// Harmon et al. 2008's inelastic projection of one zone: min ½ Σ m |x − x̂|² s.t. g_k(x) ≥ 0. Its dual,
 /// min_{λ≥0} f(λ) = ½ λᵀAλ + λᵀ(Jx̂ − δ), has gradient g(x(λ)); FISTA (Beck & Teboulle 2009) with the
 /// diagonal majoriser D' (scale_kernel) and the gradient restart of O'Donoghue & Candès 2015:
@@ -296,8 +331,8 @@ struct MaxSumOp {
 template <unsigned Threads>
 __global__ void __launch_bounds__(Threads)
     project_kernel(ZoneLists z, Constraints c, const float* x_hat, const float* inverse_mass, float* x1,
-                   std::uint32_t n, double delta, double tol, int max_sweeps, std::uint8_t* action,
-                   std::uint8_t* outcome, GpuImpactZones::Counters* counters) {
+                   std::uint32_t n, double delta, double tol, int max_sweeps, std::uint32_t giant,
+                   std::uint8_t* action, std::uint8_t* outcome, GpuImpactZones::Counters* counters) {
     using Reduce = cub::BlockReduce<MaxSum, Threads>;
     __shared__ typename Reduce::TempStorage storage;
     __shared__ MaxSum total;
@@ -305,36 +340,21 @@ __global__ void __launch_bounds__(Threads)
     const std::uint32_t root = z.zone_label[zone];
     if (action[root] != kProject) return;
     const std::uint32_t cb = z.coffset[zone], ce = z.coffset[zone + 1];
-    // Each zone is projected by the kernel of its size class (see kLargeZoneConstraints).
+    // Each zone is projected by the kernel of its size class (see kLargeZoneConstraints); zones of
+    // more than `giant` constraints by the grid-wide kernels instead (project_giant_zone).
+    if (ce - cb > giant) return;
     if ((ce - cb > kLargeZoneConstraints) != (Threads == kLargeZoneThreads)) return;
     const std::uint32_t vb = z.voffset[zone], ve = z.voffset[zone + 1];
     for (std::uint32_t i = cb + threadIdx.x; i < ce; i += blockDim.x) c.momentum[z.cvalue[i]] = c.lambda[z.cvalue[i]];
     __syncthreads();
-    gather_positions(z, c, vb, ve, x_hat, inverse_mass, x1, n);
+    gather_positions(z, c, vb, ve, x_hat, inverse_mass, x1, n, threadIdx.x, blockDim.x);
     __syncthreads();
     double t = 1.0;
     int sweep = 1;
     bool converged = false;
     for (; sweep <= max_sweeps; ++sweep) {
         MaxSum mine{0.0, 0.0};
-        for (std::uint32_t i = cb + threadIdx.x; i < ce; i += blockDim.x) {
-            const std::uint32_t k = z.cvalue[i];
-            const double s = c.scale[k];
-            if (!(s > 0.0)) continue;
-            double f[3] = {0.0, 0.0, 0.0};
-            for (int j = 0; j < 4; ++j) {
-                const std::uint32_t v = c.vertex[4 * k + j];
-                const double w = c.weight[4 * k + j];
-                for (int a = 0; a < 3; ++a) f[a] += w * load(x1, v, n, a);
-            }
-            const double g = c.normal[3 * k] * f[0] + c.normal[3 * k + 1] * f[1] + c.normal[3 * k + 2] * f[2] - delta;
-            const double y = c.momentum[k], lambda = c.lambda[k];
-            mine.max = fmax(mine.max, y > 0.0 ? fabs(g) : fmax(0.0, -g));
-            const double next = fmax(0.0, y - s * g);
-            mine.sum += (y - next) * (next - lambda);
-            c.previous[k] = lambda;
-            c.lambda[k] = next;
-        }
+        for (std::uint32_t i = cb + threadIdx.x; i < ce; i += blockDim.x) project_constraint(c, z.cvalue[i], x1, n, delta, mine);
         const MaxSum all = Reduce(storage).Reduce(mine, MaxSumOp{});
         if (threadIdx.x == 0) total = all;
         __syncthreads();
@@ -345,21 +365,14 @@ __global__ void __launch_bounds__(Threads)
             converged = true;
             break;
         }
-        double beta = 0.0;
-        if (r.sum > 0.0) {
-            t = 1.0;  // restart: the momentum points uphill
-        } else {
-            const double next_t = 0.5 * (1.0 + sqrt(1.0 + 4.0 * t * t));
-            beta = (t - 1.0) / next_t;
-            t = next_t;
-        }
+        const double beta = momentum_factor(r.sum, t);
         for (std::uint32_t i = cb + threadIdx.x; i < ce; i += blockDim.x) {
             const std::uint32_t k = z.cvalue[i];
             const double l = c.lambda[k];
             c.momentum[k] = fmax(0.0, l + beta * (l - c.previous[k]));
         }
         __syncthreads();
-        gather_positions(z, c, vb, ve, x_hat, inverse_mass, x1, n);
+        gather_positions(z, c, vb, ve, x_hat, inverse_mass, x1, n, threadIdx.x, blockDim.x);
         __syncthreads();
     }
     for (std::uint32_t i = vb + threadIdx.x; i < ve; i += blockDim.x) outcome[z.unique_vertex[z.vvalue[i]]] = kProjected;
@@ -367,6 +380,94 @@ __global__ void __launch_bounds__(Threads)
         action[root] = kNone;
         atomicAdd(&counters->sweeps, static_cast<std::uint32_t>(converged ? sweep : max_sweeps));
         if (!converged) atomicAdd(&counters->unconverged, 1U);
+    }
+}
+
+// ---- The projection of a giant zone: the whole grid ----------------------------------------------------
+// One block cannot hide the latency of a zone of tens of thousands of constraints (an iteration is a
+// few dependent loads per constraint), so such a zone runs the same iteration as project_kernel with
+// each phase a kernel over the whole device: step (constraints; per-block partials), reduce (one
+// block, fixed order: the same bits on every run), momentum, gather. The host launches them in
+// batches and reads the convergence flag between batches.
+
+constexpr unsigned kGridThreads = 256;
+
+struct GiantState {
+    double t;
+    double beta;
+    std::uint32_t converged;  // 1 once the residual is within tol (every later launch is a no-op)
+    std::uint32_t sweeps;
+};
+
+__global__ void __launch_bounds__(kGridThreads)
+    giant_step_kernel(Constraints c, const std::uint32_t* cvalue, std::uint32_t cb, std::uint32_t ce, const float* x1,
+                      std::uint32_t n, double delta, const GiantState* state, MaxSum* partial) {
+    using Reduce = cub::BlockReduce<MaxSum, kGridThreads>;
+    __shared__ typename Reduce::TempStorage storage;
+    if (state->converged != 0) return;
+    MaxSum mine{0.0, 0.0};
+    for (std::uint32_t i = cb + blockIdx.x * blockDim.x + threadIdx.x; i < ce; i += gridDim.x * blockDim.x)
+        project_constraint(c, cvalue[i], x1, n, delta, mine);
+    const MaxSum all = Reduce(storage).Reduce(mine, MaxSumOp{});
+    if (threadIdx.x == 0) partial[blockIdx.x] = all;
+}
+
+__global__ void __launch_bounds__(kGridThreads)
+    giant_reduce_kernel(const MaxSum* partial, unsigned blocks, double tol, GiantState* state) {
+    using Reduce = cub::BlockReduce<MaxSum, kGridThreads>;
+    __shared__ typename Reduce::TempStorage storage;
+    if (state->converged != 0) return;
+    MaxSum mine{0.0, 0.0};
+    for (unsigned b = threadIdx.x; b < blocks; b += blockDim.x) mine = MaxSumOp{}(mine, partial[b]);
+    const MaxSum r = Reduce(storage).Reduce(mine, MaxSumOp{});
+    if (threadIdx.x != 0) return;
+    ++state->sweeps;
+    if (r.max <= tol) {
+        state->converged = 1;
+        return;
+    }
+    double t = state->t;
+    state->beta = momentum_factor(r.sum, t);
+    state->t = t;
+}
+
+__global__ void giant_momentum_kernel(Constraints c, const std::uint32_t* cvalue, std::uint32_t cb, std::uint32_t ce,
+                                      const GiantState* state) {
+    const bool accepted = state->converged != 0;
+    const double beta = state->beta;
+    for (std::uint32_t i = cb + blockIdx.x * blockDim.x + threadIdx.x; i < ce; i += gridDim.x * blockDim.x) {
+        const std::uint32_t k = cvalue[i];
+        const double l = c.lambda[k];
+        if (accepted)
+            c.lambda[k] = c.momentum[k];  // x = x(y) was accepted (idempotent once converged)
+        else
+            c.momentum[k] = fmax(0.0, l + beta * (l - c.previous[k]));
+    }
+}
+
+__global__ void giant_gather_kernel(ZoneLists z, Constraints c, std::uint32_t vb, std::uint32_t ve, const float* x_hat,
+                                    const float* inverse_mass, float* x1, std::uint32_t n, const GiantState* state) {
+    if (state != nullptr && state->converged != 0) return;
+    gather_positions(z, c, vb, ve, x_hat, inverse_mass, x1, n, blockIdx.x * blockDim.x + threadIdx.x,
+                     gridDim.x * blockDim.x);
+}
+
+__global__ void giant_begin_kernel(Constraints c, const std::uint32_t* cvalue, std::uint32_t cb, std::uint32_t ce,
+                                   GiantState* state) {
+    for (std::uint32_t i = cb + blockIdx.x * blockDim.x + threadIdx.x; i < ce; i += gridDim.x * blockDim.x)
+        c.momentum[cvalue[i]] = c.lambda[cvalue[i]];
+    if (blockIdx.x == 0 && threadIdx.x == 0) *state = GiantState{1.0, 0.0, 0, 0};
+}
+
+__global__ void giant_end_kernel(ZoneLists z, std::uint32_t zone, std::uint8_t* action, std::uint8_t* outcome,
+                                 const GiantState* state, GpuImpactZones::Counters* counters) {
+    const std::uint32_t vb = z.voffset[zone], ve = z.voffset[zone + 1];
+    for (std::uint32_t i = vb + blockIdx.x * blockDim.x + threadIdx.x; i < ve; i += gridDim.x * blockDim.x)
+        outcome[z.unique_vertex[z.vvalue[i]]] = kProjected;
+    if (blockIdx.x == 0 && threadIdx.x == 0) {
+        action[z.zone_label[zone]] = kNone;
+        atomicAdd(&counters->sweeps, state->sweeps);
+        if (state->converged == 0) atomicAdd(&counters->unconverged, 1U);
     }
 }
 
@@ -624,7 +725,8 @@ std::size_t GpuImpactZones::memory_bytes() const {
              vvalue_[i].bytes();
     b += unique_vertex_.bytes() + unique_count_.bytes() + unique_offset_.bytes() + zone_label_.bytes() +
          zone_ccount_.bytes() + zone_coffset_.bytes() + zone_label2_.bytes() + zone_vcount_.bytes() +
-         zone_voffset_.bytes() + hit_free_.bytes() + carry_.bytes() + temp_.bytes() + counters_.bytes();
+         zone_voffset_.bytes() + hit_free_.bytes() + carry_.bytes() + temp_.bytes() + counters_.bytes() +
+         giant_scratch_.bytes();
     return b;
 }
 
@@ -807,6 +909,78 @@ ZoneLists zone_lists(const DeviceArray<std::uint32_t>& zone_label, const DeviceA
 
 }  // namespace
 
+void GpuImpactZones::project_giant_zones(const GpuImpactZoneInput& in, double tol, cudaStream_t stream) {
+    // The zones' sizes and roots on the host (one copy each; zones are few next to vertices).
+    host_coffset_.resize(zones_ + 1);
+    WEFT_CUDA_CHECK(cudaMemcpyAsync(host_coffset_.data(), zone_coffset_.get(), (zones_ + 1) * sizeof(std::uint32_t),
+                                    cudaMemcpyDeviceToHost, stream));
+    WEFT_CUDA_CHECK(cudaStreamSynchronize(stream));
+    std::vector<std::uint32_t> giant;
+    for (std::uint32_t z = 0; z < zones_; ++z)
+        if (host_coffset_[z + 1] - host_coffset_[z] > in.giant_zone_constraints) giant.push_back(z);
+    if (giant.empty()) return;
+    host_voffset_.resize(zones_ + 1);
+    host_label_.resize(zones_);
+    WEFT_CUDA_CHECK(cudaMemcpyAsync(host_voffset_.data(), zone_voffset_.get(), (zones_ + 1) * sizeof(std::uint32_t),
+                                    cudaMemcpyDeviceToHost, stream));
+    WEFT_CUDA_CHECK(cudaMemcpyAsync(host_label_.data(), zone_label_.get(), zones_ * sizeof(std::uint32_t),
+                                    cudaMemcpyDeviceToHost, stream));
+    std::vector<std::uint8_t> dirty(giant.size());
+    for (std::size_t i = 0; i < giant.size(); ++i)
+        WEFT_CUDA_CHECK(cudaMemcpyAsync(&dirty[i], action_.get() + host_label_[giant[i]], 1, cudaMemcpyDeviceToHost,
+                                        stream));
+    WEFT_CUDA_CHECK(cudaStreamSynchronize(stream));
+    if (multiprocessors_ == 0) {
+        int device = 0;
+        WEFT_CUDA_CHECK(cudaGetDevice(&device));
+        WEFT_CUDA_CHECK(cudaDeviceGetAttribute(&multiprocessors_, cudaDevAttrMultiProcessorCount, device));
+    }
+    const unsigned max_blocks = 4U * static_cast<unsigned>(std::max(multiprocessors_, 1));
+    grow(giant_scratch_, 4 + 2 * static_cast<std::size_t>(max_blocks));
+    if (giant_flag_.size() == 0) giant_flag_.allocate(1);
+    auto* state = reinterpret_cast<GiantState*>(giant_scratch_.get());
+    auto* partial = reinterpret_cast<MaxSum*>(giant_scratch_.get() + 4);
+    static_assert(sizeof(GiantState) <= 4 * sizeof(double) && sizeof(MaxSum) == 2 * sizeof(double));
+    const ZoneLists zl = zone_lists(zone_label_, zone_coffset_, cvalue_sorted_, zone_voffset_, vvalue_sorted_,
+                                    unique_vertex_, unique_offset_, unique_count_, slot_sorted_);
+    const Constraints c{c_vertex_.get(), c_weight_.get(), c_normal_.get(), c_scale_.get(),
+                        lambda_.get(),   momentum_.get(), previous_.get()};
+    const std::uint32_t n = in.vertex_count;
+    constexpr int kBatch = 16;  // iterations between two reads of the convergence flag
+    for (std::size_t i = 0; i < giant.size(); ++i) {
+        if (dirty[i] != kProject) continue;
+        const std::uint32_t z = giant[i];
+        const std::uint32_t cb = host_coffset_[z], ce = host_coffset_[z + 1];
+        const std::uint32_t vb = host_voffset_[z], ve = host_voffset_[z + 1];
+        const unsigned cblocks = std::min(blocks_for(ce - cb, kGridThreads), max_blocks);
+        const unsigned vblocks = std::min(blocks_for(ve - vb, kGridThreads), max_blocks);
+        giant_begin_kernel<<<cblocks, kGridThreads, 0, stream>>>(c, cvalue_sorted_, cb, ce, state);
+        giant_gather_kernel<<<vblocks, kGridThreads, 0, stream>>>(zl, c, vb, ve, x_hat_.get(), in.inverse_mass, in.x1,
+                                                                  n, nullptr);
+        WEFT_CUDA_CHECK_LAUNCH("impact zones: giant zone set-up");
+        for (int done = 0; done < in.max_sweeps;) {
+            const int batch = std::min(kBatch, in.max_sweeps - done);
+            for (int b = 0; b < batch; ++b) {
+                giant_step_kernel<<<cblocks, kGridThreads, 0, stream>>>(c, cvalue_sorted_, cb, ce, in.x1, n,
+                                                                        in.thickness, state, partial);
+                giant_reduce_kernel<<<1, kGridThreads, 0, stream>>>(partial, cblocks, tol, state);
+                giant_momentum_kernel<<<cblocks, kGridThreads, 0, stream>>>(c, cvalue_sorted_, cb, ce, state);
+                giant_gather_kernel<<<vblocks, kGridThreads, 0, stream>>>(zl, c, vb, ve, x_hat_.get(), in.inverse_mass,
+                                                                          in.x1, n, state);
+            }
+            WEFT_CUDA_CHECK_LAUNCH("impact zones: giant zone iteration");
+            done += batch;
+            WEFT_CUDA_CHECK(cudaMemcpyAsync(giant_flag_.get(), &state->converged, sizeof(std::uint32_t),
+                                            cudaMemcpyDeviceToHost, stream));
+            WEFT_CUDA_CHECK(cudaStreamSynchronize(stream));
+            if (giant_flag_[0] != 0) break;
+        }
+        giant_end_kernel<<<vblocks, kGridThreads, 0, stream>>>(zl, z, action_.get(), outcome_.get(), state,
+                                                               counters_.get());
+        WEFT_CUDA_CHECK_LAUNCH("impact zones: giant zone end");
+    }
+}
+
 void GpuImpactZones::fallbacks(const GpuImpactZoneInput& in, std::uint32_t hits,
                                weft::collision::ImpactZoneReport& report, cudaStream_t stream) {
     const std::uint32_t n = in.vertex_count;
@@ -867,8 +1041,9 @@ weft::collision::ImpactZoneReport GpuImpactZones::resolve(const GpuImpactZoneInp
     if (!(in.separation_ratio > 0.0 && in.separation_ratio < 1.0))
         throw Error("GPU impact zones: separation_ratio must be in (0, 1) (got " + std::to_string(in.separation_ratio) +
                     ")");
-    if (in.max_iterations < 0 || in.max_rigid_rounds < 0 || in.max_sweeps < 1)
-        throw Error("GPU impact zones: max_iterations and max_rigid_rounds must be ≥ 0, max_sweeps ≥ 1");
+    if (in.max_iterations < 0 || in.max_rigid_rounds < 0 || in.max_sweeps < 1 || in.giant_zone_constraints < 1)
+        throw Error("GPU impact zones: max_iterations and max_rigid_rounds must be ≥ 0, max_sweeps and "
+                    "giant_zone_constraints ≥ 1");
     if (!std::isfinite(in.tolerance_ratio) || !(in.tolerance_ratio > 0.0))
         throw Error("GPU impact zones: tolerance_ratio must be finite and > 0");
     if (in.vertex_count >= kInvalid) throw Error("GPU impact zones: more than 2^32 − 2 vertices");
@@ -903,14 +1078,16 @@ weft::collision::ImpactZoneReport GpuImpactZones::resolve(const GpuImpactZoneInp
         WEFT_CUDA_CHECK_LAUNCH("impact zones: mark");
         const Constraints c{c_vertex_.get(), c_weight_.get(), c_normal_.get(), c_scale_.get(),
                             lambda_.get(),   momentum_.get(), previous_.get()};
+        const std::uint32_t giant = in.giant_zone_constraints;
         project_kernel<kLargeZoneThreads><<<zones_, kLargeZoneThreads, 0, stream>>>(
-            z, c, x_hat_.get(), in.inverse_mass, in.x1, n, in.thickness, tol, in.max_sweeps, action_.get(),
+            z, c, x_hat_.get(), in.inverse_mass, in.x1, n, in.thickness, tol, in.max_sweeps, giant, action_.get(),
             outcome_.get(), counters_.get());
         WEFT_CUDA_CHECK_LAUNCH("impact zones: project (large zones)");
         project_kernel<kZoneThreads><<<zones_, kZoneThreads, 0, stream>>>(z, c, x_hat_.get(), in.inverse_mass, in.x1,
-                                                                          n, in.thickness, tol, in.max_sweeps,
+                                                                          n, in.thickness, tol, in.max_sweeps, giant,
                                                                           action_.get(), outcome_.get(), counters_.get());
         WEFT_CUDA_CHECK_LAUNCH("impact zones: project");
+        project_giant_zones(in, tol, stream);
         const Counters& counters = read_counters(stream);
         if (counters.zone_vertex_runs != zones_)
             throw Error("GPU impact zones: internal error, " + std::to_string(zones_) + " zones by constraints but " +

@@ -80,6 +80,10 @@ struct GpuImpactZoneInput {
     /// every constraint satisfied to it, every active one tight to it). 10 % keeps every corrected
     /// gap ≥ 0.9·δ, 9× the CCD separation.
     double tolerance_ratio = 0.1;
+    /// Zones of more constraints than this are projected by the whole device (a kernel per phase of
+    /// each iteration, ~4 launches) instead of one thread block each, ≥ 1. One 1024-thread block
+    /// takes ~70 µs an iteration on 16K constraints (H200), the grid path a few launch latencies.
+    std::uint32_t giant_zone_constraints = 4096;
     /// Optional: called before each detection with its index and the broad-phase input about to be
     /// used, to attach filters that depend on the motion (normal-cone patch ids over x0 → x1).
     std::function<void(int detection, GpuBroadPhaseInput& input)> refresh_broad_phase;
@@ -135,6 +139,8 @@ private:
     const Counters& read_counters(cudaStream_t stream);
     void fallbacks(const GpuImpactZoneInput& in, std::uint32_t hits, weft::collision::ImpactZoneReport& report,
                    cudaStream_t stream);
+    /// Projects the zones of more than in.giant_zone_constraints constraints that this round marked.
+    void project_giant_zones(const GpuImpactZoneInput& in, double tol, cudaStream_t stream);
 
     GpuBroadPhase broad_;
     GpuCcd ccd_;
@@ -167,6 +173,10 @@ private:
     DeviceArray<float> carry_;            // fallbacks, per hit: the displacement it carries frozen cloth by
     // Scratch.
     DeviceArray<unsigned char> temp_;
+    DeviceArray<double> giant_scratch_;  // the giant-zone iteration's state and per-block partials
+    PinnedArray<std::uint32_t> giant_flag_;
+    std::vector<std::uint32_t> host_coffset_, host_voffset_, host_label_;
+    int multiprocessors_ = 0;
     DeviceArray<Counters> counters_;
     PinnedArray<Counters> counters_host_;
 };
