@@ -32,6 +32,12 @@ using cuda::collision::GpuImpactZoneInput;
 using cuda::collision::GpuImpactZones;
 using test::brute_force_ccd;
 using test::grid;
+using test::expect_clean;
+using test::momentum;
+using test::print;
+using test::resolve_cpu;
+using test::Resolved;
+using test::same_bits;
 using test::Scene;
 
 /// The scene with every position rounded to float (what the GPU sees), so that the double judges
@@ -42,13 +48,6 @@ Scene rounded(Scene s) {
             for (int c = 0; c < 3; ++c) p[c] = static_cast<double>(static_cast<float>(p[c]));
     return s;
 }
-
-struct Resolved {
-    std::vector<Vec3d> x1;
-    ImpactZoneReport report;
-    std::vector<VertexOutcome> outcome;
-    std::vector<std::uint32_t> zone;
-};
 
 Resolved resolve_gpu(const Scene& s, int max_iterations, GpuImpactZones& zones, std::uint32_t giant = GpuImpactZoneInput{}.giant_zone_constraints) {
     const std::size_t n = s.x0.size();
@@ -98,72 +97,6 @@ Resolved resolve_gpu(const Scene& s, int max_iterations = 32) {
     return resolve_gpu(s, max_iterations, zones);
 }
 
-Resolved resolve_cpu(const Scene& s, int max_iterations = 32) {
-    Resolved r;
-    r.x1 = s.x1;
-    ImpactZoneSolver solver;
-    ImpactZoneInput in;
-    in.x0 = s.x0;
-    in.x1 = r.x1;
-    in.inverse_mass = s.inverse_mass;
-    in.triangles = s.triangles;
-    in.edges = s.edges;
-    in.thickness = s.thickness;
-    in.max_iterations = max_iterations;
-    r.report = solver.resolve(in);
-    r.outcome.assign(solver.outcome().begin(), solver.outcome().end());
-    return r;
-}
-
-void print(const char* what, const Resolved& r) {
-    const ImpactZoneReport& p = r.report;
-    std::printf(
-        "%s: resolved %d, rounds %d, zones %d (max %d vertices), constraints %d, rigid zones %d (%d rounds), frozen "
-        "%d, carried %d, sweeps %lld (%d unconverged), detections %d, candidates %lld, CCD %lld tests / %lld hits; "
-        "broad %.2f ms, CCD %.2f ms, zones %.2f ms\n",
-        what, p.resolved ? 1 : 0, p.iterations, p.zones, p.max_zone_vertices, p.constraints, p.rigid_zones,
-        p.rigid_rounds, p.frozen_vertices, p.carried_vertices, static_cast<long long>(p.qp_sweeps), p.qp_unconverged,
-        p.detections, static_cast<long long>(p.candidate_pairs), static_cast<long long>(p.ccd_tests),
-        static_cast<long long>(p.ccd_hits), p.broad_phase_ms, p.ccd_ms, p.zones_ms);
-}
-
-bool same_bits(const Vec3d& a, const Vec3d& b) { return std::memcmp(&a, &b, sizeof(Vec3d)) == 0; }
-
-/// Everything `resolve` promises (the CPU test's expect_clean, on the float-rounded scene).
-void expect_clean(const Scene& s, const Resolved& r) {
-    const ImpactZoneReport& rep = r.report;
-    EXPECT_TRUE(rep.resolved);
-    EXPECT_EQ(rep.remaining_hits, 0);
-    const test::Collisions c = brute_force_ccd(s, r.x1, s.eta());
-    EXPECT_EQ(c.vf, 0U) << "vertex-face collisions left";
-    EXPECT_EQ(c.ee, 0U) << "edge-edge collisions left";
-    const IntersectionReport ic = check_intersections(r.x1, s.triangles);
-    EXPECT_TRUE(ic.clean()) << ic.intersecting_pairs << " intersecting triangle pairs left";
-    std::size_t fixed_moved = 0, untouched_moved = 0, frozen_off = 0, nonfinite = 0, zone_mismatch = 0;
-    int frozen = 0, carried = 0;
-    ASSERT_EQ(r.outcome.size(), s.x0.size());
-    for (std::size_t v = 0; v < s.x0.size(); ++v) {
-        nonfinite += physics::is_finite(r.x1[v]) ? 0 : 1;
-        const VertexOutcome o = r.outcome[v];
-        if (s.inverse_mass[v] == 0.0) {
-            EXPECT_EQ(o, VertexOutcome::Fixed);
-            fixed_moved += same_bits(r.x1[v], s.x1[v]) ? 0 : 1;
-        }
-        if (o == VertexOutcome::Untouched) untouched_moved += same_bits(r.x1[v], s.x1[v]) ? 0 : 1;
-        if (o == VertexOutcome::Frozen) frozen_off += same_bits(r.x1[v], s.x0[v]) ? 0 : 1;
-        frozen += o == VertexOutcome::Frozen ? 1 : 0;
-        carried += o == VertexOutcome::Carried ? 1 : 0;
-        const bool zoned = o != VertexOutcome::Fixed && o != VertexOutcome::Untouched;
-        zone_mismatch += zoned == (r.zone[v] != kNoZone) ? 0 : 1;
-    }
-    EXPECT_EQ(nonfinite, 0U);
-    EXPECT_EQ(fixed_moved, 0U) << "vertices of inverse mass 0 moved";
-    EXPECT_EQ(untouched_moved, 0U) << "vertices in no zone changed";
-    EXPECT_EQ(frozen_off, 0U) << "frozen vertices not at x0";
-    EXPECT_EQ(zone_mismatch, 0U);
-    EXPECT_EQ(rep.frozen_vertices, frozen);
-    EXPECT_EQ(rep.carried_vertices, carried);
-}
 
 /// ½ Σ m |x1 − x̂|²: what the inelastic projection minimises.
 double correction(const Scene& s, const std::vector<Vec3d>& x1) {
@@ -173,11 +106,6 @@ double correction(const Scene& s, const std::vector<Vec3d>& x1) {
     return e;
 }
 
-Vec3d momentum(const Scene& s, const std::vector<Vec3d>& x1, const std::vector<std::uint32_t>& vertices) {
-    Vec3d p{};
-    for (std::uint32_t v : vertices) p += (1.0 / s.inverse_mass[v]) * (x1[v] - s.x0[v]);
-    return p;
-}
 
 TEST(GpuImpactZones, VertexDrivenHeadOnThroughTriangle) {
     WEFT_REQUIRE_GPU();

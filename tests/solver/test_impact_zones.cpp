@@ -40,39 +40,18 @@ using test::crumpled_sheet;
 using test::grid;
 using test::Scene;
 using test::two_sheets;
+using test::expect_clean;
+using test::momentum;
+using test::print;
+using test::Resolved;
+using test::same_bits;
 
 // ---- Checks ----------------------------------------------------------------------------------------
 
-struct Resolved {
-    std::vector<Vec3d> x1;
-    ImpactZoneReport report;
-    std::vector<VertexOutcome> outcome;
-    std::vector<std::uint32_t> zone;
-    double ms = 0.0;
-};
-
+/// The CPU reference on the scene (shared with the GPU test as test::resolve_cpu).
 Resolved resolve(const Scene& s, int max_iterations = 32, ImpactZoneSolver* reuse = nullptr) {
-    Resolved r;
-    r.x1 = s.x1;
-    ImpactZoneSolver local;
-    ImpactZoneSolver& solver = reuse != nullptr ? *reuse : local;
-    ImpactZoneInput in;
-    in.x0 = s.x0;
-    in.x1 = r.x1;
-    in.inverse_mass = s.inverse_mass;
-    in.triangles = s.triangles;
-    in.edges = s.edges;
-    in.thickness = s.thickness;
-    in.max_iterations = max_iterations;
-    const auto t0 = std::chrono::steady_clock::now();
-    r.report = solver.resolve(in);
-    r.ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
-    r.outcome.assign(solver.outcome().begin(), solver.outcome().end());
-    r.zone.assign(solver.zone_of_vertex().begin(), solver.zone_of_vertex().end());
-    return r;
+    return test::resolve_cpu(s, max_iterations, reuse);
 }
-
-bool same_bits(const Vec3d& a, const Vec3d& b) { return std::memcmp(&a, &b, sizeof(Vec3d)) == 0; }
 
 /// The scene is a real test: x0 clean and separated, the motion colliding, and x1 intersecting unless
 /// the surfaces pass through each other completely (tunnelling, which only CCD sees).
@@ -81,50 +60,6 @@ void expect_meaningful(const Scene& s, bool x1_intersects = true) {
     EXPECT_EQ(brute_force_ccd(s, s.x0, s.eta()).total(), 0U) << "x0 → x0 must be collision free";
     EXPECT_GT(brute_force_ccd(s, s.x1, s.eta()).total(), 0U) << "x0 → x1 must collide";
     EXPECT_EQ(check_intersections(s.x1, s.triangles).clean(), !x1_intersects) << "x1 intersecting";
-}
-
-/// Everything `resolve` promises about its output.
-void expect_clean(const Scene& s, const Resolved& r) {
-    const ImpactZoneReport& rep = r.report;
-    EXPECT_TRUE(rep.resolved);
-    EXPECT_EQ(rep.remaining_hits, 0);
-    EXPECT_EQ(rep.eta, s.eta());
-    const Collisions c = brute_force_ccd(s, r.x1, rep.eta);
-    EXPECT_EQ(c.vf, 0U) << "vertex-face collisions left";
-    EXPECT_EQ(c.ee, 0U) << "edge-edge collisions left";
-    const IntersectionReport ic = check_intersections(r.x1, s.triangles);
-    EXPECT_TRUE(ic.clean()) << ic.intersecting_pairs << " intersecting triangle pairs left";
-    std::size_t fixed_moved = 0, untouched_moved = 0, frozen_off = 0, nonfinite = 0, zone_mismatch = 0;
-    int frozen = 0, carried = 0;
-    for (std::size_t v = 0; v < s.x0.size(); ++v) {
-        nonfinite += physics::is_finite(r.x1[v]) ? 0 : 1;
-        const VertexOutcome o = r.outcome[v];
-        if (s.inverse_mass[v] == 0.0) {
-            EXPECT_EQ(o, VertexOutcome::Fixed);
-            fixed_moved += same_bits(r.x1[v], s.x1[v]) ? 0 : 1;
-        }
-        if (o == VertexOutcome::Untouched) untouched_moved += same_bits(r.x1[v], s.x1[v]) ? 0 : 1;
-        if (o == VertexOutcome::Frozen) frozen_off += same_bits(r.x1[v], s.x0[v]) ? 0 : 1;
-        frozen += o == VertexOutcome::Frozen ? 1 : 0;
-        carried += o == VertexOutcome::Carried ? 1 : 0;
-        // In a zone exactly when moved by one.
-        const bool zoned = o != VertexOutcome::Fixed && o != VertexOutcome::Untouched;
-        zone_mismatch += zoned == (r.zone[v] != kNoZone) ? 0 : 1;
-    }
-    EXPECT_EQ(nonfinite, 0U);
-    EXPECT_EQ(fixed_moved, 0U) << "vertices of inverse mass 0 moved";
-    EXPECT_EQ(untouched_moved, 0U) << "vertices in no zone changed";
-    EXPECT_EQ(frozen_off, 0U) << "frozen vertices not at x0";
-    EXPECT_EQ(zone_mismatch, 0U);
-    EXPECT_EQ(rep.frozen_vertices, frozen);
-    EXPECT_EQ(rep.carried_vertices, carried);
-}
-
-/// Σ m (x1 − x0) over `vertices`.
-Vec3d momentum(const Scene& s, const std::vector<Vec3d>& x1, const std::vector<std::uint32_t>& vertices) {
-    Vec3d p{};
-    for (std::uint32_t v : vertices) p += (1.0 / s.inverse_mass[v]) * (x1[v] - s.x0[v]);
-    return p;
 }
 
 /// Vertices of `points` that lie over a triangle of `surface` in the horizontal (x, z) projection of
@@ -148,17 +83,6 @@ std::size_t wrong_side(const std::vector<Vec3d>& x, const std::vector<std::uint3
     return wrong;
 }
 
-void print(const char* what, const Resolved& r) {
-    const ImpactZoneReport& p = r.report;
-    std::printf(
-        "%s: resolved %d, rounds %d, zones %d (max %d vertices), constraints %d, rigid zones %d (%d rounds), frozen "
-        "%d, carried %d, QP sweeps %lld (%d unconverged), detections %d, candidates %lld, CCD %lld tests / %lld hits; "
-        "%.1f ms (broad %.1f, CCD %.1f, zones %.1f)\n",
-        what, p.resolved ? 1 : 0, p.iterations, p.zones, p.max_zone_vertices, p.constraints, p.rigid_zones,
-        p.rigid_rounds, p.frozen_vertices, p.carried_vertices, static_cast<long long>(p.qp_sweeps), p.qp_unconverged,
-        p.detections, static_cast<long long>(p.candidate_pairs), static_cast<long long>(p.ccd_tests),
-        static_cast<long long>(p.ccd_hits), r.ms, p.broad_phase_ms, p.ccd_ms, p.zones_ms);
-}
 
 // ---- Single contacts, against the closed form ------------------------------------------------------------
 

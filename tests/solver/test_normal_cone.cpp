@@ -27,6 +27,7 @@
 #include "collision/normal_cone_front.h"
 #include "collision/patch_hierarchy.h"
 #include "random_geometry.h"
+#include "sheet_deformations.h"
 
 namespace weft::collision {
 namespace {
@@ -69,29 +70,9 @@ Scene grid_scene(int cx, int cy) {
 
 using Field = test::SmoothField;
 
-/// Folds the part of a flat sheet beyond the line u = u_fold (u = x cos α + y sin α) by θ about it.
-Vec3d fold(const Vec3d& p, double alpha, double u_fold, double theta) {
-    const double c = std::cos(alpha), s = std::sin(alpha);
-    const double u = c * p.x + s * p.y, w = -s * p.x + c * p.y;
-    if (u <= u_fold) return p;
-    const double d = u - u_fold, u2 = u_fold + d * std::cos(theta), z = p.z + d * std::sin(theta);
-    return {c * u2 - s * w, s * u2 + c * w, z};
-}
-
-/// Rolls a strip (x from its start x_min) into an inward spiral: radius r0, gap g between turns.
-Vec3d roll(const Vec3d& p, double x_min, double r0, double gap) {
-    const double phi = (p.x - x_min) / r0;
-    const double r = r0 - gap * phi / (2.0 * kPi);
-    return {x_min + r * std::sin(phi), p.y, r0 - r * std::cos(phi) + p.z};
-}
-
-/// The twist benchmark's kinematic field: the sheet (x along the axis through the midpoints of its
-/// two opposite edges x = ±L/2) turned about that axis by (π/3 rad/s)·t·(2x/L): the two edges turn
-/// at π/3 rad/s in opposite directions.
-Vec3d twist(const Vec3d& p, double L, double t) {
-    const double phi = kPi / 3.0 * t * (2.0 * p.x / L);
-    return {p.x, p.y * std::cos(phi) - p.z * std::sin(phi), p.y * std::sin(phi) + p.z * std::cos(phi)};
-}
+using test::fold;
+using test::roll;
+using test::twist;
 
 // ---- Brute force -------------------------------------------------------------------------------------
 
