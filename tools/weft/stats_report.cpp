@@ -282,12 +282,13 @@ void print_run_summary(std::ostream& out, const RunContext& c, const RunSummary&
         << format_fixed(s.cg_iterations.max, 0) << "; largest solve " << s.cg_iterations_max_solve << "; "
         << s.cg_not_converged << " of " << s.solves << " solves not converged\n";
     out << "  NaN/Inf        " << s.non_finite_frames << " frames\n";
-    out << "  contacts       mean " << format_fixed(s.contacts.mean, 1) << ", max " << format_fixed(s.contacts.max, 0)
-        << "\n";
+    // Vertex–collider contacts of the analytic colliders; the cloth's pair springs are on the next line.
+    out << "  colliders      contacts mean " << format_fixed(s.contacts.mean, 1) << ", max "
+        << format_fixed(s.contacts.max, 0) << "\n";
     const auto& col = s.collisions;
     if (col.active) {
         out << "  collisions     pairs/frame median " << format_fixed(col.candidate_pairs.median, 0) << " (culled "
-            << format_fixed(col.culled_pairs.median, 0) << "), contacts median " << format_fixed(col.contacts.median, 0)
+            << format_fixed(col.culled_pairs.median, 0) << "), pair springs median " << format_fixed(col.contacts.median, 0)
             << ", CCD " << col.ccd_hits << " hits in " << col.ccd_tests << " tests\n";
         out << "  impact zones   " << col.impact_zones << " zones, at most " << col.impact_iterations_max
             << " rounds per substep; fallbacks: " << col.rigid_zones << " rigid, " << col.frozen_vertices
