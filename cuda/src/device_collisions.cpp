@@ -182,7 +182,7 @@ std::size_t DeviceCollisions::detect(const Model& model, double t, double h, con
     collision::GpuBroadPhaseInput in = broad_phase_input(thickness);
     stats.ms(Stage::BroadPhase) += ms_since(clock);
     clock = Clock::now();
-    cull(model, in, stream);
+    if (settings.cull_contacts) cull(model, in, stream);  // CollisionSettings::cull_contacts says why
     if (in.triangle_patch != nullptr) WEFT_CUDA_CHECK(cudaStreamSynchronize(stream));  // its own stage time
     stats.ms(Stage::Culling) += ms_since(clock);
     clock = Clock::now();

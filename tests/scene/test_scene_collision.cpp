@@ -54,6 +54,7 @@ thickness = 0.003
 stiffness = 2.5e5
 max_impact_iterations = 7
 impact_tolerance = 0.2
+cull_contacts = true
 max_impact_sweeps = 64
 check = true
 )" + kSheet);
@@ -69,6 +70,8 @@ check = true
     EXPECT_EQ(c.max_impact_iterations, 7);
     EXPECT_EQ(d.impact_tolerance, 0.0);  // the backend's default
     EXPECT_EQ(c.impact_tolerance, 0.2);
+    EXPECT_FALSE(d.cull_contacts);
+    EXPECT_TRUE(c.cull_contacts);
     EXPECT_EQ(d.max_impact_sweeps, 0);
     EXPECT_EQ(c.max_impact_sweeps, 64);
     EXPECT_NE(d.check, true);

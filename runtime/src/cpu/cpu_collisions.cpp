@@ -70,7 +70,8 @@ void CpuCollisions<T>::begin_substep(const Model& model, double t, double h, con
     in.thickness = g.gap(settings);
     in.self_pairs = g.self;
     stats.ms(Stage::BroadPhase) += ms_since(clock);
-    cull(model, x0_, x1_, in, stats);
+    // The proximity stage culls only on request (CollisionSettings::cull_contacts says why).
+    if (settings.cull_contacts) cull(model, x0_, x1_, in, stats);
     clock = Clock::now();
     broad_.find(in, pairs_);
     stats.collision.candidate_pairs += static_cast<std::int64_t>(pairs_.vf.size() + pairs_.ee.size());
