@@ -57,7 +57,6 @@ void DeviceCollisions::release() {
     kinematic_count_ = 0;
     vertices_ = 0;
     triangle_count_ = edge_count_ = 0;
-    zone_substeps_ = 0;
     ledger_.clear();
     positions_ = {};
     triangles_ = {};
@@ -271,7 +270,6 @@ bool DeviceCollisions::resolve(const Model& model, double h, float* x, float* v,
                      report.max_zone_vertices, static_cast<long long>(report.qp_sweeps), report.qp_unconverged,
                      report.rigid_zones, report.frozen_vertices, report.carried_vertices, report.resolved ? 1 : 0,
                      report.broad_phase_ms, report.ccd_ms, report.zones_ms);
-    ++zone_substeps_;
     const auto clock = Clock::now();
     launch_collision_scatter(x1c, x0c, zones_.outcome(), n_, vertices_, static_cast<float>(1.0 / h), x, v, v0,
                              dv_previous, stream);

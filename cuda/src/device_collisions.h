@@ -23,7 +23,6 @@
 
 #include <cstddef>
 #include <cstdint>
-#include <memory>
 #include <vector>
 
 #include "collision/broad_phase_gpu.h"
@@ -78,8 +77,6 @@ public:
 
     /// Device memory held, bytes.
     [[nodiscard]] std::size_t memory_bytes() const;
-    /// Substeps whose CCD gate reported a hit, so that the impact zones ran (since the build).
-    [[nodiscard]] int zone_substeps() const { return zone_substeps_; }
 
 private:
     /// The broad-phase input over `x0c` → `x1c` with bounds grown by `thickness` (m).
@@ -94,7 +91,6 @@ private:
     std::size_t kinematic_count_ = 0;   // mesh collider vertices
     std::uint32_t vertices_ = 0;        // n + kinematic: the component stride of the position arrays
     std::uint32_t triangle_count_ = 0, edge_count_ = 0;
-    int zone_substeps_ = 0;
     bool trace_zones_ = false;
 
     MemoryLedger ledger_;

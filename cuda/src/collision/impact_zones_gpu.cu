@@ -809,7 +809,6 @@ std::uint32_t GpuImpactZones::detect(const GpuImpactZoneInput& in, weft::collisi
     cin.eta = float_at_least(report.eta);
     cin.clamp_to_start_distance = true;
     const GpuCcdCounters& cc = ccd_.find(cin, broad_.pairs(), stream);
-    if (report.detections == 1) first_ = cc;
     report.ccd_tests += cc.tests;
     report.ccd_hits += cc.hits;
     report.ccd_ms += ms_since(clock);
@@ -910,6 +909,8 @@ ZoneLists zone_lists(const DeviceArray<std::uint32_t>& zone_label, const DeviceA
 }  // namespace
 
 void GpuImpactZones::project_giant_zones(const GpuImpactZoneInput& in, double tol, cudaStream_t stream) {
+    // No zone can be giant while all the constraints together are not: no read-back in that case.
+    if (constraints_ <= in.giant_zone_constraints) return;
     // The zones' sizes and roots on the host (one copy each; zones are few next to vertices).
     host_coffset_.resize(zones_ + 1);
     WEFT_CUDA_CHECK(cudaMemcpyAsync(host_coffset_.data(), zone_coffset_.get(), (zones_ + 1) * sizeof(std::uint32_t),

@@ -109,8 +109,6 @@ public:
     void download(std::vector<weft::collision::VertexOutcome>& outcome, std::vector<std::uint32_t>& zone,
                   cudaStream_t stream) const;
 
-    /// The CCD of the first detection of the last call (the substep's gate).
-    [[nodiscard]] const GpuCcdCounters& first_detection() const { return first_; }
     [[nodiscard]] std::size_t memory_bytes() const;
 
     /// Counters the kernels leave on the device (read back once per round).
@@ -144,7 +142,6 @@ private:
 
     GpuBroadPhase broad_;
     GpuCcd ccd_;
-    GpuCcdCounters first_{};
     std::uint32_t vertices_ = 0;       // capacity of the per-vertex arrays
     std::size_t capacity_ = 0;         // constraint capacity
     std::uint32_t constraints_ = 0;    // constraints of this call
