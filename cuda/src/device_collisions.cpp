@@ -65,6 +65,8 @@ void DeviceCollisions::release() {
     inverse_mass_ = {};
     thickness_ = {};
     friction_ = {};
+    rest_ = {};
+    vertex_cloth_ = {};
     kinematic_host_.allocate(0);
     cones_.release();
 }
@@ -101,6 +103,14 @@ void DeviceCollisions::build(const FlatModel& flat, const Model& model) {
     kinematic_host_.allocate(4 * 3 * kinematic_count_);
     kinematic_x0_.resize(kinematic_count_);
     kinematic_x1_.resize(kinematic_count_);
+    if (g.self && n_ > 0) {
+        // Rest exclusion (CollisionSettings::rest_exclusion) only concerns pairs inside one cloth.
+        std::vector<float> rest(3 * static_cast<std::size_t>(n_));
+        for (std::size_t i = 0; i < n_; ++i)
+            for (int c = 0; c < 3; ++c) rest[static_cast<std::size_t>(c) * n_ + i] = static_cast<float>(g.rest[i][c]);
+        rest_.upload(rest, ledger_, "collision rest shape");
+        vertex_cloth_.upload(g.vertex_cloth, ledger_, "collision rest shape");
+    }
     if (g.self) {
         // The hierarchy as the CPU builds it (cpu_collisions.cpp), so that patch ids are node ids of
         // the same tree; only the cloth's primitives get ids on the GPU (colliders never need them).
@@ -199,6 +209,10 @@ std::size_t DeviceCollisions::detect(const Model& model, double t, double h, con
     p.friction = friction_.get();
     p.triangles = triangles_.get();
     p.edges = edges_.get();
+    p.rest = rest_.get();
+    p.vertex_cloth = vertex_cloth_.get();
+    p.rest_count = rest_.get() != nullptr ? n_ : 0U;
+    p.rest_exclusion = static_cast<float>(settings.rest_exclusion);
     p.h = static_cast<float>(h);
     p.thickness_override = static_cast<float>(settings.thickness);
     p.stiffness_override = static_cast<float>(settings.stiffness);

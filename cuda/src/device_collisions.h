@@ -97,6 +97,8 @@ private:
     DeviceArray<float> positions_;  // x0 then x1, SoA with stride vertices_
     DeviceArray<std::uint32_t> triangles_, edges_, triangle_group_;
     DeviceArray<float> inverse_mass_, thickness_, friction_;
+    DeviceArray<float> rest_;                 // with self-collision: cloth rest positions, SoA stride n_
+    DeviceArray<std::uint32_t> vertex_cloth_;  // with self-collision: owning cloth of each cloth vertex
     PinnedArray<float> kinematic_host_;  // x(t), x(t + h), x(t + h) again for the solve, v: 3·nk each
     collision::GpuNormalConeCulling cones_;  // built with self-collision
     collision::GpuBroadPhase broad_;  // over the predicted motion (proximity)

@@ -41,10 +41,21 @@ void validate(const SolverSettings& s) {
     check_range("solver", "threads", s.threads, 0, 1024);
 }
 
+// The ranges of settings.h, for worlds built through the API (the scene loader checks them by key).
+void validate(const CollisionSettings& c) {
+    check_range("collision", "thickness", c.thickness, 0.0, 0.1);
+    check_range("collision", "stiffness", c.stiffness, 0.0, 1e9);
+    check_range("collision", "rest_exclusion", c.rest_exclusion, 0.0, 10.0);
+    check_range("collision", "max_impact_iterations", c.max_impact_iterations, 1, 1000);
+    check_range("collision", "impact_tolerance", c.impact_tolerance, 0.0, 0.5);
+    check_range("collision", "max_impact_sweeps", c.max_impact_sweeps, 0, 100000);
+}
+
 }  // namespace
 
 World::World(const WorldDesc& desc, std::string_view backend, const BackendOptions& options) {
     validate(desc.solver);
+    validate(desc.collision);
     model_.settings = desc;
     BackendOptions o = options;
     if (o.threads == 0) o.threads = desc.solver.threads;
@@ -96,6 +107,7 @@ void World::ensure_built() const {
 
 const StepStats& World::step() {
     validate(model_.settings.solver);
+    validate(model_.settings.collision);
     ensure_built();
     const auto start = std::chrono::steady_clock::now();
     stats_ = StepStats{};

@@ -16,6 +16,7 @@
 #include "weft/scene.h"
 
 #include "gpu_test_util.h"
+#include "rest_exclusion_scene.h"
 
 namespace weft {
 namespace {
@@ -111,6 +112,23 @@ TEST(CudaCollisions, ContactCountOfOneStateMatchesTheCpu) {
     std::printf("[ contacts ] layers, one state: CPU %d, GPU %d\n", cpu_contacts, gpu_contacts);
     EXPECT_GT(cpu_contacts, 0);
     EXPECT_LE(std::abs(gpu_contacts - cpu_contacts), std::max(2, cpu_contacts / 100));
+}
+
+// The CPU test's promise (test_cloth_collisions.cpp) on the GPU narrow phase, and the same counts.
+TEST(CudaCollisions, RestNeighboursGetNoSpringsButOtherClothsDo) {
+    WEFT_REQUIRE_GPU();
+    const int excluded = test::rest_exclusion_contacts("cuda", 1.0, false);
+    const int kept = test::rest_exclusion_contacts("cuda", 0.0, false);
+    const int two_sheets = test::rest_exclusion_contacts("cuda", 1.0, true);
+    std::printf("[ contacts ] rest exclusion on the GPU: %d excluded, %d kept, %d with two sheets\n", excluded, kept,
+                two_sheets);
+    EXPECT_EQ(excluded, 0);
+    // As in ContactCountOfOneStateMatchesTheCpu: float and double differ only on pairs within
+    // rounding of the thickness.
+    const int cpu_kept = test::rest_exclusion_contacts("cpu", 0.0, false);
+    const int cpu_two_sheets = test::rest_exclusion_contacts("cpu", 1.0, true);
+    EXPECT_LE(std::abs(kept - cpu_kept), std::max(2, cpu_kept / 100));
+    EXPECT_LE(std::abs(two_sheets - cpu_two_sheets), std::max(2, cpu_two_sheets / 100));
 }
 
 }  // namespace

@@ -55,6 +55,7 @@ stiffness = 2.5e5
 max_impact_iterations = 7
 impact_tolerance = 0.2
 cull_contacts = true
+rest_exclusion = 2.5
 max_impact_sweeps = 64
 check = true
 )" + kSheet);
@@ -72,6 +73,8 @@ check = true
     EXPECT_EQ(c.impact_tolerance, 0.2);
     EXPECT_FALSE(d.cull_contacts);
     EXPECT_TRUE(c.cull_contacts);
+    EXPECT_EQ(d.rest_exclusion, 1.0);
+    EXPECT_EQ(c.rest_exclusion, 2.5);
     EXPECT_EQ(d.max_impact_sweeps, 0);
     EXPECT_EQ(c.max_impact_sweeps, 64);
     EXPECT_NE(d.check, true);
@@ -124,6 +127,8 @@ TEST(SceneCollisionErrors, OutOfRange) {
                 {"key 'collision.max_impact_iterations'", "value 1001 is out of range"});
     parse_error("[collision]\nimpact_tolerance = 0.6\n" + kSheet,
                 {"key 'collision.impact_tolerance'", "out of range", "[0, 0.5]"});
+    parse_error("[collision]\nrest_exclusion = 11\n" + kSheet,
+                {"key 'collision.rest_exclusion'", "out of range", "[0, 10]"});
     parse_error("[collision]\nmax_impact_sweeps = -1\n" + kSheet,
                 {"key 'collision.max_impact_sweeps'", "value -1 is out of range"});
     parse_error("[collision]\nthickness = inf\n" + kSheet, {"key 'collision.thickness'", "not finite"});

@@ -7,6 +7,8 @@
 #include <algorithm>
 #include <cmath>
 
+#include "rest_exclusion_scene.h"
+#include "weft/error.h"
 #include "weft/mesh.h"
 #include "weft/world.h"
 
@@ -87,6 +89,24 @@ TEST(ClothCollisions, SheetFoldingOverABarDoesNotPassThroughItself) {
         ASSERT_EQ(s.collision.remaining_intersections, 0) << "frame " << frame;
         ASSERT_EQ(s.collision.unresolved_substeps, 0) << "frame " << frame;
     }
+}
+
+// A sheet whose edges are shorter than its contact thickness: its rest neighbours are within the
+// thickness but are no contacts (CollisionSettings::rest_exclusion); the exclusion off gives them
+// springs, and two sheets 3 mm apart keep theirs with it on.
+TEST(ClothCollisions, RestNeighboursGetNoSpringsButOtherClothsDo) {
+    const int excluded = test::rest_exclusion_contacts("cpu", 1.0, false);
+    const int kept = test::rest_exclusion_contacts("cpu", 0.0, false);
+    const int two_sheets = test::rest_exclusion_contacts("cpu", 1.0, true);
+    EXPECT_EQ(excluded, 0);
+    EXPECT_GT(kept, 1000) << "the scene must have in-plane neighbours within the thickness";
+    EXPECT_GE(two_sheets, 41 * 41) << "every vertex of each sheet is over a face of the other";
+}
+
+TEST(ClothCollisions, RestExclusionOutOfRangeIsRejected) {
+    WorldDesc desc;
+    desc.collision.rest_exclusion = -1.0;
+    EXPECT_THROW(World world(desc), Error);
 }
 
 // Control: without cloth collisions the same two sheets end up through each other on the floor, and

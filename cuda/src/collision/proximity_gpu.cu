@@ -19,6 +19,21 @@ constexpr unsigned kThreads = 256;
     return static_cast<unsigned>((count + kThreads - 1) / kThreads);
 }
 
+/// True for a pair of rest neighbours (rest_neighbours in runtime/src/collision/proximity_contacts.cpp).
+__device__ bool rest_neighbours(const GpuProximityInput& in, const PairVertices& pv, float thickness) {
+    if (!(in.rest_exclusion > 0.0F) || in.rest == nullptr) return false;
+    for (int i = 0; i < 4; ++i)
+        if (pv.id[i] >= in.rest_count) return false;
+    if (in.vertex_cloth[pv.id[0]] != in.vertex_cloth[pv.id[3]]) return false;
+    V3f r[4];
+    for (int i = 0; i < 4; ++i) r[i] = load_position(in.rest, pv.id[i], in.rest_count);
+    float w[4];
+    V3f normal;
+    float distance = 0.0F;
+    pair_closest(pv.vf, r, w, normal, distance);
+    return distance < in.rest_exclusion * thickness;
+}
+
 /// The contact of one candidate, or false when it is none (too far at both ends, or nothing moves).
 /// The same steps as make_contact in runtime/src/collision/proximity_contacts.cpp, in float. Not
 /// inlined: both passes must run the very same instructions (the compiler could otherwise fuse
@@ -49,6 +64,7 @@ __device__ __noinline__ bool make_contact(const GpuProximityInput& in, std::uint
         in.thickness_override > 0.0F ? in.thickness_override : physics::max_(thickness_a, thickness_b);
     const float gap1 = physics::dot(normal, predicted);
     if (!(physics::min_(gap0, gap1) < thickness)) return false;
+    if (rest_neighbours(in, pv, thickness)) return false;
     for (int i = 0; i < 4; ++i) {
         c.vertex[i] = pv.id[i];
         c.weight[i] = w[i];
@@ -121,6 +137,8 @@ void GpuProximityContacts::enqueue(const GpuProximityInput& in, const GpuPairLis
     if (in.vertex_count > 0 && (in.x0 == nullptr || in.x1 == nullptr || in.inverse_mass == nullptr ||
                                 in.thickness == nullptr || in.friction == nullptr))
         throw Error("GPU proximity contacts: per-vertex arrays missing");
+    if (in.rest != nullptr && (in.vertex_cloth == nullptr || in.rest_count > in.vertex_count))
+        throw Error("GPU proximity contacts: rest positions without cloth ids, or more of them than vertices");
     if (!(in.h > 0.0F)) throw Error("GPU proximity contacts: substep must be positive, got " + std::to_string(in.h));
     if (capacity_ == 0) capacity_ = std::max<std::size_t>(1024, pairs.capacity / 4);
     if (position_.size() < std::size_t{pairs.capacity} + 1) position_.allocate(std::size_t{pairs.capacity} + 1, ledger_, "contacts: ranks");

@@ -39,6 +39,14 @@ struct GpuProximityInput {
     const float* friction = nullptr;      ///< per vertex, Coulomb coefficient
     const std::uint32_t* triangles = nullptr;  ///< as given to the broad phase
     const std::uint32_t* edges = nullptr;
+    /// Rest exclusion, as ProximityInput in runtime/src/collision/proximity_contacts.h: pairs whose
+    /// vertices all lie below `rest_count` (the cloth vertices), belong to one cloth and are closer
+    /// than rest_exclusion × thickness in the rest positions are no contacts. Null `rest` or a factor
+    /// of 0 excludes nothing.
+    const float* rest = nullptr;                  ///< rest positions, SoA with stride rest_count, m
+    const std::uint32_t* vertex_cloth = nullptr;  ///< owning cloth of each of the rest_count vertices
+    std::uint32_t rest_count = 0;
+    float rest_exclusion = 0.0F;
     float h = 0.0F;                   ///< substep, s (> 0)
     float thickness_override = 0.0F;  ///< m; > 0 replaces the per-vertex thickness
     float stiffness_override = 0.0F;  ///< N/m; > 0 replaces the 100·m/h² rule

@@ -70,6 +70,12 @@ struct CollisionSettings {
     /// it the crossings all go to the impact zones: `falling` at 48² on the CPU took 30× more CCD
     /// hits and never finished (docs/results.md). Off by default.
     bool cull_contacts = false;
+    /// Proximity pairs inside one cloth whose primitives lie closer than this many contact thicknesses
+    /// in the cloth's rest shape (its initial placement) get no spring: they are neighbours in the
+    /// fabric, not surfaces touching, and a spring would push them apart against the membrane (on
+    /// a sheet whose edges are shorter than the thickness, every vertex would have several). CCD and
+    /// the impact zones still test them. 0 keeps every pair. Valid range [0, 10].
+    double rest_exclusion = 1.0;
     /// Also count the pairs culling removed (`CollisionStats::culled_pairs`), which costs a box test
     /// per culled pair (about 4× the culled broad phase on a twisted sheet): for benchmarks.
     bool count_culled = false;

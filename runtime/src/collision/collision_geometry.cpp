@@ -46,6 +46,8 @@ CollisionGeometry build_collision_geometry(const FlatModel& flat, const Model& m
         g.friction[i] = material.friction;
         g.max_thickness = std::max(g.max_thickness, material.contact_thickness);
     }
+    g.rest = flat.initial_positions;
+    g.vertex_cloth = flat.vertex_cloth;
     for (const CollisionGeometry::MeshCollider& mc : g.meshes) {
         const ColliderDesc& c = model.colliders[mc.collider];
         const std::size_t first = g.cloth_vertices + mc.first_vertex;

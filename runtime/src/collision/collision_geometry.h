@@ -33,6 +33,10 @@ struct CollisionGeometry {
     std::vector<double> inverse_mass;    ///< 1/kg; 0 for pinned and kinematic vertices
     std::vector<double> thickness;       ///< m: the cloth's contact thickness, 0 for kinematic vertices
     std::vector<double> friction;        ///< the cloth's or the collider's Coulomb coefficient
+    /// Cloth vertices only (size cloth_vertices): the rest shape as placed at the start, m, and the
+    /// owning cloth, for the proximity stage's rest exclusion (CollisionSettings::rest_exclusion).
+    std::vector<Vec3d> rest;
+    std::vector<std::uint32_t> vertex_cloth;
     double max_thickness = 0.0;          ///< largest cloth contact thickness, m
 
     [[nodiscard]] std::size_t kinematic_vertices() const { return kinematic_local.size(); }

@@ -12,6 +12,20 @@
 namespace weft::collision {
 namespace {
 
+/// True when the pair's vertices all belong to one cloth and lie within rest_exclusion × thickness of
+/// each other in its rest shape: fabric neighbours, not surfaces in contact.
+bool rest_neighbours(const ProximityInput& in, const std::uint32_t (&ids)[4], int first_side, double thickness) {
+    if (!(in.rest_exclusion > 0.0) || in.rest.empty()) return false;
+    for (const std::uint32_t v : ids)
+        if (v >= in.rest.size()) return false;
+    if (in.vertex_cloth[ids[0]] != in.vertex_cloth[ids[3]]) return false;
+    const auto& r = in.rest;
+    const double distance =
+        first_side == 1 ? physics::point_triangle_proximity(r[ids[0]], r[ids[1]], r[ids[2]], r[ids[3]]).distance
+                        : physics::edge_edge_proximity(r[ids[0]], r[ids[1]], r[ids[2]], r[ids[3]]).distance;
+    return distance < in.rest_exclusion * thickness;
+}
+
 /// Builds the contact of one candidate from its four vertices and weights; false when it is not a
 /// contact (too far at both ends, or nothing can move).
 /// `first_side` vertices (1 for vertex–face, 2 for edge–edge) belong to the first primitive.
@@ -33,6 +47,7 @@ bool make_contact(const ProximityInput& in, const std::uint32_t (&ids)[4], const
     const double thickness = in.thickness_override > 0.0 ? in.thickness_override : std::max(thickness_a, thickness_b);
     const double gap1 = dot(normal, predicted);
     if (!(std::min(gap0, gap1) < thickness)) return false;
+    if (rest_neighbours(in, ids, first_side, thickness)) return false;
     for (int i = 0; i < 4; ++i) {
         c.vertex[i] = ids[i];
         c.weight[i] = w[i];
@@ -51,6 +66,9 @@ void find_proximity_contacts(const ProximityInput& in, std::vector<ProximityCont
     const std::size_t n = in.x0.size();
     if (in.x1.size() != n || in.inverse_mass.size() != n || in.thickness.size() != n || in.friction.size() != n)
         throw Error("find_proximity_contacts: per-vertex arrays differ in size (" + std::to_string(n) + " positions)");
+    if (!in.rest.empty() && in.vertex_cloth.size() != in.rest.size())
+        throw Error("find_proximity_contacts: " + std::to_string(in.rest.size()) + " rest positions but " +
+                    std::to_string(in.vertex_cloth.size()) + " cloth ids");
     if (!(in.h > 0.0)) throw Error("find_proximity_contacts: substep must be positive, got " + std::to_string(in.h));
     const std::size_t nvf = in.vf.size();
     const std::size_t total = nvf + in.ee.size();

@@ -41,6 +41,12 @@ struct ProximityInput {
     std::span<const Edge> edges;
     std::span<const VertexFacePair> vf;     ///< broad-phase candidates
     std::span<const EdgeEdgePair> ee;
+    /// Rest exclusion (CollisionSettings::rest_exclusion): a pair whose four vertices are vertices of
+    /// one cloth (ids below rest.size()) and lie closer than rest_exclusion × thickness in the rest
+    /// positions is no contact. Empty `rest` or a factor of 0 excludes nothing.
+    std::span<const Vec3d> rest;                 ///< rest positions of the cloth vertices, m
+    std::span<const std::uint32_t> vertex_cloth;  ///< owning cloth of each cloth vertex
+    double rest_exclusion = 0.0;
     double h = 0.0;                         ///< substep, s
     double thickness_override = 0.0;        ///< m; > 0 replaces the per-vertex thickness
     double stiffness_override = 0.0;        ///< N/m; > 0 replaces the 100·m/h² rule
@@ -50,7 +56,7 @@ struct ProximityInput {
 /// inverse mass 0 is skipped (nothing can move). Stiffness: `stiffness_override`, or 100·m/h² with
 /// m = 1/Σ w_i²/m_i the pair's effective mass (the rule the analytic colliders use per vertex, so a
 /// resting contact sinks g·h²/100 into the thickness). Thickness: the larger of the two sides'.
-/// Friction: the mean of the two sides'. Throws `weft::Error` on mismatched sizes.
+/// Friction: the mean of the two sides'. Pairs of rest neighbours are skipped (see `rest`). Throws `weft::Error` on mismatched sizes.
 void find_proximity_contacts(const ProximityInput& in, std::vector<ProximityContact>& out);
 
 }  // namespace weft::collision

@@ -89,6 +89,9 @@ void CpuCollisions<T>::begin_substep(const Model& model, double t, double h, con
     p.edges = g.edges;
     p.vf = pairs_.vf;
     p.ee = pairs_.ee;
+    p.rest = g.rest;
+    p.vertex_cloth = g.vertex_cloth;
+    p.rest_exclusion = settings.rest_exclusion;
     p.h = h;
     p.thickness_override = settings.thickness;
     p.stiffness_override = settings.stiffness;
