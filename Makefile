@@ -1,5 +1,6 @@
 # Weft: set-up, build, demo and tests, one command each (README, "Quick start").
-#   make demo   install missing packages, build Release into build/, simulate the flag scene
+#   make demo   install missing packages, build Release into build/, simulate the flag scene and
+#               render it headless to PNGs (plus an MP4 when ffmpeg is installed)
 #   make test   the same set-up and build, then the whole test suite
 # Other targets: build, asan, format, tidy, clean. Variables can be overridden: make demo DEMO_FRAMES=60
 
@@ -13,6 +14,8 @@ DEMO_SCENE  ?= flag
 DEMO_FRAMES ?= 300
 DEMO_SET    ?= cloth.flag.mesh.grid.cells=[90,54]
 DEMO_OUT    ?= out/demo
+DEMO_CAPTURE ?= egl
+DEMO_SIZE   ?= 960x540
 
 WEFT := $(BUILD_DIR)/bin/weft
 
@@ -32,10 +35,11 @@ build: configure
 demo: build
 	rm -rf $(DEMO_OUT)
 	$(WEFT) run $(DEMO_SCENE) --frames $(DEMO_FRAMES) $(foreach s,$(DEMO_SET),--set '$(s)') \
-	    --out $(DEMO_OUT) --stats $(DEMO_OUT)/stats.json
+	    --capture $(DEMO_CAPTURE) --size $(DEMO_SIZE) --out $(DEMO_OUT) --stats $(DEMO_OUT)/stats.json
 	@echo
-	@echo "demo output: $(DEMO_OUT)/frame_*.ply (one mesh per cloth per frame, frame 0 = initial state)"
-	@echo "             $(DEMO_OUT)/stats.json (timings, CG iterations, memory)"
+	@echo "demo output: $(DEMO_OUT)/frame_*.png (one picture per frame, frame 0 = initial state)"
+	@echo "             $(DEMO_OUT)/contact_sheet.png, $(DEMO_OUT)/capture.mp4 (with ffmpeg)"
+	@echo "             $(DEMO_OUT)/stats.json (timings, CG iterations, memory, capture)"
 
 test: build
 	ctest --test-dir $(BUILD_DIR) --output-on-failure -j$(JOBS)

@@ -6,13 +6,17 @@
 # Set WEFT_SKIP_DEPS=1 to skip the check (e.g. on a machine managed some other way).
 set -euo pipefail
 
-# One group per part of the build. A later issue adds its group here (the renderer: Vulkan, GLFW,
-# EGL; the editor: ImGui) and lists it in PACKAGE_GROUPS below.
+# One group per part of the build. A later issue adds its group here (the editor: ImGui, GLFW) and
+# lists it in PACKAGE_GROUPS below.
 BUILD_PACKAGES=(cmake ninja-build g++ pkg-config)
 RUNTIME_PACKAGES=(libtbb-dev libtomlplusplus-dev libglm-dev)
 ASSETS_PACKAGES=(libassimp-dev)
 TEST_PACKAGES=(libgtest-dev libgmock-dev libbenchmark-dev python3)
-PACKAGE_GROUPS=(BUILD_PACKAGES RUNTIME_PACKAGES ASSETS_PACKAGES TEST_PACKAGES)
+# The renderer (WEFT_RENDER): Vulkan loader, headers, glslc, lavapipe and the validation layers;
+# EGL and OpenGL through GLVND with Mesa's llvmpipe; libpng for the captured frames.
+RENDER_PACKAGES=(libvulkan-dev glslc mesa-vulkan-drivers vulkan-validationlayers libegl-dev libgl-dev libegl-mesa0
+                 libgl1-mesa-dri libpng-dev)
+PACKAGE_GROUPS=(BUILD_PACKAGES RUNTIME_PACKAGES ASSETS_PACKAGES TEST_PACKAGES RENDER_PACKAGES)
 
 if [[ "${WEFT_SKIP_DEPS:-0}" == "1" ]]; then
     echo "deps: skipped (WEFT_SKIP_DEPS=1)"

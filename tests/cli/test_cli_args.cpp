@@ -51,6 +51,24 @@ TEST(CliArgs, RunDefaults) {
     EXPECT_FALSE(inv.run.quiet);
 }
 
+TEST(CliArgs, CaptureNeedsOutAndKnowsItsRenderers) {
+    const Invocation inv = parse({"run", "flag", "--capture", "egl", "--out", "pics", "--size", "640x360"});
+    EXPECT_EQ(inv.run.capture, "egl");
+    EXPECT_EQ(inv.run.capture_width, 640);
+    EXPECT_EQ(inv.run.capture_height, 360);
+    EXPECT_FALSE(inv.run.meshes) << "--capture alone writes pictures, not meshes";
+    EXPECT_TRUE(parse({"run", "flag", "--capture=vulkan", "--out", "p", "--format", "ply"}).run.meshes);
+    EXPECT_TRUE(parse({"run", "flag", "--out", "p"}).run.meshes);
+    EXPECT_EQ(parse({"run", "flag"}).run.capture, "none");
+    EXPECT_EQ(error_of({"run", "flag", "--capture", "egl"}), "--capture egl needs --out DIR for the pictures");
+    EXPECT_EQ(error_of({"run", "flag", "--capture", "opengl", "--out", "p"}),
+              "--capture expects egl, vulkan or none, got 'opengl'");
+    EXPECT_EQ(error_of({"run", "flag", "--size", "640", "--out", "p"}),
+              "--size expects WIDTHxHEIGHT in pixels, e.g. 1280x720, got '640'");
+    EXPECT_NE(error_of({"run", "flag", "--size", "8x8"}).find("--size"), std::string::npos);
+    EXPECT_NE(error_of({"run", "flag", "--size", "640xabc"}).find("--size"), std::string::npos);
+}
+
 TEST(CliArgs, RunAllFlags) {
     const Invocation inv =
         parse({"run", "--frames", "12", "scenes/x.toml", "--out=out/x", "--format", "obj", "--stats", "s.json", "--set",

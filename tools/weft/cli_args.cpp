@@ -142,7 +142,7 @@ bool apply_simulation_flag(std::string_view command, SimulationOptions& sim, std
 
 constexpr FlagSpec kRunFlags[] = {{"--backend", true}, {"--threads", true}, {"--set", true},   {"--frames", true},
                                   {"--out", true},     {"--format", true},  {"--stats", true}, {"--quiet", false},
-                                  {"--check", false}};
+                                  {"--check", false},  {"--capture", true}, {"--size", true}};
 
 constexpr FlagSpec kBenchFlags[] = {{"--backend", true}, {"--threads", true}, {"--set", true},
                                     {"--frames", true},  {"--warmup", true},  {"--json", true}};
@@ -159,6 +159,7 @@ Invocation parse_run(std::span<const std::string_view> args) {
     Invocation inv;
     inv.command = Invocation::Command::Run;
     RunOptions& run = inv.run;
+    bool explicit_format = false;
     const auto positionals = FlagParser(cmd, args, kRunFlags).parse([&](std::string_view name, std::string_view value) {
         if (apply_simulation_flag(cmd, run.sim, name, value)) return;
         if (name == "--frames") {
@@ -166,6 +167,7 @@ Invocation parse_run(std::span<const std::string_view> args) {
         } else if (name == "--out") {
             run.out_dir = std::filesystem::path(value);
         } else if (name == "--format") {
+            explicit_format = true;
             if (value == "ply")
                 run.format = MeshFormat::Ply;
             else if (value == "obj")
@@ -178,9 +180,23 @@ Invocation parse_run(std::span<const std::string_view> args) {
             run.quiet = true;
         } else if (name == "--check") {
             run.check = true;
+        } else if (name == "--capture") {
+            if (value != "egl" && value != "vulkan" && value != "none")
+                throw UsageError(cmd, "--capture expects egl, vulkan or none, got " + quoted(value));
+            run.capture = std::string(value);
+        } else if (name == "--size") {
+            const auto x = value.find('x');
+            if (x == std::string_view::npos)
+                throw UsageError(cmd, "--size expects WIDTHxHEIGHT in pixels, e.g. 1280x720, got " + quoted(value));
+            run.capture_width = parse_int(cmd, name, value.substr(0, x), 16, 8192);
+            run.capture_height = parse_int(cmd, name, value.substr(x + 1), 16, 8192);
         }
     });
     if (!positionals) return help_for(cmd);
+    if (run.capture != "none" && run.out_dir.empty())
+        throw UsageError(cmd, "--capture " + run.capture + " needs --out DIR for the pictures");
+    // Captured runs write pictures; meshes only when a mesh format was asked for as well.
+    if (run.capture != "none") run.meshes = explicit_format;
     if (positionals->empty()) throw UsageError(cmd, "missing SCENE (a scene file or a name from assets/scenes)");
     if (positionals->size() > 1) {
         throw UsageError(cmd, "unexpected argument " + quoted((*positionals)[1]) +

@@ -53,6 +53,10 @@ struct RunOptions {
     std::filesystem::path stats_file;  ///< empty: write no stats JSON
     bool quiet = false;
     bool check = false;  ///< exact intersection check after every frame (collision.check)
+    std::string capture = "none";  ///< "egl", "vulkan" or "none": render every frame to DIR/frame_NNNN.png
+    int capture_width = 1280;      ///< pixels
+    int capture_height = 720;      ///< pixels
+    bool meshes = true;            ///< with --out, write meshes (--capture alone writes only pictures)
 };
 
 struct BenchOptions {

@@ -6,6 +6,9 @@
 
 #include "weft/backend.h"
 #include "weft/mesh.h"
+#if WEFT_HAVE_RENDER
+#include "weft/render/renderer.h"
+#endif
 
 #include "build_info.h"
 #include "commands.h"
@@ -55,6 +58,31 @@ int info_command(std::ostream& out) {
         backends.add_row({name, device, backend_description(name)});
     }
     backends.print(out);
+
+#if WEFT_HAVE_RENDER
+    // Each renderer started once, small: where it draws, or why it cannot here. The cloth reaches
+    // it by host upload until the zero-copy path is wired (docs/rendering.md).
+    out << "\nrenderers (weft run --capture)\n";
+    TextTable renderers({{"name", TextTable::Align::Left}, {"device", TextTable::Align::Left},
+                         {"cloth path", TextTable::Align::Left}});
+    for (const std::string& name : render::renderer_names()) {
+        std::string device, path;
+        try {
+            render::RendererOptions options;
+            options.width = options.height = 16;
+            options.samples = 1;
+            options.shadow_map_size = 16;
+            const auto renderer = render::create_renderer(name, options);
+            device = renderer->device_description();
+            path = "host upload";
+        } catch (const std::exception& e) {
+            device = std::string("unavailable: ") + e.what();
+            path = "-";
+        }
+        renderers.add_row({name, device, path});
+    }
+    renderers.print(out);
+#endif
 
     out << "\nhost\n";
     out << "  CPU            " << cpu_model() << '\n';

@@ -9,6 +9,7 @@
 #include "weft/error.h"
 
 #include "commands.h"
+#include "frame_capture.h"
 #include "frame_writer.h"
 #include "output_file.h"
 #include "progress_bar.h"
@@ -48,7 +49,18 @@ int run_command(const RunOptions& options, std::ostream& out, std::ostream& err)
     std::ofstream stats_stream;
     if (!options.stats_file.empty()) stats_stream = open_output_file(options.stats_file, "stats file");
     std::optional<FrameWriter> writer;
-    if (!options.out_dir.empty()) writer.emplace(options.out_dir, options.format, cloth_names, frames);
+    if (!options.out_dir.empty() && options.meshes) writer.emplace(options.out_dir, options.format, cloth_names, frames);
+    std::optional<FrameCapture> capture;
+    if (options.capture != "none") {
+#if WEFT_HAVE_RENDER
+        capture.emplace(options.capture, options.out_dir, options.capture_width, options.capture_height, world,
+                        loaded.desc.camera, frames);
+#else
+        throw Error("--capture " + options.capture +
+                    ": this build has no renderer (configure with -DWEFT_RENDER=ON and the Vulkan, EGL and libpng "
+                    "packages of tools/deps.sh)");
+#endif
+    }
 
     const RunContext before = describe_run(loaded.desc, world, options.sim.threads);
     if (!options.quiet) {
@@ -59,6 +71,7 @@ int run_command(const RunOptions& options, std::ostream& out, std::ostream& err)
 
     const auto start = std::chrono::steady_clock::now();
     if (writer) writer->write(0, world);
+    if (capture) capture->capture(0, world);
     std::vector<StepStats> stats;
     stats.reserve(static_cast<std::size_t>(std::min(frames, 1'000'000)));  // a huge --frames grows as it goes
     bool interrupted = false;
@@ -68,6 +81,7 @@ int run_command(const RunOptions& options, std::ostream& out, std::ostream& err)
         for (int frame = 1; frame <= frames; ++frame) {
             stats.push_back(world.step());
             if (writer) writer->write(frame, world);
+            if (capture) capture->capture(frame, world);
             bar.update(frame);
             if (g_interrupted != 0) {
                 interrupted = true;
@@ -80,13 +94,16 @@ int run_command(const RunOptions& options, std::ostream& out, std::ostream& err)
     // Describe again: backends may grow scratch memory while stepping (reported, STYLE.md item 3).
     const RunContext context = describe_run(loaded.desc, world, options.sim.threads);
     const RunSummary summary = summarize(stats);
+    std::optional<CaptureSummary> captured;
+    if (capture) captured = capture->finish(1.0 / world.settings().solver.dt);
+    const CaptureSummary* capture_summary = captured ? &*captured : nullptr;
     if (stats_stream.is_open()) {
-        write_run_json(stats_stream, context, summary, stats, wall_seconds);
+        write_run_json(stats_stream, context, summary, stats, wall_seconds, capture_summary);
         close_output_file(stats_stream, options.stats_file, "stats file");
     }
 
     if (!options.quiet) {
-        print_run_summary(out, context, summary, wall_seconds);
+        print_run_summary(out, context, summary, wall_seconds, capture_summary);
         out << '\n';
         if (writer) {
             out << "  meshes         " << writer->files_written()

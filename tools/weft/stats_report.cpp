@@ -234,11 +234,22 @@ void write_summary_fields(JsonWriter& json, const RunContext& c, const RunSummar
 }
 
 void write_run_json(std::ostream& out, const RunContext& context, const RunSummary& summary,
-                    std::span<const StepStats> frames, double wall_seconds) {
+                    std::span<const StepStats> frames, double wall_seconds, const CaptureSummary* capture) {
     JsonWriter json(out);
     json.begin_object();
     write_summary_fields(json, context, summary);
     json.field("wall_seconds", wall_seconds);
+    if (capture != nullptr) {
+        json.key("capture").begin_object();
+        json.field("renderer", capture->renderer);
+        json.field("device", capture->device);
+        json.field("path", capture->path);
+        json.field("bytes_per_frame", static_cast<double>(capture->bytes_per_frame));
+        json.field("frames", capture->frames);
+        json.field("render_ms_median", capture->render_ms_median);
+        json.field("write_ms_median", capture->write_ms_median);
+        json.end_object();
+    }
     json.key("series").begin_object();
     json.key("step_ms").begin_array(true);
     for (const StepStats& f : frames) json.value(f.step_ms);
@@ -256,7 +267,8 @@ void write_run_json(std::ostream& out, const RunContext& context, const RunSumma
     json.end_object();
 }
 
-void print_run_summary(std::ostream& out, const RunContext& c, const RunSummary& s, double wall_seconds) {
+void print_run_summary(std::ostream& out, const RunContext& c, const RunSummary& s, double wall_seconds,
+                       const CaptureSummary* capture) {
     out << "\nweft run " << c.scene << ": " << c.backend << " (" << c.device << ")\n";
     out << "  scene        " << c.scene_file << ": " << c.cloths << (c.cloths == 1 ? " cloth, " : " cloths, ")
         << c.vertices << " vertices, " << c.triangles << " triangles\n";
@@ -302,6 +314,14 @@ void print_run_summary(std::ostream& out, const RunContext& c, const RunSummary&
         << format_bytes(static_cast<double>(c.backend_memory_bytes)) << " + fabric "
         << format_bytes(static_cast<double>(c.fabric_memory_bytes)) << "; "
         << format_fixed(c.memory_bytes_per_triangle(), 0) << " B per triangle)\n";
+    if (capture != nullptr) {
+        out << "  capture        " << capture->frames << " frames by " << capture->renderer << " (" << capture->device
+            << "): " << format_fixed(capture->render_ms_median, 2) << " ms to draw, "
+            << format_fixed(capture->write_ms_median, 2) << " ms to write a frame (medians); cloth by "
+            << capture->path << ", " << capture->bytes_per_frame << " B per frame\n";
+        if (!capture->contact_sheet.empty()) out << "  contact sheet  " << capture->contact_sheet << '\n';
+        out << "  video          " << (capture->video.empty() ? "none: " + capture->video_note : capture->video) << '\n';
+    }
     const auto warnings = run_warnings(c, s);
     if (!warnings.empty()) out << '\n';
     for (const std::string& w : warnings) out << "  WARNING: " << w << '\n';

@@ -14,6 +14,7 @@
 
 #include "weft/stats.h"
 
+#include "frame_capture.h"
 #include "json_writer.h"
 
 namespace weft {
@@ -107,9 +108,11 @@ struct RunContext {
 /// Writes the summary keys into an object the caller has opened (shared by run and bench JSON).
 void write_summary_fields(JsonWriter& json, const RunContext& context, const RunSummary& summary);
 /// The stats JSON of one run: summary keys plus the per-frame series (step_ms, cg_iterations, contacts).
+/// With `capture`, a "capture" object: renderer, device, path, bytes per frame, frames, median ms.
 void write_run_json(std::ostream& out, const RunContext& context, const RunSummary& summary,
-                    std::span<const StepStats> frames, double wall_seconds);
-/// The summary table printed at the end of `weft run`, warnings included.
-void print_run_summary(std::ostream& out, const RunContext& context, const RunSummary& summary, double wall_seconds);
+                    std::span<const StepStats> frames, double wall_seconds, const CaptureSummary* capture = nullptr);
+/// The summary table printed at the end of `weft run`, warnings included, and the capture's lines.
+void print_run_summary(std::ostream& out, const RunContext& context, const RunSummary& summary, double wall_seconds,
+                       const CaptureSummary* capture = nullptr);
 
 }  // namespace weft::cli

@@ -33,6 +33,12 @@ Options:
   --frames N         frames to simulate; default: the scene's 'frames'
   --out DIR          write a mesh per cloth per frame: DIR/frame_0000_<cloth>.ply (frame 0 = initial state)
   --format ply|obj   mesh format for --out; default ply
+  --capture egl|vulkan|none
+                     render every frame headless to DIR/frame_0000.png (needs --out DIR; meshes
+                     then only with --format), plus DIR/contact_sheet.png and DIR/capture.mp4
+                     when ffmpeg is installed; egl: OpenGL 4.5 through EGL, vulkan: the Vulkan
+                     renderer; default none
+  --size WxH         picture size for --capture, pixels; default 1280x720
   --stats FILE.json  write run statistics as JSON (per-stage ms, CG iterations, per-frame series)
   --set KEY=VALUE    override a scene key, as if written in the file; repeatable
                      e.g. --set solver.substeps=4 --set 'wind.velocity=[2, 0, 0]'

@@ -1,0 +1,79 @@
+#pragma once
+/// @file
+/// The renderer interface: Vulkan (render/src/vulkan/) and EGL + OpenGL 4.5 (render/src/egl/) draw a
+/// RenderScene offscreen and read the picture back. Both render the same image up to rasterisation
+/// rounding (tests/render/ holds them to it).
+#include <cstdint>
+#include <memory>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include <optional>
+
+#include "weft/interop.h"
+#include "weft/render/image.h"
+#include "weft/render/render_scene.h"
+
+namespace weft::render {
+
+struct RendererOptions {
+    int width = 1280;           ///< pixels
+    int height = 720;           ///< pixels
+    int samples = 4;            ///< MSAA samples per pixel (1, 2, 4 or 8; lowered to what the device has)
+    int shadow_map_size = 2048;  ///< texels per side
+    /// Vulkan: enable VK_LAYER_KHRONOS_validation and count its messages (`validation_messages`);
+    /// an error when the layer is not installed. EGL: a debug context with KHR_debug counted the same way.
+    bool validation = false;
+};
+
+/// How the cloth vertices reached the renderer in the last frame.
+struct TransferStats {
+    std::string path;                 ///< "host upload" or "interop"
+    std::uint64_t bytes_uploaded = 0;  ///< host → device bytes in the last frame
+};
+
+/// The zero-copy link (docs/rendering.md): the renderer's cloth vertex buffer and a timeline semaphore,
+/// exported for a GPU backend on the same device to import (weft/cuda/external_memory.h). The writer
+/// waits until the timeline reaches the value the renderer last signalled (its reads are done),
+/// writes, and signals a new value; the renderer's frame waits on that value (RenderFrame::wait_value).
+struct ClothInterop {
+    ExternalMemoryHandle memory;    ///< RenderScene::cloth_vertices RenderVertex, 24 bytes apart
+    ExternalTimelineHandle timeline;
+    DeviceUuid device_uuid{};       ///< the GPU they live on
+};
+
+class Renderer {
+public:
+    virtual ~Renderer() = default;
+    Renderer() = default;
+    Renderer(const Renderer&) = delete;
+    Renderer& operator=(const Renderer&) = delete;
+
+    /// "vulkan" or "egl".
+    [[nodiscard]] virtual std::string_view name() const = 0;
+    /// The device and driver it renders on ("llvmpipe (LLVM 15.0.6), Vulkan 1.3.230").
+    [[nodiscard]] virtual std::string device_description() const = 0;
+    /// Uploads the static geometry of `scene` (kept by copy) and sizes the cloth buffer.
+    virtual void load(const RenderScene& scene) = 0;
+    /// Draws `frame` (shadow pass, then the scene with MSAA, resolved) and reads the picture back.
+    [[nodiscard]] virtual Image draw(const RenderFrame& frame) = 0;
+    [[nodiscard]] virtual TransferStats transfer() const = 0;
+    /// After load(): exports the cloth buffer and a timeline semaphore (new fds, owned by the caller
+    /// until imported). From then on a frame with no cloth vertices is drawn from what the writer
+    /// put in the buffer, with RenderFrame's wait and signal values. std::nullopt, with the reason in
+    /// `why`, where the device or the API cannot export (lavapipe, the EGL path so far).
+    [[nodiscard]] virtual std::optional<ClothInterop> export_cloth(std::string& why) = 0;
+    /// Copies the cloth vertex buffer back to the host: what the renderer draws from (tests).
+    [[nodiscard]] virtual std::vector<RenderVertex> read_cloth() = 0;
+    /// Validation or debug messages of warning or error severity so far (0 without validation).
+    [[nodiscard]] virtual int validation_messages() const = 0;
+};
+
+/// Creates the renderer called `name` ("vulkan", "egl"). Throws `weft::Error` saying what is missing
+/// (no Vulkan device, no EGL display, no validation layer) when it cannot start.
+[[nodiscard]] std::unique_ptr<Renderer> create_renderer(std::string_view name, const RendererOptions& options = {});
+/// Names of the compiled renderers.
+[[nodiscard]] std::vector<std::string> renderer_names();
+
+}  // namespace weft::render

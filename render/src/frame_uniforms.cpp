@@ -1,0 +1,65 @@
+// Camera, light and per-draw uniforms shared by both renderers (see frame_uniforms.h).
+#include "frame_uniforms.h"
+
+#include <algorithm>
+#include <cmath>
+
+#include <glm/gtc/matrix_transform.hpp>
+
+namespace weft::render::detail {
+
+FrameUniforms frame_uniforms(const RenderScene& scene, int width, int height, int shadow_map_size) {
+    FrameUniforms u{};
+    const Camera& c = scene.camera;
+    const float aspect = static_cast<float>(width) / static_cast<float>(std::max(height, 1));
+    const glm::mat4 projection = glm::perspectiveRH_ZO(glm::radians(c.fov_degrees), aspect, c.near_plane, c.far_plane);
+    // A camera looking straight up or down needs another up vector.
+    const glm::vec3 forward = glm::normalize(c.target - c.position);
+    const glm::vec3 up = std::abs(forward.y) > 0.999F ? glm::vec3(0.0F, 0.0F, -1.0F) : glm::vec3(0.0F, 1.0F, 0.0F);
+    u.view_projection = projection * glm::lookAtRH(c.position, c.target, up);
+
+    // The shadow map: an orthographic box along the light around the bounds' bounding sphere.
+    const glm::vec3 d = glm::normalize(scene.light.direction);
+    const glm::vec3 centre = 0.5F * (scene.bounds_min + scene.bounds_max);
+    const float radius = std::max(0.5F * glm::length(scene.bounds_max - scene.bounds_min), 1e-3F);
+    const glm::vec3 light_up = std::abs(d.y) > 0.999F ? glm::vec3(0.0F, 0.0F, 1.0F) : glm::vec3(0.0F, 1.0F, 0.0F);
+    const glm::mat4 light_view = glm::lookAtRH(centre - d * (2.0F * radius), centre, light_up);
+    const glm::mat4 light_ortho = glm::orthoRH_ZO(-radius, radius, -radius, radius, 0.0F, 4.0F * radius);
+    u.light_projection = light_ortho * light_view;
+
+    const float texel = 1.0F / static_cast<float>(std::max(shadow_map_size, 1));
+    const float world_texel = 2.0F * radius * texel;  // m
+    u.camera_position = glm::vec4(c.position, texel);
+    u.light_direction = glm::vec4(d, 0.0F);
+    u.light_colour = glm::vec4(scene.light.colour, scene.light.ambient);
+    u.sky_colour = glm::vec4(scene.light.sky, world_texel);
+    // Depth bias: the depth of 1.5 world texels, a texel's slope at about 56°, in the 0..1 range of
+    // the 4·radius deep light box.
+    u.ground_colour = glm::vec4(scene.light.ground, 1.5F * world_texel / (4.0F * radius));
+    return u;
+}
+
+std::vector<DrawUniforms> draw_uniforms(const RenderScene& scene, const RenderFrame& frame) {
+    std::vector<DrawUniforms> out;
+    out.reserve(scene.cloths.size() + scene.colliders.size());
+    for (const ClothDraw& cloth : scene.cloths) {
+        DrawUniforms u{};
+        u.model = glm::mat4(1.0F);
+        u.front_colour = glm::vec4(cloth.front_colour, 1.0F);
+        u.back_colour = glm::vec4(cloth.back_colour, 1.0F);
+        u.material = glm::vec4(0.0F, 0.85F, 1.0F, 0.0F);
+        out.push_back(u);
+    }
+    for (std::size_t k = 0; k < scene.colliders.size(); ++k) {
+        const ColliderDraw& collider = scene.colliders[k];
+        DrawUniforms u{};
+        u.model = k < frame.collider_models.size() ? frame.collider_models[k] : glm::mat4(1.0F);
+        u.front_colour = glm::vec4(collider.colour, 1.0F);
+        u.back_colour = glm::vec4(collider.grid_spacing > 0.0F ? collider.line_colour : collider.colour, 1.0F);
+        u.material = glm::vec4(collider.grid_spacing, collider.grid_spacing > 0.0F ? 1.0F : 0.5F, 0.0F, 0.0F);
+        out.push_back(u);
+    }
+    return out;
+}
+
+}  // namespace weft::render::detail

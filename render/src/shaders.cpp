@@ -1,0 +1,39 @@
+// The build-time shader outputs as arrays and strings (see shaders.h).
+#include "shaders.h"
+
+namespace weft::render::detail {
+namespace {
+
+const std::uint32_t kSurfaceVertSpirv[] =
+#include "surface.vert.spv.inc"
+    ;
+const std::uint32_t kSurfaceFragSpirv[] =
+#include "surface.frag.spv.inc"
+    ;
+const std::uint32_t kShadowVertSpirv[] =
+#include "shadow.vert.spv.inc"
+    ;
+const std::uint32_t kShadowFragSpirv[] =
+#include "shadow.frag.spv.inc"
+    ;
+const char* const kSurfaceVertGlsl =
+#include "surface.vert.glsl.inc"
+    ;
+const char* const kSurfaceFragGlsl =
+#include "surface.frag.glsl.inc"
+    ;
+const char* const kShadowVertGlsl =
+#include "shadow.vert.glsl.inc"
+    ;
+const char* const kShadowFragGlsl =
+#include "shadow.frag.glsl.inc"
+    ;
+
+}  // namespace
+
+ShaderCode surface_vertex_shader() { return {kSurfaceVertSpirv, kSurfaceVertGlsl}; }
+ShaderCode surface_fragment_shader() { return {kSurfaceFragSpirv, kSurfaceFragGlsl}; }
+ShaderCode shadow_vertex_shader() { return {kShadowVertSpirv, kShadowVertGlsl}; }
+ShaderCode shadow_fragment_shader() { return {kShadowFragSpirv, kShadowFragGlsl}; }
+
+}  // namespace weft::render::detail

@@ -1,0 +1,718 @@
+// The Vulkan renderer, offscreen: a shadow map pass, a multisampled surface pass resolved to one
+// sample, and a copy of the picture to the host, recorded into one command buffer per frame and
+// waited for with a fence (capture, not presentation: the frame is needed on the host at once).
+//
+// Geometry: the cloth vertex buffer (device-local, RenderScene::cloth_vertices × 24 bytes) is filled
+// each frame from a persistently mapped staging buffer, or left as it is when the frame brings no
+// vertices (the zero-copy path writes it on the device). The colliders' meshes and every index live
+// in one static buffer uploaded by load(). Uniforms: the Frame block, then one Draw block per draw
+// at the device's uniform offset alignment, selected by a dynamic offset.
+#include "vulkan/vulkan_renderer.h"
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <cstring>
+#include <string>
+#include <vector>
+
+#include <unistd.h>
+
+#include "weft/error.h"
+
+#include "frame_uniforms.h"
+#include "shaders.h"
+#include "vulkan/vulkan_check.h"
+#include "vulkan/vulkan_context.h"
+#include "vulkan/vulkan_interop.h"
+#include "vulkan/vulkan_pipelines.h"
+#include "vulkan/vulkan_resources.h"
+
+namespace weft::render::detail {
+namespace {
+
+constexpr VkFormat kColourFormat = VK_FORMAT_R8G8B8A8_UNORM;  // holds sRGB-encoded values (the shader encodes)
+
+VkDeviceSize align_up(VkDeviceSize n, VkDeviceSize alignment) { return (n + alignment - 1) / alignment * alignment; }
+
+// The first of `candidates` whose optimal tiling has every feature of `features`.
+VkFormat first_format(VkPhysicalDevice device, std::initializer_list<VkFormat> candidates,
+                      VkFormatFeatureFlags features) {
+    for (const VkFormat f : candidates) {
+        VkFormatProperties p{};
+        vkGetPhysicalDeviceFormatProperties(device, f, &p);
+        if ((p.optimalTilingFeatures & features) == features) return f;
+    }
+    return VK_FORMAT_UNDEFINED;
+}
+
+// The most samples up to `requested` that colour and depth attachments both support (1 always is).
+VkSampleCountFlagBits sample_count(const VkPhysicalDeviceLimits& limits, int requested) {
+    const VkSampleCountFlags supported = limits.framebufferColorSampleCounts & limits.framebufferDepthSampleCounts;
+    for (int s = requested; s > 1; s /= 2)
+        if ((supported & static_cast<VkSampleCountFlags>(s)) != 0) return static_cast<VkSampleCountFlagBits>(s);
+    return VK_SAMPLE_COUNT_1_BIT;
+}
+
+// The clear colour goes to the UNORM target as it is, so it is encoded like the shader's output.
+float to_srgb(float c) {
+    c = std::clamp(c, 0.0F, 1.0F);
+    return c < 0.0031308F ? c * 12.92F : 1.055F * std::pow(c, 1.0F / 2.4F) - 0.055F;
+}
+
+class VulkanRenderer final : public Renderer {
+public:
+    explicit VulkanRenderer(const RendererOptions& options);
+    ~VulkanRenderer() override;
+
+    [[nodiscard]] std::string_view name() const override { return "vulkan"; }
+    [[nodiscard]] std::string device_description() const override { return context_.description(); }
+    void load(const RenderScene& scene) override;
+    [[nodiscard]] Image draw(const RenderFrame& frame) override;
+    [[nodiscard]] TransferStats transfer() const override { return transfer_; }
+    [[nodiscard]] int validation_messages() const override { return context_.validation_messages(); }
+    [[nodiscard]] std::optional<ClothInterop> export_cloth(std::string& why) override;
+    [[nodiscard]] std::vector<RenderVertex> read_cloth() override;
+
+private:
+    void create_targets();
+    void create_pipelines();
+    void create_descriptors();
+    void record(VkCommandBuffer commands, const std::vector<DrawUniforms>& draws, bool upload, bool external) const;
+    /// The queue-family ownership transfer of the exported cloth buffer: acquired from the external
+    /// writer (CUDA) before the frame reads it, released back after.
+    void external_barrier(VkCommandBuffer commands, bool acquire) const;
+    void draw_all(VkCommandBuffer commands, const std::vector<DrawUniforms>& draws, bool casters_only) const;
+    void destroy_scene() noexcept;
+    void destroy() noexcept;
+
+    RendererOptions options_;
+    VulkanContext context_;
+    VkSampleCountFlagBits samples_ = VK_SAMPLE_COUNT_1_BIT;  ///< what the device allowed of options_.samples
+    VkFormat depth_format_ = VK_FORMAT_UNDEFINED;
+    VkFormat shadow_format_ = VK_FORMAT_UNDEFINED;
+    VkFilter shadow_filter_ = VK_FILTER_LINEAR;
+    VkExtent2D extent_{};
+    VkExtent2D shadow_extent_{};
+
+    // Targets and pipelines, made once.
+    DeviceImage shadow_map_, colour_, depth_, resolved_;
+    VkSampler shadow_sampler_ = VK_NULL_HANDLE;
+    VkRenderPass shadow_pass_ = VK_NULL_HANDLE, surface_pass_ = VK_NULL_HANDLE;
+    VkFramebuffer shadow_framebuffer_ = VK_NULL_HANDLE, surface_framebuffer_ = VK_NULL_HANDLE;
+    VkDescriptorSetLayout set_layout_ = VK_NULL_HANDLE;
+    VkPipelineLayout pipeline_layout_ = VK_NULL_HANDLE;
+    VkPipeline shadow_pipeline_ = VK_NULL_HANDLE, surface_pipeline_ = VK_NULL_HANDLE;
+    VkDescriptorPool descriptor_pool_ = VK_NULL_HANDLE;
+    VkDescriptorSet descriptor_set_ = VK_NULL_HANDLE;
+    VkCommandBuffer commands_ = VK_NULL_HANDLE;
+    VkFence fence_ = VK_NULL_HANDLE;
+    DeviceBuffer readback_;  ///< the resolved picture, width·height·4 bytes
+
+    // The scene, made by load().
+    bool loaded_ = false;
+    RenderScene scene_;
+    DeviceBuffer static_geometry_;   ///< the colliders' vertices, then the cloth indices, then the colliders'
+    VkDeviceSize index_offset_ = 0;  ///< of the first index in static_geometry_
+    std::vector<std::uint32_t> collider_first_index_;  ///< into the index range, per collider
+    std::vector<std::int32_t> collider_first_vertex_;  ///< into the colliders' vertices, per collider
+    DeviceBuffer cloth_vertices_, cloth_staging_;
+    // Zero-copy (export_cloth): the cloth buffer is exported, a timeline orders the writer's writes
+    // against this renderer's reads.
+    bool exported_ = false;
+    bool exported_dedicated_ = false;
+    VkSemaphore timeline_ = VK_NULL_HANDLE;
+    std::uint64_t last_signal_ = 0;
+    DeviceBuffer uniforms_;  ///< Frame at 0, Draw i at draw_base_ + i·draw_stride_
+    VkDeviceSize draw_base_ = 0, draw_stride_ = 0;
+    TransferStats transfer_{"host upload", 0};
+};
+
+VulkanRenderer::VulkanRenderer(const RendererOptions& options) : options_(options), context_(options.validation) {
+    try {
+        extent_ = {static_cast<std::uint32_t>(options.width), static_cast<std::uint32_t>(options.height)};
+        const auto shadow_size = static_cast<std::uint32_t>(options.shadow_map_size);
+        shadow_extent_ = {shadow_size, shadow_size};
+        const VkPhysicalDeviceLimits& limits = context_.properties().limits;
+        if (extent_.width > limits.maxFramebufferWidth || extent_.height > limits.maxFramebufferHeight ||
+            shadow_size > limits.maxImageDimension2D || shadow_size > limits.maxFramebufferWidth)
+            throw Error("vulkan renderer: " + std::to_string(extent_.width) + "×" + std::to_string(extent_.height) +
+                        " pixels or a shadow map of " + std::to_string(shadow_size) + "² exceed the limits of " +
+                        context_.description());
+        samples_ = sample_count(limits, options.samples);
+        create_targets();
+        create_pipelines();
+        create_descriptors();
+    } catch (...) {
+        destroy();
+        throw;
+    }
+}
+
+VulkanRenderer::~VulkanRenderer() { destroy(); }
+
+void VulkanRenderer::create_targets() {
+    const VkPhysicalDevice physical = context_.physical_device();
+    const VkDevice device = context_.device();
+    // Every device has D16 with these features; the others give the shadow test more precision.
+    depth_format_ = first_format(physical, {VK_FORMAT_D32_SFLOAT, VK_FORMAT_X8_D24_UNORM_PACK32, VK_FORMAT_D16_UNORM},
+                                 VK_FORMAT_FEATURE_DEPTH_STENCIL_ATTACHMENT_BIT);
+    shadow_format_ = first_format(physical, {VK_FORMAT_D32_SFLOAT, VK_FORMAT_X8_D24_UNORM_PACK32, VK_FORMAT_D16_UNORM},
+                                  VK_FORMAT_FEATURE_DEPTH_STENCIL_ATTACHMENT_BIT | VK_FORMAT_FEATURE_SAMPLED_IMAGE_BIT);
+    if (depth_format_ == VK_FORMAT_UNDEFINED || shadow_format_ == VK_FORMAT_UNDEFINED)
+        throw Error("vulkan renderer: no depth format to render and sample on " + context_.description());
+    VkFormatProperties shadow_props{};
+    vkGetPhysicalDeviceFormatProperties(physical, shadow_format_, &shadow_props);
+    // Linear filtering of a compare sampler blends the 2×2 test results: softer PCF where allowed.
+    shadow_filter_ = (shadow_props.optimalTilingFeatures & VK_FORMAT_FEATURE_SAMPLED_IMAGE_FILTER_LINEAR_BIT) != 0
+                         ? VK_FILTER_LINEAR
+                         : VK_FILTER_NEAREST;
+
+    shadow_map_ = create_image(context_, shadow_extent_, shadow_format_, VK_SAMPLE_COUNT_1_BIT,
+                               VK_IMAGE_USAGE_DEPTH_STENCIL_ATTACHMENT_BIT | VK_IMAGE_USAGE_SAMPLED_BIT,
+                               VK_IMAGE_ASPECT_DEPTH_BIT);
+    resolved_ =
+        create_image(context_, extent_, kColourFormat, VK_SAMPLE_COUNT_1_BIT,
+                     VK_IMAGE_USAGE_COLOR_ATTACHMENT_BIT | VK_IMAGE_USAGE_TRANSFER_SRC_BIT, VK_IMAGE_ASPECT_COLOR_BIT);
+    if (samples_ != VK_SAMPLE_COUNT_1_BIT)
+        colour_ = create_image(context_, extent_, kColourFormat, samples_,
+                               VK_IMAGE_USAGE_COLOR_ATTACHMENT_BIT | VK_IMAGE_USAGE_TRANSIENT_ATTACHMENT_BIT,
+                               VK_IMAGE_ASPECT_COLOR_BIT);
+    depth_ = create_image(context_, extent_, depth_format_, samples_,
+                          VK_IMAGE_USAGE_DEPTH_STENCIL_ATTACHMENT_BIT | VK_IMAGE_USAGE_TRANSIENT_ATTACHMENT_BIT,
+                          VK_IMAGE_ASPECT_DEPTH_BIT);
+
+    VkSamplerCreateInfo sampler{};
+    sampler.sType = VK_STRUCTURE_TYPE_SAMPLER_CREATE_INFO;
+    sampler.magFilter = shadow_filter_;
+    sampler.minFilter = shadow_filter_;
+    sampler.mipmapMode = VK_SAMPLER_MIPMAP_MODE_NEAREST;
+    // Outside the map nothing casts a shadow: the border reads as the far plane.
+    sampler.addressModeU = VK_SAMPLER_ADDRESS_MODE_CLAMP_TO_BORDER;
+    sampler.addressModeV = VK_SAMPLER_ADDRESS_MODE_CLAMP_TO_BORDER;
+    sampler.addressModeW = VK_SAMPLER_ADDRESS_MODE_CLAMP_TO_BORDER;
+    sampler.borderColor = VK_BORDER_COLOR_FLOAT_OPAQUE_WHITE;
+    sampler.compareEnable = VK_TRUE;
+    sampler.compareOp = VK_COMPARE_OP_LESS_OR_EQUAL;  // lit where the reference is no deeper than the map
+    sampler.maxLod = 0.0F;
+    WEFT_VK_CHECK(vkCreateSampler(device, &sampler, nullptr, &shadow_sampler_));
+
+    shadow_pass_ = create_shadow_pass(device, shadow_format_);
+    surface_pass_ = create_surface_pass(device, kColourFormat, depth_format_, samples_);
+    VkFramebufferCreateInfo fb{};
+    fb.sType = VK_STRUCTURE_TYPE_FRAMEBUFFER_CREATE_INFO;
+    fb.renderPass = shadow_pass_;
+    fb.attachmentCount = 1;
+    fb.pAttachments = &shadow_map_.view;
+    fb.width = shadow_extent_.width;
+    fb.height = shadow_extent_.height;
+    fb.layers = 1;
+    WEFT_VK_CHECK(vkCreateFramebuffer(device, &fb, nullptr, &shadow_framebuffer_));
+    const std::array<VkImageView, 3> views =
+        samples_ != VK_SAMPLE_COUNT_1_BIT ? std::array<VkImageView, 3>{colour_.view, depth_.view, resolved_.view}
+                                          : std::array<VkImageView, 3>{resolved_.view, depth_.view, VK_NULL_HANDLE};
+    fb.renderPass = surface_pass_;
+    fb.attachmentCount = samples_ != VK_SAMPLE_COUNT_1_BIT ? 3U : 2U;
+    fb.pAttachments = views.data();
+    fb.width = extent_.width;
+    fb.height = extent_.height;
+    WEFT_VK_CHECK(vkCreateFramebuffer(device, &fb, nullptr, &surface_framebuffer_));
+
+    readback_ = create_buffer(context_, VkDeviceSize{extent_.width} * extent_.height * 4,
+                              VK_BUFFER_USAGE_TRANSFER_DST_BIT, MemoryUse::readback);
+
+    VkCommandBufferAllocateInfo alloc{};
+    alloc.sType = VK_STRUCTURE_TYPE_COMMAND_BUFFER_ALLOCATE_INFO;
+    alloc.commandPool = context_.command_pool();
+    alloc.level = VK_COMMAND_BUFFER_LEVEL_PRIMARY;
+    alloc.commandBufferCount = 1;
+    WEFT_VK_CHECK(vkAllocateCommandBuffers(device, &alloc, &commands_));
+    VkFenceCreateInfo fence{};
+    fence.sType = VK_STRUCTURE_TYPE_FENCE_CREATE_INFO;
+    WEFT_VK_CHECK(vkCreateFence(device, &fence, nullptr, &fence_));
+}
+
+void VulkanRenderer::create_pipelines() {
+    const VkDevice device = context_.device();
+    // common.glsl: binding 0 Frame, 1 Draw (one set of uniforms per draw, picked by a dynamic
+    // offset), 2 the shadow map.
+    const std::array<VkDescriptorSetLayoutBinding, 3> bindings{{
+        {0, VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER, 1, VK_SHADER_STAGE_VERTEX_BIT | VK_SHADER_STAGE_FRAGMENT_BIT, nullptr},
+        {1, VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER_DYNAMIC, 1, VK_SHADER_STAGE_VERTEX_BIT | VK_SHADER_STAGE_FRAGMENT_BIT,
+         nullptr},
+        {2, VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER, 1, VK_SHADER_STAGE_FRAGMENT_BIT, nullptr},
+    }};
+    VkDescriptorSetLayoutCreateInfo set{};
+    set.sType = VK_STRUCTURE_TYPE_DESCRIPTOR_SET_LAYOUT_CREATE_INFO;
+    set.bindingCount = static_cast<std::uint32_t>(bindings.size());
+    set.pBindings = bindings.data();
+    WEFT_VK_CHECK(vkCreateDescriptorSetLayout(device, &set, nullptr, &set_layout_));
+    VkPipelineLayoutCreateInfo layout{};
+    layout.sType = VK_STRUCTURE_TYPE_PIPELINE_LAYOUT_CREATE_INFO;
+    layout.setLayoutCount = 1;
+    layout.pSetLayouts = &set_layout_;
+    WEFT_VK_CHECK(vkCreatePipelineLayout(device, &layout, nullptr, &pipeline_layout_));
+
+    PipelineDesc shadow;
+    shadow.pass = shadow_pass_;
+    shadow.layout = pipeline_layout_;
+    shadow.vertex = shadow_vertex_shader();
+    shadow.fragment = shadow_fragment_shader();
+    shadow.normals = false;
+    shadow.extent = shadow_extent_;
+    // Not flipped: the surface shader samples at uv = ndc.xy·0.5 + 0.5, so NDC y = −1 must land
+    // on row 0 of the map, as it does with a positive viewport (and on OpenGL).
+    shadow.flip_y = false;
+    shadow.colour = false;
+    // The surface shader offsets its lookups along the normal and subtracts a bias: no slope bias here.
+    shadow.depth_compare = VK_COMPARE_OP_LESS;
+    shadow_pipeline_ = create_pipeline(device, shadow);
+
+    PipelineDesc surface;
+    surface.pass = surface_pass_;
+    surface.layout = pipeline_layout_;
+    surface.vertex = surface_vertex_shader();
+    surface.fragment = surface_fragment_shader();
+    surface.extent = extent_;
+    surface.flip_y = true;
+    surface.samples = samples_;
+    surface.depth_compare = VK_COMPARE_OP_LESS;
+    surface_pipeline_ = create_pipeline(device, surface);
+}
+
+void VulkanRenderer::create_descriptors() {
+    const VkDevice device = context_.device();
+    const std::array<VkDescriptorPoolSize, 3> sizes{{
+        {VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER, 1},
+        {VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER_DYNAMIC, 1},
+        {VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER, 1},
+    }};
+    VkDescriptorPoolCreateInfo pool{};
+    pool.sType = VK_STRUCTURE_TYPE_DESCRIPTOR_POOL_CREATE_INFO;
+    pool.maxSets = 1;
+    pool.poolSizeCount = static_cast<std::uint32_t>(sizes.size());
+    pool.pPoolSizes = sizes.data();
+    WEFT_VK_CHECK(vkCreateDescriptorPool(device, &pool, nullptr, &descriptor_pool_));
+    VkDescriptorSetAllocateInfo alloc{};
+    alloc.sType = VK_STRUCTURE_TYPE_DESCRIPTOR_SET_ALLOCATE_INFO;
+    alloc.descriptorPool = descriptor_pool_;
+    alloc.descriptorSetCount = 1;
+    alloc.pSetLayouts = &set_layout_;
+    WEFT_VK_CHECK(vkAllocateDescriptorSets(device, &alloc, &descriptor_set_));
+
+    // The shadow map is fixed; the uniform buffers follow in load(), sized by the scene.
+    const VkDescriptorImageInfo image{shadow_sampler_, shadow_map_.view,
+                                      VK_IMAGE_LAYOUT_DEPTH_STENCIL_READ_ONLY_OPTIMAL};
+    VkWriteDescriptorSet write{};
+    write.sType = VK_STRUCTURE_TYPE_WRITE_DESCRIPTOR_SET;
+    write.dstSet = descriptor_set_;
+    write.dstBinding = 2;
+    write.descriptorCount = 1;
+    write.descriptorType = VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER;
+    write.pImageInfo = &image;
+    vkUpdateDescriptorSets(device, 1, &write, 0, nullptr);
+}
+
+void VulkanRenderer::load(const RenderScene& scene) {
+    // draw() waits for its frame, so nothing of the previous scene is in use.
+    destroy_scene();
+    scene_ = scene;
+    const VkDevice device = context_.device();
+
+    // Static geometry: every collider's vertices (drawn with a vertex offset each), then the cloth
+    // indices and the colliders' indices (4-byte aligned, as the index buffer offset must be).
+    std::vector<RenderVertex> vertices;
+    std::vector<std::uint32_t> indices(scene_.cloth_indices);
+    for (const ColliderDraw& c : scene_.colliders) {
+        collider_first_vertex_.push_back(static_cast<std::int32_t>(vertices.size()));
+        collider_first_index_.push_back(static_cast<std::uint32_t>(indices.size()));
+        vertices.insert(vertices.end(), c.mesh.vertices.begin(), c.mesh.vertices.end());
+        indices.insert(indices.end(), c.mesh.indices.begin(), c.mesh.indices.end());
+    }
+    const VkDeviceSize vertex_bytes = vertices.size() * sizeof(RenderVertex);
+    const VkDeviceSize index_bytes = indices.size() * sizeof(std::uint32_t);
+    index_offset_ = vertex_bytes;
+    const VkDeviceSize cloth_bytes = VkDeviceSize{scene_.cloth_vertices} * sizeof(RenderVertex);
+
+    if (vertex_bytes + index_bytes > 0)
+        static_geometry_ = create_buffer(
+            context_, vertex_bytes + index_bytes,
+            VK_BUFFER_USAGE_VERTEX_BUFFER_BIT | VK_BUFFER_USAGE_INDEX_BUFFER_BIT | VK_BUFFER_USAGE_TRANSFER_DST_BIT,
+            MemoryUse::device_local);
+    if (cloth_bytes > 0) {
+        cloth_vertices_ = create_buffer(
+            context_, cloth_bytes,
+            VK_BUFFER_USAGE_VERTEX_BUFFER_BIT | VK_BUFFER_USAGE_TRANSFER_DST_BIT | VK_BUFFER_USAGE_TRANSFER_SRC_BIT,
+            MemoryUse::device_local);
+        cloth_staging_ = create_buffer(context_, cloth_bytes, VK_BUFFER_USAGE_TRANSFER_SRC_BIT, MemoryUse::upload);
+    }
+    if (vertex_bytes + index_bytes > 0 || cloth_bytes > 0) {
+        DeviceBuffer staging;
+        if (vertex_bytes + index_bytes > 0) {
+            staging = create_buffer(context_, vertex_bytes + index_bytes, VK_BUFFER_USAGE_TRANSFER_SRC_BIT,
+                                    MemoryUse::upload);
+            std::memcpy(staging.mapped, vertices.data(), vertex_bytes);
+            std::memcpy(static_cast<std::byte*>(staging.mapped) + vertex_bytes, indices.data(), index_bytes);
+        }
+        try {
+            context_.submit_and_wait([&](VkCommandBuffer commands) {
+                if (staging.buffer != VK_NULL_HANDLE) {
+                    const VkBufferCopy copy{0, 0, vertex_bytes + index_bytes};
+                    vkCmdCopyBuffer(commands, staging.buffer, static_geometry_.buffer, 1, &copy);
+                }
+                // Zeros until the first frame fills it: defined contents for a frame without vertices.
+                if (cloth_vertices_.buffer != VK_NULL_HANDLE)
+                    vkCmdFillBuffer(commands, cloth_vertices_.buffer, 0, VK_WHOLE_SIZE, 0);
+                // The fence wait orders the host, not later submissions: make the writes visible to
+                // the vertex input of every frame.
+                VkMemoryBarrier barrier{};
+                barrier.sType = VK_STRUCTURE_TYPE_MEMORY_BARRIER;
+                barrier.srcAccessMask = VK_ACCESS_TRANSFER_WRITE_BIT;
+                barrier.dstAccessMask = VK_ACCESS_VERTEX_ATTRIBUTE_READ_BIT | VK_ACCESS_INDEX_READ_BIT;
+                vkCmdPipelineBarrier(commands, VK_PIPELINE_STAGE_TRANSFER_BIT, VK_PIPELINE_STAGE_VERTEX_INPUT_BIT, 0, 1,
+                                     &barrier, 0, nullptr, 0, nullptr);
+            });
+        } catch (...) {
+            destroy_buffer(device, staging);
+            throw;
+        }
+        destroy_buffer(device, staging);
+    }
+
+    // Uniforms: offsets of dynamic uniform buffers must be multiples of the device's alignment.
+    const VkDeviceSize alignment =
+        std::max<VkDeviceSize>(context_.properties().limits.minUniformBufferOffsetAlignment, 16);
+    const std::size_t draw_count = scene_.cloths.size() + scene_.colliders.size();
+    draw_base_ = align_up(sizeof(FrameUniforms), alignment);
+    draw_stride_ = align_up(sizeof(DrawUniforms), alignment);
+    uniforms_ = create_buffer(context_, draw_base_ + std::max<std::size_t>(draw_count, 1) * draw_stride_,
+                              VK_BUFFER_USAGE_UNIFORM_BUFFER_BIT, MemoryUse::upload);
+    const VkDescriptorBufferInfo frame_info{uniforms_.buffer, 0, sizeof(FrameUniforms)};
+    const VkDescriptorBufferInfo draw_info{uniforms_.buffer, draw_base_, sizeof(DrawUniforms)};
+    std::array<VkWriteDescriptorSet, 2> writes{};
+    for (std::size_t w = 0; w < writes.size(); ++w) {
+        writes[w].sType = VK_STRUCTURE_TYPE_WRITE_DESCRIPTOR_SET;
+        writes[w].dstSet = descriptor_set_;
+        writes[w].dstBinding = static_cast<std::uint32_t>(w);
+        writes[w].descriptorCount = 1;
+        writes[w].descriptorType =
+            w == 0 ? VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER : VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER_DYNAMIC;
+        writes[w].pBufferInfo = w == 0 ? &frame_info : &draw_info;
+    }
+    vkUpdateDescriptorSets(device, static_cast<std::uint32_t>(writes.size()), writes.data(), 0, nullptr);
+    transfer_ = {"host upload", 0};
+    loaded_ = true;
+}
+
+Image VulkanRenderer::draw(const RenderFrame& frame) {
+    if (!loaded_) throw Error("vulkan renderer: draw() before load()");
+    const bool upload = !frame.cloth.empty();
+    if (upload && frame.cloth.size() != scene_.cloth_vertices)
+        throw Error("vulkan renderer: the frame has " + std::to_string(frame.cloth.size()) +
+                    " cloth vertices, the scene's cloth buffer " + std::to_string(scene_.cloth_vertices));
+    const VkDevice device = context_.device();
+
+    // The previous frame was waited for, so the mapped buffers are free to write.
+    if (upload) std::memcpy(cloth_staging_.mapped, frame.cloth.data(), frame.cloth.size_bytes());
+    const FrameUniforms frame_u = frame_uniforms(scene_, options_.width, options_.height, options_.shadow_map_size);
+    const std::vector<DrawUniforms> draws = draw_uniforms(scene_, frame);
+    auto* uniform_bytes = static_cast<std::byte*>(uniforms_.mapped);
+    std::memcpy(uniform_bytes, &frame_u, sizeof frame_u);
+    for (std::size_t i = 0; i < draws.size(); ++i)
+        std::memcpy(uniform_bytes + draw_base_ + i * draw_stride_, &draws[i], sizeof(DrawUniforms));
+
+    WEFT_VK_CHECK(vkResetCommandBuffer(commands_, 0));
+    VkCommandBufferBeginInfo begin{};
+    begin.sType = VK_STRUCTURE_TYPE_COMMAND_BUFFER_BEGIN_INFO;
+    begin.flags = VK_COMMAND_BUFFER_USAGE_ONE_TIME_SUBMIT_BIT;
+    // Drawn from what the external writer left in the exported buffer: no upload, and the reads are
+    // ordered by the timeline (wait for the writer's value, signal ours when done).
+    const bool external = exported_ && !upload;
+    if ((frame.wait_value != 0 || frame.signal_value != 0) && !exported_)
+        throw Error("vulkan renderer: a frame with timeline values, but the cloth buffer is not exported");
+    if (frame.signal_value != 0 && frame.signal_value <= last_signal_)
+        throw Error("vulkan renderer: timeline signal value " + std::to_string(frame.signal_value) +
+                    " is not above the last one signalled, " + std::to_string(last_signal_));
+    WEFT_VK_CHECK(vkBeginCommandBuffer(commands_, &begin));
+    record(commands_, draws, upload, external);
+    WEFT_VK_CHECK(vkEndCommandBuffer(commands_));
+    VkSubmitInfo submit{};
+    submit.sType = VK_STRUCTURE_TYPE_SUBMIT_INFO;
+    submit.commandBufferCount = 1;
+    submit.pCommandBuffers = &commands_;
+    VkTimelineSemaphoreSubmitInfo timeline{};
+    timeline.sType = VK_STRUCTURE_TYPE_TIMELINE_SEMAPHORE_SUBMIT_INFO;
+    const VkPipelineStageFlags wait_stage = VK_PIPELINE_STAGE_VERTEX_INPUT_BIT;
+    if (frame.wait_value != 0) {
+        timeline.waitSemaphoreValueCount = 1;
+        timeline.pWaitSemaphoreValues = &frame.wait_value;
+        submit.waitSemaphoreCount = 1;
+        submit.pWaitSemaphores = &timeline_;
+        submit.pWaitDstStageMask = &wait_stage;
+    }
+    if (frame.signal_value != 0) {
+        timeline.signalSemaphoreValueCount = 1;
+        timeline.pSignalSemaphoreValues = &frame.signal_value;
+        submit.signalSemaphoreCount = 1;
+        submit.pSignalSemaphores = &timeline_;
+        last_signal_ = frame.signal_value;
+    }
+    if (frame.wait_value != 0 || frame.signal_value != 0) submit.pNext = &timeline;
+    WEFT_VK_CHECK(vkQueueSubmit(context_.queue(), 1, &submit, fence_));
+    WEFT_VK_CHECK(vkWaitForFences(device, 1, &fence_, VK_TRUE, UINT64_MAX));
+    WEFT_VK_CHECK(vkResetFences(device, 1, &fence_));
+
+    invalidate(context_, readback_);
+    Image image(options_.width, options_.height);
+    std::memcpy(image.rgba.data(), readback_.mapped, image.rgba.size());
+    transfer_ = {external ? "interop" : "host upload", upload ? static_cast<std::uint64_t>(frame.cloth.size_bytes()) : 0};
+    return image;
+}
+
+std::optional<ClothInterop> VulkanRenderer::export_cloth(std::string& why) {
+    if (!loaded_) throw Error("vulkan renderer: export_cloth() before load()");
+    if (!context_.interop_available()) {
+        why = context_.description() + ": " + context_.interop_unavailable_reason();
+        return std::nullopt;
+    }
+    if (cloth_vertices_.buffer == VK_NULL_HANDLE) {
+        why = "the scene has no cloth";
+        return std::nullopt;
+    }
+    const VkDevice device = context_.device();
+    if (!exported_) {
+        // Replace the cloth buffer by an exportable one (zeros, as load() leaves it).
+        bool dedicated = false;
+        DeviceBuffer exported = create_exportable_buffer(
+            context_, cloth_vertices_.size,
+            VK_BUFFER_USAGE_VERTEX_BUFFER_BIT | VK_BUFFER_USAGE_TRANSFER_DST_BIT | VK_BUFFER_USAGE_TRANSFER_SRC_BIT,
+            dedicated);
+        try {
+            context_.submit_and_wait([&](VkCommandBuffer commands) {
+                vkCmdFillBuffer(commands, exported.buffer, 0, VK_WHOLE_SIZE, 0);
+            });
+            timeline_ = create_exportable_timeline(context_);
+        } catch (...) {
+            destroy_buffer(device, exported);
+            throw;
+        }
+        destroy_buffer(device, cloth_vertices_);
+        cloth_vertices_ = exported;
+        exported_dedicated_ = dedicated;
+        exported_ = true;
+    }
+    ClothInterop link;
+    link.memory = export_memory(context_, cloth_vertices_, exported_dedicated_);
+    try {
+        link.timeline = export_timeline(context_, timeline_);
+    } catch (...) {
+        ::close(link.memory.fd);
+        throw;
+    }
+    std::copy(context_.device_uuid().begin(), context_.device_uuid().end(), link.device_uuid.begin());
+    return link;
+}
+
+std::vector<RenderVertex> VulkanRenderer::read_cloth() {
+    if (!loaded_) throw Error("vulkan renderer: read_cloth() before load()");
+    std::vector<RenderVertex> out(scene_.cloth_vertices);
+    if (out.empty()) return out;
+    DeviceBuffer host = create_buffer(context_, cloth_vertices_.size, VK_BUFFER_USAGE_TRANSFER_DST_BIT, MemoryUse::readback);
+    try {
+        context_.submit_and_wait([&](VkCommandBuffer commands) {
+            if (exported_) external_barrier(commands, true);
+            const VkBufferCopy copy{0, 0, cloth_vertices_.size};
+            vkCmdCopyBuffer(commands, cloth_vertices_.buffer, host.buffer, 1, &copy);
+            VkMemoryBarrier to_host{};
+            to_host.sType = VK_STRUCTURE_TYPE_MEMORY_BARRIER;
+            to_host.srcAccessMask = VK_ACCESS_TRANSFER_WRITE_BIT;
+            to_host.dstAccessMask = VK_ACCESS_HOST_READ_BIT;
+            vkCmdPipelineBarrier(commands, VK_PIPELINE_STAGE_TRANSFER_BIT, VK_PIPELINE_STAGE_HOST_BIT, 0, 1, &to_host, 0,
+                                 nullptr, 0, nullptr);
+            if (exported_) external_barrier(commands, false);
+        });
+        invalidate(context_, host);
+        std::memcpy(out.data(), host.mapped, out.size() * sizeof(RenderVertex));
+    } catch (...) {
+        destroy_buffer(context_.device(), host);
+        throw;
+    }
+    destroy_buffer(context_.device(), host);
+    return out;
+}
+
+void VulkanRenderer::external_barrier(VkCommandBuffer commands, bool acquire) const {
+    VkBufferMemoryBarrier barrier{};
+    barrier.sType = VK_STRUCTURE_TYPE_BUFFER_MEMORY_BARRIER;
+    barrier.srcAccessMask = acquire ? 0 : VK_ACCESS_VERTEX_ATTRIBUTE_READ_BIT | VK_ACCESS_TRANSFER_READ_BIT;
+    barrier.dstAccessMask = acquire ? VK_ACCESS_VERTEX_ATTRIBUTE_READ_BIT | VK_ACCESS_TRANSFER_READ_BIT : 0;
+    barrier.srcQueueFamilyIndex = acquire ? VK_QUEUE_FAMILY_EXTERNAL : context_.queue_family();
+    barrier.dstQueueFamilyIndex = acquire ? context_.queue_family() : VK_QUEUE_FAMILY_EXTERNAL;
+    barrier.buffer = cloth_vertices_.buffer;
+    barrier.offset = 0;
+    barrier.size = VK_WHOLE_SIZE;
+    vkCmdPipelineBarrier(commands, acquire ? VK_PIPELINE_STAGE_TOP_OF_PIPE_BIT : VK_PIPELINE_STAGE_ALL_COMMANDS_BIT,
+                         acquire ? VK_PIPELINE_STAGE_VERTEX_INPUT_BIT | VK_PIPELINE_STAGE_TRANSFER_BIT
+                                 : VK_PIPELINE_STAGE_BOTTOM_OF_PIPE_BIT,
+                         0, 0, nullptr, 1, &barrier, 0, nullptr);
+}
+
+void VulkanRenderer::record(VkCommandBuffer commands, const std::vector<DrawUniforms>& draws, bool upload,
+                            bool external) const {
+    if (external) external_barrier(commands, true);
+    if (upload) {
+        const VkBufferCopy copy{0, 0, cloth_staging_.size};
+        vkCmdCopyBuffer(commands, cloth_staging_.buffer, cloth_vertices_.buffer, 1, &copy);
+        VkBufferMemoryBarrier barrier{};
+        barrier.sType = VK_STRUCTURE_TYPE_BUFFER_MEMORY_BARRIER;
+        barrier.srcAccessMask = VK_ACCESS_TRANSFER_WRITE_BIT;
+        barrier.dstAccessMask = VK_ACCESS_VERTEX_ATTRIBUTE_READ_BIT;
+        barrier.srcQueueFamilyIndex = VK_QUEUE_FAMILY_IGNORED;
+        barrier.dstQueueFamilyIndex = VK_QUEUE_FAMILY_IGNORED;
+        barrier.buffer = cloth_vertices_.buffer;
+        barrier.offset = 0;
+        barrier.size = VK_WHOLE_SIZE;
+        vkCmdPipelineBarrier(commands, VK_PIPELINE_STAGE_TRANSFER_BIT, VK_PIPELINE_STAGE_VERTEX_INPUT_BIT, 0, 0,
+                             nullptr, 1, &barrier, 0, nullptr);
+    }
+
+    VkClearValue depth_clear{};
+    depth_clear.depthStencil = {1.0F, 0};
+    VkRenderPassBeginInfo pass{};
+    pass.sType = VK_STRUCTURE_TYPE_RENDER_PASS_BEGIN_INFO;
+    pass.renderPass = shadow_pass_;
+    pass.framebuffer = shadow_framebuffer_;
+    pass.renderArea = {{0, 0}, shadow_extent_};
+    pass.clearValueCount = 1;
+    pass.pClearValues = &depth_clear;
+    vkCmdBeginRenderPass(commands, &pass, VK_SUBPASS_CONTENTS_INLINE);
+    vkCmdBindPipeline(commands, VK_PIPELINE_BIND_POINT_GRAPHICS, shadow_pipeline_);
+    draw_all(commands, draws, true);
+    vkCmdEndRenderPass(commands);
+
+    const glm::vec3& bg = scene_.background;
+    std::array<VkClearValue, 3> clears{};
+    clears[0].color = {{to_srgb(bg.r), to_srgb(bg.g), to_srgb(bg.b), 1.0F}};
+    clears[1].depthStencil = {1.0F, 0};
+    clears[2].color = clears[0].color;
+    pass.renderPass = surface_pass_;
+    pass.framebuffer = surface_framebuffer_;
+    pass.renderArea = {{0, 0}, extent_};
+    pass.clearValueCount = samples_ != VK_SAMPLE_COUNT_1_BIT ? 3U : 2U;
+    pass.pClearValues = clears.data();
+    vkCmdBeginRenderPass(commands, &pass, VK_SUBPASS_CONTENTS_INLINE);
+    vkCmdBindPipeline(commands, VK_PIPELINE_BIND_POINT_GRAPHICS, surface_pipeline_);
+    draw_all(commands, draws, false);
+    vkCmdEndRenderPass(commands);
+
+    // The render pass left the picture in TRANSFER_SRC_OPTIMAL; rows come out top to bottom because
+    // the viewport is flipped.
+    VkBufferImageCopy copy{};
+    copy.imageSubresource = {VK_IMAGE_ASPECT_COLOR_BIT, 0, 0, 1};
+    copy.imageExtent = {extent_.width, extent_.height, 1};
+    vkCmdCopyImageToBuffer(commands, resolved_.image, VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL, readback_.buffer, 1, &copy);
+    VkBufferMemoryBarrier to_host{};
+    to_host.sType = VK_STRUCTURE_TYPE_BUFFER_MEMORY_BARRIER;
+    to_host.srcAccessMask = VK_ACCESS_TRANSFER_WRITE_BIT;
+    to_host.dstAccessMask = VK_ACCESS_HOST_READ_BIT;
+    to_host.srcQueueFamilyIndex = VK_QUEUE_FAMILY_IGNORED;
+    to_host.dstQueueFamilyIndex = VK_QUEUE_FAMILY_IGNORED;
+    to_host.buffer = readback_.buffer;
+    to_host.offset = 0;
+    to_host.size = VK_WHOLE_SIZE;
+    vkCmdPipelineBarrier(commands, VK_PIPELINE_STAGE_TRANSFER_BIT, VK_PIPELINE_STAGE_HOST_BIT, 0, 0, nullptr, 1,
+                         &to_host, 0, nullptr);
+    if (external) external_barrier(commands, false);
+}
+
+void VulkanRenderer::draw_all(VkCommandBuffer commands, const std::vector<DrawUniforms>& draws,
+                              bool casters_only) const {
+    const VkDeviceSize zero = 0;
+    if (static_geometry_.buffer != VK_NULL_HANDLE)
+        vkCmdBindIndexBuffer(commands, static_geometry_.buffer, index_offset_, VK_INDEX_TYPE_UINT32);
+    const std::size_t cloths = scene_.cloths.size();
+    VkBuffer bound = VK_NULL_HANDLE;
+    for (std::size_t i = 0; i < draws.size(); ++i) {
+        // The ground (the only draw with grid lines) receives shadows but casts none: drawing it into
+        // the map would only cost fill and invite acne.
+        if (casters_only && draws[i].material.x > 0.0F) continue;
+        const bool cloth = i < cloths;
+        const std::uint32_t count = cloth
+                                        ? scene_.cloths[i].index_count
+                                        : static_cast<std::uint32_t>(scene_.colliders[i - cloths].mesh.indices.size());
+        if (count == 0) continue;
+        const VkBuffer vertices = cloth ? cloth_vertices_.buffer : static_geometry_.buffer;
+        if (vertices != bound) {
+            vkCmdBindVertexBuffers(commands, 0, 1, &vertices, &zero);
+            bound = vertices;
+        }
+        const auto offset = static_cast<std::uint32_t>(i * draw_stride_);
+        vkCmdBindDescriptorSets(commands, VK_PIPELINE_BIND_POINT_GRAPHICS, pipeline_layout_, 0, 1, &descriptor_set_, 1,
+                                &offset);
+        if (cloth)
+            vkCmdDrawIndexed(commands, count, 1, scene_.cloths[i].first_index, 0, 0);
+        else
+            vkCmdDrawIndexed(commands, count, 1, collider_first_index_[i - cloths], collider_first_vertex_[i - cloths],
+                             0);
+    }
+}
+
+void VulkanRenderer::destroy_scene() noexcept {
+    const VkDevice device = context_.device();
+    destroy_buffer(device, static_geometry_);
+    destroy_buffer(device, cloth_vertices_);
+    destroy_buffer(device, cloth_staging_);
+    destroy_buffer(device, uniforms_);
+    // An exported buffer goes with its scene: a writer that imported it must import the new one
+    // (export_cloth after the next load()).
+    if (timeline_ != VK_NULL_HANDLE) vkDestroySemaphore(device, timeline_, nullptr);
+    timeline_ = VK_NULL_HANDLE;
+    exported_ = false;
+    last_signal_ = 0;
+    collider_first_index_.clear();
+    collider_first_vertex_.clear();
+    loaded_ = false;
+}
+
+void VulkanRenderer::destroy() noexcept {
+    const VkDevice device = context_.device();
+    if (device == VK_NULL_HANDLE) return;
+    // A draw that threw between submit and wait may have left work in flight.
+    vkQueueWaitIdle(context_.queue());
+    destroy_scene();
+    if (fence_ != VK_NULL_HANDLE) vkDestroyFence(device, fence_, nullptr);
+    if (commands_ != VK_NULL_HANDLE) vkFreeCommandBuffers(device, context_.command_pool(), 1, &commands_);
+    if (descriptor_pool_ != VK_NULL_HANDLE) vkDestroyDescriptorPool(device, descriptor_pool_, nullptr);
+    if (surface_pipeline_ != VK_NULL_HANDLE) vkDestroyPipeline(device, surface_pipeline_, nullptr);
+    if (shadow_pipeline_ != VK_NULL_HANDLE) vkDestroyPipeline(device, shadow_pipeline_, nullptr);
+    if (pipeline_layout_ != VK_NULL_HANDLE) vkDestroyPipelineLayout(device, pipeline_layout_, nullptr);
+    if (set_layout_ != VK_NULL_HANDLE) vkDestroyDescriptorSetLayout(device, set_layout_, nullptr);
+    if (surface_framebuffer_ != VK_NULL_HANDLE) vkDestroyFramebuffer(device, surface_framebuffer_, nullptr);
+    if (shadow_framebuffer_ != VK_NULL_HANDLE) vkDestroyFramebuffer(device, shadow_framebuffer_, nullptr);
+    if (surface_pass_ != VK_NULL_HANDLE) vkDestroyRenderPass(device, surface_pass_, nullptr);
+    if (shadow_pass_ != VK_NULL_HANDLE) vkDestroyRenderPass(device, shadow_pass_, nullptr);
+    if (shadow_sampler_ != VK_NULL_HANDLE) vkDestroySampler(device, shadow_sampler_, nullptr);
+    destroy_buffer(device, readback_);
+    destroy_image(device, resolved_);
+    destroy_image(device, depth_);
+    destroy_image(device, colour_);
+    destroy_image(device, shadow_map_);
+    fence_ = VK_NULL_HANDLE;
+    commands_ = VK_NULL_HANDLE;
+    descriptor_pool_ = VK_NULL_HANDLE;
+    descriptor_set_ = VK_NULL_HANDLE;
+    surface_pipeline_ = shadow_pipeline_ = VK_NULL_HANDLE;
+    pipeline_layout_ = VK_NULL_HANDLE;
+    set_layout_ = VK_NULL_HANDLE;
+    surface_framebuffer_ = shadow_framebuffer_ = VK_NULL_HANDLE;
+    surface_pass_ = shadow_pass_ = VK_NULL_HANDLE;
+    shadow_sampler_ = VK_NULL_HANDLE;
+}
+
+}  // namespace
+
+std::unique_ptr<Renderer> create_vulkan_renderer(const RendererOptions& options) {
+    return std::make_unique<VulkanRenderer>(options);
+}
+
+}  // namespace weft::render::detail

@@ -1,0 +1,50 @@
+#pragma once
+// Scenes the renderer tests draw, shared by the Vulkan, EGL and capture tests: small, fixed and
+// without simulation, so that every pixel is reproducible.
+#include <memory>
+
+#include "weft/mesh.h"
+#include "weft/render/render_scene.h"
+#include "weft/world.h"
+
+namespace weft::render::test {
+
+/// A world and the scene and frame drawn from it. The world is kept because the scene refers to
+/// its cloths by index.
+struct TestScene {
+    std::unique_ptr<World> world;
+    RenderScene scene;
+    std::vector<RenderVertex> vertices;
+    RenderFrame frame;
+};
+
+/// A 1 m square sheet tilted 30° about X above a ball resting on the ground plane, seen from the
+/// front and above: the image shows the sheet's front (upper) side, the ball, the ball's and the
+/// sheet's shadows on the ground grid, and the sky colour above the horizon.
+/// With `show_back`, the sheet is turned over (rotated 180° about X): the camera sees its back.
+inline TestScene sheet_over_ball(bool show_back = false) {
+    TestScene t;
+    t.world = std::make_unique<World>();
+    const auto fabric = Fabric::cook(make_grid(1.0, 1.0, 16, 16, GridPlane::XZ), {.density = 0.2});
+    ClothDesc cloth{.name = "sheet", .fabric = fabric};
+    const double angle = (show_back ? 3.141592653589793 : 0.0) + 0.5235987755982988;
+    cloth.transform.rotation = rotation_from_vector({angle, 0.0, 0.0});
+    cloth.transform.translation = {0.0, 0.9, 0.0};
+    t.world->add_cloth(cloth);
+    ColliderDesc ball{.name = "ball", .shape = ColliderShape::Sphere};
+    ball.radius = 0.3;
+    ball.motion.origin = {0.3, 0.3, 0.2};
+    t.world->add_collider(ball);
+    t.world->add_collider(ColliderDesc{.name = "floor", .shape = ColliderShape::Plane});
+    CameraDesc camera;
+    camera.position = {0.0, 1.6, 2.6};
+    camera.target = {0.0, 0.5, 0.0};
+    camera.fov_degrees = 45.0;
+    t.scene = make_render_scene(*t.world, camera);
+    cloth_vertices(*t.world, t.scene, t.vertices);
+    t.frame.cloth = t.vertices;
+    t.frame.collider_models = collider_models(t.scene, t.world->model(), 0.0);
+    return t;
+}
+
+}  // namespace weft::render::test
