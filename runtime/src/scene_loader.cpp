@@ -116,6 +116,7 @@ void read_collision(Table& root, CollisionSettings& c) {
     if (auto k = t->choice("culling", {"normal_cone", "none"}))
         c.culling = *k == 0 ? CollisionCulling::NormalCone : CollisionCulling::None;
     c.cull_contacts = t->boolean("cull_contacts", c.cull_contacts);
+    c.count_culled = t->boolean("count_culled", c.count_culled);
     c.rest_exclusion = t->number("rest_exclusion", c.rest_exclusion, {0.0, 10.0});
     c.thickness = t->number("thickness", c.thickness, {0.0, 0.1});
     c.stiffness = t->number("stiffness", c.stiffness, {0.0, 1e9});

@@ -56,6 +56,7 @@ max_impact_iterations = 7
 impact_tolerance = 0.2
 cull_contacts = true
 rest_exclusion = 2.5
+count_culled = true
 max_impact_sweeps = 64
 check = true
 )" + kSheet);
@@ -73,6 +74,8 @@ check = true
     EXPECT_EQ(c.impact_tolerance, 0.2);
     EXPECT_FALSE(d.cull_contacts);
     EXPECT_TRUE(c.cull_contacts);
+    EXPECT_FALSE(d.count_culled);
+    EXPECT_TRUE(c.count_culled);
     EXPECT_EQ(d.rest_exclusion, 1.0);
     EXPECT_EQ(c.rest_exclusion, 2.5);
     EXPECT_EQ(d.max_impact_sweeps, 0);

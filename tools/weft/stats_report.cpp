@@ -92,6 +92,7 @@ RunContext describe_run(const SceneDesc& scene, const World& world, int threads)
     c.scene = scene.name;
     c.scene_file = scene.path.string();
     c.backend = std::string(world.backend().name());
+    c.culled_pairs_counted = world.model().settings.collision.count_culled && c.backend == "cpu";
     c.device = world.backend().device_description();
     c.threads = threads;
     const Model& model = world.model();
@@ -204,6 +205,7 @@ void write_summary_fields(JsonWriter& json, const RunContext& c, const RunSummar
     json.field("active", col.active);
     json.key("candidate_pairs");
     write_distribution(json, col.candidate_pairs);
+    json.field("culled_pairs_counted", c.culled_pairs_counted);
     json.key("culled_pairs");
     write_distribution(json, col.culled_pairs);
     json.key("contacts");
@@ -299,8 +301,10 @@ void print_run_summary(std::ostream& out, const RunContext& c, const RunSummary&
         << format_fixed(s.contacts.max, 0) << "\n";
     const auto& col = s.collisions;
     if (col.active) {
-        out << "  collisions     pairs/frame median " << format_fixed(col.candidate_pairs.median, 0) << " (culled "
-            << format_fixed(col.culled_pairs.median, 0) << "), pair springs median " << format_fixed(col.contacts.median, 0)
+        out << "  collisions     pairs/frame median " << format_fixed(col.candidate_pairs.median, 0)
+            << (c.culled_pairs_counted ? " (culled " + format_fixed(col.culled_pairs.median, 0) + ")"
+                                       : std::string(" (culled pairs not counted: collision.count_culled, cpu backend)"))
+            << ", pair springs median " << format_fixed(col.contacts.median, 0)
             << ", CCD " << col.ccd_hits << " hits in " << col.ccd_tests << " tests\n";
         out << "  impact zones   " << col.impact_zones << " zones, at most " << col.impact_iterations_max
             << " rounds per substep; fallbacks: " << col.rigid_zones << " rigid, " << col.frozen_vertices

@@ -92,6 +92,9 @@ struct RunContext {
     double cg_tolerance = 0.0;
     int cg_max_iterations = 0;
     std::string precision;  ///< "float" or "double"
+    /// Whether CollisionStats::culled_pairs was counted: collision.count_culled on the cpu backend
+    /// (the cuda backend does not count them; weft_cuda_collision_bench measures its culling).
+    bool culled_pairs_counted = false;
     std::size_t backend_memory_bytes = 0;
     std::size_t fabric_memory_bytes = 0;     ///< each shared fabric counted once
     std::vector<std::string> cook_warnings;  ///< from the fabrics' cook reports, prefixed by cloth name
