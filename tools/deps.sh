@@ -13,9 +13,10 @@ RUNTIME_PACKAGES=(libtbb-dev libtomlplusplus-dev libglm-dev)
 ASSETS_PACKAGES=(libassimp-dev)
 TEST_PACKAGES=(libgtest-dev libgmock-dev libbenchmark-dev python3)
 # The renderer (WEFT_RENDER): Vulkan loader, headers, glslc, lavapipe and the validation layers;
-# EGL and OpenGL through GLVND with Mesa's llvmpipe; libpng for the captured frames.
+# EGL and OpenGL through GLVND with Mesa's llvmpipe; libpng for the captured frames; GLFW for the
+# window of `weft view`, and Xvfb (xvfb-run needs xauth) to test it without a display.
 RENDER_PACKAGES=(libvulkan-dev glslc mesa-vulkan-drivers vulkan-validationlayers libegl-dev libgl-dev libegl-mesa0
-                 libgl1-mesa-dri libpng-dev)
+                 libgl1-mesa-dri libpng-dev libglfw3-dev xvfb xauth)
 PACKAGE_GROUPS=(BUILD_PACKAGES RUNTIME_PACKAGES ASSETS_PACKAGES TEST_PACKAGES RENDER_PACKAGES)
 
 if [[ "${WEFT_SKIP_DEPS:-0}" == "1" ]]; then

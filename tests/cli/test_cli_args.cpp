@@ -155,6 +155,78 @@ TEST(CliArgs, Bench) {
     EXPECT_NE(error_of({"bench", "flag", "--out", "x"}).find("'--out'"), std::string::npos);
 }
 
+TEST(CliArgs, ViewDefaultsAndFlags) {
+    const Invocation defaults = parse({"view", "flag"});
+    ASSERT_EQ(defaults.command, Invocation::Command::View);
+    EXPECT_EQ(defaults.view.scene, "flag");
+    EXPECT_EQ(defaults.view.sim.backend, "auto");
+    EXPECT_FALSE(defaults.view.frames.has_value());
+    EXPECT_TRUE(defaults.view.screenshot.empty());
+    EXPECT_EQ(defaults.view.width, 1280);
+    EXPECT_EQ(defaults.view.height, 720);
+    EXPECT_EQ(defaults.view.time_scale, 1.0);
+    EXPECT_FALSE(defaults.view.validation);
+
+    const Invocation inv = parse({"view", "flag", "--backend", "cpu", "--set", "a.b=1", "--frames", "20", "--screenshot",
+                                  "out/v.PNG", "--size=320x240", "--time-scale", "0.5", "--validation", "--threads",
+                                  "2"});
+    EXPECT_EQ(inv.view.sim.backend, "cpu");
+    EXPECT_EQ(inv.view.sim.threads, 2);
+    EXPECT_EQ(inv.view.sim.overrides, (std::vector<std::string>{"a.b=1"}));
+    EXPECT_EQ(inv.view.frames, 20);
+    EXPECT_EQ(inv.view.screenshot, "out/v.PNG");
+    EXPECT_EQ(inv.view.width, 320);
+    EXPECT_EQ(inv.view.height, 240);
+    EXPECT_EQ(inv.view.time_scale, 0.5);
+    EXPECT_TRUE(inv.view.validation);
+    EXPECT_EQ(parse({"view", "--help"}).help_topic, "view");
+    EXPECT_EQ(parse({"help", "view"}).help_topic, "view");
+}
+
+TEST(CliArgs, ViewMistakesNameTheFlag) {
+    std::string e = error_of({"view"});
+    EXPECT_NE(e.find("missing SCENE"), std::string::npos) << e;
+    EXPECT_EQ(command_of({"view"}), "view");
+    e = error_of({"view", "flag", "drape"});
+    EXPECT_NE(e.find("unexpected argument 'drape'"), std::string::npos) << e;
+    e = error_of({"view", "flag", "--frames", "0"});
+    EXPECT_NE(e.find("--frames must be in [1, "), std::string::npos) << e;
+    e = error_of({"view", "flag", "--screenshot", "shot.jpg"});
+    EXPECT_NE(e.find("--screenshot expects a .png file name, got 'shot.jpg'"), std::string::npos) << e;
+    e = error_of({"view", "flag", "--screenshot", ".png"});
+    EXPECT_NE(e.find("--screenshot expects a .png"), std::string::npos) << e;
+    e = error_of({"view", "flag", "--size", "320"});
+    EXPECT_NE(e.find("--size expects WIDTHxHEIGHT"), std::string::npos) << e;
+    e = error_of({"view", "flag", "--size", "8x8"});
+    EXPECT_NE(e.find("--size must be in [16, 8192], got '8'"), std::string::npos) << e;
+    e = error_of({"view", "flag", "--time-scale", "fast"});
+    EXPECT_NE(e.find("--time-scale expects a number, got 'fast'"), std::string::npos) << e;
+    e = error_of({"view", "flag", "--time-scale", "1000"});
+    EXPECT_NE(e.find("--time-scale must be in [0.01, 100], got '1000'"), std::string::npos) << e;
+    e = error_of({"view", "flag", "--time-scale", "0.001"});
+    EXPECT_NE(e.find("--time-scale must be in"), std::string::npos) << e;
+    e = error_of({"view", "flag", "--time-scale", "nan"});
+    EXPECT_NE(e.find("--time-scale expects a number"), std::string::npos) << e;
+    e = error_of({"view", "flag", "--validation=yes"});
+    EXPECT_NE(e.find("--validation takes no value"), std::string::npos) << e;
+    e = error_of({"view", "flag", "--out", "x"});
+    EXPECT_NE(e.find("unknown option '--out'"), std::string::npos) << e;
+    e = error_of({"view", "flag", "--time-sacle", "2"});
+    EXPECT_NE(e.find("did you mean '--time-scale'"), std::string::npos) << e;
+    e = error_of({"veiw", "flag"});
+    EXPECT_NE(e.find("did you mean 'view'"), std::string::npos) << e;
+}
+
+TEST(CliArgs, ParseDouble) {
+    EXPECT_EQ(parse_double("view", "--time-scale", "2", 0.01, 100.0), 2.0);
+    EXPECT_EQ(parse_double("view", "--time-scale", "0.01", 0.01, 100.0), 0.01);
+    EXPECT_EQ(parse_double("view", "--time-scale", "1e1", 0.01, 100.0), 10.0);
+    EXPECT_THROW((void)parse_double("view", "--time-scale", "", 0.01, 100.0), UsageError);
+    EXPECT_THROW((void)parse_double("view", "--time-scale", "2x", 0.01, 100.0), UsageError);
+    EXPECT_THROW((void)parse_double("view", "--time-scale", "inf", 0.01, 100.0), UsageError);
+    EXPECT_THROW((void)parse_double("view", "--time-scale", "-1", 0.01, 100.0), UsageError);
+}
+
 TEST(CliArgs, TopLevel) {
     EXPECT_EQ(parse({"--help"}).command, Invocation::Command::Help);
     EXPECT_EQ(parse({"-h"}).command, Invocation::Command::Help);
@@ -195,6 +267,11 @@ TEST(CliArgs, HelpTextsCoverEveryFlag) {
     for (const std::string_view flag : {"--backend", "--threads", "--frames", "--warmup", "--json", "--set"}) {
         EXPECT_NE(usage_text("bench").find(flag), std::string_view::npos) << flag;
     }
+    for (const std::string_view flag : {"--backend", "--threads", "--set", "--frames", "--screenshot", "--size",
+                                        "--time-scale", "--validation"}) {
+        EXPECT_NE(usage_text("view").find(flag), std::string_view::npos) << flag;
+    }
+    EXPECT_NE(usage_text("").find("weft view SCENE"), std::string_view::npos);
     EXPECT_EQ(usage_hint("run"), "Try 'weft run --help'.");
     EXPECT_EQ(usage_hint(""), "Try 'weft help'.");
 }

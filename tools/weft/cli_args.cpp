@@ -1,8 +1,11 @@
 #include "cli_args.h"
 
 #include <algorithm>
+#include <cctype>
 #include <charconv>
+#include <cmath>
 #include <optional>
+#include <sstream>
 #include <system_error>
 #include <vector>
 
@@ -12,14 +15,20 @@ std::string_view extension(MeshFormat format) { return format == MeshFormat::Obj
 
 namespace {
 
-constexpr std::string_view kCommands[] = {"run", "bench", "info", "help"};
+constexpr std::string_view kCommands[] = {"run", "bench", "view", "info", "help"};
 
 struct FlagSpec {
     std::string_view name;  ///< with the leading dashes
     bool takes_value;
 };
 
-std::string quoted(std::string_view text) { return "'" + std::string(text) + "'"; }
+// Appended piecewise: GCC 12 warns (-Wrestrict, a known false positive) on "literal" + string.
+std::string quoted(std::string_view text) {
+    std::string out;
+    out.reserve(text.size() + 2);
+    out.append(1, '\'').append(text).append(1, '\'');
+    return out;
+}
 
 /// Levenshtein distance, for "did you mean" hints on misspelt flags and commands.
 std::size_t edit_distance(std::string_view a, std::string_view b) {
@@ -144,6 +153,19 @@ constexpr FlagSpec kRunFlags[] = {{"--backend", true}, {"--threads", true}, {"--
                                   {"--out", true},     {"--format", true},  {"--stats", true}, {"--quiet", false},
                                   {"--check", false},  {"--capture", true}, {"--size", true}};
 
+constexpr FlagSpec kViewFlags[] = {{"--backend", true}, {"--threads", true},    {"--set", true},
+                                   {"--frames", true},  {"--screenshot", true}, {"--size", true},
+                                   {"--time-scale", true}, {"--validation", false}};
+
+/// `--size WIDTHxHEIGHT`, each side in [16, 8192] pixels.
+void parse_size(std::string_view cmd, std::string_view name, std::string_view value, int& width, int& height) {
+    const auto x = value.find('x');
+    if (x == std::string_view::npos)
+        throw UsageError(cmd, std::string(name) + " expects WIDTHxHEIGHT in pixels, e.g. 1280x720, got " + quoted(value));
+    width = parse_int(cmd, name, value.substr(0, x), 16, 8192);
+    height = parse_int(cmd, name, value.substr(x + 1), 16, 8192);
+}
+
 constexpr FlagSpec kBenchFlags[] = {{"--backend", true}, {"--threads", true}, {"--set", true},
                                     {"--frames", true},  {"--warmup", true},  {"--json", true}};
 
@@ -185,11 +207,7 @@ Invocation parse_run(std::span<const std::string_view> args) {
                 throw UsageError(cmd, "--capture expects egl, vulkan or none, got " + quoted(value));
             run.capture = std::string(value);
         } else if (name == "--size") {
-            const auto x = value.find('x');
-            if (x == std::string_view::npos)
-                throw UsageError(cmd, "--size expects WIDTHxHEIGHT in pixels, e.g. 1280x720, got " + quoted(value));
-            run.capture_width = parse_int(cmd, name, value.substr(0, x), 16, 8192);
-            run.capture_height = parse_int(cmd, name, value.substr(x + 1), 16, 8192);
+            parse_size(cmd, name, value, run.capture_width, run.capture_height);
         }
     });
     if (!positionals) return help_for(cmd);
@@ -228,6 +246,38 @@ Invocation parse_bench(std::span<const std::string_view> args) {
     return inv;
 }
 
+Invocation parse_view(std::span<const std::string_view> args) {
+    constexpr std::string_view cmd = "view";
+    Invocation inv;
+    inv.command = Invocation::Command::View;
+    ViewOptions& view = inv.view;
+    const auto positionals = FlagParser(cmd, args, kViewFlags).parse([&](std::string_view name, std::string_view value) {
+        if (apply_simulation_flag(cmd, view.sim, name, value)) return;
+        if (name == "--frames") {
+            view.frames = parse_int(cmd, name, value, 1, 100'000'000);
+        } else if (name == "--screenshot") {
+            const std::filesystem::path path(value);
+            std::string ext = path.extension().string();
+            std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return std::tolower(c); });
+            if (ext != ".png" || path.filename() == ".png")
+                throw UsageError(cmd, "--screenshot expects a .png file name, got " + quoted(value));
+            view.screenshot = path;
+        } else if (name == "--size") {
+            parse_size(cmd, name, value, view.width, view.height);
+        } else if (name == "--time-scale") {
+            view.time_scale = parse_double(cmd, name, value, 0.01, 100.0);
+        } else if (name == "--validation") {
+            view.validation = true;
+        }
+    });
+    if (!positionals) return help_for(cmd);
+    if (positionals->empty()) throw UsageError(cmd, "missing SCENE (a scene file or a name from assets/scenes)");
+    if (positionals->size() > 1)
+        throw UsageError(cmd, "unexpected argument " + quoted((*positionals)[1]) + " (view shows one scene)");
+    view.scene = std::string(positionals->front());
+    return inv;
+}
+
 Invocation parse_info(std::span<const std::string_view> args) {
     constexpr std::string_view cmd = "info";
     const auto positionals = FlagParser(cmd, args, {}).parse([](std::string_view, std::string_view) {});
@@ -255,6 +305,23 @@ int parse_int(std::string_view command, std::string_view flag, std::string_view 
     return static_cast<int>(value);
 }
 
+double parse_double(std::string_view command, std::string_view flag, std::string_view text, double min,
+                    double max) {
+    double value = 0.0;
+    const char* first = text.data();
+    const char* last = text.data() + text.size();
+    const auto [end, ec] = std::from_chars(first, last, value);
+    if (text.empty() || ec == std::errc::invalid_argument || end != last || !std::isfinite(value)) {
+        throw UsageError(std::string(command), std::string(flag) + " expects a number, got " + quoted(text));
+    }
+    if (ec == std::errc::result_out_of_range || value < min || value > max) {
+        std::ostringstream range;
+        range << std::string(flag) << " must be in [" << min << ", " << max << "], got " << quoted(text);
+        throw UsageError(std::string(command), range.str());
+    }
+    return value;
+}
+
 Invocation parse_command_line(std::span<const std::string_view> args) {
     if (args.empty()) throw UsageError("", "no command given");
     const std::string_view first = args.front();
@@ -277,6 +344,7 @@ Invocation parse_command_line(std::span<const std::string_view> args) {
     }
     if (first == "run") return parse_run(rest);
     if (first == "bench") return parse_bench(rest);
+    if (first == "view") return parse_view(rest);
     if (first == "info") return parse_info(rest);
     if (first.starts_with('-')) {
         constexpr std::string_view kTopFlags[] = {"--help", "--version"};

@@ -67,12 +67,25 @@ struct BenchOptions {
     int frames = 100;
 };
 
+/// `weft view`: the scene simulated live in a window (builds with the renderer only).
+struct ViewOptions {
+    std::string scene;  ///< a path or a bare scene name
+    SimulationOptions sim;
+    std::optional<int> frames;         ///< exit after this many displayed frames; empty: when closed
+    std::filesystem::path screenshot;  ///< empty: none; else the last displayed frame as PNG at exit
+    int width = 1280;                  ///< window size, screen pixels
+    int height = 720;
+    double time_scale = 1.0;           ///< simulated seconds per wall second, [0.01, 100]
+    bool validation = false;           ///< Vulkan validation layer, messages to stderr
+};
+
 struct Invocation {
-    enum class Command : std::uint8_t { Help, Version, Run, Bench, Info };
+    enum class Command : std::uint8_t { Help, Version, Run, Bench, Info, View };
     Command command = Command::Help;
     std::string help_topic;  ///< Help: "" for the overview, or a subcommand name
     RunOptions run;
     BenchOptions bench;
+    ViewOptions view;
 };
 
 /// Parses the arguments after the program name. Throws `UsageError`.
@@ -81,5 +94,8 @@ struct Invocation {
 /// Parses a whole decimal integer in [min, max] for `flag`; throws `UsageError` (for `command`)
 /// naming the flag and the text otherwise.
 [[nodiscard]] int parse_int(std::string_view command, std::string_view flag, std::string_view text, int min, int max);
+/// The same for a finite decimal number in [min, max].
+[[nodiscard]] double parse_double(std::string_view command, std::string_view flag, std::string_view text, double min,
+                                  double max);
 
 }  // namespace weft::cli

@@ -14,6 +14,9 @@ namespace weft::cli {
 int run_command(const RunOptions& options, std::ostream& out, std::ostream& err);
 /// `weft bench`: the table on `out`, progress lines on `err`.
 int bench_command(const BenchOptions& options, std::ostream& out, std::ostream& err);
+/// `weft view`: a window until Esc/Q or --frames; a summary line on `out`, errors on `err`. Throws
+/// weft::Error when the build has no renderer or there is no display.
+int view_command(const ViewOptions& options, std::ostream& out, std::ostream& err);
 /// `weft info`.
 int info_command(std::ostream& out);
 

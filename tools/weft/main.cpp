@@ -33,6 +33,8 @@ int dispatch(const weft::cli::Invocation& inv) {
             return weft::cli::run_command(inv.run, std::cout, std::cerr);
         case Command::Bench:
             return weft::cli::bench_command(inv.bench, std::cout, std::cerr);
+        case Command::View:
+            return weft::cli::view_command(inv.view, std::cout, std::cerr);
         case Command::Info:
             return weft::cli::info_command(std::cout);
     }

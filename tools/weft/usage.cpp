@@ -9,6 +9,7 @@ constexpr std::string_view kOverview = R"(weft: real-time cloth simulation
 Usage:
   weft run SCENE [options]        simulate a scene, write meshes and stats
   weft bench SCENE... [options]   time scenes after a warm-up, report per-stage medians
+  weft view SCENE [options]       simulate a scene live in a window (Vulkan; builds with the renderer)
   weft info                       version, backends, devices and build options
   weft help [COMMAND]             this text, or a command's options
   weft --version
@@ -66,6 +67,36 @@ Options:
   -h, --help         this text
 )";
 
+constexpr std::string_view kView = R"(Usage: weft view SCENE [options]
+
+Simulates SCENE live in a window drawn by the Vulkan renderer: the simulation runs at real time
+(times --time-scale) whatever the display rate, and the title shows fps, simulated time and state.
+Needs a display: set DISPLAY, or run under 'xvfb-run -a' where there is none.
+
+Keys and mouse:
+  left drag          orbit the camera round its target
+  right/middle drag  pan
+  scroll             zoom
+  Space              pause / resume
+  Right arrow, N     one step while paused
+  + / -              time scale x2 / /2
+  R                  reset the camera
+  S                  screenshot to the --screenshot file, or weft_view_NNNN.png
+  Esc, Q             quit
+
+Options:
+  --backend NAME     simulation backend: cpu, cuda (see 'weft info'); default auto
+  --threads N        CPU worker threads, 0 = all cores
+  --set KEY=VALUE    override a scene key, as if written in the file; repeatable
+  --frames N         quit after N displayed frames (scripted runs, tests)
+  --screenshot FILE.png
+                     write the last displayed frame to FILE.png at exit
+  --size WxH         window size, pixels; default 1280x720
+  --time-scale X     simulated seconds per wall second, 0.01 to 100; default 1
+  --validation       enable the Vulkan validation layer; its messages go to stderr
+  -h, --help         this text
+)";
+
 constexpr std::string_view kInfo = R"(Usage: weft info
 
 Prints the version, the compiled backends and the devices they run on, CPU threads and the build
@@ -74,7 +105,7 @@ options (CUDA, renderer, editor, mesh import).
 
 constexpr std::string_view kHelp = R"(Usage: weft help [COMMAND]
 
-Prints the overview, or the options of COMMAND (run, bench, info).
+Prints the overview, or the options of COMMAND (run, bench, view, info).
 )";
 
 }  // namespace
@@ -82,6 +113,7 @@ Prints the overview, or the options of COMMAND (run, bench, info).
 std::string_view usage_text(std::string_view topic) {
     if (topic == "run") return kRun;
     if (topic == "bench") return kBench;
+    if (topic == "view") return kView;
     if (topic == "info") return kInfo;
     if (topic == "help") return kHelp;
     return kOverview;

@@ -123,9 +123,14 @@ constexpr const char* kNoDevice =
 
 int vulkan_validation_messages_total() { return g_validation_messages.load(); }
 
-VulkanContext::VulkanContext(bool validation) {
+VulkanContext::VulkanContext(bool validation, const SurfaceRequest* surface) {
     try {
-        create_instance(validation);
+        create_instance(validation, surface);
+        if (surface != nullptr) {
+            if (!surface->create_surface) throw Error("vulkan renderer: a surface request without a create function");
+            surface_ = surface->create_surface(instance_);
+            if (surface_ == VK_NULL_HANDLE) throw Error("vulkan renderer: the window system gave no Vulkan surface");
+        }
         choose_physical_device();
         create_device();
     } catch (...) {
@@ -144,6 +149,8 @@ void VulkanContext::destroy() noexcept {
         if (command_pool_ != VK_NULL_HANDLE) vkDestroyCommandPool(device_, command_pool_, nullptr);
         vkDestroyDevice(device_, nullptr);
     }
+    if (surface_ != VK_NULL_HANDLE) vkDestroySurfaceKHR(instance_, surface_, nullptr);
+    surface_ = VK_NULL_HANDLE;
     if (messenger_ != VK_NULL_HANDLE) {
         const auto destroy_messenger = reinterpret_cast<PFN_vkDestroyDebugUtilsMessengerEXT>(
             vkGetInstanceProcAddr(instance_, "vkDestroyDebugUtilsMessengerEXT"));
@@ -156,7 +163,7 @@ void VulkanContext::destroy() noexcept {
     instance_ = VK_NULL_HANDLE;
 }
 
-void VulkanContext::create_instance(bool validation) {
+void VulkanContext::create_instance(bool validation, const SurfaceRequest* surface) {
     if (vkEnumerateInstanceVersion(&instance_version_) != VK_SUCCESS || instance_version_ < VK_API_VERSION_1_1)
         throw Error("vulkan renderer: the Vulkan loader is older than Vulkan 1.1 (" +
                     version_string(instance_version_) + ")");
@@ -184,6 +191,14 @@ void VulkanContext::create_instance(bool validation) {
                 "extension " VK_EXT_DEBUG_UTILS_EXTENSION_NAME " is missing");
         layers.push_back(kValidationLayer);
         extensions.push_back(VK_EXT_DEBUG_UTILS_EXTENSION_NAME);
+    }
+    if (surface != nullptr) {
+        for (const std::string& ext : surface->instance_extensions) {
+            if (!has_instance_extension(nullptr, ext.c_str()))
+                throw Error("vulkan renderer: the window needs the instance extension " + ext +
+                            ", which the Vulkan loader does not offer");
+            extensions.push_back(ext.c_str());
+        }
     }
 
     VkApplicationInfo app{};
@@ -242,14 +257,27 @@ void VulkanContext::choose_physical_device() {
         vkGetPhysicalDeviceQueueFamilyProperties(device, &families, nullptr);
         std::vector<VkQueueFamilyProperties> family(families);
         vkGetPhysicalDeviceQueueFamilyProperties(device, &families, family.data());
+        if (surface_ != VK_NULL_HANDLE && !has_device_extension(device, VK_KHR_SWAPCHAIN_EXTENSION_NAME)) {
+            rejected += std::string(rejected.empty() ? "" : "; ") + p.deviceName + ": no " +
+                        VK_KHR_SWAPCHAIN_EXTENSION_NAME;
+            continue;
+        }
+        // With a window, the one queue both draws and presents.
         std::uint32_t graphics = families;
-        for (std::uint32_t f = 0; f < families; ++f)
-            if ((family[f].queueFlags & VK_QUEUE_GRAPHICS_BIT) != 0 && family[f].queueCount > 0) {
-                graphics = f;
-                break;
+        for (std::uint32_t f = 0; f < families; ++f) {
+            if ((family[f].queueFlags & VK_QUEUE_GRAPHICS_BIT) == 0 || family[f].queueCount == 0) continue;
+            if (surface_ != VK_NULL_HANDLE) {
+                VkBool32 present = VK_FALSE;
+                WEFT_VK_CHECK(vkGetPhysicalDeviceSurfaceSupportKHR(device, f, surface_, &present));
+                if (present != VK_TRUE) continue;
             }
+            graphics = f;
+            break;
+        }
         if (graphics == families) {
-            rejected += std::string(rejected.empty() ? "" : "; ") + p.deviceName + ": no graphics queue";
+            rejected += std::string(rejected.empty() ? "" : "; ") + p.deviceName +
+                        (surface_ != VK_NULL_HANDLE ? ": no graphics queue that can present to the window"
+                                                    : ": no graphics queue");
             continue;
         }
         if (type_rank(p.deviceType) > best_rank) {
@@ -309,6 +337,10 @@ void VulkanContext::create_device() {
             extensions.push_back(VK_KHR_TIMELINE_SEMAPHORE_EXTENSION_NAME);
         timeline.timelineSemaphore = VK_TRUE;
         info.pNext = &timeline;
+    }
+    // The window presents through a swapchain (choose_physical_device checked the device has it).
+    if (surface_ != VK_NULL_HANDLE) extensions.push_back(VK_KHR_SWAPCHAIN_EXTENSION_NAME);
+    if (!extensions.empty()) {
         info.enabledExtensionCount = static_cast<std::uint32_t>(extensions.size());
         info.ppEnabledExtensionNames = extensions.data();
     }

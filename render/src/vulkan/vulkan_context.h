@@ -2,6 +2,8 @@
 // The Vulkan instance, the chosen physical device, the logical device with its graphics queue and a
 // command pool: what every Vulkan object of the renderer is made from. The validation layer and its
 // message counter live here too, so that messages about the device's own destruction are counted.
+// For the window (vulkan_window.cpp) it also owns the window's surface and picks a queue that can
+// present to it.
 #include <vulkan/vulkan.h>
 
 #include <array>
@@ -9,8 +11,17 @@
 #include <cstdint>
 #include <functional>
 #include <string>
+#include <vector>
 
 namespace weft::render::detail {
+
+/// What a context needs to draw into a window: the instance extensions of the window system
+/// (glfwGetRequiredInstanceExtensions) and a function that creates the window's surface on the new
+/// instance (glfwCreateWindowSurface). The context owns the surface from then on.
+struct SurfaceRequest {
+    std::vector<std::string> instance_extensions;
+    std::function<VkSurfaceKHR(VkInstance)> create_surface;
+};
 
 class VulkanContext {
 public:
@@ -19,7 +30,11 @@ public:
     /// `validation`, enables VK_LAYER_KHRONOS_validation and VK_EXT_debug_utils with a messenger that
     /// counts warnings and errors and prints them to stderr ("vulkan validation: ..."). Throws
     /// weft::Error when there is no Vulkan device or no validation layer when asked for.
-    explicit VulkanContext(bool validation);
+    ///
+    /// With `surface`, the instance also enables its extensions, the surface is created right after
+    /// the instance, and only devices with VK_KHR_swapchain and a graphics queue family that can
+    /// present to the surface qualify; the device is created with VK_KHR_swapchain.
+    explicit VulkanContext(bool validation, const SurfaceRequest* surface = nullptr);
     ~VulkanContext();
     VulkanContext(const VulkanContext&) = delete;
     VulkanContext& operator=(const VulkanContext&) = delete;
@@ -29,6 +44,8 @@ public:
     [[nodiscard]] VkDevice device() const { return device_; }
     [[nodiscard]] VkQueue queue() const { return queue_; }
     [[nodiscard]] std::uint32_t queue_family() const { return queue_family_; }
+    /// The window's surface (VK_NULL_HANDLE without a SurfaceRequest); the queue can present to it.
+    [[nodiscard]] VkSurfaceKHR surface() const { return surface_; }
     /// Command buffers from it can be reset one by one.
     [[nodiscard]] VkCommandPool command_pool() const { return command_pool_; }
     [[nodiscard]] const VkPhysicalDeviceProperties& properties() const { return properties_; }
@@ -60,13 +77,14 @@ public:
     void submit_and_wait(const std::function<void(VkCommandBuffer)>& record) const;
 
 private:
-    void create_instance(bool validation);
+    void create_instance(bool validation, const SurfaceRequest* surface);
     void choose_physical_device();
     void create_device();
     void destroy() noexcept;
 
     VkInstance instance_ = VK_NULL_HANDLE;
     VkDebugUtilsMessengerEXT messenger_ = VK_NULL_HANDLE;
+    VkSurfaceKHR surface_ = VK_NULL_HANDLE;
     VkPhysicalDevice physical_device_ = VK_NULL_HANDLE;
     VkDevice device_ = VK_NULL_HANDLE;
     VkQueue queue_ = VK_NULL_HANDLE;

@@ -2,6 +2,10 @@
 // sample, and a copy of the picture to the host, recorded into one command buffer per frame and
 // waited for with a fence (capture, not presentation: the frame is needed on the host at once).
 //
+// The window (vulkan_window.cpp) draws with the same passes and blits the resolved picture into a
+// swapchain image instead of copying it to the host; it does not wait for the frame, the next one
+// waits for its fence first (draw_to_swapchain).
+//
 // Geometry: the cloth vertex buffer (device-local, RenderScene::cloth_vertices × 24 bytes) is filled
 // each frame from a persistently mapped staging buffer, or left as it is when the frame brings no
 // vertices (the zero-copy path writes it on the device). The colliders' meshes and every index live
@@ -60,75 +64,10 @@ float to_srgb(float c) {
     return c < 0.0031308F ? c * 12.92F : 1.055F * std::pow(c, 1.0F / 2.4F) - 0.055F;
 }
 
-class VulkanRenderer final : public Renderer {
-public:
-    explicit VulkanRenderer(const RendererOptions& options);
-    ~VulkanRenderer() override;
+}  // namespace
 
-    [[nodiscard]] std::string_view name() const override { return "vulkan"; }
-    [[nodiscard]] std::string device_description() const override { return context_.description(); }
-    void load(const RenderScene& scene) override;
-    [[nodiscard]] Image draw(const RenderFrame& frame) override;
-    [[nodiscard]] TransferStats transfer() const override { return transfer_; }
-    [[nodiscard]] int validation_messages() const override { return context_.validation_messages(); }
-    [[nodiscard]] std::optional<ClothInterop> export_cloth(std::string& why) override;
-    [[nodiscard]] std::vector<RenderVertex> read_cloth() override;
-
-private:
-    void create_targets();
-    void create_pipelines();
-    void create_descriptors();
-    void record(VkCommandBuffer commands, const std::vector<DrawUniforms>& draws, bool upload, bool external) const;
-    /// The queue-family ownership transfer of the exported cloth buffer: acquired from the external
-    /// writer (CUDA) before the frame reads it, released back after.
-    void external_barrier(VkCommandBuffer commands, bool acquire) const;
-    void draw_all(VkCommandBuffer commands, const std::vector<DrawUniforms>& draws, bool casters_only) const;
-    void destroy_scene() noexcept;
-    void destroy() noexcept;
-
-    RendererOptions options_;
-    VulkanContext context_;
-    VkSampleCountFlagBits samples_ = VK_SAMPLE_COUNT_1_BIT;  ///< what the device allowed of options_.samples
-    VkFormat depth_format_ = VK_FORMAT_UNDEFINED;
-    VkFormat shadow_format_ = VK_FORMAT_UNDEFINED;
-    VkFilter shadow_filter_ = VK_FILTER_LINEAR;
-    VkExtent2D extent_{};
-    VkExtent2D shadow_extent_{};
-
-    // Targets and pipelines, made once.
-    DeviceImage shadow_map_, colour_, depth_, resolved_;
-    VkSampler shadow_sampler_ = VK_NULL_HANDLE;
-    VkRenderPass shadow_pass_ = VK_NULL_HANDLE, surface_pass_ = VK_NULL_HANDLE;
-    VkFramebuffer shadow_framebuffer_ = VK_NULL_HANDLE, surface_framebuffer_ = VK_NULL_HANDLE;
-    VkDescriptorSetLayout set_layout_ = VK_NULL_HANDLE;
-    VkPipelineLayout pipeline_layout_ = VK_NULL_HANDLE;
-    VkPipeline shadow_pipeline_ = VK_NULL_HANDLE, surface_pipeline_ = VK_NULL_HANDLE;
-    VkDescriptorPool descriptor_pool_ = VK_NULL_HANDLE;
-    VkDescriptorSet descriptor_set_ = VK_NULL_HANDLE;
-    VkCommandBuffer commands_ = VK_NULL_HANDLE;
-    VkFence fence_ = VK_NULL_HANDLE;
-    DeviceBuffer readback_;  ///< the resolved picture, width·height·4 bytes
-
-    // The scene, made by load().
-    bool loaded_ = false;
-    RenderScene scene_;
-    DeviceBuffer static_geometry_;   ///< the colliders' vertices, then the cloth indices, then the colliders'
-    VkDeviceSize index_offset_ = 0;  ///< of the first index in static_geometry_
-    std::vector<std::uint32_t> collider_first_index_;  ///< into the index range, per collider
-    std::vector<std::int32_t> collider_first_vertex_;  ///< into the colliders' vertices, per collider
-    DeviceBuffer cloth_vertices_, cloth_staging_;
-    // Zero-copy (export_cloth): the cloth buffer is exported, a timeline orders the writer's writes
-    // against this renderer's reads.
-    bool exported_ = false;
-    bool exported_dedicated_ = false;
-    VkSemaphore timeline_ = VK_NULL_HANDLE;
-    std::uint64_t last_signal_ = 0;
-    DeviceBuffer uniforms_;  ///< Frame at 0, Draw i at draw_base_ + i·draw_stride_
-    VkDeviceSize draw_base_ = 0, draw_stride_ = 0;
-    TransferStats transfer_{"host upload", 0};
-};
-
-VulkanRenderer::VulkanRenderer(const RendererOptions& options) : options_(options), context_(options.validation) {
+VulkanRenderer::VulkanRenderer(const RendererOptions& options, const SurfaceRequest* surface)
+    : options_(options), context_(options.validation, surface) {
     try {
         extent_ = {static_cast<std::uint32_t>(options.width), static_cast<std::uint32_t>(options.height)};
         const auto shadow_size = static_cast<std::uint32_t>(options.shadow_map_size);
@@ -171,17 +110,6 @@ void VulkanRenderer::create_targets() {
     shadow_map_ = create_image(context_, shadow_extent_, shadow_format_, VK_SAMPLE_COUNT_1_BIT,
                                VK_IMAGE_USAGE_DEPTH_STENCIL_ATTACHMENT_BIT | VK_IMAGE_USAGE_SAMPLED_BIT,
                                VK_IMAGE_ASPECT_DEPTH_BIT);
-    resolved_ =
-        create_image(context_, extent_, kColourFormat, VK_SAMPLE_COUNT_1_BIT,
-                     VK_IMAGE_USAGE_COLOR_ATTACHMENT_BIT | VK_IMAGE_USAGE_TRANSFER_SRC_BIT, VK_IMAGE_ASPECT_COLOR_BIT);
-    if (samples_ != VK_SAMPLE_COUNT_1_BIT)
-        colour_ = create_image(context_, extent_, kColourFormat, samples_,
-                               VK_IMAGE_USAGE_COLOR_ATTACHMENT_BIT | VK_IMAGE_USAGE_TRANSIENT_ATTACHMENT_BIT,
-                               VK_IMAGE_ASPECT_COLOR_BIT);
-    depth_ = create_image(context_, extent_, depth_format_, samples_,
-                          VK_IMAGE_USAGE_DEPTH_STENCIL_ATTACHMENT_BIT | VK_IMAGE_USAGE_TRANSIENT_ATTACHMENT_BIT,
-                          VK_IMAGE_ASPECT_DEPTH_BIT);
-
     VkSamplerCreateInfo sampler{};
     sampler.sType = VK_STRUCTURE_TYPE_SAMPLER_CREATE_INFO;
     sampler.magFilter = shadow_filter_;
@@ -208,18 +136,6 @@ void VulkanRenderer::create_targets() {
     fb.height = shadow_extent_.height;
     fb.layers = 1;
     WEFT_VK_CHECK(vkCreateFramebuffer(device, &fb, nullptr, &shadow_framebuffer_));
-    const std::array<VkImageView, 3> views =
-        samples_ != VK_SAMPLE_COUNT_1_BIT ? std::array<VkImageView, 3>{colour_.view, depth_.view, resolved_.view}
-                                          : std::array<VkImageView, 3>{resolved_.view, depth_.view, VK_NULL_HANDLE};
-    fb.renderPass = surface_pass_;
-    fb.attachmentCount = samples_ != VK_SAMPLE_COUNT_1_BIT ? 3U : 2U;
-    fb.pAttachments = views.data();
-    fb.width = extent_.width;
-    fb.height = extent_.height;
-    WEFT_VK_CHECK(vkCreateFramebuffer(device, &fb, nullptr, &surface_framebuffer_));
-
-    readback_ = create_buffer(context_, VkDeviceSize{extent_.width} * extent_.height * 4,
-                              VK_BUFFER_USAGE_TRANSFER_DST_BIT, MemoryUse::readback);
 
     VkCommandBufferAllocateInfo alloc{};
     alloc.sType = VK_STRUCTURE_TYPE_COMMAND_BUFFER_ALLOCATE_INFO;
@@ -230,6 +146,80 @@ void VulkanRenderer::create_targets() {
     VkFenceCreateInfo fence{};
     fence.sType = VK_STRUCTURE_TYPE_FENCE_CREATE_INFO;
     WEFT_VK_CHECK(vkCreateFence(device, &fence, nullptr, &fence_));
+    create_size_targets();
+}
+
+void VulkanRenderer::create_size_targets() {
+    const VkDevice device = context_.device();
+    // TRANSFER_SRC: copied to the host (capture, screenshots) or blitted to the window.
+    resolved_ =
+        create_image(context_, extent_, kColourFormat, VK_SAMPLE_COUNT_1_BIT,
+                     VK_IMAGE_USAGE_COLOR_ATTACHMENT_BIT | VK_IMAGE_USAGE_TRANSFER_SRC_BIT, VK_IMAGE_ASPECT_COLOR_BIT);
+    if (samples_ != VK_SAMPLE_COUNT_1_BIT)
+        colour_ = create_image(context_, extent_, kColourFormat, samples_,
+                               VK_IMAGE_USAGE_COLOR_ATTACHMENT_BIT | VK_IMAGE_USAGE_TRANSIENT_ATTACHMENT_BIT,
+                               VK_IMAGE_ASPECT_COLOR_BIT);
+    depth_ = create_image(context_, extent_, depth_format_, samples_,
+                          VK_IMAGE_USAGE_DEPTH_STENCIL_ATTACHMENT_BIT | VK_IMAGE_USAGE_TRANSIENT_ATTACHMENT_BIT,
+                          VK_IMAGE_ASPECT_DEPTH_BIT);
+    const std::array<VkImageView, 3> views =
+        samples_ != VK_SAMPLE_COUNT_1_BIT ? std::array<VkImageView, 3>{colour_.view, depth_.view, resolved_.view}
+                                          : std::array<VkImageView, 3>{resolved_.view, depth_.view, VK_NULL_HANDLE};
+    VkFramebufferCreateInfo fb{};
+    fb.sType = VK_STRUCTURE_TYPE_FRAMEBUFFER_CREATE_INFO;
+    fb.layers = 1;
+    fb.renderPass = surface_pass_;
+    fb.attachmentCount = samples_ != VK_SAMPLE_COUNT_1_BIT ? 3U : 2U;
+    fb.pAttachments = views.data();
+    fb.width = extent_.width;
+    fb.height = extent_.height;
+    WEFT_VK_CHECK(vkCreateFramebuffer(device, &fb, nullptr, &surface_framebuffer_));
+
+    readback_ = create_buffer(context_, VkDeviceSize{extent_.width} * extent_.height * 4,
+                              VK_BUFFER_USAGE_TRANSFER_DST_BIT, MemoryUse::readback);
+}
+
+void VulkanRenderer::destroy_size_targets() noexcept {
+    const VkDevice device = context_.device();
+    if (surface_pipeline_ != VK_NULL_HANDLE) vkDestroyPipeline(device, surface_pipeline_, nullptr);
+    if (surface_framebuffer_ != VK_NULL_HANDLE) vkDestroyFramebuffer(device, surface_framebuffer_, nullptr);
+    surface_pipeline_ = VK_NULL_HANDLE;
+    surface_framebuffer_ = VK_NULL_HANDLE;
+    destroy_buffer(device, readback_);
+    destroy_image(device, resolved_);
+    destroy_image(device, depth_);
+    destroy_image(device, colour_);
+}
+
+void VulkanRenderer::resize(int width, int height) {
+    if (width < 1 || height < 1 || width > 16384 || height > 16384)
+        throw Error("vulkan renderer: resize to " + std::to_string(width) + "×" + std::to_string(height) +
+                    " pixels, outside 1..16384 per side");
+    const VkPhysicalDeviceLimits& limits = context_.properties().limits;
+    if (static_cast<std::uint32_t>(width) > limits.maxFramebufferWidth ||
+        static_cast<std::uint32_t>(height) > limits.maxFramebufferHeight)
+        throw Error("vulkan renderer: " + std::to_string(width) + "×" + std::to_string(height) +
+                    " pixels exceed the limits of " + context_.description());
+    if (width == options_.width && height == options_.height) return;
+    wait_frame();
+    destroy_size_targets();
+    have_picture_ = false;
+    options_.width = width;
+    options_.height = height;
+    extent_ = {static_cast<std::uint32_t>(width), static_cast<std::uint32_t>(height)};
+    create_size_targets();
+    create_surface_pipeline();
+}
+
+VkFormat VulkanRenderer::colour_format() { return kColourFormat; }
+
+void VulkanRenderer::set_camera(const Camera& camera) { scene_.camera = camera; }
+
+void VulkanRenderer::wait_frame() {
+    if (!in_flight_) return;
+    WEFT_VK_CHECK(vkWaitForFences(context_.device(), 1, &fence_, VK_TRUE, UINT64_MAX));
+    WEFT_VK_CHECK(vkResetFences(context_.device(), 1, &fence_));
+    in_flight_ = false;
 }
 
 void VulkanRenderer::create_pipelines() {
@@ -268,6 +258,10 @@ void VulkanRenderer::create_pipelines() {
     shadow.depth_compare = VK_COMPARE_OP_LESS;
     shadow_pipeline_ = create_pipeline(device, shadow);
 
+    create_surface_pipeline();
+}
+
+void VulkanRenderer::create_surface_pipeline() {
     PipelineDesc surface;
     surface.pass = surface_pass_;
     surface.layout = pipeline_layout_;
@@ -277,7 +271,7 @@ void VulkanRenderer::create_pipelines() {
     surface.flip_y = true;
     surface.samples = samples_;
     surface.depth_compare = VK_COMPARE_OP_LESS;
-    surface_pipeline_ = create_pipeline(device, surface);
+    surface_pipeline_ = create_pipeline(context_.device(), surface);
 }
 
 void VulkanRenderer::create_descriptors() {
@@ -314,7 +308,8 @@ void VulkanRenderer::create_descriptors() {
 }
 
 void VulkanRenderer::load(const RenderScene& scene) {
-    // draw() waits for its frame, so nothing of the previous scene is in use.
+    // Once the frame in flight (a window's) is done, nothing of the previous scene is in use.
+    wait_frame();
     destroy_scene();
     scene_ = scene;
     const VkDevice device = context_.device();
@@ -404,15 +399,21 @@ void VulkanRenderer::load(const RenderScene& scene) {
     loaded_ = true;
 }
 
-Image VulkanRenderer::draw(const RenderFrame& frame) {
+template <typename Finish>
+bool VulkanRenderer::record_frame(const RenderFrame& frame, bool& external, Finish&& finish) {
     if (!loaded_) throw Error("vulkan renderer: draw() before load()");
     const bool upload = !frame.cloth.empty();
     if (upload && frame.cloth.size() != scene_.cloth_vertices)
         throw Error("vulkan renderer: the frame has " + std::to_string(frame.cloth.size()) +
                     " cloth vertices, the scene's cloth buffer " + std::to_string(scene_.cloth_vertices));
-    const VkDevice device = context_.device();
+    if ((frame.wait_value != 0 || frame.signal_value != 0) && !exported_)
+        throw Error("vulkan renderer: a frame with timeline values, but the cloth buffer is not exported");
+    if (frame.signal_value != 0 && frame.signal_value <= last_signal_)
+        throw Error("vulkan renderer: timeline signal value " + std::to_string(frame.signal_value) +
+                    " is not above the last one signalled, " + std::to_string(last_signal_));
+    // The previous frame must be done with the mapped buffers and the command buffer.
+    wait_frame();
 
-    // The previous frame was waited for, so the mapped buffers are free to write.
     if (upload) std::memcpy(cloth_staging_.mapped, frame.cloth.data(), frame.cloth.size_bytes());
     const FrameUniforms frame_u = frame_uniforms(scene_, options_.width, options_.height, options_.shadow_map_size);
     const std::vector<DrawUniforms> draws = draw_uniforms(scene_, frame);
@@ -427,45 +428,129 @@ Image VulkanRenderer::draw(const RenderFrame& frame) {
     begin.flags = VK_COMMAND_BUFFER_USAGE_ONE_TIME_SUBMIT_BIT;
     // Drawn from what the external writer left in the exported buffer: no upload, and the reads are
     // ordered by the timeline (wait for the writer's value, signal ours when done).
-    const bool external = exported_ && !upload;
-    if ((frame.wait_value != 0 || frame.signal_value != 0) && !exported_)
-        throw Error("vulkan renderer: a frame with timeline values, but the cloth buffer is not exported");
-    if (frame.signal_value != 0 && frame.signal_value <= last_signal_)
-        throw Error("vulkan renderer: timeline signal value " + std::to_string(frame.signal_value) +
-                    " is not above the last one signalled, " + std::to_string(last_signal_));
+    external = exported_ && !upload;
     WEFT_VK_CHECK(vkBeginCommandBuffer(commands_, &begin));
     record(commands_, draws, upload, external);
+    finish(commands_);
+    if (external) external_barrier(commands_, false);
     WEFT_VK_CHECK(vkEndCommandBuffer(commands_));
+    return upload;
+}
+
+void VulkanRenderer::submit_frame(const RenderFrame& frame, VkSemaphore wait_binary, VkSemaphore signal_binary) {
+    // Waits: the writer's timeline value (before vertex input), the acquired swapchain image (before
+    // the blit). Signals: the timeline, the window's "rendered" semaphore. Binary semaphores take no
+    // value, but with a timeline in the submission every semaphore gets an entry (ignored for them).
+    std::array<VkSemaphore, 2> waits{}, signals{};
+    std::array<VkPipelineStageFlags, 2> wait_stages{};
+    std::array<std::uint64_t, 2> wait_values{}, signal_values{};
+    std::uint32_t wait_count = 0, signal_count = 0;
+    if (frame.wait_value != 0) {
+        waits[wait_count] = timeline_;
+        wait_stages[wait_count] = VK_PIPELINE_STAGE_VERTEX_INPUT_BIT;
+        wait_values[wait_count++] = frame.wait_value;
+    }
+    if (wait_binary != VK_NULL_HANDLE) {
+        waits[wait_count] = wait_binary;
+        wait_stages[wait_count++] = VK_PIPELINE_STAGE_TRANSFER_BIT;
+    }
+    if (frame.signal_value != 0) {
+        signals[signal_count] = timeline_;
+        signal_values[signal_count++] = frame.signal_value;
+    }
+    if (signal_binary != VK_NULL_HANDLE) signals[signal_count++] = signal_binary;
+
     VkSubmitInfo submit{};
     submit.sType = VK_STRUCTURE_TYPE_SUBMIT_INFO;
     submit.commandBufferCount = 1;
     submit.pCommandBuffers = &commands_;
+    submit.waitSemaphoreCount = wait_count;
+    submit.pWaitSemaphores = waits.data();
+    submit.pWaitDstStageMask = wait_stages.data();
+    submit.signalSemaphoreCount = signal_count;
+    submit.pSignalSemaphores = signals.data();
     VkTimelineSemaphoreSubmitInfo timeline{};
     timeline.sType = VK_STRUCTURE_TYPE_TIMELINE_SEMAPHORE_SUBMIT_INFO;
-    const VkPipelineStageFlags wait_stage = VK_PIPELINE_STAGE_VERTEX_INPUT_BIT;
-    if (frame.wait_value != 0) {
-        timeline.waitSemaphoreValueCount = 1;
-        timeline.pWaitSemaphoreValues = &frame.wait_value;
-        submit.waitSemaphoreCount = 1;
-        submit.pWaitSemaphores = &timeline_;
-        submit.pWaitDstStageMask = &wait_stage;
-    }
-    if (frame.signal_value != 0) {
-        timeline.signalSemaphoreValueCount = 1;
-        timeline.pSignalSemaphoreValues = &frame.signal_value;
-        submit.signalSemaphoreCount = 1;
-        submit.pSignalSemaphores = &timeline_;
-        last_signal_ = frame.signal_value;
-    }
+    timeline.waitSemaphoreValueCount = wait_count;
+    timeline.pWaitSemaphoreValues = wait_values.data();
+    timeline.signalSemaphoreValueCount = signal_count;
+    timeline.pSignalSemaphoreValues = signal_values.data();
     if (frame.wait_value != 0 || frame.signal_value != 0) submit.pNext = &timeline;
     WEFT_VK_CHECK(vkQueueSubmit(context_.queue(), 1, &submit, fence_));
-    WEFT_VK_CHECK(vkWaitForFences(device, 1, &fence_, VK_TRUE, UINT64_MAX));
-    WEFT_VK_CHECK(vkResetFences(device, 1, &fence_));
+    in_flight_ = true;
+    if (frame.signal_value != 0) last_signal_ = frame.signal_value;
+}
+
+Image VulkanRenderer::draw(const RenderFrame& frame) {
+    bool external = false;
+    const bool upload = record_frame(frame, external, [&](VkCommandBuffer commands) { record_readback(commands); });
+    submit_frame(frame, VK_NULL_HANDLE, VK_NULL_HANDLE);
+    wait_frame();
+    have_picture_ = true;
 
     invalidate(context_, readback_);
     Image image(options_.width, options_.height);
     std::memcpy(image.rgba.data(), readback_.mapped, image.rgba.size());
     transfer_ = {external ? "interop" : "host upload", upload ? static_cast<std::uint64_t>(frame.cloth.size_bytes()) : 0};
+    return image;
+}
+
+void VulkanRenderer::draw_to_swapchain(const RenderFrame& frame, const SwapchainTarget& target) {
+    if (target.image == VK_NULL_HANDLE || target.extent.width == 0 || target.extent.height == 0)
+        throw Error("vulkan renderer: draw_to_swapchain without a swapchain image");
+    // Scaling only happens for a frame drawn while the window changes size; linear where allowed.
+    VkFormatProperties props{};
+    vkGetPhysicalDeviceFormatProperties(context_.physical_device(), kColourFormat, &props);
+    const bool same_size = target.extent.width == extent_.width && target.extent.height == extent_.height;
+    const VkFilter filter =
+        !same_size && (props.optimalTilingFeatures & VK_FORMAT_FEATURE_SAMPLED_IMAGE_FILTER_LINEAR_BIT) != 0
+            ? VK_FILTER_LINEAR
+            : VK_FILTER_NEAREST;
+    bool external = false;
+    const bool upload = record_frame(frame, external, [&](VkCommandBuffer commands) {
+        // The swapchain image's old contents are not needed: UNDEFINED → TRANSFER_DST. The stage
+        // is the one the acquire semaphore is waited at, so the transition comes after the acquire.
+        VkImageMemoryBarrier barrier{};
+        barrier.sType = VK_STRUCTURE_TYPE_IMAGE_MEMORY_BARRIER;
+        barrier.srcAccessMask = 0;
+        barrier.dstAccessMask = VK_ACCESS_TRANSFER_WRITE_BIT;
+        barrier.oldLayout = VK_IMAGE_LAYOUT_UNDEFINED;
+        barrier.newLayout = VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL;
+        barrier.srcQueueFamilyIndex = VK_QUEUE_FAMILY_IGNORED;
+        barrier.dstQueueFamilyIndex = VK_QUEUE_FAMILY_IGNORED;
+        barrier.image = target.image;
+        barrier.subresourceRange = {VK_IMAGE_ASPECT_COLOR_BIT, 0, 1, 0, 1};
+        vkCmdPipelineBarrier(commands, VK_PIPELINE_STAGE_TRANSFER_BIT, VK_PIPELINE_STAGE_TRANSFER_BIT, 0, 0, nullptr,
+                             0, nullptr, 1, &barrier);
+        // The surface pass left the resolved picture in TRANSFER_SRC_OPTIMAL, its writes visible to
+        // transfers; rows run top to bottom in both images.
+        VkImageBlit blit{};
+        blit.srcSubresource = {VK_IMAGE_ASPECT_COLOR_BIT, 0, 0, 1};
+        blit.srcOffsets[1] = {static_cast<std::int32_t>(extent_.width), static_cast<std::int32_t>(extent_.height), 1};
+        blit.dstSubresource = {VK_IMAGE_ASPECT_COLOR_BIT, 0, 0, 1};
+        blit.dstOffsets[1] = {static_cast<std::int32_t>(target.extent.width),
+                              static_cast<std::int32_t>(target.extent.height), 1};
+        vkCmdBlitImage(commands, resolved_.image, VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL, target.image,
+                       VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL, 1, &blit, filter);
+        barrier.srcAccessMask = VK_ACCESS_TRANSFER_WRITE_BIT;
+        barrier.dstAccessMask = 0;  // the present waits on the semaphore signalled after this submission
+        barrier.oldLayout = VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL;
+        barrier.newLayout = VK_IMAGE_LAYOUT_PRESENT_SRC_KHR;
+        vkCmdPipelineBarrier(commands, VK_PIPELINE_STAGE_TRANSFER_BIT, VK_PIPELINE_STAGE_BOTTOM_OF_PIPE_BIT, 0, 0,
+                             nullptr, 0, nullptr, 1, &barrier);
+    });
+    submit_frame(frame, target.acquired, target.rendered);
+    have_picture_ = true;
+    transfer_ = {external ? "interop" : "host upload", upload ? static_cast<std::uint64_t>(frame.cloth.size_bytes()) : 0};
+}
+
+Image VulkanRenderer::read_back() {
+    if (!have_picture_) throw Error("vulkan renderer: read_back() before a frame was drawn");
+    wait_frame();
+    context_.submit_and_wait([&](VkCommandBuffer commands) { record_readback(commands); });
+    invalidate(context_, readback_);
+    Image image(options_.width, options_.height);
+    std::memcpy(image.rgba.data(), readback_.mapped, image.rgba.size());
     return image;
 }
 
@@ -480,6 +565,7 @@ std::optional<ClothInterop> VulkanRenderer::export_cloth(std::string& why) {
         return std::nullopt;
     }
     const VkDevice device = context_.device();
+    wait_frame();  // a window's frame may still read the buffer replaced below
     if (!exported_) {
         // Replace the cloth buffer by an exportable one (zeros, as load() leaves it).
         bool dedicated = false;
@@ -605,6 +691,9 @@ void VulkanRenderer::record(VkCommandBuffer commands, const std::vector<DrawUnif
     draw_all(commands, draws, false);
     vkCmdEndRenderPass(commands);
 
+}
+
+void VulkanRenderer::record_readback(VkCommandBuffer commands) const {
     // The render pass left the picture in TRANSFER_SRC_OPTIMAL; rows come out top to bottom because
     // the viewport is flipped.
     VkBufferImageCopy copy{};
@@ -622,7 +711,6 @@ void VulkanRenderer::record(VkCommandBuffer commands, const std::vector<DrawUnif
     to_host.size = VK_WHOLE_SIZE;
     vkCmdPipelineBarrier(commands, VK_PIPELINE_STAGE_TRANSFER_BIT, VK_PIPELINE_STAGE_HOST_BIT, 0, 0, nullptr, 1,
                          &to_host, 0, nullptr);
-    if (external) external_barrier(commands, false);
 }
 
 void VulkanRenderer::draw_all(VkCommandBuffer commands, const std::vector<DrawUniforms>& draws,
@@ -683,21 +771,17 @@ void VulkanRenderer::destroy() noexcept {
     if (fence_ != VK_NULL_HANDLE) vkDestroyFence(device, fence_, nullptr);
     if (commands_ != VK_NULL_HANDLE) vkFreeCommandBuffers(device, context_.command_pool(), 1, &commands_);
     if (descriptor_pool_ != VK_NULL_HANDLE) vkDestroyDescriptorPool(device, descriptor_pool_, nullptr);
-    if (surface_pipeline_ != VK_NULL_HANDLE) vkDestroyPipeline(device, surface_pipeline_, nullptr);
+    destroy_size_targets();
     if (shadow_pipeline_ != VK_NULL_HANDLE) vkDestroyPipeline(device, shadow_pipeline_, nullptr);
     if (pipeline_layout_ != VK_NULL_HANDLE) vkDestroyPipelineLayout(device, pipeline_layout_, nullptr);
     if (set_layout_ != VK_NULL_HANDLE) vkDestroyDescriptorSetLayout(device, set_layout_, nullptr);
-    if (surface_framebuffer_ != VK_NULL_HANDLE) vkDestroyFramebuffer(device, surface_framebuffer_, nullptr);
     if (shadow_framebuffer_ != VK_NULL_HANDLE) vkDestroyFramebuffer(device, shadow_framebuffer_, nullptr);
     if (surface_pass_ != VK_NULL_HANDLE) vkDestroyRenderPass(device, surface_pass_, nullptr);
     if (shadow_pass_ != VK_NULL_HANDLE) vkDestroyRenderPass(device, shadow_pass_, nullptr);
     if (shadow_sampler_ != VK_NULL_HANDLE) vkDestroySampler(device, shadow_sampler_, nullptr);
-    destroy_buffer(device, readback_);
-    destroy_image(device, resolved_);
-    destroy_image(device, depth_);
-    destroy_image(device, colour_);
     destroy_image(device, shadow_map_);
     fence_ = VK_NULL_HANDLE;
+    in_flight_ = false;
     commands_ = VK_NULL_HANDLE;
     descriptor_pool_ = VK_NULL_HANDLE;
     descriptor_set_ = VK_NULL_HANDLE;
@@ -708,8 +792,6 @@ void VulkanRenderer::destroy() noexcept {
     surface_pass_ = shadow_pass_ = VK_NULL_HANDLE;
     shadow_sampler_ = VK_NULL_HANDLE;
 }
-
-}  // namespace
 
 std::unique_ptr<Renderer> create_vulkan_renderer(const RendererOptions& options) {
     return std::make_unique<VulkanRenderer>(options);
