@@ -136,7 +136,8 @@ void read_motions(Table& root, SceneDesc& scene) {
         if (!names.insert(m.name).second)
             t.fail("name", name_node, "duplicate motion name '" + m.name + "' (expected a unique name)");
         m.motion.origin = t.vec3("origin", {});
-        m.motion.initial_rotation = rotation_from_euler_degrees(t.vec3("rotation", {}));
+        m.rotation_degrees = t.vec3("rotation", {});
+        m.motion.initial_rotation = rotation_from_euler_degrees(m.rotation_degrees);
         m.motion.linear_velocity = t.vec3("linear_velocity", {});
         m.motion.angular_velocity = t.vec3("angular_velocity", {});
         m.motion.amplitude = t.vec3("amplitude", {});
@@ -332,6 +333,16 @@ void read_cloths(Table& root, SceneDesc& scene) {
         read_material(t, c.desc.material);
         for (Table& p : t.array_of_tables("pin")) c.pins.push_back(read_pin(p, c.source, scene.motions));
         const std::optional<Repeat> repeat = read_repeat(t);
+        ClothPlacement placement;
+        placement.name = name;
+        placement.position = position;
+        placement.rotation_degrees = rotation;
+        if (repeat) {
+            placement.repeat_count = repeat->count;
+            placement.repeat_offset = repeat->offset;
+            placement.repeat_rotation_step = repeat->rotation_step;
+        }
+        scene.cloth_placements.push_back(placement);
         // Copy k is named NAME<k> and placed at position + k·offset, turned by rotation + k·rotation_step;
         // a cloth without repeat is the single copy 0 under its own name.
         const int copies = repeat ? repeat->count : 1;
@@ -393,6 +404,7 @@ void read_colliders(Table& root, SceneDesc& scene) {
         }
         if (auto f = t.optional_number("friction", {0.0, 10.0})) c.friction = *f;
         const std::string motion = motion_reference(t, scene.motions);
+        Vec3d rotation_degrees{};
         if (!motion.empty()) {
             const std::string why = "a collider that follows a motion takes its frame from it (expected either motion or " +
                                     std::string("position/rotation)");
@@ -402,9 +414,11 @@ void read_colliders(Table& root, SceneDesc& scene) {
                 if (m.name == motion) c.motion = m.motion;
         } else {
             c.motion.origin = t.vec3("position", {});
-            c.motion.initial_rotation = rotation_from_euler_degrees(t.vec3("rotation", {}));
+            rotation_degrees = t.vec3("rotation", {});
+            c.motion.initial_rotation = rotation_from_euler_degrees(rotation_degrees);
         }
         t.finish();
+        scene.collider_rotation_degrees.push_back(rotation_degrees);
         scene.colliders.push_back(std::move(c));
         scene.collider_motions.push_back(motion);
         scene.collider_meshes.push_back(std::move(mesh));

@@ -59,6 +59,18 @@ struct CameraDesc {
 struct SceneMotion {
     std::string name;
     Motion motion;
+    Vec3d rotation_degrees{};  ///< the file's Euler angles behind motion.initial_rotation (save_scene writes them)
+};
+
+/// How one `[[cloth]]` table placed its cloths, as written in the file: what save_scene() writes back
+/// (the cloths' transforms are derived from it).
+struct ClothPlacement {
+    std::string name;
+    Vec3d position{};          ///< m
+    Vec3d rotation_degrees{};  ///< Euler angles, degrees
+    int repeat_count = 0;      ///< 0: no `repeat` table
+    Vec3d repeat_offset{};     ///< m
+    Vec3d repeat_rotation_step{};  ///< degrees
 };
 
 /// A parsed, validated scene.
@@ -73,6 +85,10 @@ struct SceneDesc {
     /// Per collider: the mesh file of a mesh collider (its `ColliderDesc::mesh` stays empty until
     /// build_world() loads it), an empty path for analytic shapes.
     std::vector<ColliderMeshSource> collider_meshes;
+    /// Per `[[cloth]]` table (SceneCloth::entry indexes it).
+    std::vector<ClothPlacement> cloth_placements;
+    /// Per collider: the file's Euler angles behind its initial rotation (zero for one that follows a motion).
+    std::vector<Vec3d> collider_rotation_degrees;
     CameraDesc camera{};
     int frames = 300;  ///< frames `weft run` simulates unless told otherwise
 };
@@ -85,6 +101,18 @@ struct SceneDesc {
 /// Same as load_scene for TOML text already in memory; `name` stands in for the file name in errors.
 [[nodiscard]] SceneDesc parse_scene(std::string_view toml_text, const std::filesystem::path& name,
                                     std::span<const std::string> overrides = {});
+
+/// The scene as TOML text in the format of docs/scene-format.md: every key written, numbers in their
+/// shortest form that reads back to the same double, mesh paths relative to `directory` (the folder
+/// the text will be saved in). Loading the text gives the same scene (tests/scene/test_scene_writer.cpp).
+/// The cloths of one `[[cloth]]` table are written as that table, with the first cloth's material:
+/// throws `weft::Error` naming the cloths when copies of one table have different materials.
+[[nodiscard]] std::string scene_to_toml(const SceneDesc& scene, const std::filesystem::path& directory);
+/// Writes scene_to_toml() to `path` (relative to its folder). Throws `weft::Error` naming the file on failure.
+void save_scene(const SceneDesc& scene, const std::filesystem::path& path);
+/// Copies what can be tuned live in `world` into `scene`: the world settings (solver, gravity, wind,
+/// collisions) and each cloth's material. Throws `weft::Error` if the world's cloths are not the scene's.
+void update_scene_from_world(SceneDesc& scene, const World& world);
 
 /// Cooks the fabrics (loading mesh files), loads the meshes of mesh colliders, resolves pins and
 /// motions and creates the world. Copies made by `repeat` share one cooked fabric. Throws
