@@ -6,8 +6,7 @@
 # Set WEFT_SKIP_DEPS=1 to skip the check (e.g. on a machine managed some other way).
 set -euo pipefail
 
-# One group per part of the build. A later issue adds its group here (the editor: ImGui, GLFW) and
-# lists it in PACKAGE_GROUPS below.
+# One group per part of the build, all listed in PACKAGE_GROUPS below.
 BUILD_PACKAGES=(cmake ninja-build g++ pkg-config)
 RUNTIME_PACKAGES=(libtbb-dev libtomlplusplus-dev libglm-dev)
 ASSETS_PACKAGES=(libassimp-dev)
@@ -17,7 +16,10 @@ TEST_PACKAGES=(libgtest-dev libgmock-dev libbenchmark-dev python3)
 # window of `weft view`, and Xvfb (xvfb-run needs xauth) to test it without a display.
 RENDER_PACKAGES=(libvulkan-dev glslc mesa-vulkan-drivers vulkan-validationlayers libegl-dev libgl-dev libegl-mesa0
                  libgl1-mesa-dri libpng-dev libglfw3-dev xvfb xauth)
-PACKAGE_GROUPS=(BUILD_PACKAGES RUNTIME_PACKAGES ASSETS_PACKAGES TEST_PACKAGES RENDER_PACKAGES)
+# The editor (WEFT_EDITOR, `weft edit`): Dear ImGui with its GLFW and Vulkan backends in one static
+# library (its font atlas needs stb); GLFW and Vulkan come with the renderer's group.
+EDITOR_PACKAGES=(libimgui-dev libstb-dev)
+PACKAGE_GROUPS=(BUILD_PACKAGES RUNTIME_PACKAGES ASSETS_PACKAGES TEST_PACKAGES RENDER_PACKAGES EDITOR_PACKAGES)
 
 if [[ "${WEFT_SKIP_DEPS:-0}" == "1" ]]; then
     echo "deps: skipped (WEFT_SKIP_DEPS=1)"

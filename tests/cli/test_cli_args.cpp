@@ -183,6 +183,37 @@ TEST(CliArgs, ViewDefaultsAndFlags) {
     EXPECT_EQ(parse({"help", "view"}).help_topic, "view");
 }
 
+TEST(CliArgs, EditDefaultsAndFlags) {
+    const Invocation defaults = parse({"edit"});
+    ASSERT_EQ(defaults.command, Invocation::Command::Edit);
+    EXPECT_EQ(defaults.edit.scene, "flag");  // the scene to start from when none is named
+    EXPECT_TRUE(defaults.edit.script.empty());
+    EXPECT_FALSE(defaults.edit.frames.has_value());
+    EXPECT_EQ(defaults.edit.width, 1280);
+
+    const Invocation inv = parse({"edit", "twist", "--backend", "cpu", "--script", "s.txt", "--frames", "30",
+                                  "--screenshot", "out/e.png", "--size", "800x600", "--time-scale", "2",
+                                  "--validation", "--set", "a.b=1"});
+    EXPECT_EQ(inv.edit.scene, "twist");
+    EXPECT_EQ(inv.edit.sim.backend, "cpu");
+    EXPECT_EQ(inv.edit.script, "s.txt");
+    EXPECT_EQ(inv.edit.frames, 30);
+    EXPECT_EQ(inv.edit.screenshot, "out/e.png");
+    EXPECT_EQ(inv.edit.width, 800);
+    EXPECT_EQ(inv.edit.height, 600);
+    EXPECT_EQ(inv.edit.time_scale, 2.0);
+    EXPECT_TRUE(inv.edit.validation);
+    EXPECT_EQ(inv.edit.sim.overrides, (std::vector<std::string>{"a.b=1"}));
+    EXPECT_EQ(parse({"help", "edit"}).help_topic, "edit");
+
+    std::string e = error_of({"edit", "flag", "drape"});
+    EXPECT_NE(e.find("unexpected argument 'drape' (edit opens one scene)"), std::string::npos) << e;
+    e = error_of({"edit", "--screenshot", "shot.jpg"});
+    EXPECT_NE(e.find("--screenshot expects a .png file name"), std::string::npos) << e;
+    e = error_of({"edit", "--scrip", "s.txt"});
+    EXPECT_NE(e.find("did you mean '--script'"), std::string::npos) << e;
+}
+
 TEST(CliArgs, ViewMistakesNameTheFlag) {
     std::string e = error_of({"view"});
     EXPECT_NE(e.find("missing SCENE"), std::string::npos) << e;

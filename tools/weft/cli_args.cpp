@@ -15,7 +15,7 @@ std::string_view extension(MeshFormat format) { return format == MeshFormat::Obj
 
 namespace {
 
-constexpr std::string_view kCommands[] = {"run", "bench", "view", "info", "help"};
+constexpr std::string_view kCommands[] = {"run", "bench", "view", "edit", "info", "help"};
 
 struct FlagSpec {
     std::string_view name;  ///< with the leading dashes
@@ -157,6 +157,20 @@ constexpr FlagSpec kViewFlags[] = {{"--backend", true}, {"--threads", true},    
                                    {"--frames", true},  {"--screenshot", true}, {"--size", true},
                                    {"--time-scale", true}, {"--validation", false}};
 
+constexpr FlagSpec kEditFlags[] = {{"--backend", true},    {"--threads", true},    {"--set", true},
+                                   {"--frames", true},     {"--screenshot", true}, {"--size", true},
+                                   {"--time-scale", true}, {"--validation", false}, {"--script", true}};
+
+/// `--screenshot FILE.png`.
+std::filesystem::path parse_png(std::string_view cmd, std::string_view name, std::string_view value) {
+    const std::filesystem::path path(value);
+    std::string ext = path.extension().string();
+    std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return std::tolower(c); });
+    if (ext != ".png" || path.filename() == ".png")
+        throw UsageError(cmd, std::string(name) + " expects a .png file name, got " + quoted(value));
+    return path;
+}
+
 /// `--size WIDTHxHEIGHT`, each side in [16, 8192] pixels.
 void parse_size(std::string_view cmd, std::string_view name, std::string_view value, int& width, int& height) {
     const auto x = value.find('x');
@@ -278,6 +292,34 @@ Invocation parse_view(std::span<const std::string_view> args) {
     return inv;
 }
 
+Invocation parse_edit(std::span<const std::string_view> args) {
+    constexpr std::string_view cmd = "edit";
+    Invocation inv;
+    inv.command = Invocation::Command::Edit;
+    EditOptions& edit = inv.edit;
+    const auto positionals = FlagParser(cmd, args, kEditFlags).parse([&](std::string_view name, std::string_view value) {
+        if (apply_simulation_flag(cmd, edit.sim, name, value)) return;
+        if (name == "--frames") {
+            edit.frames = parse_int(cmd, name, value, 1, 100'000'000);
+        } else if (name == "--screenshot") {
+            edit.screenshot = parse_png(cmd, name, value);
+        } else if (name == "--script") {
+            edit.script = std::filesystem::path(value);
+        } else if (name == "--size") {
+            parse_size(cmd, name, value, edit.width, edit.height);
+        } else if (name == "--time-scale") {
+            edit.time_scale = parse_double(cmd, name, value, 0.01, 100.0);
+        } else if (name == "--validation") {
+            edit.validation = true;
+        }
+    });
+    if (!positionals) return help_for(cmd);
+    if (positionals->size() > 1)
+        throw UsageError(cmd, "unexpected argument " + quoted((*positionals)[1]) + " (edit opens one scene)");
+    if (!positionals->empty()) edit.scene = std::string(positionals->front());
+    return inv;
+}
+
 Invocation parse_info(std::span<const std::string_view> args) {
     constexpr std::string_view cmd = "info";
     const auto positionals = FlagParser(cmd, args, {}).parse([](std::string_view, std::string_view) {});
@@ -345,6 +387,7 @@ Invocation parse_command_line(std::span<const std::string_view> args) {
     if (first == "run") return parse_run(rest);
     if (first == "bench") return parse_bench(rest);
     if (first == "view") return parse_view(rest);
+    if (first == "edit") return parse_edit(rest);
     if (first == "info") return parse_info(rest);
     if (first.starts_with('-')) {
         constexpr std::string_view kTopFlags[] = {"--help", "--version"};

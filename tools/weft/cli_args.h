@@ -79,13 +79,27 @@ struct ViewOptions {
     bool validation = false;           ///< Vulkan validation layer, messages to stderr
 };
 
+/// `weft edit`: the scene in the window with the ImGui editor's panels (builds with the editor only).
+struct EditOptions {
+    std::string scene = "flag";  ///< a path or a bare scene name
+    SimulationOptions sim;
+    std::optional<int> frames;         ///< exit after this many displayed frames; empty: when closed
+    std::filesystem::path screenshot;  ///< empty: none; else the last displayed frame (with the panels) at exit
+    std::filesystem::path script;      ///< empty: interactive; else the script to run (docs/editor.md)
+    int width = 1280;                  ///< window size, screen pixels
+    int height = 720;
+    double time_scale = 1.0;           ///< simulated seconds per wall second, [0.01, 100]
+    bool validation = false;           ///< Vulkan validation layer; a message makes the run fail
+};
+
 struct Invocation {
-    enum class Command : std::uint8_t { Help, Version, Run, Bench, Info, View };
+    enum class Command : std::uint8_t { Help, Version, Run, Bench, Info, View, Edit };
     Command command = Command::Help;
     std::string help_topic;  ///< Help: "" for the overview, or a subcommand name
     RunOptions run;
     BenchOptions bench;
     ViewOptions view;
+    EditOptions edit;
 };
 
 /// Parses the arguments after the program name. Throws `UsageError`.

@@ -17,6 +17,10 @@ int bench_command(const BenchOptions& options, std::ostream& out, std::ostream& 
 /// `weft view`: a window until Esc/Q or --frames; a summary line on `out`, errors on `err`. Throws
 /// weft::Error when the build has no renderer or there is no display.
 int view_command(const ViewOptions& options, std::ostream& out, std::ostream& err);
+/// `weft edit`: the editor until Esc/Q, --frames or the script's end; a summary on `out`, failed
+/// expectations and errors on `err`. Throws weft::Error when the build has no editor, the script
+/// is bad, or there is no display.
+int edit_command(const EditOptions& options, std::ostream& out, std::ostream& err);
 /// `weft info`.
 int info_command(std::ostream& out);
 

@@ -35,6 +35,8 @@ int dispatch(const weft::cli::Invocation& inv) {
             return weft::cli::bench_command(inv.bench, std::cout, std::cerr);
         case Command::View:
             return weft::cli::view_command(inv.view, std::cout, std::cerr);
+        case Command::Edit:
+            return weft::cli::edit_command(inv.edit, std::cout, std::cerr);
         case Command::Info:
             return weft::cli::info_command(std::cout);
     }

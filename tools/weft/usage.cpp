@@ -10,6 +10,7 @@ Usage:
   weft run SCENE [options]        simulate a scene, write meshes and stats
   weft bench SCENE... [options]   time scenes after a warm-up, report per-stage medians
   weft view SCENE [options]       simulate a scene live in a window (Vulkan; builds with the renderer)
+  weft edit [SCENE] [options]     the ImGui editor: play a scene and tune it live (builds with the editor)
   weft info                       version, backends, devices and build options
   weft help [COMMAND]             this text, or a command's options
   weft --version
@@ -97,6 +98,43 @@ Options:
   -h, --help         this text
 )";
 
+constexpr std::string_view kEdit = R"(Usage: weft edit [SCENE] [options]
+
+Opens SCENE (default: flag) in the editor: the scene simulated live in a window with ImGui panels
+to play, pause, step and reset it and to tune the solver, the materials of each cloth, collisions,
+wind and gravity while it runs, with plots of the last 300 steps' timings, CG iterations,
+residuals and contacts. Changes apply at the next step. Needs a display (or 'xvfb-run -a').
+The panels' layout is kept in $XDG_CONFIG_HOME/weft/imgui.ini (else ~/.config/weft/imgui.ini).
+See docs/editor.md.
+
+Keys and mouse (when the panels do not have them):
+  left drag          orbit the camera round its target
+  right/middle drag  pan
+  scroll             zoom
+  Space              pause / resume
+  Right arrow, N     one step (pauses)
+  + / -              time scale x2 / /2
+  R                  reset the camera
+  S                  screenshot to the --screenshot file, or weft_edit.png
+  Esc, Q             quit
+
+Options:
+  --backend NAME     simulation backend: cpu, cuda (see 'weft info'); default auto
+  --threads N        CPU worker threads, 0 = all cores
+  --set KEY=VALUE    override a scene key, as if written in the file; repeatable
+  --script FILE      run FILE's commands instead of waiting for a person, one step per
+                     displayed frame (frame N, set KEY VALUE, expect KEY VALUE, pause, play,
+                     step, reset, timescale X, screenshot FILE.png, quit; see docs/editor.md);
+                     exit code 1 when an expect fails. No imgui.ini is read or written.
+  --frames N         quit after N displayed frames
+  --screenshot FILE.png
+                     write the last displayed frame, panels included, to FILE.png at exit
+  --size WxH         window size, pixels; default 1280x720
+  --time-scale X     simulated seconds per wall second, 0.01 to 100; default 1
+  --validation       enable the Vulkan validation layer; a message makes the exit code 1
+  -h, --help         this text
+)";
+
 constexpr std::string_view kInfo = R"(Usage: weft info
 
 Prints the version, the compiled backends and the devices they run on, CPU threads and the build
@@ -105,7 +143,7 @@ options (CUDA, renderer, editor, mesh import).
 
 constexpr std::string_view kHelp = R"(Usage: weft help [COMMAND]
 
-Prints the overview, or the options of COMMAND (run, bench, view, info).
+Prints the overview, or the options of COMMAND (run, bench, view, edit, info).
 )";
 
 }  // namespace
@@ -114,6 +152,7 @@ std::string_view usage_text(std::string_view topic) {
     if (topic == "run") return kRun;
     if (topic == "bench") return kBench;
     if (topic == "view") return kView;
+    if (topic == "edit") return kEdit;
     if (topic == "info") return kInfo;
     if (topic == "help") return kHelp;
     return kOverview;

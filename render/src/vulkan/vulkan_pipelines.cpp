@@ -151,6 +151,50 @@ VkRenderPass create_surface_pass(VkDevice device, VkFormat colour, VkFormat dept
     return create_pass(device, info);
 }
 
+VkRenderPass create_overlay_pass(VkDevice device, VkFormat colour) {
+    VkAttachmentDescription c{};
+    c.format = colour;
+    c.samples = VK_SAMPLE_COUNT_1_BIT;
+    c.loadOp = VK_ATTACHMENT_LOAD_OP_LOAD;  // drawn over the scene's picture
+    c.storeOp = VK_ATTACHMENT_STORE_OP_STORE;
+    c.stencilLoadOp = VK_ATTACHMENT_LOAD_OP_DONT_CARE;
+    c.stencilStoreOp = VK_ATTACHMENT_STORE_OP_DONT_CARE;
+    c.initialLayout = VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL;  // where the surface pass left it
+    c.finalLayout = VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL;    // where the blit and the read-back expect it
+    const VkAttachmentReference colour_ref{0, VK_IMAGE_LAYOUT_COLOR_ATTACHMENT_OPTIMAL};
+    VkSubpassDescription subpass{};
+    subpass.pipelineBindPoint = VK_PIPELINE_BIND_POINT_GRAPHICS;
+    subpass.colorAttachmentCount = 1;
+    subpass.pColorAttachments = &colour_ref;
+
+    std::array<VkSubpassDependency, 2> dependencies{};
+    // The surface pass wrote (resolved) the picture; a previous read-back may still be reading it.
+    dependencies[0] = {VK_SUBPASS_EXTERNAL,
+                       0,
+                       VK_PIPELINE_STAGE_COLOR_ATTACHMENT_OUTPUT_BIT | VK_PIPELINE_STAGE_TRANSFER_BIT,
+                       VK_PIPELINE_STAGE_COLOR_ATTACHMENT_OUTPUT_BIT,
+                       VK_ACCESS_COLOR_ATTACHMENT_WRITE_BIT,
+                       VK_ACCESS_COLOR_ATTACHMENT_READ_BIT | VK_ACCESS_COLOR_ATTACHMENT_WRITE_BIT,
+                       0};
+    // The blit to the swapchain image and the copy to the host read the result.
+    dependencies[1] = {0,
+                       VK_SUBPASS_EXTERNAL,
+                       VK_PIPELINE_STAGE_COLOR_ATTACHMENT_OUTPUT_BIT,
+                       VK_PIPELINE_STAGE_TRANSFER_BIT,
+                       VK_ACCESS_COLOR_ATTACHMENT_WRITE_BIT,
+                       VK_ACCESS_TRANSFER_READ_BIT,
+                       0};
+    VkRenderPassCreateInfo info{};
+    info.sType = VK_STRUCTURE_TYPE_RENDER_PASS_CREATE_INFO;
+    info.attachmentCount = 1;
+    info.pAttachments = &c;
+    info.subpassCount = 1;
+    info.pSubpasses = &subpass;
+    info.dependencyCount = static_cast<std::uint32_t>(dependencies.size());
+    info.pDependencies = dependencies.data();
+    return create_pass(device, info);
+}
+
 VkPipeline create_pipeline(VkDevice device, const PipelineDesc& desc) {
     std::array<VkShaderModule, 2> modules{};
     VkPipeline pipeline = VK_NULL_HANDLE;

@@ -18,6 +18,11 @@ namespace weft::render::detail {
 [[nodiscard]] VkRenderPass create_surface_pass(VkDevice device, VkFormat colour, VkFormat depth,
                                                VkSampleCountFlagBits samples);
 
+/// The overlay pass of the window (window_overlay.h): one single-sample `colour` attachment, the
+/// resolved picture, loaded as the surface pass left it (VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL),
+/// drawn over and left in the same layout for the blit to the swapchain and the copy to the host.
+[[nodiscard]] VkRenderPass create_overlay_pass(VkDevice device, VkFormat colour);
+
 struct PipelineDesc {
     VkRenderPass pass = VK_NULL_HANDLE;
     VkPipelineLayout layout = VK_NULL_HANDLE;

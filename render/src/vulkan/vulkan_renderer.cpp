@@ -177,14 +177,37 @@ void VulkanRenderer::create_size_targets() {
 
     readback_ = create_buffer(context_, VkDeviceSize{extent_.width} * extent_.height * 4,
                               VK_BUFFER_USAGE_TRANSFER_DST_BIT, MemoryUse::readback);
+    if (overlay_pass_ != VK_NULL_HANDLE) create_overlay_framebuffer();
+}
+
+void VulkanRenderer::create_overlay_framebuffer() {
+    VkFramebufferCreateInfo fb{};
+    fb.sType = VK_STRUCTURE_TYPE_FRAMEBUFFER_CREATE_INFO;
+    fb.layers = 1;
+    fb.renderPass = overlay_pass_;
+    fb.attachmentCount = 1;
+    fb.pAttachments = &resolved_.view;
+    fb.width = extent_.width;
+    fb.height = extent_.height;
+    WEFT_VK_CHECK(vkCreateFramebuffer(context_.device(), &fb, nullptr, &overlay_framebuffer_));
+}
+
+VkRenderPass VulkanRenderer::overlay_pass() {
+    if (overlay_pass_ == VK_NULL_HANDLE) {
+        overlay_pass_ = create_overlay_pass(context_.device(), kColourFormat);
+        create_overlay_framebuffer();
+    }
+    return overlay_pass_;
 }
 
 void VulkanRenderer::destroy_size_targets() noexcept {
     const VkDevice device = context_.device();
     if (surface_pipeline_ != VK_NULL_HANDLE) vkDestroyPipeline(device, surface_pipeline_, nullptr);
     if (surface_framebuffer_ != VK_NULL_HANDLE) vkDestroyFramebuffer(device, surface_framebuffer_, nullptr);
+    if (overlay_framebuffer_ != VK_NULL_HANDLE) vkDestroyFramebuffer(device, overlay_framebuffer_, nullptr);
     surface_pipeline_ = VK_NULL_HANDLE;
     surface_framebuffer_ = VK_NULL_HANDLE;
+    overlay_framebuffer_ = VK_NULL_HANDLE;
     destroy_buffer(device, readback_);
     destroy_image(device, resolved_);
     destroy_image(device, depth_);
@@ -507,7 +530,20 @@ void VulkanRenderer::draw_to_swapchain(const RenderFrame& frame, const Swapchain
             ? VK_FILTER_LINEAR
             : VK_FILTER_NEAREST;
     bool external = false;
+    if (target.overlay && overlay_pass_ == VK_NULL_HANDLE)
+        throw Error("vulkan renderer: an overlay without overlay_pass()");
     const bool upload = record_frame(frame, external, [&](VkCommandBuffer commands) {
+        if (target.overlay) {
+            // Drawn into the resolved picture, so that the read-back (screenshots) shows it too.
+            VkRenderPassBeginInfo pass{};
+            pass.sType = VK_STRUCTURE_TYPE_RENDER_PASS_BEGIN_INFO;
+            pass.renderPass = overlay_pass_;
+            pass.framebuffer = overlay_framebuffer_;
+            pass.renderArea.extent = extent_;
+            vkCmdBeginRenderPass(commands, &pass, VK_SUBPASS_CONTENTS_INLINE);
+            target.overlay(commands, extent_);
+            vkCmdEndRenderPass(commands);
+        }
         // The swapchain image's old contents are not needed: UNDEFINED → TRANSFER_DST. The stage
         // is the one the acquire semaphore is waited at, so the transition comes after the acquire.
         VkImageMemoryBarrier barrier{};
@@ -777,6 +813,8 @@ void VulkanRenderer::destroy() noexcept {
     if (set_layout_ != VK_NULL_HANDLE) vkDestroyDescriptorSetLayout(device, set_layout_, nullptr);
     if (shadow_framebuffer_ != VK_NULL_HANDLE) vkDestroyFramebuffer(device, shadow_framebuffer_, nullptr);
     if (surface_pass_ != VK_NULL_HANDLE) vkDestroyRenderPass(device, surface_pass_, nullptr);
+    if (overlay_pass_ != VK_NULL_HANDLE) vkDestroyRenderPass(device, overlay_pass_, nullptr);
+    overlay_pass_ = VK_NULL_HANDLE;
     if (shadow_pass_ != VK_NULL_HANDLE) vkDestroyRenderPass(device, shadow_pass_, nullptr);
     if (shadow_sampler_ != VK_NULL_HANDLE) vkDestroySampler(device, shadow_sampler_, nullptr);
     destroy_image(device, shadow_map_);

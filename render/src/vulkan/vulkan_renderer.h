@@ -5,6 +5,7 @@
 #include <vulkan/vulkan.h>
 
 #include <cstdint>
+#include <functional>
 #include <memory>
 #include <optional>
 #include <string>
@@ -27,6 +28,8 @@ struct SwapchainTarget {
     VkExtent2D extent{};
     VkSemaphore acquired = VK_NULL_HANDLE;
     VkSemaphore rendered = VK_NULL_HANDLE;
+    /// Recorded inside the overlay pass over the resolved picture, before the blit (none: empty).
+    std::function<void(VkCommandBuffer, VkExtent2D)> overlay;
 };
 
 class VulkanRenderer final : public Renderer {
@@ -61,6 +64,9 @@ public:
     /// Draws `frame` like draw() and blits the resolved picture into `target` (scaled when the sizes
     /// differ), without waiting: the next frame, wait_frame() or read_back() waits for it.
     void draw_to_swapchain(const RenderFrame& frame, const SwapchainTarget& target);
+    /// The overlay pass (vulkan_pipelines.h), made on the first call with its framebuffer over the
+    /// resolved picture (remade on resize()).
+    [[nodiscard]] VkRenderPass overlay_pass();
     /// The picture of the last frame drawn (from the resolved target, through the read-back buffer).
     /// Throws weft::Error before the first frame.
     [[nodiscard]] Image read_back();
@@ -69,6 +75,7 @@ private:
     void create_targets();
     void create_size_targets();
     void destroy_size_targets() noexcept;
+    void create_overlay_framebuffer();
     void create_surface_pipeline();
     void create_pipelines();
     void create_descriptors();
@@ -102,6 +109,8 @@ private:
     VkSampler shadow_sampler_ = VK_NULL_HANDLE;
     VkRenderPass shadow_pass_ = VK_NULL_HANDLE, surface_pass_ = VK_NULL_HANDLE;
     VkFramebuffer shadow_framebuffer_ = VK_NULL_HANDLE, surface_framebuffer_ = VK_NULL_HANDLE;
+    VkRenderPass overlay_pass_ = VK_NULL_HANDLE;         ///< made by overlay_pass(), for the window
+    VkFramebuffer overlay_framebuffer_ = VK_NULL_HANDLE;  ///< over resolved_, while overlay_pass_ exists
     VkDescriptorSetLayout set_layout_ = VK_NULL_HANDLE;
     VkPipelineLayout pipeline_layout_ = VK_NULL_HANDLE;
     VkPipeline shadow_pipeline_ = VK_NULL_HANDLE, surface_pipeline_ = VK_NULL_HANDLE;

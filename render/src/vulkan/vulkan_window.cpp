@@ -13,12 +13,14 @@
 #include <GLFW/glfw3.h>
 
 #include <algorithm>
+#include <functional>
 #include <memory>
 #include <string>
 #include <vector>
 
 #include "weft/error.h"
 #include "weft/render/window.h"
+#include "weft/render/window_overlay.h"
 
 #include "vulkan/vulkan_check.h"
 #include "vulkan/vulkan_renderer.h"
@@ -112,6 +114,7 @@ struct Window::Impl {
     detail::VulkanRenderer renderer;
     std::unique_ptr<detail::Swapchain> swapchain;
     VkSemaphore acquired = VK_NULL_HANDLE;
+    WindowOverlay* overlay = nullptr;  ///< not owned (set_overlay)
     bool recreate = false;
     bool presented = false;
 
@@ -177,6 +180,10 @@ struct Window::Impl {
         target.extent = swapchain->extent();
         target.acquired = acquired;
         target.rendered = swapchain->rendered(index);
+        if (overlay != nullptr) {
+            (void)renderer.overlay_pass();
+            target.overlay = [this](VkCommandBuffer commands, VkExtent2D extent) { overlay->record(commands, extent); };
+        }
         renderer.draw_to_swapchain(frame, target);
         presented = true;
         const detail::Swapchain::Status presented_status = swapchain->present(index);
@@ -226,6 +233,30 @@ void Window::reset_camera() { impl_->input.camera().reset(); }
 int Window::width() const { return impl_->renderer.width(); }
 
 int Window::height() const { return impl_->renderer.height(); }
+
+void Window::set_overlay(WindowOverlay* overlay) {
+    impl_->overlay = overlay;
+    impl_->input.set_overlay(overlay);
+}
+
+OverlayVulkan Window::overlay_vulkan() {
+    detail::VulkanRenderer& renderer = impl_->renderer;
+    const detail::VulkanContext& context = renderer.context();
+    OverlayVulkan out;
+    out.instance = context.instance();
+    out.physical_device = context.physical_device();
+    out.device = context.device();
+    out.queue_family = context.queue_family();
+    out.queue = context.queue();
+    out.render_pass = renderer.overlay_pass();
+    out.format = detail::VulkanRenderer::colour_format();
+    out.frames = 2;
+    out.window = impl_->window.handle;
+    out.submit_and_wait = [&context](const std::function<void(VkCommandBuffer)>& record) {
+        context.submit_and_wait(record);
+    };
+    return out;
+}
 
 int Window::validation_messages() const { return impl_->renderer.validation_messages(); }
 

@@ -37,6 +37,10 @@ bool WindowInput::take_resized() {
     return out;
 }
 
+bool WindowInput::overlay_mouse() const { return overlay_ != nullptr && overlay_->wants_mouse(); }
+
+bool WindowInput::overlay_keyboard() const { return overlay_ != nullptr && overlay_->wants_keyboard(); }
+
 WindowInput* WindowInput::self(GLFWwindow* window) {
     return static_cast<WindowInput*>(glfwGetWindowUserPointer(window));
 }
@@ -44,6 +48,7 @@ WindowInput* WindowInput::self(GLFWwindow* window) {
 void WindowInput::on_key(GLFWwindow* window, int key, int /*scancode*/, int action, int /*mods*/) {
     WindowInput* in = self(window);
     if (in == nullptr || (action != GLFW_PRESS && action != GLFW_REPEAT)) return;
+    if (in->overlay_keyboard()) return;  // typed into the overlay (an editor's text field)
     // Held keys repeat only where repeating makes sense: stepping.
     const bool press = action == GLFW_PRESS;
     switch (key) {
@@ -73,7 +78,7 @@ void WindowInput::on_key(GLFWwindow* window, int key, int /*scancode*/, int acti
 // ('+' is Shift+= on a US keyboard).
 void WindowInput::on_char(GLFWwindow* window, unsigned int codepoint) {
     WindowInput* in = self(window);
-    if (in == nullptr) return;
+    if (in == nullptr || in->overlay_keyboard()) return;
     if (codepoint == '+') ++in->requests_.time_scale_steps;
     if (codepoint == '-') --in->requests_.time_scale_steps;
 }
@@ -85,6 +90,7 @@ void WindowInput::on_button(GLFWwindow* window, int button, int action, int /*mo
         in->drag_ = Drag::none;
         return;
     }
+    if (in->overlay_mouse()) return;  // a click on the overlay's panels starts no drag
     if (button == GLFW_MOUSE_BUTTON_LEFT)
         in->drag_ = Drag::orbit;
     else if (button == GLFW_MOUSE_BUTTON_RIGHT || button == GLFW_MOUSE_BUTTON_MIDDLE)
@@ -112,7 +118,7 @@ void WindowInput::on_cursor(GLFWwindow* window, double x, double y) {
 
 void WindowInput::on_scroll(GLFWwindow* window, double /*dx*/, double dy) {
     WindowInput* in = self(window);
-    if (in != nullptr) in->camera_.zoom(dy);
+    if (in != nullptr && !in->overlay_mouse()) in->camera_.zoom(dy);
 }
 
 void WindowInput::on_framebuffer_size(GLFWwindow* window, int /*width*/, int /*height*/) {

@@ -2,6 +2,7 @@
 // The viewer's input (window.h): GLFW's mouse, scroll, key and resize callbacks turned into camera
 // moves (OrbitCamera), requests for the application (ViewerRequests) and flags for the window.
 #include "weft/render/window.h"
+#include "weft/render/window_overlay.h"
 
 #include "window/orbit_camera.h"
 
@@ -23,6 +24,8 @@ public:
     [[nodiscard]] ViewerRequests take_requests();
     /// Esc or Q was pressed.
     [[nodiscard]] bool quit() const { return quit_; }
+    /// While `overlay` (may be null) wants the mouse or the keys, the camera and the keys ignore them.
+    void set_overlay(const WindowOverlay* overlay) { overlay_ = overlay; }
     /// The framebuffer changed size since the last call.
     [[nodiscard]] bool take_resized();
 
@@ -35,7 +38,11 @@ private:
     static void on_scroll(GLFWwindow* window, double dx, double dy);
     static void on_framebuffer_size(GLFWwindow* window, int width, int height);
 
+    [[nodiscard]] bool overlay_mouse() const;
+    [[nodiscard]] bool overlay_keyboard() const;
+
     GLFWwindow* window_;
+    const WindowOverlay* overlay_ = nullptr;
     OrbitCamera camera_;
     ViewerRequests requests_;
     bool quit_ = false;

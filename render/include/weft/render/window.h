@@ -17,6 +17,9 @@
 
 namespace weft::render {
 
+class WindowOverlay;
+struct OverlayVulkan;  // window_overlay.h, for Vulkan-aware clients
+
 /// What the viewer's keys asked of the application since the last `Window::take_requests()`.
 struct ViewerRequests {
     bool toggle_pause = false;  ///< Space pressed an odd number of times
@@ -64,6 +67,13 @@ public:
     /// The picture's size, pixels (the window's framebuffer size at the last present).
     [[nodiscard]] int width() const;
     [[nodiscard]] int height() const;
+    /// Draws `overlay` over every presented picture from the next present on (nullptr: none); it
+    /// also gets the mouse and keys while it wants them (window_overlay.h). Not owned: it must
+    /// outlive the window or be unset first.
+    void set_overlay(WindowOverlay* overlay);
+    /// The Vulkan objects an overlay is made with (window_overlay.h; creates the overlay pass on
+    /// the first call).
+    [[nodiscard]] OverlayVulkan overlay_vulkan();
     /// As Renderer::validation_messages and Renderer::transfer.
     [[nodiscard]] int validation_messages() const;
     [[nodiscard]] TransferStats transfer() const;

@@ -1,0 +1,38 @@
+#pragma once
+/// @file
+/// Dear ImGui (Debian's 1.86: GLFW and Vulkan backends) in the live window: an overlay
+/// (weft/render/window_overlay.h) that records ImGui's draw data into the window's overlay pass.
+/// One per process (ImGui's backends keep global state).
+#include <filesystem>
+#include <memory>
+
+#include "weft/render/window.h"
+#include "weft/render/window_overlay.h"
+
+namespace weft::editor {
+
+class ImGuiLayer final : public render::WindowOverlay {
+public:
+    /// Creates the ImGui context and its backends on `window` and registers itself as its overlay.
+    /// `ini_file`: where ImGui keeps the panels' layout between runs; empty: nowhere (scripted runs,
+    /// so that a test never depends on a layout a person left behind). Throws weft::Error when a
+    /// backend cannot start or the fonts cannot be uploaded.
+    ImGuiLayer(render::Window& window, const std::filesystem::path& ini_file);
+    /// Unregisters from the window, waits for the device, shuts the backends down.
+    ~ImGuiLayer() override;
+
+    /// Starts an ImGui frame (call before any ImGui widget, once per displayed frame).
+    void begin_frame();
+    /// Ends it: ImGui::Render(). The draw data is recorded by the next Window::present().
+    void end_frame();
+
+    void record(VkCommandBuffer commands, VkExtent2D extent) override;
+    [[nodiscard]] bool wants_mouse() const override;
+    [[nodiscard]] bool wants_keyboard() const override;
+
+private:
+    struct Impl;
+    std::unique_ptr<Impl> impl_;
+};
+
+}  // namespace weft::editor

@@ -1,0 +1,50 @@
+#pragma once
+/// @file
+/// The editor's scripts (`weft edit --script FILE`): a list of commands, one per line, that drive
+/// the editor without a person and without depending on timing (docs/editor.md, "Scripts").
+///
+///     # comment; blank lines are ignored
+///     frame 5                      run until 5 frames have been displayed
+///     set solver.substeps 4        set a parameter through the panels' code path, at the next frame
+///     expect solver.substeps 4     the world (and, once it stepped, the step) uses that value
+///     pause | play | step | reset  the play controls (step: pause, then one step)
+///     timescale 0.5                the play controls' time scale, [0.01, 100]
+///     screenshot out/edit.png      the last displayed frame, with the panels, as PNG
+///     quit                         end (so does the end of the script)
+///
+/// Parsing checks the commands and their argument counts and numbers; parameter keys and values
+/// are checked against the scene's parameters before the window opens (`check_script`).
+#include <filesystem>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include "weft/editor/parameters.h"
+
+namespace weft::editor {
+
+struct ScriptCommand {
+    enum class Kind : unsigned char { frame, set, expect, pause, play, step, reset, timescale, screenshot, quit };
+    Kind kind = Kind::quit;
+    int line = 0;         ///< 1-based line in the script
+    int frame = 0;        ///< frame: the displayed-frame count to reach
+    std::string key;      ///< set, expect: the parameter's key
+    std::string text;     ///< set, expect: the value as written; screenshot: the path
+    double number = 0.0;  ///< timescale; set, expect: the value once checked (check_script)
+};
+
+struct Script {
+    std::string name;  ///< the file, for messages
+    std::vector<ScriptCommand> commands;
+};
+
+/// Parses `text` (named `name` in messages). Throws weft::Error "NAME:LINE: WHAT" for an unknown
+/// command, a wrong number of arguments, a bad number, or a `frame` that does not move forward.
+[[nodiscard]] Script parse_script(std::string_view text, const std::string& name);
+/// Reads and parses `file`; throws weft::Error when it cannot be read.
+[[nodiscard]] Script read_script(const std::filesystem::path& file);
+/// Checks every `set`/`expect` key and value against `table` and stores the values (`number`).
+/// Throws weft::Error "NAME:LINE: …" naming the first bad one.
+void check_script(Script& script, const ParameterTable& table);
+
+}  // namespace weft::editor

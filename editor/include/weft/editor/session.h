@@ -1,0 +1,68 @@
+#pragma once
+/// @file
+/// What the editor edits: the scene as loaded, the world built from it, the frame loop that plays
+/// it, the parameter table and the stats history. Panels, keys and scripts all change it through
+/// this object, so the three share one code path.
+#include <map>
+#include <memory>
+#include <optional>
+#include <string>
+
+#include "weft/backend.h"
+#include "weft/frame_loop.h"
+#include "weft/scene.h"
+#include "weft/world.h"
+
+#include "weft/editor/parameters.h"
+#include "weft/editor/stats_history.h"
+
+namespace weft::editor {
+
+/// Play-control requests from keys and scripts, consumed by the play panel (which applies them
+/// with the same calls as its buttons).
+struct PlayRequests {
+    std::optional<bool> paused;
+    int single_steps = 0;
+    bool reset = false;
+    std::optional<double> time_scale;
+};
+
+class Session {
+public:
+    /// `world` was built from `scene` on `backend` with `options`; reset() builds it again that way.
+    Session(SceneDesc scene, std::string backend, BackendOptions options, std::unique_ptr<World> world,
+            double time_scale);
+
+    [[nodiscard]] const SceneDesc& scene() const { return scene_; }
+    [[nodiscard]] World& world() { return *world_; }
+    [[nodiscard]] FrameLoop& loop() { return *loop_; }
+    [[nodiscard]] ParameterTable& parameters() { return parameters_; }
+    [[nodiscard]] StatsHistory& history() { return history_; }
+    [[nodiscard]] PlayRequests& requests() { return requests_; }
+
+    /// Sets `p` to `value` (clamped to its range) on the world — the one setter of panels and
+    /// scripts. Remembers the step count, so that `expect` knows when a step has used it.
+    double apply(const Parameter& p, double value);
+    /// Steps taken before `key` was last applied, or nothing if it never was.
+    [[nodiscard]] std::optional<std::int64_t> applied_at(const std::string& key) const;
+
+    /// Builds the world again from the scene (time 0, the initial state), keeping the tuned
+    /// settings and materials, the pause state and the time scale; clears the stats.
+    void reset();
+    [[nodiscard]] int resets() const { return resets_; }
+
+private:
+    SceneDesc scene_;
+    std::string backend_;
+    BackendOptions options_;
+    std::unique_ptr<World> world_;
+    std::unique_ptr<FrameLoop> loop_;
+    ParameterTable parameters_;
+    StatsHistory history_;
+    PlayRequests requests_;
+    std::map<std::string, std::int64_t> applied_at_;
+    std::int64_t steps_before_reset_ = 0;  ///< so that step counts keep rising across resets
+    int resets_ = 0;
+};
+
+}  // namespace weft::editor

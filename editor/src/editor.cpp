@@ -1,0 +1,262 @@
+// The editor's main loop (see editor.h).
+#include "weft/editor/editor.h"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdlib>
+#include <iomanip>
+#include <sstream>
+#include <system_error>
+#include <vector>
+
+#include "weft/error.h"
+#include "weft/render/image.h"
+#include "weft/render/render_scene.h"
+#include "weft/render/window.h"
+
+#include "weft/editor/imgui_layer.h"
+#include "weft/editor/panels.h"
+#include "weft/editor/session.h"
+
+namespace weft::editor {
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+double seconds(Clock::duration d) { return std::chrono::duration<double>(d).count(); }
+
+void make_parent(const std::filesystem::path& file) {
+    if (!file.has_parent_path()) return;
+    std::error_code ec;
+    std::filesystem::create_directories(file.parent_path(), ec);
+    if (ec) throw Error("edit: cannot create " + file.parent_path().string() + ": " + ec.message());
+}
+
+/// Runs a script's commands between displayed frames. Commands that change something (set, the
+/// play controls) end the script's turn: the change is made by the panels during the next frame,
+/// and the commands after it see its result. `frame N` waits for the Nth displayed frame.
+class ScriptRunner {
+public:
+    explicit ScriptRunner(const Script& script) : script_(script) {}
+
+    enum class Outcome : unsigned char { next_frame, quit, failed };
+
+    /// `shown`: frames displayed so far. `shot`: writes the last displayed frame to a file.
+    template <typename Screenshot>
+    Outcome run(Session& session, int shown, Screenshot&& shot, std::ostream& out, std::ostream& err) {
+        while (next_ < script_.commands.size()) {
+            const ScriptCommand& c = script_.commands[next_];
+            const std::string where = script_.name + ":" + std::to_string(c.line) + ": ";
+            using K = ScriptCommand::Kind;
+            switch (c.kind) {
+                case K::frame:
+                    if (shown < c.frame) return Outcome::next_frame;
+                    ++next_;
+                    break;
+                case K::set:
+                    session.parameters().set_pending(c.key, c.number);
+                    ++next_;
+                    return Outcome::next_frame;
+                case K::expect:
+                    if (!expect(session, c, where, err)) return Outcome::failed;
+                    ++next_;
+                    break;
+                case K::pause:
+                case K::play:
+                    session.requests().paused = c.kind == K::pause;
+                    ++next_;
+                    return Outcome::next_frame;
+                case K::step:
+                    ++session.requests().single_steps;
+                    ++next_;
+                    return Outcome::next_frame;
+                case K::reset:
+                    session.requests().reset = true;
+                    ++next_;
+                    return Outcome::next_frame;
+                case K::timescale:
+                    session.requests().time_scale = c.number;
+                    ++next_;
+                    return Outcome::next_frame;
+                case K::screenshot:
+                    if (shown == 0) return Outcome::next_frame;  // nothing displayed yet
+                    make_parent(c.text);
+                    shot(std::filesystem::path(c.text));
+                    out << "screenshot " << c.text << std::endl;
+                    ++next_;
+                    break;
+                case K::quit:
+                    next_ = script_.commands.size();
+                    return Outcome::quit;
+            }
+        }
+        return Outcome::quit;
+    }
+
+    [[nodiscard]] int expectations() const { return expectations_; }
+
+private:
+    bool expect(Session& session, const ScriptCommand& c, const std::string& where, std::ostream& err) {
+        const Parameter* p = session.parameters().find(c.key);
+        const double have = p->get(session.world());
+        const auto same = [](double a, double b) { return std::abs(a - b) <= 1e-9 * std::max(1.0, std::abs(b)); };
+        if (!same(have, c.number)) {
+            err << "weft edit: " << where << "expect " << c.key << " " << c.text << ": the world uses "
+                << ParameterTable::format_value(*p, have) << std::endl;
+            return false;
+        }
+        // Where the step reports the value, and a step ran since it was set: the step must agree.
+        const FrameLoop& loop = session.loop();
+        const std::optional<std::int64_t> at = session.applied_at(p->key);
+        if (p->observed && loop.steps() > 0 && (!at || loop.steps() > *at)) {
+            if (const std::optional<double> used = p->observed(loop.last_stats()); used && !same(*used, c.number)) {
+                err << "weft edit: " << where << "expect " << c.key << " " << c.text << ": the last step used "
+                    << ParameterTable::format_value(*p, *used) << std::endl;
+                return false;
+            }
+        }
+        ++expectations_;
+        return true;
+    }
+
+    const Script& script_;
+    std::size_t next_ = 0;
+    int expectations_ = 0;
+};
+
+std::string title_of(const std::string& scene, double fps, Session& session) {
+    std::ostringstream t;
+    t << std::fixed << "weft edit " << scene << " \u2014 " << std::setprecision(1) << fps << " fps, t = "
+      << std::setprecision(2) << session.world().time() << " s";
+    if (session.loop().paused()) t << ", paused";
+    return t.str();
+}
+
+}  // namespace
+
+std::filesystem::path default_ini_file() {
+    std::filesystem::path folder;
+    if (const char* xdg = std::getenv("XDG_CONFIG_HOME"); xdg != nullptr && *xdg != '\0')
+        folder = std::filesystem::path(xdg) / "weft";
+    else if (const char* home = std::getenv("HOME"); home != nullptr && *home != '\0')
+        folder = std::filesystem::path(home) / ".config" / "weft";
+    else
+        return {};
+    std::error_code ec;
+    std::filesystem::create_directories(folder, ec);
+    if (ec) return {};
+    return folder / "imgui.ini";
+}
+
+int run_editor(const SceneDesc& scene, std::unique_ptr<World> world, EditorOptions options, std::ostream& out,
+               std::ostream& err) {
+    if (!options.screenshot.empty()) make_parent(options.screenshot);
+    const std::string name = scene.name.empty() ? std::string("scene") : scene.name;
+    Session session(scene, options.backend, options.backend_options, std::move(world), options.time_scale);
+    const bool scripted = options.script.has_value();
+    if (scripted) check_script(*options.script, session.parameters());  // before any window opens
+
+    render::RendererOptions renderer;
+    renderer.width = options.width;
+    renderer.height = options.height;
+    renderer.validation = options.validation;
+    render::Window window(renderer, "weft edit " + name);
+    const render::RenderScene render_scene = render::make_render_scene(session.world(), scene.camera);
+    window.load(render_scene);
+    // Scripted runs keep no layout: a test must not depend on what a person left behind.
+    ImGuiLayer imgui(window, scripted ? std::filesystem::path{} : options.ini_file);
+
+    std::optional<ScriptRunner> runner;
+    if (scripted) runner.emplace(*options.script);
+    std::vector<render::RenderVertex> vertices;
+    render::RenderFrame frame;
+    int shown = 0;
+    int status = 0;
+    const Clock::time_point start = Clock::now();
+    Clock::time_point last = start, fps_at = start, first_shown = start;
+    int fps_frames = 0;
+    double fps = 0.0;
+    auto shot = [&](const std::filesystem::path& file) { render::write_png(file, window.screenshot()); };
+
+    while (window.poll_events()) {
+        // Keys of the viewer: the same requests as the play panel's buttons.
+        const render::ViewerRequests keys = window.take_requests();
+        PlayRequests& asked = session.requests();
+        if (keys.toggle_pause) asked.paused = !session.loop().paused();
+        asked.single_steps += keys.single_steps;
+        if (keys.time_scale_steps != 0)
+            asked.time_scale =
+                std::clamp(session.loop().time_scale() * std::ldexp(1.0, keys.time_scale_steps), 0.01, 100.0);
+
+        if (runner) {
+            const ScriptRunner::Outcome o = runner->run(session, shown, shot, out, err);
+            if (o == ScriptRunner::Outcome::failed) {
+                status = 1;
+                break;
+            }
+            if (o == ScriptRunner::Outcome::quit) break;
+        }
+
+        imgui.begin_frame();
+        draw_panels(session, PanelLayout{static_cast<float>(window.width()), static_cast<float>(window.height()), fps});
+        imgui.end_frame();
+
+        // Scripted: exactly the wall time of one step per frame (at the current scale), so that the
+        // run steps once per displayed frame whatever the machine's speed.
+        const Clock::time_point now = Clock::now();
+        FrameLoop& loop = session.loop();
+        const double wall = shown == 0 ? 0.0
+                            : scripted ? session.world().settings().solver.dt / loop.time_scale()
+                                       : seconds(now - last);
+        const std::int64_t before = loop.steps();
+        (void)loop.advance(wall);
+        if (loop.steps() > before) session.history().record(loop.last_stats());
+        if (shown > 0) session.history().frame_ms.push(1000.0 * seconds(now - last));
+        last = now;
+
+        render::cloth_vertices(session.world(), render_scene, vertices);
+        frame.cloth = vertices;
+        frame.collider_models = render::collider_models(render_scene, session.world().model(), session.world().time());
+        window.present(frame);
+        if (++shown == 1) first_shown = Clock::now();
+        ++fps_frames;
+        if (keys.screenshot) {
+            const std::filesystem::path file = options.screenshot.empty() ? "weft_edit.png" : options.screenshot;
+            shot(file);
+            out << "screenshot " << file.string() << std::endl;
+        }
+        const Clock::time_point after = Clock::now();
+        if (seconds(after - fps_at) >= 0.5) {
+            fps = fps_frames / seconds(after - fps_at);
+            fps_frames = 0;
+            fps_at = after;
+            window.set_title(title_of(name, fps, session));
+        }
+        if (options.frames && shown >= *options.frames) break;
+    }
+    // A script that ends waiting for a frame the --frames limit cut off still gets its last word.
+    if (runner && status == 0 && shown > 0) {
+        if (runner->run(session, shown, shot, out, err) == ScriptRunner::Outcome::failed) status = 1;
+    }
+    const double shown_seconds = seconds(Clock::now() - first_shown);
+    if (!options.screenshot.empty() && shown > 0) {
+        shot(options.screenshot);
+        out << "screenshot " << options.screenshot.string() << std::endl;
+    }
+    const double mean_fps = shown > 1 && shown_seconds > 0.0 ? (shown - 1) / shown_seconds : 0.0;
+    out << std::fixed << std::setprecision(1) << "weft edit: " << shown << (shown == 1 ? " frame" : " frames")
+        << " of " << name << " at " << window.width() << "x" << window.height() << ", " << mean_fps << " fps, "
+        << std::setprecision(2) << "simulated " << session.world().time() << " s in " << session.loop().steps()
+        << " steps, on " << window.device_description() << std::endl;
+    if (runner && status == 0)
+        out << "script " << options.script->name << ": " << options.script->commands.size() << " commands, "
+            << runner->expectations() << " expectations met" << std::endl;
+    if (options.validation && window.validation_messages() > 0) {
+        err << "weft: " << window.validation_messages() << " Vulkan validation messages" << std::endl;
+        status = 1;
+    }
+    return status;
+}
+
+}  // namespace weft::editor

@@ -1,0 +1,241 @@
+// The editor's panels (see panels.h). Every parameter widget comes from the ParameterTable, and
+// every change — a widget moved, or a value a script left pending — goes through Session::apply.
+#include "weft/editor/panels.h"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdint>
+#include <cstdio>
+#include <string>
+
+#include <imgui.h>
+
+namespace weft::editor {
+namespace {
+
+constexpr float kColumn = 340.0F;  ///< width of the two side columns, screen pixels
+
+// "%.4g N/m": the unit in the slider's own text, so that every value is shown with it.
+std::string format_with_unit(const Parameter& p, const char* number) {
+    std::string f = number;
+    if (!p.unit.empty()) f += " " + p.unit;
+    return f;
+}
+
+void tooltip(const Parameter& p) {
+    if (!ImGui::IsItemHovered()) return;
+    std::string range;
+    if (p.kind == ParameterKind::real || p.kind == ParameterKind::integer) {
+        char text[96];
+        std::snprintf(text, sizeof text, "valid range [%g, %g]%s%s", p.min, p.max, p.unit.empty() ? "" : " ",
+                      p.unit.c_str());
+        range = text;
+    }
+    ImGui::SetTooltip("%s\n%s%s%s", p.key.c_str(), range.c_str(), p.hint.empty() ? "" : "\n", p.hint.c_str());
+}
+
+// The widget of one parameter; returns true with `value` set when the user changed it.
+bool widget(const Parameter& p, double& value) {
+    const std::string id = p.label + "##" + p.key;
+    bool changed = false;
+    switch (p.kind) {
+        case ParameterKind::real: {
+            const ImGuiSliderFlags flags =
+                ImGuiSliderFlags_AlwaysClamp | (p.log_scale ? ImGuiSliderFlags_Logarithmic : ImGuiSliderFlags_None);
+            changed = ImGui::SliderScalar(id.c_str(), ImGuiDataType_Double, &value, &p.min, &p.max,
+                                          format_with_unit(p, "%.4g").c_str(), flags);
+            break;
+        }
+        case ParameterKind::integer: {
+            auto v = static_cast<std::int32_t>(std::lround(value));
+            const auto lo = static_cast<std::int32_t>(p.min), hi = static_cast<std::int32_t>(p.max);
+            const ImGuiSliderFlags flags =
+                ImGuiSliderFlags_AlwaysClamp | (p.log_scale ? ImGuiSliderFlags_Logarithmic : ImGuiSliderFlags_None);
+            changed = ImGui::SliderScalar(id.c_str(), ImGuiDataType_S32, &v, &lo, &hi,
+                                          format_with_unit(p, "%d").c_str(), flags);
+            value = v;
+            break;
+        }
+        case ParameterKind::boolean: {
+            bool b = value != 0.0;
+            changed = ImGui::Checkbox(id.c_str(), &b);
+            value = b ? 1.0 : 0.0;
+            break;
+        }
+        case ParameterKind::choice: {
+            int index = static_cast<int>(std::lround(value));
+            const std::string& shown = p.choices.at(static_cast<std::size_t>(std::clamp(
+                index, 0, static_cast<int>(p.choices.size()) - 1)));
+            if (ImGui::BeginCombo(id.c_str(), shown.c_str())) {
+                for (std::size_t i = 0; i < p.choices.size(); ++i) {
+                    const bool selected = static_cast<int>(i) == index;
+                    if (ImGui::Selectable(p.choices[i].c_str(), selected)) {
+                        index = static_cast<int>(i);
+                        changed = true;
+                    }
+                    if (selected) ImGui::SetItemDefaultFocus();
+                }
+                ImGui::EndCombo();
+            }
+            value = index;
+            break;
+        }
+    }
+    tooltip(p);
+    return changed;
+}
+
+// The parameters of one panel. `visible`: its header is open. A closed header draws nothing but
+// still applies pending values, so that a script's `set` never depends on what is folded.
+void parameter_rows(Session& session, const char* panel, bool visible) {
+    std::string group;
+    bool group_open = true;
+    for (const Parameter& p : session.parameters().parameters()) {
+        if (p.panel != panel) continue;
+        bool shown = visible;
+        if (visible && !p.group.empty()) {
+            if (p.group != group) {
+                group = p.group;
+                ImGui::SetNextItemOpen(true, ImGuiCond_Once);
+                group_open = ImGui::TreeNode(("cloth " + group).c_str());
+                if (group_open) ImGui::TreePop();  // flat rows under the node: no nesting to close later
+            }
+            shown = group_open;
+        }
+        double value = p.get(session.world());
+        bool changed = shown && widget(p, value);
+        if (const std::optional<double> pending = session.parameters().take_pending(p)) {
+            value = *pending;
+            changed = true;
+        }
+        if (changed) session.apply(p, value);
+    }
+}
+
+void play_controls(Session& session, bool visible) {
+    FrameLoop& loop = session.loop();
+    PlayRequests& asked = session.requests();
+    bool paused = loop.paused();
+    int steps = 0;
+    bool reset = false;
+    double scale = loop.time_scale();
+    if (visible) {
+        if (ImGui::Button(paused ? "Play" : "Pause", ImVec2(70.0F, 0.0F))) paused = !paused;
+        ImGui::SameLine();
+        if (ImGui::Button("Step")) ++steps;
+        ImGui::SameLine();
+        if (ImGui::Button("Reset")) reset = true;
+        const double lo = 0.01, hi = 100.0;
+        ImGui::SliderScalar("time scale", ImGuiDataType_Double, &scale, &lo, &hi, "%.3g x",
+                            ImGuiSliderFlags_Logarithmic | ImGuiSliderFlags_AlwaysClamp);
+        if (ImGui::IsItemHovered()) ImGui::SetTooltip("simulated seconds per wall second, [0.01, 100]");
+    }
+    // Keys and scripts: the same changes as the buttons.
+    if (asked.paused) paused = *asked.paused;
+    steps += asked.single_steps;
+    reset = reset || asked.reset;
+    if (asked.time_scale) scale = *asked.time_scale;
+    asked = {};
+
+    if (reset) session.reset();
+    FrameLoop& current = session.loop();  // reset() made a new one
+    if (steps > 0) {
+        current.set_paused(true);  // a single step is a step of a paused simulation
+        current.request_single_step();
+    } else if (paused != current.paused()) {
+        current.set_paused(paused);
+    }
+    current.set_time_scale(std::clamp(scale, 0.01, 100.0));
+}
+
+void status_lines(Session& session, const PanelLayout& layout) {
+    const World& world = session.world();
+    ImGui::Text("t = %.3f s, %lld steps%s", world.time(), static_cast<long long>(session.loop().steps()),
+                session.loop().paused() ? ", paused" : "");
+    ImGui::Text("%.1f fps, %lld steps dropped", layout.fps, static_cast<long long>(session.loop().dropped_steps()));
+}
+
+void plot(const char* label, const Series& s, const char* format, float height = 42.0F) {
+    char overlay[64];
+    std::snprintf(overlay, sizeof overlay, format, static_cast<double>(s.last()));
+    ImGui::PlotLines(label, s.values().data(), static_cast<int>(s.size()), static_cast<int>(s.offset()), overlay,
+                     FLT_MAX, FLT_MAX, ImVec2(0.0F, height));
+}
+
+void stats_panel(Session& session, const PanelLayout& layout) {
+    ImGui::SetNextWindowPos(ImVec2(layout.width - kColumn, 0.0F), ImGuiCond_FirstUseEver);
+    ImGui::SetNextWindowSize(ImVec2(kColumn, layout.height), ImGuiCond_FirstUseEver);
+    if (!ImGui::Begin("Stats")) {
+        ImGui::End();
+        return;
+    }
+    const StatsHistory& h = session.history();
+    const StepStats& s = h.last;
+    ImGui::Text("last step: %.2f ms, %d substeps", s.step_ms, s.substeps);
+    ImGui::Text("CG: %d iterations (largest solve %d)", s.cg_iterations, s.cg_iterations_max);
+    ImGui::Text("CG residual %.2e, %d solves capped", s.cg_residual, s.cg_not_converged);
+    ImGui::Text("contacts: %d collider, %d cloth", s.collider_contacts, s.collision.contacts);
+    ImGui::Text("history: last %zu steps", h.step_ms.size());
+    ImGui::PushItemWidth(-110.0F);
+    plot("ms / step", h.step_ms, "%.2f ms");
+    if (ImGui::TreeNodeEx("ms per stage", ImGuiTreeNodeFlags_DefaultOpen)) {
+        for (std::size_t i = 0; i < h.stage_ms.size(); ++i) {
+            if (h.stage_ms[i].max() <= 0.0F) continue;  // a stage this scene does not run
+            plot(std::string(kStageNames[i]).c_str(), h.stage_ms[i], "%.2f ms", 30.0F);
+        }
+        ImGui::TreePop();
+    }
+    plot("CG iterations", h.cg_iterations, "%.0f");
+    plot("log10 residual", h.cg_residual_log10, "%.2f");
+    plot("contacts", h.contacts, "%.0f");
+    plot("ms / frame", h.frame_ms, "%.1f ms");
+    ImGui::PopItemWidth();
+    ImGui::End();
+}
+
+// A red banner while the last step met trouble, with how often it happened since the last reset.
+void warning_banner(Session& session, const PanelLayout& layout) {
+    const StatsHistory& h = session.history();
+    const bool not_converged = h.last.cg_not_converged > 0;
+    const bool non_finite = h.last.non_finite;
+    if (!not_converged && !non_finite) return;
+    const float width = std::max(200.0F, layout.width - 2.0F * kColumn - 20.0F);
+    ImGui::SetNextWindowPos(ImVec2((layout.width - width) * 0.5F, 8.0F), ImGuiCond_Always);
+    ImGui::SetNextWindowSize(ImVec2(width, 0.0F), ImGuiCond_Always);
+    ImGui::PushStyleColor(ImGuiCol_WindowBg, ImVec4(0.75F, 0.08F, 0.08F, 0.95F));
+    ImGui::Begin("##warning", nullptr,
+                 ImGuiWindowFlags_NoDecoration | ImGuiWindowFlags_NoMove | ImGuiWindowFlags_NoSavedSettings |
+                     ImGuiWindowFlags_NoFocusOnAppearing | ImGuiWindowFlags_NoInputs);
+    if (non_finite)
+        ImGui::TextWrapped("NaN or Inf in the last step: the state was restored (%d of %d steps)", h.non_finite_steps,
+                           h.steps);
+    if (not_converged)
+        ImGui::TextWrapped("CG did not converge in %d solves of the last step (%d of %d steps): raise the cap, "
+                           "the substeps, or loosen the tolerance",
+                           h.last.cg_not_converged, h.not_converged_steps, h.steps);
+    ImGui::End();
+    ImGui::PopStyleColor();
+}
+
+}  // namespace
+
+void draw_panels(Session& session, const PanelLayout& layout) {
+    ImGui::SetNextWindowPos(ImVec2(0.0F, 0.0F), ImGuiCond_FirstUseEver);
+    ImGui::SetNextWindowSize(ImVec2(kColumn, layout.height), ImGuiCond_FirstUseEver);
+    const bool open = ImGui::Begin(("Weft: " + session.scene().name).c_str());
+    ImGui::PushItemWidth(-150.0F);
+    // Play first: a reset replaces the world the other panels edit.
+    const bool play = open && ImGui::CollapsingHeader("Play", ImGuiTreeNodeFlags_DefaultOpen);
+    play_controls(session, play);
+    if (play) status_lines(session, layout);
+    parameter_rows(session, "solver", open && ImGui::CollapsingHeader("Solver", ImGuiTreeNodeFlags_DefaultOpen));
+    parameter_rows(session, "materials", open && ImGui::CollapsingHeader("Materials", ImGuiTreeNodeFlags_DefaultOpen));
+    parameter_rows(session, "collision", open && ImGui::CollapsingHeader("Collision"));
+    parameter_rows(session, "world", open && ImGui::CollapsingHeader("Wind and gravity"));
+    ImGui::PopItemWidth();
+    ImGui::End();
+    stats_panel(session, layout);
+    warning_banner(session, layout);
+}
+
+}  // namespace weft::editor

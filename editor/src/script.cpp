@@ -1,0 +1,130 @@
+// Parsing and checking of editor scripts (see script.h).
+#include "weft/editor/script.h"
+
+#include <charconv>
+#include <cmath>
+#include <fstream>
+#include <sstream>
+
+#include "weft/error.h"
+
+namespace weft::editor {
+namespace {
+
+struct Spelling {
+    std::string_view name;
+    ScriptCommand::Kind kind;
+    int arguments;
+};
+constexpr Spelling kCommands[] = {
+    {"frame", ScriptCommand::Kind::frame, 1},           {"set", ScriptCommand::Kind::set, 2},
+    {"expect", ScriptCommand::Kind::expect, 2},         {"pause", ScriptCommand::Kind::pause, 0},
+    {"play", ScriptCommand::Kind::play, 0},             {"step", ScriptCommand::Kind::step, 0},
+    {"reset", ScriptCommand::Kind::reset, 0},           {"timescale", ScriptCommand::Kind::timescale, 1},
+    {"screenshot", ScriptCommand::Kind::screenshot, 1}, {"quit", ScriptCommand::Kind::quit, 0},
+};
+
+std::string command_list() {
+    std::string out;
+    for (const Spelling& s : kCommands) out += (out.empty() ? "" : ", ") + std::string(s.name);
+    return out;
+}
+
+std::vector<std::string> words_of(std::string_view line) {
+    std::vector<std::string> words;
+    std::istringstream in{std::string(line)};
+    for (std::string w; in >> w;) words.push_back(w);
+    return words;
+}
+
+}  // namespace
+
+Script parse_script(std::string_view text, const std::string& name) {
+    Script script;
+    script.name = name;
+    int line_number = 0;
+    int last_frame = 0;
+    std::size_t start = 0;
+    while (start <= text.size()) {
+        const std::size_t end = std::min(text.find('\n', start), text.size());
+        std::string_view line = text.substr(start, end - start);
+        start = end + 1;
+        ++line_number;
+        if (const auto hash = line.find('#'); hash != std::string_view::npos) line = line.substr(0, hash);
+        const std::vector<std::string> words = words_of(line);
+        if (words.empty()) {
+            if (end == text.size()) break;
+            continue;
+        }
+        const std::string where = name + ":" + std::to_string(line_number) + ": ";
+        const Spelling* spelling = nullptr;
+        for (const Spelling& s : kCommands)
+            if (s.name == words[0]) spelling = &s;
+        if (spelling == nullptr)
+            throw Error(where + "unknown command '" + words[0] + "' (commands: " + command_list() + ")");
+        const int given = static_cast<int>(words.size()) - 1;
+        if (given != spelling->arguments)
+            throw Error(where + "'" + words[0] + "' takes " + std::to_string(spelling->arguments) +
+                        (spelling->arguments == 1 ? " argument" : " arguments") + ", got " + std::to_string(given));
+        ScriptCommand c;
+        c.kind = spelling->kind;
+        c.line = line_number;
+        switch (c.kind) {
+            case ScriptCommand::Kind::frame: {
+                const std::string& w = words[1];
+                const auto [ptr, ec] = std::from_chars(w.data(), w.data() + w.size(), c.frame);
+                if (ec != std::errc{} || ptr != w.data() + w.size() || c.frame < 1 || c.frame > 100'000'000)
+                    throw Error(where + "frame expects a frame count in [1, 100000000], got '" + w + "'");
+                if (c.frame <= last_frame)
+                    throw Error(where + "frame " + w + " does not come after frame " + std::to_string(last_frame));
+                last_frame = c.frame;
+                break;
+            }
+            case ScriptCommand::Kind::timescale: {
+                const std::string& w = words[1];
+                const auto [ptr, ec] = std::from_chars(w.data(), w.data() + w.size(), c.number);
+                if (ec != std::errc{} || ptr != w.data() + w.size() || !(c.number >= 0.01 && c.number <= 100.0))
+                    throw Error(where + "timescale expects a number in [0.01, 100], got '" + w + "'");
+                break;
+            }
+            case ScriptCommand::Kind::set:
+            case ScriptCommand::Kind::expect:
+                c.key = words[1];
+                c.text = words[2];
+                break;
+            case ScriptCommand::Kind::screenshot:
+                c.text = words[1];
+                break;
+            default:
+                break;
+        }
+        script.commands.push_back(std::move(c));
+        if (end == text.size()) break;
+    }
+    return script;
+}
+
+Script read_script(const std::filesystem::path& file) {
+    std::ifstream in(file, std::ios::binary);
+    if (!in) throw Error("script " + file.string() + ": cannot be read");
+    std::ostringstream text;
+    text << in.rdbuf();
+    return parse_script(text.str(), file.string());
+}
+
+void check_script(Script& script, const ParameterTable& table) {
+    for (ScriptCommand& c : script.commands) {
+        if (c.kind != ScriptCommand::Kind::set && c.kind != ScriptCommand::Kind::expect) continue;
+        const std::string where = script.name + ":" + std::to_string(c.line) + ": ";
+        const Parameter* p = table.find(c.key);
+        if (p == nullptr)
+            throw Error(where + "unknown parameter '" + c.key + "' (the keys are listed in docs/editor.md)");
+        try {
+            c.number = ParameterTable::parse_value(*p, c.text);
+        } catch (const Error& e) {
+            throw Error(where + e.what());
+        }
+    }
+}
+
+}  // namespace weft::editor

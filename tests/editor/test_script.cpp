@@ -1,0 +1,136 @@
+// Editor scripts (weft/editor/script.h) and the parameter table they go through
+// (weft/editor/parameters.h): parsing, the errors that name the line, ranges, and that a pending
+// value reaches the world only through the panel code's take_pending + apply.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <memory>
+#include <optional>
+#include <string>
+
+#include "weft/editor/parameters.h"
+#include "weft/editor/script.h"
+#include "weft/error.h"
+#include "weft/fabric.h"
+#include "weft/mesh.h"
+#include "weft/world.h"
+
+namespace weft::editor {
+namespace {
+
+std::string error_of(const std::string& text) {
+    try {
+        (void)parse_script(text, "s.txt");
+    } catch (const Error& e) {
+        return e.what();
+    }
+    return "";
+}
+
+std::unique_ptr<World> small_world() {
+    auto world = std::make_unique<World>(WorldDesc{}, "cpu");
+    world->add_cloth({.name = "sheet", .fabric = Fabric::cook(make_grid(1.0, 1.0, 2, 2))});
+    return world;
+}
+
+TEST(Script, ParsesEveryCommand) {
+    const Script s = parse_script(
+        "# comment\n\nframe 3\nset solver.substeps 4   # trailing comment\nexpect solver.substeps 4\npause\nplay\n"
+        "step\nreset\ntimescale 0.5\nscreenshot out/a.png\nframe 9\nquit",
+        "s.txt");
+    ASSERT_EQ(s.commands.size(), 11U);
+    using K = ScriptCommand::Kind;
+    EXPECT_EQ(s.commands[0].kind, K::frame);
+    EXPECT_EQ(s.commands[0].frame, 3);
+    EXPECT_EQ(s.commands[0].line, 3);
+    EXPECT_EQ(s.commands[1].kind, K::set);
+    EXPECT_EQ(s.commands[1].key, "solver.substeps");
+    EXPECT_EQ(s.commands[1].text, "4");
+    EXPECT_EQ(s.commands[7].kind, K::timescale);
+    EXPECT_DOUBLE_EQ(s.commands[7].number, 0.5);
+    EXPECT_EQ(s.commands[8].text, "out/a.png");
+    EXPECT_EQ(s.commands[10].kind, K::quit);
+    EXPECT_EQ(s.commands[10].line, 13);
+}
+
+TEST(Script, ErrorsNameTheLine) {
+    EXPECT_EQ(error_of("frame 1\njump 3\n"),
+              "s.txt:2: unknown command 'jump' (commands: frame, set, expect, pause, play, step, reset, timescale, "
+              "screenshot, quit)");
+    EXPECT_EQ(error_of("set solver.substeps\n"), "s.txt:1: 'set' takes 2 arguments, got 1");
+    EXPECT_EQ(error_of("pause now\n"), "s.txt:1: 'pause' takes 0 arguments, got 1");
+    EXPECT_EQ(error_of("\nframe ten\n"), "s.txt:2: frame expects a frame count in [1, 100000000], got 'ten'");
+    EXPECT_EQ(error_of("frame 5\nframe 5\n"), "s.txt:2: frame 5 does not come after frame 5");
+    EXPECT_EQ(error_of("timescale 1000\n"), "s.txt:1: timescale expects a number in [0.01, 100], got '1000'");
+}
+
+TEST(Script, CheckNamesBadKeysAndValues) {
+    const std::unique_ptr<World> owned = small_world();
+    const ParameterTable table(*owned);
+    auto check_error = [&](const std::string& text) {
+        Script s = parse_script(text, "s.txt");
+        try {
+            check_script(s, table);
+        } catch (const Error& e) {
+            return std::string(e.what());
+        }
+        return std::string();
+    };
+    EXPECT_EQ(check_error("frame 1\nset solver.substepz 4\n"),
+              "s.txt:2: unknown parameter 'solver.substepz' (the keys are listed in docs/editor.md)");
+    EXPECT_EQ(check_error("set solver.substeps 5000\n"),
+              "s.txt:1: 'solver.substeps': out of range: '5000' (expected an integer in [1, 1000])");
+    EXPECT_EQ(check_error("set solver.substeps 2.5\n"),
+              "s.txt:1: 'solver.substeps': not an integer: '2.5' (expected an integer in [1, 1000])");
+    EXPECT_EQ(check_error("expect solver.cg_warm_start maybe\n"),
+              "s.txt:1: 'solver.cg_warm_start': not a boolean: 'maybe' (expected true or false)");
+    EXPECT_EQ(check_error("set solver.precision quad\n"),
+              "s.txt:1: 'solver.precision': unknown choice 'quad' (expected one of float, double)");
+    EXPECT_EQ(check_error("set cloth.sheet.material.poisson_ratio 0.7\n"),
+              "s.txt:1: 'cloth.sheet.material.poisson_ratio': out of range: '0.7' (expected a number in [0, 0.49])");
+    Script good = parse_script("set cloth.0.material.friction 0.5\nexpect solver.precision float\n", "s.txt");
+    check_script(good, table);
+    EXPECT_DOUBLE_EQ(good.commands[0].number, 0.5);
+    EXPECT_DOUBLE_EQ(good.commands[1].number, 0.0);  // the index of "float"
+}
+
+TEST(Parameters, PendingValuesReachTheWorldThroughApply) {
+    const std::unique_ptr<World> owned = small_world();
+    World& world = *owned;
+    ParameterTable table(world);
+    const Parameter* substeps = table.find("solver.substeps");
+    const Parameter* stretch = table.find("cloth.0.material.stretch_stiffness");  // the index alias
+    ASSERT_NE(substeps, nullptr);
+    ASSERT_NE(stretch, nullptr);
+    EXPECT_EQ(stretch->key, "cloth.sheet.material.stretch_stiffness");
+    EXPECT_EQ(stretch->unit, "N/m");
+
+    table.set_pending("solver.substeps", 4.0);
+    EXPECT_EQ(world.settings().solver.substeps, 1) << "a pending value is not applied by itself";
+    const std::optional<double> v = table.take_pending(*substeps);
+    ASSERT_TRUE(v);
+    EXPECT_FALSE(table.take_pending(*substeps)) << "taken once";
+    ParameterTable::apply(*substeps, world, *v);
+    EXPECT_EQ(world.settings().solver.substeps, 4);
+    EXPECT_EQ(world.step().substeps, 4) << "the next step uses it";
+
+    // The widgets' clamp: out of range goes to the nearest end, integers are rounded.
+    EXPECT_DOUBLE_EQ(ParameterTable::apply(*stretch, world, 1e12), 1e8);
+    EXPECT_DOUBLE_EQ(world.material(0).stretch_stiffness, 1e8);
+    EXPECT_DOUBLE_EQ(ParameterTable::apply(*substeps, world, 2.6), 3.0);
+    EXPECT_THROW(table.set_pending("no.such.key", 1.0), Error);
+}
+
+TEST(Parameters, VectorsKeepTheirLengthInRange) {
+    const std::unique_ptr<World> owned = small_world();
+    World& world = *owned;
+    const ParameterTable table(world);
+    const Parameter* gx = table.find("world.gravity.x");
+    ASSERT_NE(gx, nullptr);
+    ParameterTable::apply(*gx, world, 1000.0);
+    const Vec3d g = world.settings().gravity;
+    EXPECT_NEAR(std::sqrt(g.x * g.x + g.y * g.y + g.z * g.z), 1000.0, 1e-9);
+}
+
+}  // namespace
+}  // namespace weft::editor
