@@ -86,6 +86,12 @@ public:
                     out << "screenshot " << c.text << std::endl;
                     ++next_;
                     break;
+                case K::save:
+                    make_parent(c.text);
+                    session.save(c.text);
+                    out << "saved " << c.text << std::endl;
+                    ++next_;
+                    break;
                 case K::quit:
                     next_ = script_.commands.size();
                     return Outcome::quit;

@@ -6,6 +6,7 @@
 #include <cmath>
 #include <cstdint>
 #include <cstdio>
+#include <filesystem>
 #include <string>
 
 #include <imgui.h>
@@ -125,6 +126,19 @@ void play_controls(Session& session, bool visible) {
         if (ImGui::Button("Step")) ++steps;
         ImGui::SameLine();
         if (ImGui::Button("Reset")) reset = true;
+        ImGui::SameLine();
+        // Save: the scene with what was tuned, next to the scene file (docs/editor.md).
+        if (ImGui::Button("Save")) {
+            const std::filesystem::path file = session.default_save_path();
+            try {
+                session.save(file);
+                session.set_message("saved " + file.string());
+            } catch (const std::exception& e) {
+                session.set_message(std::string("save failed: ") + e.what());
+            }
+        }
+        if (ImGui::IsItemHovered()) ImGui::SetTooltip("write %s", session.default_save_path().string().c_str());
+        if (!session.message().empty()) ImGui::TextWrapped("%s", session.message().c_str());
         const double lo = 0.01, hi = 100.0;
         ImGui::SliderScalar("time scale", ImGuiDataType_Double, &scale, &lo, &hi, "%.3g x",
                             ImGuiSliderFlags_Logarithmic | ImGuiSliderFlags_AlwaysClamp);

@@ -30,6 +30,17 @@ std::optional<std::int64_t> Session::applied_at(const std::string& key) const {
     return it->second - steps_before_reset_;
 }
 
+void Session::save(const std::filesystem::path& path) const {
+    SceneDesc tuned = scene_;
+    update_scene_from_world(tuned, *world_);
+    save_scene(tuned, path);
+}
+
+std::filesystem::path Session::default_save_path() const {
+    const std::filesystem::path& source = scene_.path;
+    return source.parent_path() / (source.stem().string() + "_tuned.toml");
+}
+
 void Session::reset() {
     // What the designer tuned survives: only the state goes back to the start.
     const WorldDesc settings = world_->settings();

@@ -56,7 +56,7 @@ TEST(Script, ParsesEveryCommand) {
 TEST(Script, ErrorsNameTheLine) {
     EXPECT_EQ(error_of("frame 1\njump 3\n"),
               "s.txt:2: unknown command 'jump' (commands: frame, set, expect, pause, play, step, reset, timescale, "
-              "screenshot, quit)");
+              "screenshot, save, quit)");
     EXPECT_EQ(error_of("set solver.substeps\n"), "s.txt:1: 'set' takes 2 arguments, got 1");
     EXPECT_EQ(error_of("pause now\n"), "s.txt:1: 'pause' takes 0 arguments, got 1");
     EXPECT_EQ(error_of("\nframe ten\n"), "s.txt:2: frame expects a frame count in [1, 100000000], got 'ten'");
@@ -130,6 +130,14 @@ TEST(Parameters, VectorsKeepTheirLengthInRange) {
     ParameterTable::apply(*gx, world, 1000.0);
     const Vec3d g = world.settings().gravity;
     EXPECT_NEAR(std::sqrt(g.x * g.x + g.y * g.y + g.z * g.z), 1000.0, 1e-9);
+}
+
+TEST(Script, SaveNeedsAPath) {
+    const Script s = parse_script("frame 1\nsave out/tuned.toml\n", "s.txt");
+    ASSERT_EQ(s.commands.size(), 2U);
+    EXPECT_EQ(s.commands[1].kind, ScriptCommand::Kind::save);
+    EXPECT_EQ(s.commands[1].text, "out/tuned.toml");
+    EXPECT_THROW((void)parse_script("save\n", "s.txt"), Error);
 }
 
 }  // namespace

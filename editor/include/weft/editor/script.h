@@ -10,6 +10,7 @@
 ///     pause | play | step | reset  the play controls (step: pause, then one step)
 ///     timescale 0.5                the play controls' time scale, [0.01, 100]
 ///     screenshot out/edit.png      the last displayed frame, with the panels, as PNG
+///     save out/tuned.toml          the scene with what was tuned, as the Save button writes it
 ///     quit                         end (so does the end of the script)
 ///
 /// Parsing checks the commands and their argument counts and numbers; parameter keys and values
@@ -24,12 +25,12 @@
 namespace weft::editor {
 
 struct ScriptCommand {
-    enum class Kind : unsigned char { frame, set, expect, pause, play, step, reset, timescale, screenshot, quit };
+    enum class Kind : unsigned char { frame, set, expect, pause, play, step, reset, timescale, screenshot, save, quit };
     Kind kind = Kind::quit;
     int line = 0;         ///< 1-based line in the script
     int frame = 0;        ///< frame: the displayed-frame count to reach
     std::string key;      ///< set, expect: the parameter's key
-    std::string text;     ///< set, expect: the value as written; screenshot: the path
+    std::string text;     ///< set, expect: the value as written; screenshot, save: the path
     double number = 0.0;  ///< timescale; set, expect: the value once checked (check_script)
 };
 

@@ -3,6 +3,7 @@
 /// What the editor edits: the scene as loaded, the world built from it, the frame loop that plays
 /// it, the parameter table and the stats history. Panels, keys and scripts all change it through
 /// this object, so the three share one code path.
+#include <filesystem>
 #include <map>
 #include <memory>
 #include <optional>
@@ -46,6 +47,16 @@ public:
     /// Steps taken before `key` was last applied, or nothing if it never was.
     [[nodiscard]] std::optional<std::int64_t> applied_at(const std::string& key) const;
 
+    /// Saves the scene with what was tuned live (settings, materials) to `path` (docs/scene-format.md,
+    /// "Saving a scene"); loading it gives the tuned scene. Throws weft::Error naming the file.
+    void save(const std::filesystem::path& path) const;
+    /// The file the Save button writes: NAME_tuned.toml next to the scene file.
+    [[nodiscard]] std::filesystem::path default_save_path() const;
+
+    /// The last file operation's outcome, shown under the play controls.
+    [[nodiscard]] const std::string& message() const { return message_; }
+    void set_message(std::string message) { message_ = std::move(message); }
+
     /// Builds the world again from the scene (time 0, the initial state), keeping the tuned
     /// settings and materials, the pause state and the time scale; clears the stats.
     void reset();
@@ -63,6 +74,7 @@ private:
     std::map<std::string, std::int64_t> applied_at_;
     std::int64_t steps_before_reset_ = 0;  ///< so that step counts keep rising across resets
     int resets_ = 0;
+    std::string message_;
 };
 
 }  // namespace weft::editor
