@@ -52,14 +52,9 @@ int run_command(const RunOptions& options, std::ostream& out, std::ostream& err)
     if (!options.out_dir.empty() && options.meshes) writer.emplace(options.out_dir, options.format, cloth_names, frames);
     std::optional<FrameCapture> capture;
     if (options.capture != "none") {
-#if WEFT_HAVE_RENDER
+        // Without the renderer in the build, this says so (frame_capture.cpp).
         capture.emplace(options.capture, options.out_dir, options.capture_width, options.capture_height, world,
                         loaded.desc.camera, frames);
-#else
-        throw Error("--capture " + options.capture +
-                    ": this build has no renderer (configure with -DWEFT_RENDER=ON and the Vulkan, EGL and libpng "
-                    "packages of tools/deps.sh)");
-#endif
     }
 
     const RunContext before = describe_run(loaded.desc, world, options.sim.threads);

@@ -1,6 +1,9 @@
 // Headless capture of a run to PNG frames, a contact sheet and an MP4 (see frame_capture.h).
 #include "frame_capture.h"
 
+#include "weft/error.h"
+
+#if WEFT_HAVE_RENDER
 #include <algorithm>
 #include <chrono>
 #include <cstdio>
@@ -8,7 +11,6 @@
 #include <iomanip>
 #include <sstream>
 
-#include "weft/error.h"
 #include "weft/render/renderer.h"
 #include "weft/scene.h"
 #include "weft/world.h"
@@ -134,3 +136,23 @@ CaptureSummary FrameCapture::finish(double fps) {
 }
 
 }  // namespace weft::cli
+
+#else  // a build without the renderer (WEFT_RENDER off): --capture is an error that says why
+
+namespace weft::cli {
+
+struct FrameCapture::State {};
+
+FrameCapture::FrameCapture(const std::string& renderer, std::filesystem::path, int, int, const World&,
+                           const CameraDesc&, int) {
+    throw Error("--capture " + renderer +
+                ": this build has no renderer (configure with -DWEFT_RENDER=ON and the Vulkan, EGL and libpng "
+                "packages of tools/deps.sh)");
+}
+FrameCapture::~FrameCapture() = default;
+void FrameCapture::capture(int, const World&) {}
+CaptureSummary FrameCapture::finish(double) { return {}; }
+
+}  // namespace weft::cli
+
+#endif
