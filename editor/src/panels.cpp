@@ -202,6 +202,10 @@ void stats_panel(Session& session, const PanelLayout& layout) {
     plot("CG iterations", h.cg_iterations, "%.0f");
     plot("log10 residual", h.cg_residual_log10, "%.2f");
     plot("contacts", h.contacts, "%.0f");
+    // Collision work and failures, where the scene has the collision stages (or the check) on.
+    if (session.world().settings().collision.self_collision || h.impact_zones.max() > 0.0F)
+        plot("impact zones", h.impact_zones, "%.0f");
+    if (session.world().settings().collision.check) plot("intersections", h.intersections, "%.0f");
     plot("ms / frame", h.frame_ms, "%.1f ms");
     ImGui::PopItemWidth();
     ImGui::End();

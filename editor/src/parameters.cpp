@@ -156,6 +156,18 @@ ParameterTable::ParameterTable(const World& world) {
                                false, [col](World& w) -> double& { return col(w).rest_exclusion; }));
     P.push_back(number<int>("collision.max_impact_iterations", "collision", "impact-zone rounds", "", 1, 1000, true,
                             [col](World& w) -> int& { return col(w).max_impact_iterations; }));
+    P.push_back(number<double>("collision.impact_tolerance", "collision", "impact tolerance", "thicknesses", 0.0, 0.5,
+                               false, [col](World& w) -> double& { return col(w).impact_tolerance; }));
+    P.back().hint = "a zone's projection stops within this fraction of the thickness; 0: the backend's default";
+    P.push_back(number<int>("collision.max_impact_sweeps", "collision", "impact sweeps", "", 0, 100000, true,
+                            [col](World& w) -> int& { return col(w).max_impact_sweeps; }));
+    P.back().hint = "cap on one zone's projection iterations per round; 0: the backend's default";
+    P.push_back(flag("collision.count_culled", "collision", "count culled pairs",
+                     [col](World& w) -> bool& { return col(w).count_culled; }));
+    P.back().hint = "also count the pairs culling removed (cpu backend; costs a box test per pair)";
+    P.push_back(flag("collision.check", "collision", "exact check",
+                     [col](World& w) -> bool& { return col(w).check; }));
+    P.back().hint = "exact triangle-triangle intersection check after every step (costly; for testing)";
 
     // ---- world: gravity and wind
     const char* axes[] = {"x", "y", "z"};

@@ -40,6 +40,8 @@ void StatsHistory::record(const StepStats& s) {
     // Residuals span decades; 1e-12 keeps log10 finite for an exact solve.
     cg_residual_log10.push(std::log10(std::max(s.cg_residual, 1e-12)));
     contacts.push(s.collider_contacts + s.collision.contacts);
+    impact_zones.push(s.collision.impact_zones);
+    intersections.push(static_cast<double>(std::max<std::int64_t>(s.collision.remaining_intersections, 0)));
     ++steps;
     if (s.cg_not_converged > 0) ++not_converged_steps;
     if (s.non_finite) ++non_finite_steps;
@@ -52,6 +54,8 @@ void StatsHistory::clear() {
     cg_iterations.clear();
     cg_residual_log10.clear();
     contacts.clear();
+    impact_zones.clear();
+    intersections.clear();
     frame_ms.clear();
     steps = not_converged_steps = non_finite_steps = 0;
     last = {};

@@ -132,6 +132,24 @@ TEST(Parameters, VectorsKeepTheirLengthInRange) {
     EXPECT_NEAR(std::sqrt(g.x * g.x + g.y * g.y + g.z * g.z), 1000.0, 1e-9);
 }
 
+// Every collision knob of docs/scene-format.md is in the table, reaching the world's settings.
+TEST(Parameters, EveryCollisionKnobIsEditable) {
+    const std::unique_ptr<World> owned = small_world();
+    World& world = *owned;
+    ParameterTable table(world);
+    for (const char* key : {"collision.self", "collision.continuous", "collision.culling", "collision.cull_contacts",
+                            "collision.thickness", "collision.stiffness", "collision.rest_exclusion",
+                            "collision.max_impact_iterations", "collision.impact_tolerance",
+                            "collision.max_impact_sweeps", "collision.count_culled", "collision.check"})
+        EXPECT_NE(table.find(key), nullptr) << key;
+    ParameterTable::apply(*table.find("collision.impact_tolerance"), world, 0.9);  // clamped to its range
+    EXPECT_DOUBLE_EQ(world.settings().collision.impact_tolerance, 0.5);
+    ParameterTable::apply(*table.find("collision.max_impact_sweeps"), world, 64.0);
+    EXPECT_EQ(world.settings().collision.max_impact_sweeps, 64);
+    ParameterTable::apply(*table.find("collision.check"), world, 1.0);
+    EXPECT_TRUE(world.settings().collision.check);
+}
+
 TEST(Script, SaveNeedsAPath) {
     const Script s = parse_script("frame 1\nsave out/tuned.toml\n", "s.txt");
     ASSERT_EQ(s.commands.size(), 2U);

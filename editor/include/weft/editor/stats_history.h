@@ -38,6 +38,8 @@ struct StatsHistory {
     Series cg_iterations{kCapacity};                                             ///< summed over the step's solves
     Series cg_residual_log10{kCapacity};  ///< log10 of the largest final relative residual
     Series contacts{kCapacity};           ///< collider contacts + cloth proximity contacts
+    Series impact_zones{kCapacity};       ///< impact zones formed in the step (collision stages only)
+    Series intersections{kCapacity};      ///< intersecting triangle pairs after the step (exact check on)
     Series frame_ms{kCapacity};           ///< wall time between displayed frames, ms
     int steps = 0;                        ///< steps recorded since the last clear
     int not_converged_steps = 0;          ///< of those, steps with a CG solve that hit its cap
