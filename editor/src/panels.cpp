@@ -237,6 +237,22 @@ void warning_banner(Session& session, const PanelLayout& layout) {
 
 }  // namespace
 
+// The keys and mouse actions (docs/editor.md, "Keys and mouse"), listed where the user looks for them.
+void help_rows() {
+    static constexpr const char* kHelp[][2] = {
+        {"left drag", "orbit the camera"},         {"right/middle drag", "pan"},
+        {"scroll", "zoom"},                        {"Space", "pause / resume"},
+        {"Right arrow, N", "one step (pauses)"},   {"+ / -", "time scale x2 / /2"},
+        {"R", "reset the camera"},                 {"S", "screenshot"},
+        {"Esc, Q", "quit"},                        {"Ctrl+click a slider", "type a value"},
+    };
+    for (const auto& row : kHelp) {
+        ImGui::TextUnformatted(row[0]);
+        ImGui::SameLine(150.0F);
+        ImGui::TextDisabled("%s", row[1]);
+    }
+}
+
 void draw_panels(Session& session, const PanelLayout& layout) {
     ImGui::SetNextWindowPos(ImVec2(0.0F, 0.0F), ImGuiCond_FirstUseEver);
     ImGui::SetNextWindowSize(ImVec2(kColumn, layout.height), ImGuiCond_FirstUseEver);
@@ -250,6 +266,7 @@ void draw_panels(Session& session, const PanelLayout& layout) {
     parameter_rows(session, "materials", open && ImGui::CollapsingHeader("Materials", ImGuiTreeNodeFlags_DefaultOpen));
     parameter_rows(session, "collision", open && ImGui::CollapsingHeader("Collision"));
     parameter_rows(session, "world", open && ImGui::CollapsingHeader("Wind and gravity"));
+    if (open && ImGui::CollapsingHeader("Help: keys and mouse")) help_rows();
     ImGui::PopItemWidth();
     ImGui::End();
     stats_panel(session, layout);
