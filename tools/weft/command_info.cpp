@@ -7,6 +7,8 @@
 #include "weft/backend.h"
 #include "weft/mesh.h"
 #if WEFT_HAVE_RENDER
+#include <unistd.h>
+
 #include "weft/render/renderer.h"
 #endif
 
@@ -60,11 +62,16 @@ int info_command(std::ostream& out) {
     backends.print(out);
 
 #if WEFT_HAVE_RENDER
-    // Each renderer started once, small: where it draws, or why it cannot here. The cloth reaches
-    // it by host upload until the zero-copy path is wired (docs/rendering.md).
-    out << "\nrenderers (weft run --capture)\n";
+    // Each renderer started once, small: where it draws, or why it cannot here, and whether its
+    // cloth buffer can be shared zero-copy with a GPU backend (docs/rendering.md, "Zero-copy
+    // interop"), found by exporting the buffer of a one-triangle scene.
+    out << "\nrenderers (weft run --capture, weft view, weft edit)\n";
     TextTable renderers({{"name", TextTable::Align::Left}, {"device", TextTable::Align::Left},
-                         {"cloth path", TextTable::Align::Left}});
+                         {"zero-copy cloth", TextTable::Align::Left}});
+    render::RenderScene probe;
+    probe.cloth_vertices = 3;
+    probe.cloth_indices = {0, 1, 2};
+    probe.cloths.push_back(render::ClothDraw{.name = "probe", .vertex_count = 3, .index_count = 3});
     for (const std::string& name : render::renderer_names()) {
         std::string device, path;
         try {
@@ -74,7 +81,15 @@ int info_command(std::ostream& out) {
             options.shadow_map_size = 16;
             const auto renderer = render::create_renderer(name, options);
             device = renderer->device_description();
-            path = "host upload";
+            renderer->load(probe);
+            std::string why;
+            if (auto link = renderer->export_cloth(why)) {
+                ::close(link->memory.fd);
+                ::close(link->timeline.fd);
+                path = "available (exported memory + timeline semaphore)";
+            } else {
+                path = "no, host upload: " + why;
+            }
         } catch (const std::exception& e) {
             device = std::string("unavailable: ") + e.what();
             path = "-";

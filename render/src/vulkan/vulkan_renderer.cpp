@@ -593,7 +593,7 @@ Image VulkanRenderer::read_back() {
 std::optional<ClothInterop> VulkanRenderer::export_cloth(std::string& why) {
     if (!loaded_) throw Error("vulkan renderer: export_cloth() before load()");
     if (!context_.interop_available()) {
-        why = context_.description() + ": " + context_.interop_unavailable_reason();
+        why = context_.interop_unavailable_reason();  // the device is in device_description()
         return std::nullopt;
     }
     if (cloth_vertices_.buffer == VK_NULL_HANDLE) {
