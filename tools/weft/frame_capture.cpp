@@ -15,17 +15,13 @@
 #include "weft/scene.h"
 #include "weft/world.h"
 
+#include "stats_report.h"
+
 namespace weft::cli {
 namespace {
 
 constexpr int kSheetFrames = 12;
 constexpr int kSheetColumns = 4;
-
-double median(std::vector<double> v) {
-    if (v.empty()) return 0.0;
-    std::nth_element(v.begin(), v.begin() + static_cast<std::ptrdiff_t>(v.size() / 2), v.end());
-    return v[v.size() / 2];
-}
 
 double ms_since(std::chrono::steady_clock::time_point start) {
     return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
@@ -107,8 +103,8 @@ CaptureSummary FrameCapture::finish(double fps) {
     out.path = t.path;
     out.bytes_per_frame = t.bytes_uploaded;
     out.frames = s.frames;
-    out.render_ms_median = median(s.render_ms);
-    out.write_ms_median = median(s.write_ms);
+    out.render_ms_median = distribution(s.render_ms).median;
+    out.write_ms_median = distribution(s.write_ms).median;
     if (!s.sheet.empty()) {
         // Thumbnails about 320 pixels wide.
         const int scale = std::max(1, s.sheet.front().width / 320);
