@@ -1,16 +1,17 @@
 // Simulate-plus-draw per frame on one GPU: the CUDA backend steps the flag and the Vulkan renderer
-// draws it, with the cloth handed over either
-//   interop: the solver's output kernel writes the renderer's exported buffer, a timeline semaphore
-//            orders the two (docs/rendering.md), no cloth byte crosses the bus; or
-//   upload:  the solver writes its own device buffer, the host copies it out (D2H) and the renderer
-//            uploads it again (H2D), the fallback where interop is unavailable.
-// Per mode: frame time percentiles (p50, p99) and the process CPU time per frame over the timed
-// frames, and the cloth bytes that crossed the bus per frame. The draw is offscreen and includes the
-// picture's read-back (the capture path), the same in both modes.
+// draws it through the frame pipeline (weft/render/cloth_feed.h), with the cloth handed over either
+//   interop: the solver's output kernel writes one of the renderer's two exported slots, timeline
+//            semaphores order writer and reader (docs/rendering.md), no cloth byte crosses the bus; or
+//   upload:  the feed's fallback, the state read back to the host (normals computed there) and
+//            uploaded again, what runs where interop is unavailable;
+// and the frames either overlapped (the steps of frame N+1 run while the GPU draws frame N: submit,
+// simulate, collect) or serial (simulate, then draw and wait). Per mode: frame time percentiles
+// (p50, p99) and the process CPU time per frame over the timed frames, the cloth bytes that crossed
+// the bus per frame, and the frames whose stamps showed a torn read (must be 0). The draw is
+// offscreen and includes the picture's read-back (the capture path), the same in every mode.
 //
 //   build/bin/weft_render_interop_bench --json out/interop.json            # 200K and 1.2M triangles
 //   build/bin/weft_render_interop_bench --sizes 400x250 --frames 1000
-#include <cuda_runtime_api.h>
 
 #include <algorithm>
 #include <chrono>
@@ -20,14 +21,16 @@
 #include <filesystem>
 #include <fstream>
 #include <iostream>
+#include <iterator>
+#include <optional>
 #include <string>
 #include <vector>
 
 #include "json_writer.h"
 #include "text_table.h"
 #include "weft/cuda/cuda_backend.h"
-#include "weft/cuda/external_memory.h"
 #include "weft/error.h"
+#include "weft/render/cloth_feed.h"
 #include "weft/render/renderer.h"
 #include "weft/scene.h"
 
@@ -43,7 +46,7 @@ struct Size {
 };
 
 struct Options {
-    std::vector<Size> sizes{{400, 250, 1000}, {1000, 600, 300}};
+    std::vector<Size> sizes{{400, 250, 1000}, {1000, 600, 200}};
     int warmup = 20;
     int width = 960, height = 540;
     std::filesystem::path json_file;
@@ -52,11 +55,12 @@ struct Options {
 constexpr const char* kUsage = R"(Usage: weft_render_interop_bench [options]
 
 The flag scene stepped by the CUDA backend and drawn by the Vulkan renderer each frame, with the cloth
-shared zero-copy (interop) or copied through the host (upload): frame time p50/p99, CPU ms per frame,
-bytes per frame. Needs a GPU whose Vulkan driver exports memory and timeline semaphores.
+shared zero-copy (interop) or copied through the host (upload), the steps of a frame overlapping the
+draw of the one before or not (serial): frame time p50/p99, CPU ms per frame, bytes per frame. Needs a
+GPU whose Vulkan driver exports memory and timeline semaphores.
 
 Options:
-  --sizes LIST   comma-separated CXxCY[:FRAMES] grid cells (default 400x250:1000,1000x600:300;
+  --sizes LIST   comma-separated CXxCY[:FRAMES] grid cells (default 400x250:1000,1000x600:200;
                  triangles = 2·CX·CY); 1000x600 runs at dt 1/250 s, 1 substep (the P-Cloth setting)
   --warmup N     untimed frames per run; default 20
   --size WxH     picture size; default 960x540
@@ -138,21 +142,26 @@ double percentile(std::vector<double> v, double p) {
     return v[std::min(k, v.size() - 1)];
 }
 
-void check(cudaError_t e, const char* what) {
-    if (e != cudaSuccess) throw Error(std::string(what) + ": " + cudaGetErrorString(e));
-}
+struct Mode {
+    const char* name;
+    bool interop;
+    bool overlap;
+};
+constexpr Mode kModes[] = {{"interop, overlapped", true, true}, {"interop, serial", true, false},
+                           {"upload, overlapped", false, true}};
 
 struct Result {
     std::string mode;
     int cells_x = 0, cells_y = 0;
     std::size_t triangles = 0, vertices = 0;
     int frames = 0;
-    double p50 = 0, p99 = 0, mean = 0, cpu_ms = 0;
+    double p50 = 0, p99 = 0, mean = 0, cpu_ms = 0, step_ms = 0;
     double bytes_per_frame = 0;
+    std::int64_t torn = 0;
     std::string device, path;
 };
 
-Result run(const Options& o, const Size& size, bool interop) {
+Result run(const Options& o, const Size& size, const Mode& mode) {
     const auto file = std::filesystem::path(WEFT_SOURCE_DIR) / "assets" / "scenes" / "flag.toml";
     std::vector<std::string> overrides{"cloth.flag.mesh.grid.cells=[" + std::to_string(size.cells_x) + "," +
                                        std::to_string(size.cells_y) + "]"};
@@ -168,60 +177,45 @@ Result run(const Options& o, const Size& size, bool interop) {
     auto renderer = render::create_renderer("vulkan", ro);
     const render::RenderScene scene = render::make_render_scene(*world, desc.camera);
     renderer->load(scene);
-    cuda::CudaBackendApi* api = cuda::as_cuda(world->backend());
-    cudaStream_t stream = nullptr;
-    check(cudaStreamCreate(&stream), "cudaStreamCreate");
-    api->set_stream(stream);
-    const std::size_t bytes = std::size_t{scene.cloth_vertices} * sizeof(render::RenderVertex);
+    render::ClothFeed feed(*world, *renderer, scene, render::ClothFeed::Options{mode.interop});
+    if (mode.interop && !feed.zero_copy()) throw Error("no interop on this machine: " + feed.fallback_reason());
 
-    std::unique_ptr<cuda::ImportedBuffer> buffer;
-    std::unique_ptr<cuda::ImportedTimeline> timeline;
-    void* device_output = nullptr;
-    render::RenderVertex* host = nullptr;
-    if (interop) {
-        std::string why;
-        auto link = renderer->export_cloth(why);
-        if (!link) throw Error("no interop on this machine: " + why);
-        buffer = std::make_unique<cuda::ImportedBuffer>(0, link->memory);
-        timeline = std::make_unique<cuda::ImportedTimeline>(0, link->timeline);
-        api->set_output(buffer->device_pointer());
-    } else {
-        check(cudaMalloc(&device_output, bytes), "cudaMalloc");
-        check(cudaMallocHost(reinterpret_cast<void**>(&host), bytes), "cudaMallocHost");
-        api->set_output(device_output);
-    }
-
-    std::vector<double> frame_ms;
+    std::vector<double> frame_ms, step_ms;
     double cpu_total = 0.0;
-    std::uint64_t value = 0;
     const int total = o.warmup + size.frames;
+    std::optional<render::RenderFrame> drawing;
+    std::uint64_t bytes = 0;
     for (int f = 0; f < total; ++f) {
         const auto t0 = Clock::now();
         const double c0 = cpu_seconds();
-        render::RenderFrame frame;
-        frame.collider_models = render::collider_models(scene, world->model(), world->time() + world->settings().solver.dt);
-        if (interop) {
-            timeline->wait(value, stream);  // the renderer's reads of the last frame are done
-            (void)world->step();
-            timeline->signal(++value, stream);
-            frame.wait_value = value;
-            frame.signal_value = ++value;
-        } else {
-            (void)world->step();
-            check(cudaMemcpyAsync(host, device_output, bytes, cudaMemcpyDeviceToHost, stream), "cudaMemcpyAsync");
-            check(cudaStreamSynchronize(stream), "cudaStreamSynchronize");
-            frame.cloth = std::span<const render::RenderVertex>(host, scene.cloth_vertices);
+        double step = 0.0;
+        render::RenderFrame next = feed.simulate([&] { step = world->step().step_ms; });
+        if (drawing) {  // overlapped: the frame before was drawing during the step
+            (void)renderer->collect();
+            (void)feed.check(*drawing, renderer->transfer());
+            drawing.reset();
         }
-        (void)renderer->draw(frame);
+        renderer->submit(next);
+        bytes = renderer->transfer().bytes_uploaded;
+        if (mode.overlap) {
+            drawing = std::move(next);
+        } else {
+            (void)renderer->collect();
+            (void)feed.check(next, renderer->transfer());
+        }
         if (f >= o.warmup) {
             frame_ms.push_back(std::chrono::duration<double, std::milli>(Clock::now() - t0).count());
+            step_ms.push_back(step);
             cpu_total += cpu_seconds() - c0;
         }
     }
-    check(cudaStreamSynchronize(stream), "cudaStreamSynchronize");
+    if (drawing) {
+        (void)renderer->collect();
+        (void)feed.check(*drawing, renderer->transfer());
+    }
 
     Result r;
-    r.mode = interop ? "interop" : "upload";
+    r.mode = mode.name;
     r.cells_x = size.cells_x;
     r.cells_y = size.cells_y;
     r.triangles = scene.cloth_indices.size() / 3;
@@ -229,22 +223,18 @@ Result run(const Options& o, const Size& size, bool interop) {
     r.frames = size.frames;
     r.p50 = percentile(frame_ms, 0.50);
     r.p99 = percentile(frame_ms, 0.99);
+    r.step_ms = percentile(step_ms, 0.50);
     double sum = 0.0;
     for (const double m : frame_ms) sum += m;
     r.mean = sum / static_cast<double>(frame_ms.size());
     r.cpu_ms = 1000.0 * cpu_total / static_cast<double>(size.frames);
-    // Cloth bytes over the bus per frame: the renderer's upload plus, on the upload path, the copy out.
-    r.bytes_per_frame = static_cast<double>(renderer->transfer().bytes_uploaded) + (interop ? 0.0 : static_cast<double>(bytes));
+    // Cloth bytes over the bus per frame: the renderer's upload plus, on the upload path, the
+    // read-back of the state (positions as float, the same size as the upload's positions).
+    r.bytes_per_frame = static_cast<double>(bytes) +
+                        (mode.interop ? 0.0 : static_cast<double>(scene.cloth_vertices) * 3.0 * sizeof(float));
+    r.torn = feed.torn_frames();
     r.device = renderer->device_description();
-    r.path = renderer->transfer().path;
-
-    api->set_output(nullptr);
-    api->set_stream(nullptr);
-    timeline.reset();
-    buffer.reset();
-    if (device_output != nullptr) cudaFree(device_output);
-    if (host != nullptr) cudaFreeHost(host);
-    cudaStreamDestroy(stream);
+    r.path = feed.describe();
     return r;
 }
 
@@ -256,22 +246,28 @@ int main(int argc, char** argv) {
         cuda::register_cuda_backend();
         if (cuda::devices().empty()) throw Error("no CUDA device: " + cuda::unavailable_reason());
         std::vector<Result> results;
+        constexpr std::size_t kModeCount = std::size(kModes);
         for (const Size& s : o.sizes)
-            for (const bool interop : {true, false}) {
-                results.push_back(run(o, s, interop));
+            for (const Mode& m : kModes) {
+                results.push_back(run(o, s, m));
                 const Result& r = results.back();
-                std::printf("%s %zu triangles: p50 %.2f ms, p99 %.2f ms, CPU %.2f ms/frame, %.0f B/frame (%s)\n",
-                            r.mode.c_str(), r.triangles, r.p50, r.p99, r.cpu_ms, r.bytes_per_frame, r.path.c_str());
+                std::printf("%s, %zu triangles: p50 %.2f ms, p99 %.2f ms, step %.2f ms, CPU %.2f ms/frame, %.0f B/frame, "
+                            "%lld torn (%s)\n",
+                            r.mode.c_str(), r.triangles, r.p50, r.p99, r.step_ms, r.cpu_ms, r.bytes_per_frame,
+                            static_cast<long long>(r.torn), r.path.c_str());
+                std::fflush(stdout);
             }
+        // The headline ratio: each mode's p50 against the first mode's (interop, overlapped).
         cli::TextTable table({{"triangles"}, {"mode", cli::TextTable::Align::Left}, {"frames"}, {"p50 ms"}, {"p99 ms"},
-                              {"mean ms"}, {"CPU ms/frame"}, {"bus B/frame"}, {"interop speed-up (p50)"}});
+                              {"mean ms"}, {"step p50 ms"}, {"CPU ms/frame"}, {"bus B/frame"}, {"torn"},
+                              {"p50 / interop overlapped"}});
         for (std::size_t k = 0; k < results.size(); ++k) {
             const Result& r = results[k];
-            const Result& other = results[k ^ 1U];
+            const Result& base = results[k - k % kModeCount];
             table.add_row({std::to_string(r.triangles), r.mode, std::to_string(r.frames), format_fixed(r.p50, 2),
-                           format_fixed(r.p99, 2), format_fixed(r.mean, 2), format_fixed(r.cpu_ms, 2),
-                           format_fixed(r.bytes_per_frame, 0),
-                           r.mode == "interop" ? format_fixed(other.p50 / r.p50, 3) + "x" : ""});
+                           format_fixed(r.p99, 2), format_fixed(r.mean, 2), format_fixed(r.step_ms, 2),
+                           format_fixed(r.cpu_ms, 2), format_fixed(r.bytes_per_frame, 0), std::to_string(r.torn),
+                           format_fixed(r.p50 / base.p50, 3) + "x"});
         }
         std::printf("\nflag on %s, %dx%d pictures, offscreen draw with read-back\n", results.front().device.c_str(),
                     o.width, o.height);
@@ -286,6 +282,7 @@ int main(int argc, char** argv) {
                 json.field("vertices", static_cast<double>(r.vertices)).field("frames", r.frames);
                 json.field("p50_ms", r.p50).field("p99_ms", r.p99).field("mean_ms", r.mean).field("cpu_ms_per_frame", r.cpu_ms);
                 json.field("bus_bytes_per_frame", r.bytes_per_frame).field("width", o.width).field("height", o.height);
+                json.field("step_ms_p50", r.step_ms).field("torn_frames", static_cast<double>(r.torn)).field("path", r.path);
                 json.end_object();
             }
             json.end_array();

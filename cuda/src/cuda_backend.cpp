@@ -11,6 +11,7 @@
 #include "backend_access.h"
 #include "cuda_check.h"
 #include "device_solver.h"
+#include "shared_output.h"
 #include "weft/error.h"
 #include "weft/flat_model.h"
 
@@ -96,7 +97,13 @@ public:
 
     std::size_t memory_bytes() const override { return solver_->memory_bytes(); }
 
+    std::unique_ptr<SharedOutput> share_output(std::span<const SharedSlotHandle> slots, const DeviceUuid& device,
+                                               std::string& why) override {
+        return make_shared_output(*solver_, info_, slots, device, why);
+    }
+
     void set_stream(CUstream_st* stream) override { solver_->set_stream(stream); }
+    CUstream_st* stream() const override { return solver_->stream(); }
     void set_output(void* device_buffer, std::size_t stride) override { solver_->set_output(device_buffer, stride); }
     std::size_t vertex_count() const override { return flat_.vertex_count; }
     void set_use_graph(bool enabled) override { solver_->set_use_graph(enabled); }

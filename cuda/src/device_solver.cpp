@@ -415,7 +415,6 @@ void DeviceSolver::record(cudaStream_t stream, bool capturing) {
         mark();
     }
     launch_commit(view_, stream);
-    if (output_ != nullptr) launch_write_output(view_, output_, output_stride_, stream);
     mark();
 }
 
@@ -440,8 +439,6 @@ void DeviceSolver::capture_graph() {
     }
     ++graph_captures_;
     graph_newton_ = recorded_newton_;
-    graph_output_ = output_;
-    graph_output_stride_ = output_stride_;
 }
 
 void DeviceSolver::substep(const Model& model, double t, double h, StepStats& stats) {
@@ -474,8 +471,7 @@ void DeviceSolver::substep(const Model& model, double t, double h, StepStats& st
     }
 
     const bool want_graph = use_graph_ && !graph_unsupported_ && warm_;
-    if (want_graph && (graph_exec_ == nullptr || graph_newton_ != recorded_newton_ || graph_output_ != output_ ||
-                       graph_output_stride_ != output_stride_)) {
+    if (want_graph && (graph_exec_ == nullptr || graph_newton_ != recorded_newton_)) {
         try {
             capture_graph();
         } catch (const Error&) {
@@ -529,12 +525,17 @@ void DeviceSolver::substep(const Model& model, double t, double h, StepStats& st
 
     // After the solve: CCD and the impact zones on the device (device_collisions.h).
     if (collisions_.active() && ds.non_finite == 0) {
-        if (collisions_.resolve(model, h, view_.x, view_.v, view_.v0, view_.dv_previous, stream, stats) &&
-            output_ != nullptr) {
-            launch_write_output(view_, output_, output_stride_, stream);
-            WEFT_CUDA_CHECK(cudaStreamSynchronize(stream));
-        }
+        (void)collisions_.resolve(model, h, view_.x, view_.v, view_.v0, view_.dv_previous, stream, stats);
         ledger_.set("cloth collisions", collisions_.memory_bytes());  // the detection buffers grow on use
+    }
+
+    // The output buffer gets the substep's final state (after the sweep and the impact zones), outside
+    // the graph so that switching buffers (the two shared slots of a frame pipeline) re-captures
+    // nothing. A shared slot is ordered by its timeline (SharedOutput::end_frame); a buffer bound with
+    // set_output() is complete when the step returns, as that API promises.
+    if (output_ != nullptr) {
+        launch_write_output(view_, output_, output_stride_, stream);
+        if (output_synchronous_) WEFT_CUDA_CHECK(cudaStreamSynchronize(stream));
     }
 }
 
@@ -564,8 +565,6 @@ void DeviceSolver::sweep_colliders(float largest_move, cudaStream_t stream, Step
     if (!sweep_needed(largest_move)) return;
     const auto start = Clock::now();
     launch_sweep_colliders(view_, stream);
-    // The renderer's buffer was written by the graph before the sweep moved anything.
-    if (output_ != nullptr) launch_write_output(view_, output_, output_stride_, stream);
     WEFT_CUDA_CHECK(cudaMemcpyAsync(&host_stats_[0].swept_hits, &stats_.get()->swept_hits, sizeof(int),
                                     cudaMemcpyDeviceToHost, stream));
     WEFT_CUDA_CHECK(cudaStreamSynchronize(stream));
@@ -614,16 +613,17 @@ void DeviceSolver::set_stream(cudaStream_t stream) {
     user_stream_ = stream;
 }
 
-void DeviceSolver::set_output(void* device_buffer, std::size_t stride) {
+void DeviceSolver::set_output(void* device_buffer, std::size_t stride, bool synchronous) {
     if (device_buffer != nullptr && stride < 6 * sizeof(float))
         throw Error("CUDA backend: output stride " + std::to_string(stride) + " is smaller than one vertex (24 bytes)");
     output_ = device_buffer;
     output_stride_ = stride;
+    output_synchronous_ = synchronous;
     if (output_ != nullptr && view_.n > 0) {
         // Make the buffer valid at once, before the next substep.
         WEFT_CUDA_CHECK(cudaSetDevice(device_));
         launch_write_output(view_, output_, output_stride_, active_stream());
-        WEFT_CUDA_CHECK(cudaStreamSynchronize(active_stream()));
+        if (synchronous) WEFT_CUDA_CHECK(cudaStreamSynchronize(active_stream()));
     }
 }
 

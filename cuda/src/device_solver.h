@@ -38,7 +38,12 @@ public:
     void write_state(std::size_t first, std::size_t count, const Vec3d* x, const Vec3d* v);
 
     void set_stream(cudaStream_t stream);
-    void set_output(void* device_buffer, std::size_t stride);
+    /// Every substep ends by writing positions and normals to `device_buffer` (and so does this call,
+    /// at once). `synchronous`: the host waits for each of those writes (the public set_output's
+    /// promise); otherwise they are only ordered on the active stream (shared slots, whose timeline
+    /// orders them for the reader).
+    void set_output(void* device_buffer, std::size_t stride, bool synchronous = true);
+    [[nodiscard]] std::size_t vertex_count() const { return view_.n; }
     void set_use_graph(bool enabled);
     void set_assembly(AssemblyStrategy strategy);
     void set_pcg_loop(PcgLoop loop);
@@ -141,6 +146,7 @@ private:
 
     void* output_ = nullptr;
     std::size_t output_stride_ = 0;
+    bool output_synchronous_ = true;
 
     // Stage timing: events recorded between stages (in the graph too).
     std::vector<cudaEvent_t> events_;
@@ -158,8 +164,6 @@ private:
     int graph_captures_ = 0;
     int sweep_launches_ = 0;
     int graph_newton_ = 0;            // settings the graph was captured with
-    void* graph_output_ = nullptr;
-    std::size_t graph_output_stride_ = 0;
 };
 
 }  // namespace weft::cuda

@@ -35,6 +35,8 @@ void launch_commit(const DeviceView& d, cudaStream_t stream);
 void launch_sweep_colliders(const DeviceView& d, cudaStream_t stream);
 /// Writes position and area-weighted normal of every vertex to `out` (stride bytes apart).
 void launch_write_output(const DeviceView& d, void* out, std::size_t stride, cudaStream_t stream);
+/// Stores `stamp` at `where` (8-byte aligned, device memory): the frame stamps of a shared slot.
+void launch_write_stamp(void* where, std::uint64_t stamp, cudaStream_t stream);
 
 // ---- forces and assembly (force_kernels.cu) -------------------------------------------------------
 /// The whole system A·Δv = b (assembly_kernels.cu): inertia, gravity, mass damping and collider

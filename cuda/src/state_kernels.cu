@@ -132,6 +132,8 @@ __global__ void write_output_kernel(DeviceView d, unsigned char* out, std::size_
     o[5] = normal.z;
 }
 
+__global__ void write_stamp_kernel(std::uint64_t* where, std::uint64_t stamp) { *where = stamp; }
+
 }  // namespace
 
 void launch_begin_substep(const DeviceView& d, cudaStream_t stream) {
@@ -170,6 +172,11 @@ void launch_sweep_colliders(const DeviceView& d, cudaStream_t stream) {
 void launch_write_output(const DeviceView& d, void* out, std::size_t stride, cudaStream_t stream) {
     write_output_kernel<<<grid_for(d.n), kBlockSize, 0, stream>>>(d, static_cast<unsigned char*>(out), stride);
     WEFT_CUDA_CHECK_LAUNCH("write_output_kernel");
+}
+
+void launch_write_stamp(void* where, std::uint64_t stamp, cudaStream_t stream) {
+    write_stamp_kernel<<<1, 1, 0, stream>>>(static_cast<std::uint64_t*>(where), stamp);
+    WEFT_CUDA_CHECK_LAUNCH("write_stamp_kernel");
 }
 
 }  // namespace weft::cuda

@@ -11,6 +11,7 @@
 #include <vector>
 
 #include "weft/error.h"
+#include "weft/render/cloth_feed.h"
 #include "weft/render/image.h"
 #include "weft/render/render_scene.h"
 #include "weft/render/window.h"
@@ -175,8 +176,13 @@ int run_editor(const SceneDesc& scene, std::unique_ptr<World> world, EditorOptio
 
     std::optional<ScriptRunner> runner;
     if (scripted) runner.emplace(*options.script);
-    std::vector<render::RenderVertex> vertices;
-    render::RenderFrame frame;
+    // The cloth reaches the window zero-copy where the backend shares its GPU (cloth_feed.h); a
+    // reset builds a new world, so the feed is let go first and linked to the new one after.
+    std::unique_ptr<render::ClothFeed> feed;
+    session.set_before_rebuild([&] { feed.reset(); });
+    render::RenderFrame previous;
+    bool have_previous = false;
+    std::int64_t torn = 0;
     int shown = 0;
     int status = 0;
     const Clock::time_point start = Clock::now();
@@ -211,20 +217,26 @@ int run_editor(const SceneDesc& scene, std::unique_ptr<World> world, EditorOptio
         // Scripted: exactly the wall time of one step per frame (at the current scale), so that the
         // run steps once per displayed frame whatever the machine's speed.
         const Clock::time_point now = Clock::now();
-        FrameLoop& loop = session.loop();
-        const double wall = shown == 0 ? 0.0
-                            : scripted ? session.world().settings().solver.dt / loop.time_scale()
-                                       : seconds(now - last);
-        const std::int64_t before = loop.steps();
-        (void)loop.advance(wall);
-        if (loop.steps() > before) session.history().record(loop.last_stats());
+        if (!feed) {
+            feed = std::make_unique<render::ClothFeed>(session.world(), window.renderer(), render_scene);
+            have_previous = false;  // the frame before belongs to the old feed: not checked
+        }
+        render::RenderFrame frame = feed->simulate([&] {
+            FrameLoop& loop = session.loop();
+            const double wall = shown == 0 ? 0.0
+                                : scripted ? session.world().settings().solver.dt / loop.time_scale()
+                                           : seconds(now - last);
+            const std::int64_t before = loop.steps();
+            (void)loop.advance(wall);
+            if (loop.steps() > before) session.history().record(loop.last_stats());
+        });
         if (shown > 0) session.history().frame_ms.push(1000.0 * seconds(now - last));
         last = now;
-
-        render::cloth_vertices(session.world(), render_scene, vertices);
-        frame.cloth = vertices;
-        frame.collider_models = render::collider_models(render_scene, session.world().model(), session.world().time());
         window.present(frame);
+        // present() waited for the frame before: its stamps are in transfer() now.
+        if (have_previous && !feed->check(previous, window.transfer())) ++torn;
+        previous = std::move(frame);
+        have_previous = true;
         if (++shown == 1) first_shown = Clock::now();
         ++fps_frames;
         if (keys.screenshot) {
@@ -254,7 +266,8 @@ int run_editor(const SceneDesc& scene, std::unique_ptr<World> world, EditorOptio
     out << std::fixed << std::setprecision(1) << "weft edit: " << shown << (shown == 1 ? " frame" : " frames")
         << " of " << name << " at " << window.width() << "x" << window.height() << ", " << mean_fps << " fps, "
         << std::setprecision(2) << "simulated " << session.world().time() << " s in " << session.loop().steps()
-        << " steps, on " << window.device_description() << std::endl;
+        << " steps, on " << window.device_description() << "; cloth by " << (feed ? feed->describe() : "-")
+        << ", " << torn << " frames torn" << std::endl;
     if (runner && status == 0)
         out << "script " << options.script->name << ": " << options.script->commands.size() << " commands, "
             << runner->expectations() << " expectations met" << std::endl;
@@ -262,6 +275,11 @@ int run_editor(const SceneDesc& scene, std::unique_ptr<World> world, EditorOptio
         err << "weft: " << window.validation_messages() << " Vulkan validation messages" << std::endl;
         status = 1;
     }
+    if (torn > 0) {
+        err << "weft: " << torn << " frames drew from a cloth slot holding parts of two states" << std::endl;
+        status = 1;
+    }
+    session.set_before_rebuild({});
     return status;
 }
 

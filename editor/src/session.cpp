@@ -52,6 +52,8 @@ void Session::reset() {
     steps_before_reset_ += loop_->steps();
 
     loop_.reset();
+    if (before_rebuild_) before_rebuild_();
+    world_.reset();
     world_ = build_world(scene_, backend_, options_);
     world_->settings() = settings;
     for (std::size_t i = 0; i < materials.size() && i < world_->model().cloths.size(); ++i)

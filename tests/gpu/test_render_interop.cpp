@@ -1,23 +1,26 @@
 // Zero-copy interop between the CUDA backend and the Vulkan renderer (docs/rendering.md), on a GPU
-// host: the renderer exports its cloth buffer and a timeline semaphore, CUDA imports them, the
-// solver's last kernel writes positions and normals straight into the buffer, and Vulkan draws
-// from it, the two ordered by the timeline with no host wait between them.
-// - Vulkan reads exactly the bytes CUDA wrote (the buffer copied out through each API, compared).
-// - Those bytes are the solver's state (positions against World::positions, rounded to float).
-// - The picture equals the host-upload picture of the same state (normals computed on the host).
+// host, through the frame pipeline's ClothFeed: the renderer exports two cloth slots with a timeline
+// semaphore each, the backend imports them, its output kernel writes positions and normals straight
+// into one slot while Vulkan draws the frame before from the other, the timelines ordering the two
+// on the GPU with no host wait between them.
+// - The slot Vulkan draws from holds exactly the solver's state (positions bit for bit).
+// - The picture equals the host-upload picture of the same state.
 // - No cloth byte crosses the bus: the renderer uploads 0 bytes per frame on this path.
+// - 1,000 frames of the frame loop with simulation and drawing overlapped: every frame drew one
+//   whole state, its own (the frame stamps the writer puts before and after the vertices, read back
+//   by Vulkan after its draws), and the slot's contents equal the state of that frame.
 #include <gtest/gtest.h>
-
-#include <cuda_runtime_api.h>
 
 #include <cmath>
 #include <cstdio>
 #include <cstring>
 #include <filesystem>
+#include <optional>
 
 #include "gpu_test_util.h"
-#include "weft/cuda/external_memory.h"
 #include "weft/error.h"
+#include "weft/frame_loop.h"
+#include "weft/render/cloth_feed.h"
 #include "weft/render/renderer.h"
 #include "weft/scene.h"
 
@@ -40,98 +43,185 @@ std::unique_ptr<render::Renderer> vulkan_renderer(std::string& why) {
     return nullptr;
 }
 
-int cuda_device_of(const DeviceUuid& uuid) {
-    for (const cuda::DeviceInfo& d : cuda::devices())
-        if (std::equal(uuid.begin(), uuid.end(), std::begin(d.uuid))) return d.ordinal;
-    return -1;
+struct Rig {
+    SceneDesc desc;
+    std::unique_ptr<World> world;
+    std::unique_ptr<render::Renderer> renderer;
+    render::RenderScene scene;
+};
+
+// The flag on the cuda backend, drawn by a Vulkan renderer; nullopt (with `why`) without one.
+std::optional<Rig> make_rig(std::string& why) {
+    Rig r;
+    r.renderer = vulkan_renderer(why);
+    if (!r.renderer) return std::nullopt;
+    const auto file = std::filesystem::path(WEFT_SOURCE_DIR) / "assets" / "scenes" / "flag.toml";
+    r.desc = load_scene(file, {});
+    r.world = build_world(r.desc, "cuda");
+    r.scene = render::make_render_scene(*r.world, r.desc.camera);
+    r.renderer->load(r.scene);
+    return r;
 }
 
-TEST(RenderInterop, CudaWritesTheBufferVulkanDrawsWithoutACopy) {
-    WEFT_REQUIRE_GPU();
-    std::string why;
-    auto renderer = vulkan_renderer(why);
-    if (!renderer) GTEST_SKIP() << "no Vulkan renderer: " << why;
-    const auto file = std::filesystem::path(WEFT_SOURCE_DIR) / "assets" / "scenes" / "flag.toml";
-    const SceneDesc desc = load_scene(file, {});
-    auto world = build_world(desc, "cuda");
-    const render::RenderScene scene = render::make_render_scene(*world, desc.camera);
-    renderer->load(scene);
-    auto link = renderer->export_cloth(why);
-    ASSERT_TRUE(link.has_value()) << "an NVIDIA Vulkan device must export: " << why;
-    const int device = cuda_device_of(link->device_uuid);
-    ASSERT_EQ(device, 0) << "the Vulkan device is CUDA device 0 (the backend's), matched by UUID";
+// Largest differences between a slot's contents and the host's vertices of the same state.
+struct Difference {
+    double position = 0.0, normal = 0.0;
+    bool positions_identical = true;
+};
 
-    cuda::ImportedBuffer buffer(device, link->memory);
-    cuda::ImportedTimeline timeline(device, link->timeline);
-    ASSERT_EQ(buffer.size(), std::uint64_t{scene.cloth_vertices} * sizeof(render::RenderVertex));
-    cuda::CudaBackendApi* api = cuda::as_cuda(world->backend());
-    ASSERT_NE(api, nullptr);
-    cudaStream_t stream = nullptr;
-    ASSERT_EQ(cudaStreamCreate(&stream), cudaSuccess);
-    api->set_stream(stream);
-    api->set_output(buffer.device_pointer());
-
-    // Per frame k: CUDA waits for the renderer's release of frame k−1 (2k−2), steps (the output
-    // kernel writes the buffer), signals 2k−1; the renderer waits for 2k−1, draws, signals 2k.
-    constexpr int kFrames = 30;
-    render::Image picture;
-    for (int k = 1; k <= kFrames; ++k) {
-        timeline.wait(2U * static_cast<std::uint64_t>(k) - 2U, stream);
-        (void)world->step();
-        timeline.signal(2U * static_cast<std::uint64_t>(k) - 1U, stream);
-        render::RenderFrame frame;
-        frame.collider_models = render::collider_models(scene, world->model(), world->time());
-        frame.wait_value = 2U * static_cast<std::uint64_t>(k) - 1U;
-        frame.signal_value = 2U * static_cast<std::uint64_t>(k);
-        picture = renderer->draw(frame);
-        ASSERT_EQ(renderer->transfer().path, "interop") << "frame " << k;
-        ASSERT_EQ(renderer->transfer().bytes_uploaded, 0U) << "frame " << k;
-    }
-    ASSERT_EQ(cudaStreamSynchronize(stream), cudaSuccess);
-
-    // The same bytes through both APIs.
-    const std::vector<render::RenderVertex> seen_by_vulkan = renderer->read_cloth();
-    std::vector<render::RenderVertex> written_by_cuda(scene.cloth_vertices);
-    ASSERT_EQ(cudaMemcpy(written_by_cuda.data(), buffer.device_pointer(), buffer.size(), cudaMemcpyDeviceToHost),
-              cudaSuccess);
-    ASSERT_EQ(seen_by_vulkan.size(), written_by_cuda.size());
-    EXPECT_EQ(std::memcmp(seen_by_vulkan.data(), written_by_cuda.data(), buffer.size()), 0)
-        << "Vulkan must read exactly what CUDA wrote";
-
-    // They are the solver's state after the last step.
-    std::vector<render::RenderVertex> host;
-    render::cloth_vertices(*world, scene, host);
-    double position_error = 0.0, normal_error = 0.0;
+Difference compare(const std::vector<render::RenderVertex>& slot, const std::vector<render::RenderVertex>& host) {
+    Difference d;
     for (std::size_t i = 0; i < host.size(); ++i)
         for (int c = 0; c < 3; ++c) {
-            position_error = std::max(position_error, static_cast<double>(std::abs(host[i].position[c] - written_by_cuda[i].position[c])));
-            normal_error = std::max(normal_error, static_cast<double>(std::abs(host[i].normal[c] - written_by_cuda[i].normal[c])));
+            if (slot[i].position[c] != host[i].position[c]) d.positions_identical = false;
+            d.position = std::max(d.position, static_cast<double>(std::abs(host[i].position[c] - slot[i].position[c])));
+            d.normal = std::max(d.normal, static_cast<double>(std::abs(host[i].normal[c] - slot[i].normal[c])));
         }
-    std::printf("[ interop  ] %u vertices after %d frames: positions within %.3g m, normals within %.3g of the host's\n",
-                scene.cloth_vertices, kFrames, position_error, normal_error);
-    EXPECT_LT(position_error, 1e-6);
-    EXPECT_LT(normal_error, 1e-4);
+    return d;
+}
 
-    // The picture drawn from the shared buffer equals the host-upload picture of the same state.
+TEST(RenderInterop, CudaWritesTheSlotsVulkanDrawsWithoutACopy) {
+    WEFT_REQUIRE_GPU();
+    std::string why;
+    std::optional<Rig> rig = make_rig(why);
+    if (!rig) GTEST_SKIP() << "no Vulkan renderer: " << why;
+    render::ClothFeed feed(*rig->world, *rig->renderer, rig->scene);
+    ASSERT_TRUE(feed.zero_copy()) << "an NVIDIA Vulkan device on the backend's GPU must share: "
+                                  << feed.fallback_reason();
+    std::printf("[ interop  ] %s on %s\n", feed.describe().c_str(), rig->renderer->device_description().c_str());
+    for (const render::TransferStats& t : feed.primed())
+        std::printf("[ interop  ] priming round read stamps %llx/%llx\n", static_cast<unsigned long long>(t.stamp_first),
+                    static_cast<unsigned long long>(t.stamp_last));
+
+    constexpr int kFrames = 30;
+    render::Image picture;
+    render::RenderFrame last;
+    for (int k = 1; k <= kFrames; ++k) {
+        last = feed.simulate([&] { (void)rig->world->step(); });
+        EXPECT_EQ(last.cloth_slot, (k - 1) % 2) << "frames alternate between the two slots";
+        EXPECT_TRUE(last.cloth.empty()) << "no host vertices on the zero-copy path";
+        picture = rig->renderer->draw(last);
+        ASSERT_EQ(rig->renderer->transfer().path, "interop") << "frame " << k;
+        ASSERT_EQ(rig->renderer->transfer().bytes_uploaded, 0U) << "frame " << k;
+        ASSERT_TRUE(feed.check(last, rig->renderer->transfer()))
+            << "frame " << k << " stamps " << rig->renderer->transfer().stamp_first << "/"
+            << rig->renderer->transfer().stamp_last;
+    }
+
+    // What Vulkan drew from is the solver's state after the last step: positions bit for bit (the
+    // state is float on the device; the host reads it as double and rounds it back).
+    const std::vector<render::RenderVertex> slot = rig->renderer->read_cloth(last.cloth_slot);
+    std::vector<render::RenderVertex> host;
+    render::cloth_vertices(*rig->world, rig->scene, host);
+    ASSERT_EQ(slot.size(), host.size());
+    const Difference d = compare(slot, host);
+    std::printf("[ interop  ] %zu vertices after %d frames: positions within %.3g m, normals within %.3g of the host's\n",
+                host.size(), kFrames, d.position, d.normal);
+    EXPECT_TRUE(d.positions_identical) << "the slot must hold exactly the solver's positions";
+    EXPECT_LT(d.normal, 1e-4);
+
+    // The picture drawn from the shared slot equals the host-upload picture of the same state.
     auto reference = vulkan_renderer(why);
     ASSERT_TRUE(reference) << why;
-    reference->load(scene);
+    reference->load(rig->scene);
     render::RenderFrame upload;
     upload.cloth = host;
-    upload.collider_models = render::collider_models(scene, world->model(), world->time());
+    upload.collider_models = last.collider_models;
     const render::Image expected = reference->draw(upload);
     EXPECT_EQ(reference->transfer().bytes_uploaded, host.size() * sizeof(render::RenderVertex));
-    const render::ImageDifference d = render::compare(picture, expected, 16);
-    std::printf("[ interop  ] picture against the host upload: mean %.4f, max %d, %.4f %% over 16\n", d.mean, d.max,
-                100.0 * d.fraction_over);
+    const render::ImageDifference diff = render::compare(picture, expected, 16);
+    std::printf("[ interop  ] picture against the host upload: mean %.4f, max %d, %.4f %% over 16\n", diff.mean, diff.max,
+                100.0 * diff.fraction_over);
+    EXPECT_LT(diff.mean, 0.5);
+    EXPECT_LT(diff.fraction_over, 0.002);
+    EXPECT_GT(render::luminance_spread(picture), 10.0);
+    EXPECT_EQ(rig->renderer->validation_messages(), 0);
+}
+
+// The frame loop of a game: each display frame runs the steps due (FrameLoop, 60 Hz display), and
+// they run while the GPU draws the frame before: submit(N) → simulate(N+1) → collect(N). 1,000
+// frames; every frame must have drawn one whole state, its own.
+TEST(RenderInterop, ThousandOverlappedFramesDrawWholeStatesOnly) {
+    WEFT_REQUIRE_GPU();
+    std::string why;
+    std::optional<Rig> rig = make_rig(why);
+    if (!rig) GTEST_SKIP() << "no Vulkan renderer: " << why;
+    render::ClothFeed feed(*rig->world, *rig->renderer, rig->scene);
+    ASSERT_TRUE(feed.zero_copy()) << feed.fallback_reason();
+    FrameLoop loop(*rig->world);
+
+    constexpr int kFrames = 1000;
+    constexpr int kContentEvery = 50;  // the slot compared with the host's copy of the state
+    std::optional<render::RenderFrame> drawing;
+    std::vector<render::RenderVertex> state_of_drawing, state;
+    int compared = 0;
+    std::int64_t steps = 0;
+    for (int k = 1; k <= kFrames + 1; ++k) {
+        std::optional<render::RenderFrame> next;
+        if (k <= kFrames) {
+            // Overlaps the draw of frame k−1 (submitted below in the last iteration, not waited for).
+            next = feed.simulate([&] { steps += loop.advance(1.0 / 60.0); });
+            if (k % kContentEvery == 0) render::cloth_vertices(*rig->world, rig->scene, state);
+        }
+        if (drawing) {
+            (void)rig->renderer->collect();
+            const render::TransferStats t = rig->renderer->transfer();
+            ASSERT_TRUE(feed.check(*drawing, t)) << "frame " << drawing->stamp << " drew stamps " << t.stamp_first
+                                                 << "/" << t.stamp_last;
+            ASSERT_EQ(t.bytes_uploaded, 0U);
+            if (drawing->stamp % kContentEvery == 0) {
+                // The writer of frame k used the other slot; this one still holds frame k−1.
+                const Difference d = compare(rig->renderer->read_cloth(drawing->cloth_slot), state_of_drawing);
+                EXPECT_TRUE(d.positions_identical) << "frame " << drawing->stamp;
+                ++compared;
+            }
+        }
+        if (!next) break;
+        rig->renderer->submit(*next);
+        drawing = std::move(next);
+        if (k % kContentEvery == 0) state_of_drawing = state;
+    }
+    std::printf("[ overlap  ] %d frames (%lld steps): %lld checked, %lld torn, %d slots compared with the state\n",
+                kFrames, static_cast<long long>(steps), static_cast<long long>(feed.checked_frames()),
+                static_cast<long long>(feed.torn_frames()), compared);
+    EXPECT_EQ(feed.checked_frames(), kFrames);
+    EXPECT_EQ(feed.torn_frames(), 0);
+    EXPECT_EQ(compared, kFrames / kContentEvery);
+    EXPECT_GT(steps, kFrames / 2) << "the loop ran the simulation";
+    EXPECT_EQ(rig->renderer->validation_messages(), 0);
+
+    // The check itself can fail: a frame that expected another state is counted as torn.
+    render::RenderFrame wrong = *drawing;
+    wrong.stamp += 2;
+    EXPECT_FALSE(feed.check(wrong, rig->renderer->transfer()));
+    EXPECT_EQ(feed.torn_frames(), 1);
+}
+
+// The same feed with zero-copy off takes the host path on the same GPU and draws the same picture.
+TEST(RenderInterop, HostUploadFallbackDrawsTheSamePicture) {
+    WEFT_REQUIRE_GPU();
+    std::string why;
+    std::optional<Rig> a = make_rig(why);
+    if (!a) GTEST_SKIP() << "no Vulkan renderer: " << why;
+    std::optional<Rig> b = make_rig(why);
+    ASSERT_TRUE(b) << why;
+    render::ClothFeed shared(*a->world, *a->renderer, a->scene);
+    render::ClothFeed uploaded(*b->world, *b->renderer, b->scene, render::ClothFeed::Options{false});
+    ASSERT_TRUE(shared.zero_copy());
+    ASSERT_FALSE(uploaded.zero_copy());
+    EXPECT_EQ(uploaded.fallback_reason(), "zero-copy switched off");
+    render::Image pa, pb;
+    for (int k = 0; k < 10; ++k) {
+        pa = a->renderer->draw(shared.simulate([&] { (void)a->world->step(); }));
+        const render::RenderFrame f = uploaded.simulate([&] { (void)b->world->step(); });
+        pb = b->renderer->draw(f);
+        EXPECT_TRUE(uploaded.check(f, b->renderer->transfer()));
+        EXPECT_EQ(b->renderer->transfer().path, "host upload");
+        EXPECT_EQ(b->renderer->transfer().bytes_uploaded, b->scene.cloth_vertices * sizeof(render::RenderVertex));
+    }
+    const render::ImageDifference d = render::compare(pa, pb, 16);
     EXPECT_LT(d.mean, 0.5);
     EXPECT_LT(d.fraction_over, 0.002);
-    EXPECT_GT(render::luminance_spread(picture), 10.0);
-    EXPECT_EQ(renderer->validation_messages(), 0);
-
-    api->set_output(nullptr);
-    api->set_stream(nullptr);
-    cudaStreamDestroy(stream);
 }
 
 }  // namespace

@@ -144,22 +144,34 @@ TEST(VulkanRenderer, ExportsTheClothBufferOrSaysWhyNot) {
         EXPECT_THROW((void)r.draw(timed), Error) << "timeline values without an exported buffer";
         (void)r.draw(t.frame);
         EXPECT_EQ(r.transfer().path, "host upload");
+        EXPECT_TRUE(frame_intact(r.transfer(), t.frame.stamp)) << "the upload carries the frame's stamps";
         const std::vector<RenderVertex> back = r.read_cloth();
         ASSERT_EQ(back.size(), t.vertices.size());
         EXPECT_EQ(std::memcmp(back.data(), t.vertices.data(), back.size() * sizeof(RenderVertex)), 0)
             << "the buffer holds what was uploaded";
         return;
     }
-    EXPECT_GE(link->memory.fd, 0);
-    EXPECT_GE(link->timeline.fd, 0);
-    EXPECT_EQ(link->memory.size, std::uint64_t{t.scene.cloth_vertices} * sizeof(RenderVertex));
-    EXPECT_GE(link->memory.allocation_size, link->memory.size);
+    ASSERT_EQ(link->slots.size(), 2U) << "two slots: one written while the other is drawn";
+    ASSERT_EQ(link->timeline_values.size(), 2U);
+    for (const SharedSlotHandle& slot : link->slots) {
+        EXPECT_GE(slot.memory.fd, 0);
+        EXPECT_GE(slot.timeline.fd, 0);
+        EXPECT_EQ(slot.memory.size, std::uint64_t{t.scene.cloth_vertices} * sizeof(RenderVertex) + kSlotStampBytes);
+        EXPECT_GE(slot.memory.allocation_size, slot.memory.size);
+    }
+    timed.cloth_slot = 1;
     (void)r.draw(timed);  // nothing waits: value 1 is signalled after the frame
     EXPECT_EQ(r.transfer().path, "interop");
     EXPECT_EQ(r.transfer().bytes_uploaded, 0U);
     EXPECT_THROW((void)r.draw(timed), Error) << "timeline values must increase";
-    ::close(link->memory.fd);
-    ::close(link->timeline.fd);
+    timed.cloth_slot = 0;
+    (void)r.draw(timed);  // each slot has its own timeline
+    timed.cloth_slot = 2;
+    EXPECT_THROW((void)r.draw(timed), Error) << "there is no slot 2";
+    for (const SharedSlotHandle& slot : link->slots) {
+        ::close(slot.memory.fd);
+        ::close(slot.timeline.fd);
+    }
     EXPECT_EQ(r.validation_messages(), 0);
 }
 

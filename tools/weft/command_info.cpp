@@ -84,9 +84,12 @@ int info_command(std::ostream& out) {
             renderer->load(probe);
             std::string why;
             if (auto link = renderer->export_cloth(why)) {
-                ::close(link->memory.fd);
-                ::close(link->timeline.fd);
-                path = "available (exported memory + timeline semaphore)";
+                for (const SharedSlotHandle& slot : link->slots) {
+                    ::close(slot.memory.fd);
+                    ::close(slot.timeline.fd);
+                }
+                path = "available (" + std::to_string(link->slots.size()) +
+                       " exported cloth slots, a timeline semaphore each)";
             } else {
                 path = "no, host upload: " + why;
             }

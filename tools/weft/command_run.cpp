@@ -66,7 +66,7 @@ int run_command(const RunOptions& options, std::ostream& out, std::ostream& err)
 
     const auto start = std::chrono::steady_clock::now();
     if (writer) writer->write(0, world);
-    if (capture) capture->capture(0, world);
+    if (capture) capture->capture(0, {});
     std::vector<StepStats> stats;
     stats.reserve(static_cast<std::size_t>(std::min(frames, 1'000'000)));  // a huge --frames grows as it goes
     bool interrupted = false;
@@ -74,9 +74,13 @@ int run_command(const RunOptions& options, std::ostream& out, std::ostream& err)
         const InterruptGuard guard;
         ProgressBar bar(err, frames, !options.quiet && ProgressBar::stderr_is_terminal(), start);
         for (int frame = 1; frame <= frames; ++frame) {
-            stats.push_back(world.step());
+            // With a capture, the step runs while the GPU draws the frame before (frame_capture.h).
+            const auto step = [&] { stats.push_back(world.step()); };
+            if (capture)
+                capture->capture(frame, step);
+            else
+                step();
             if (writer) writer->write(frame, world);
-            if (capture) capture->capture(frame, world);
             bar.update(frame);
             if (g_interrupted != 0) {
                 interrupted = true;
@@ -92,6 +96,9 @@ int run_command(const RunOptions& options, std::ostream& out, std::ostream& err)
     std::optional<CaptureSummary> captured;
     if (capture) captured = capture->finish(1.0 / world.settings().solver.dt);
     const CaptureSummary* capture_summary = captured ? &*captured : nullptr;
+    if (captured && captured->torn_frames > 0)
+        err << "weft: WARNING: " << captured->torn_frames
+            << " captured frames drew from a cloth slot that held parts of two states (stamps differ)\n";
     if (stats_stream.is_open()) {
         write_run_json(stats_stream, context, summary, stats, wall_seconds, capture_summary);
         close_output_file(stats_stream, options.stats_file, "stats file");

@@ -18,6 +18,7 @@
 
 #if WEFT_HAVE_RENDER
 #include "weft/frame_loop.h"
+#include "weft/render/cloth_feed.h"
 #include "weft/render/render_scene.h"
 #include "weft/render/window.h"
 #endif
@@ -76,8 +77,10 @@ int view_command(const ViewOptions& options, std::ostream& out, std::ostream& er
     FrameLoop::Options loop_options;
     loop_options.time_scale = options.time_scale;
     FrameLoop loop(world, loop_options);
-    std::vector<render::RenderVertex> vertices;
-    render::RenderFrame frame;
+    // Zero-copy where the backend shares the window's GPU; the steps of each frame run while the
+    // window draws the one before (weft/render/cloth_feed.h).
+    render::ClothFeed feed(world, window.renderer(), scene);
+    render::RenderFrame previous;
 
     int shown = 0;
     const Clock::time_point start = Clock::now();
@@ -93,13 +96,12 @@ int view_command(const ViewOptions& options, std::ostream& out, std::ostream& er
 
         // The first frame shows the initial state; after it the world runs at wall-clock time.
         const Clock::time_point now = Clock::now();
-        (void)loop.advance(shown == 0 ? 0.0 : seconds(now - last));
+        render::RenderFrame frame = feed.simulate([&] { (void)loop.advance(shown == 0 ? 0.0 : seconds(now - last)); });
         last = now;
-
-        render::cloth_vertices(world, scene, vertices);
-        frame.cloth = vertices;
-        frame.collider_models = render::collider_models(scene, world.model(), world.time());
         window.present(frame);
+        // present() waited for the frame before: its stamps are in transfer() now.
+        if (shown > 0) (void)feed.check(previous, window.transfer());
+        previous = std::move(frame);
         if (++shown == 1) first_shown = Clock::now();
         ++title_frames;
 
@@ -125,8 +127,13 @@ int view_command(const ViewOptions& options, std::ostream& out, std::ostream& er
     out << std::fixed << std::setprecision(1) << "weft view: " << shown << (shown == 1 ? " frame" : " frames") << " of "
         << name << " at " << window.width() << "x" << window.height() << ", " << mean_fps << " fps, "
         << std::setprecision(2) << "simulated " << world.time() << " s in " << loop.steps() << " steps ("
-        << loop.dropped_steps() << " dropped), on " << window.device_description() << std::endl;
+        << loop.dropped_steps() << " dropped), on " << window.device_description() << "; cloth by " << feed.describe()
+        << ", " << feed.torn_frames() << " of " << feed.checked_frames() << " frames torn" << std::endl;
     if (!options.screenshot.empty() && shown > 0) out << "screenshot " << options.screenshot.string() << std::endl;
+    if (feed.torn_frames() > 0) {
+        err << "weft: " << feed.torn_frames() << " frames drew from a cloth slot holding parts of two states" << std::endl;
+        return kExitError;
+    }
     if (options.validation && window.validation_messages() > 0) {
         err << "weft: " << window.validation_messages() << " Vulkan validation messages" << std::endl;
         return kExitError;

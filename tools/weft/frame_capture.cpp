@@ -9,8 +9,10 @@
 #include <cstdio>
 #include <cstdlib>
 #include <iomanip>
+#include <optional>
 #include <sstream>
 
+#include "weft/render/cloth_feed.h"
 #include "weft/render/renderer.h"
 #include "weft/scene.h"
 #include "weft/world.h"
@@ -42,17 +44,21 @@ struct FrameCapture::State {
     std::filesystem::path dir;
     std::unique_ptr<render::Renderer> renderer;
     render::RenderScene scene;
-    std::vector<render::RenderVertex> vertices;
+    std::unique_ptr<render::ClothFeed> feed;
+    std::optional<render::RenderFrame> drawing;  ///< submitted, not collected
+    int drawing_number = 0;
+    double drawing_submit_ms = 0.0;
     int last_frame = 0;
     int digits = 4;
     std::vector<double> render_ms, write_ms;
+    std::uint64_t bytes_per_frame = 0;
     std::vector<int> sheet_frames;
     std::vector<render::Image> sheet;
     int frames = 0;
 };
 
 FrameCapture::FrameCapture(const std::string& renderer, std::filesystem::path dir, int width, int height,
-                           const World& world, const CameraDesc& camera, int last_frame)
+                           World& world, const CameraDesc& camera, int last_frame)
     : state_(std::make_unique<State>()) {
     State& s = *state_;
     s.renderer_name = renderer;
@@ -68,22 +74,42 @@ FrameCapture::FrameCapture(const std::string& renderer, std::filesystem::path di
     s.renderer = render::create_renderer(renderer, options);
     s.scene = render::make_render_scene(world, camera);
     s.renderer->load(s.scene);
+    s.feed = std::make_unique<render::ClothFeed>(world, *s.renderer, s.scene);
     for (int k = 0; k < kSheetFrames; ++k)
         s.sheet_frames.push_back(static_cast<int>(static_cast<long long>(last_frame) * k / (kSheetFrames - 1)));
 }
 
 FrameCapture::~FrameCapture() = default;
 
-void FrameCapture::capture(int frame, const World& world) {
+void FrameCapture::capture(int frame, const std::function<void()>& steps) {
     State& s = *state_;
+    // The steps run while the GPU draws the frame submitted last time.
+    render::RenderFrame next = s.feed->simulate(steps);
+    const render::RenderFrame* previous = s.drawing ? &*s.drawing : nullptr;
+    std::optional<render::Image> image;
     auto clock = std::chrono::steady_clock::now();
-    render::cloth_vertices(world, s.scene, s.vertices);
-    render::RenderFrame f;
-    f.cloth = s.vertices;
-    f.collider_models = render::collider_models(s.scene, world.model(), world.time());
-    const render::Image image = s.renderer->draw(f);
-    s.render_ms.push_back(ms_since(clock));
+    double collect_ms = 0.0;
+    if (previous != nullptr) {
+        image = s.renderer->collect();
+        (void)s.feed->check(*previous, s.renderer->transfer());
+        collect_ms = ms_since(clock);
+    }
+    const int previous_number = s.drawing_number;
     clock = std::chrono::steady_clock::now();
+    s.renderer->submit(next);
+    const double submit_ms = ms_since(clock);
+    if (previous != nullptr) s.render_ms.push_back(s.drawing_submit_ms + collect_ms);
+    s.drawing = std::move(next);
+    s.drawing_number = frame;
+    s.drawing_submit_ms = submit_ms;
+    s.bytes_per_frame = s.renderer->transfer().bytes_uploaded;
+    // The previous picture is written while the GPU draws this one.
+    if (image) write_image(previous_number, *image);
+}
+
+void FrameCapture::write_image(int frame, const render::Image& image) {
+    State& s = *state_;
+    const auto clock = std::chrono::steady_clock::now();
     std::ostringstream name;
     name << "frame_" << std::setw(s.digits) << std::setfill('0') << frame << ".png";
     render::write_png(s.dir / name.str(), image);
@@ -96,13 +122,21 @@ void FrameCapture::capture(int frame, const World& world) {
 
 CaptureSummary FrameCapture::finish(double fps) {
     State& s = *state_;
+    if (s.drawing) {
+        const auto clock = std::chrono::steady_clock::now();
+        const render::Image image = s.renderer->collect();
+        (void)s.feed->check(*s.drawing, s.renderer->transfer());
+        s.render_ms.push_back(s.drawing_submit_ms + ms_since(clock));
+        s.drawing.reset();
+        write_image(s.drawing_number, image);
+    }
     CaptureSummary out;
     out.renderer = s.renderer_name;
     out.device = s.renderer->device_description();
-    const render::TransferStats t = s.renderer->transfer();
-    out.path = t.path;
-    out.bytes_per_frame = t.bytes_uploaded;
+    out.path = s.feed->describe();
+    out.bytes_per_frame = s.bytes_per_frame;
     out.frames = s.frames;
+    out.torn_frames = s.feed->torn_frames();
     out.render_ms_median = distribution(s.render_ms).median;
     out.write_ms_median = distribution(s.write_ms).median;
     if (!s.sheet.empty()) {
@@ -139,14 +173,15 @@ namespace weft::cli {
 
 struct FrameCapture::State {};
 
-FrameCapture::FrameCapture(const std::string& renderer, std::filesystem::path, int, int, const World&,
-                           const CameraDesc&, int) {
+FrameCapture::FrameCapture(const std::string& renderer, std::filesystem::path, int, int, World&, const CameraDesc&,
+                           int) {
     throw Error("--capture " + renderer +
                 ": this build has no renderer (configure with -DWEFT_RENDER=ON and the Vulkan, EGL and libpng "
                 "packages of tools/deps.sh)");
 }
 FrameCapture::~FrameCapture() = default;
-void FrameCapture::capture(int, const World&) {}
+void FrameCapture::capture(int, const std::function<void()>&) {}
+void FrameCapture::write_image(int, const render::Image&) {}
 CaptureSummary FrameCapture::finish(double) { return {}; }
 
 }  // namespace weft::cli

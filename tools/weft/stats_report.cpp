@@ -247,6 +247,7 @@ void write_run_json(std::ostream& out, const RunContext& context, const RunSumma
         json.field("device", capture->device);
         json.field("path", capture->path);
         json.field("bytes_per_frame", static_cast<double>(capture->bytes_per_frame));
+        json.field("torn_frames", static_cast<double>(capture->torn_frames));
         json.field("frames", capture->frames);
         json.field("render_ms_median", capture->render_ms_median);
         json.field("write_ms_median", capture->write_ms_median);
@@ -320,9 +321,10 @@ void print_run_summary(std::ostream& out, const RunContext& c, const RunSummary&
         << format_fixed(c.memory_bytes_per_triangle(), 0) << " B per triangle)\n";
     if (capture != nullptr) {
         out << "  capture        " << capture->frames << " frames by " << capture->renderer << " (" << capture->device
-            << "): " << format_fixed(capture->render_ms_median, 2) << " ms to draw, "
+            << "): " << format_fixed(capture->render_ms_median, 2) << " ms host time to draw (overlapping the next step), "
             << format_fixed(capture->write_ms_median, 2) << " ms to write a frame (medians); cloth by "
-            << capture->path << ", " << capture->bytes_per_frame << " B per frame\n";
+            << capture->path << ", " << capture->bytes_per_frame << " B per frame, " << capture->torn_frames
+            << " torn\n";
         if (!capture->contact_sheet.empty()) out << "  contact sheet  " << capture->contact_sheet << '\n';
         out << "  video          " << (capture->video.empty() ? "none: " + capture->video_note : capture->video) << '\n';
     }

@@ -141,7 +141,11 @@ public:
     [[nodiscard]] std::string_view name() const override { return "egl"; }
     [[nodiscard]] std::string device_description() const override { return description_; }
     void load(const RenderScene& scene) override;
-    [[nodiscard]] Image draw(const RenderFrame& frame) override;
+    /// GL queues the work, but the picture is read back here at once (glReadPixels): collect()
+    /// returns it. (An asynchronous read through a pixel buffer would let the caller overlap.)
+    void submit(const RenderFrame& frame) override;
+    [[nodiscard]] Image collect() override;
+    void skip_frame(const RenderFrame& /*frame*/) override {}  // nothing is shared: no timeline to keep
     [[nodiscard]] TransferStats transfer() const override { return transfer_; }
     [[nodiscard]] int validation_messages() const override { return debug_log_.messages; }
     [[nodiscard]] std::optional<ClothInterop> export_cloth(std::string& why) override {
@@ -149,7 +153,7 @@ public:
         why = "the EGL path shares with CUDA through cudaGraphicsGLRegisterBuffer, not built yet";
         return std::nullopt;
     }
-    [[nodiscard]] std::vector<RenderVertex> read_cloth() override;
+    [[nodiscard]] std::vector<RenderVertex> read_cloth(int slot) override;
 
 private:
     /// Draws every cloth and collider with the bound program; `shadow_pass` leaves out the draws
@@ -176,6 +180,7 @@ private:
 
     TransferStats transfer_{"host upload", 0};
     std::vector<std::uint8_t> pixels_;  ///< read-back rows, bottom to top as GL gives them
+    std::optional<Image> submitted_;     ///< the picture of the frame submitted and not collected
 };
 
 EglRenderer::EglRenderer(const RendererOptions& options) : options_(options), context_(options.validation) {
@@ -346,8 +351,9 @@ void EglRenderer::draw_meshes(const std::vector<DrawUniforms>& draws, bool shado
     glBindVertexArray(0);
 }
 
-std::vector<RenderVertex> EglRenderer::read_cloth() {
+std::vector<RenderVertex> EglRenderer::read_cloth(int slot) {
     if (!loaded_) throw Error("egl renderer: read_cloth() before load()");
+    if (slot != 0) throw Error("egl renderer: cloth slot " + std::to_string(slot) + " (it has one, 0)");
     context_.make_current();
     std::vector<RenderVertex> out(loaded_->scene.cloth_vertices);
     if (!out.empty())
@@ -356,13 +362,23 @@ std::vector<RenderVertex> EglRenderer::read_cloth() {
     return out;
 }
 
-Image EglRenderer::draw(const RenderFrame& frame) {
+Image EglRenderer::collect() {
+    if (!submitted_) throw Error("egl renderer: collect() without a submitted frame");
+    Image image = std::move(*submitted_);
+    submitted_.reset();
+    return image;
+}
+
+void EglRenderer::submit(const RenderFrame& frame) {
     if (!loaded_) throw Error("egl renderer: draw() before load()");
+    if (frame.cloth_slot != 0 || frame.wait_value != 0 || frame.signal_value != 0)
+        throw Error("egl renderer: a frame for shared cloth slots, but nothing is exported");
     context_.make_current();
     SceneObjects& o = *loaded_;
 
     // Cloth vertices from the host; none given: the buffer already holds them (filled on the device).
-    transfer_ = {"host upload", 0};
+    // The buffer has no stamp tail: the stamps reported are the uploaded frame's own.
+    transfer_ = {"host upload", 0, frame.stamp, frame.stamp};
     if (!frame.cloth.empty()) {
         if (frame.cloth.size() != o.scene.cloth_vertices)
             throw Error("egl renderer: the frame has " + std::to_string(frame.cloth.size()) +
@@ -419,7 +435,7 @@ Image EglRenderer::draw(const RenderFrame& frame) {
     for (GLint y = 0; y < h; ++y)
         std::memcpy(image.rgba.data() + static_cast<std::size_t>(y) * row,
                     pixels_.data() + static_cast<std::size_t>(h - 1 - y) * row, row);
-    return image;
+    submitted_ = std::move(image);
 }
 
 }  // namespace

@@ -36,6 +36,8 @@ namespace weft::render::detail {
 namespace {
 
 constexpr VkFormat kColourFormat = VK_FORMAT_R8G8B8A8_UNORM;  // holds sRGB-encoded values (the shader encodes)
+// The stages that read a cloth slot: the draws' vertex input and the copy of its frame stamps.
+constexpr VkPipelineStageFlags kSlotReadStages = VK_PIPELINE_STAGE_VERTEX_INPUT_BIT | VK_PIPELINE_STAGE_TRANSFER_BIT;
 
 VkDeviceSize align_up(VkDeviceSize n, VkDeviceSize alignment) { return (n + alignment - 1) / alignment * alignment; }
 
@@ -243,6 +245,13 @@ void VulkanRenderer::wait_frame() {
     WEFT_VK_CHECK(vkWaitForFences(context_.device(), 1, &fence_, VK_TRUE, UINT64_MAX));
     WEFT_VK_CHECK(vkResetFences(context_.device(), 1, &fence_));
     in_flight_ = false;
+    if (frame_reads_stamps_) {
+        invalidate(context_, stamp_readback_);
+        std::uint64_t stamps[2]{};
+        std::memcpy(stamps, stamp_readback_.mapped, sizeof stamps);
+        transfer_.stamp_first = stamps[0];
+        transfer_.stamp_last = stamps[1];
+    }
 }
 
 void VulkanRenderer::create_pipelines() {
@@ -350,7 +359,9 @@ void VulkanRenderer::load(const RenderScene& scene) {
     const VkDeviceSize vertex_bytes = vertices.size() * sizeof(RenderVertex);
     const VkDeviceSize index_bytes = indices.size() * sizeof(std::uint32_t);
     index_offset_ = vertex_bytes;
-    const VkDeviceSize cloth_bytes = VkDeviceSize{scene_.cloth_vertices} * sizeof(RenderVertex);
+    // The vertices, then the frame stamps (weft/interop.h).
+    const VkDeviceSize cloth_bytes =
+        scene_.cloth_vertices > 0 ? VkDeviceSize{scene_.cloth_vertices} * sizeof(RenderVertex) + kSlotStampBytes : 0;
 
     if (vertex_bytes + index_bytes > 0)
         static_geometry_ = create_buffer(
@@ -358,11 +369,13 @@ void VulkanRenderer::load(const RenderScene& scene) {
             VK_BUFFER_USAGE_VERTEX_BUFFER_BIT | VK_BUFFER_USAGE_INDEX_BUFFER_BIT | VK_BUFFER_USAGE_TRANSFER_DST_BIT,
             MemoryUse::device_local);
     if (cloth_bytes > 0) {
-        cloth_vertices_ = create_buffer(
+        slots_.resize(1);
+        slots_[0].buffer = create_buffer(
             context_, cloth_bytes,
             VK_BUFFER_USAGE_VERTEX_BUFFER_BIT | VK_BUFFER_USAGE_TRANSFER_DST_BIT | VK_BUFFER_USAGE_TRANSFER_SRC_BIT,
             MemoryUse::device_local);
         cloth_staging_ = create_buffer(context_, cloth_bytes, VK_BUFFER_USAGE_TRANSFER_SRC_BIT, MemoryUse::upload);
+        stamp_readback_ = create_buffer(context_, kSlotStampBytes, VK_BUFFER_USAGE_TRANSFER_DST_BIT, MemoryUse::readback);
     }
     if (vertex_bytes + index_bytes > 0 || cloth_bytes > 0) {
         DeviceBuffer staging;
@@ -379,8 +392,7 @@ void VulkanRenderer::load(const RenderScene& scene) {
                     vkCmdCopyBuffer(commands, staging.buffer, static_geometry_.buffer, 1, &copy);
                 }
                 // Zeros until the first frame fills it: defined contents for a frame without vertices.
-                if (cloth_vertices_.buffer != VK_NULL_HANDLE)
-                    vkCmdFillBuffer(commands, cloth_vertices_.buffer, 0, VK_WHOLE_SIZE, 0);
+                if (!slots_.empty()) vkCmdFillBuffer(commands, slots_[0].buffer.buffer, 0, VK_WHOLE_SIZE, 0);
                 // The fence wait orders the host, not later submissions: make the writes visible to
                 // the vertex input of every frame.
                 VkMemoryBarrier barrier{};
@@ -431,13 +443,23 @@ bool VulkanRenderer::record_frame(const RenderFrame& frame, bool& external, Fini
                     " cloth vertices, the scene's cloth buffer " + std::to_string(scene_.cloth_vertices));
     if ((frame.wait_value != 0 || frame.signal_value != 0) && !exported_)
         throw Error("vulkan renderer: a frame with timeline values, but the cloth buffer is not exported");
-    if (frame.signal_value != 0 && frame.signal_value <= last_signal_)
+    if (frame.cloth_slot < 0 || frame.cloth_slot >= std::max(static_cast<int>(slots_.size()), 1))
+        throw Error("vulkan renderer: cloth slot " + std::to_string(frame.cloth_slot) + " does not exist (" +
+                    std::to_string(slots_.size()) + (exported_ ? " exported)" : ", none exported)"));
+    if (frame.signal_value != 0 && frame.signal_value <= slots_[static_cast<std::size_t>(frame.cloth_slot)].last_signal)
         throw Error("vulkan renderer: timeline signal value " + std::to_string(frame.signal_value) +
-                    " is not above the last one signalled, " + std::to_string(last_signal_));
+                    " is not above the last one signalled on slot " + std::to_string(frame.cloth_slot) + ", " +
+                    std::to_string(slots_[static_cast<std::size_t>(frame.cloth_slot)].last_signal));
     // The previous frame must be done with the mapped buffers and the command buffer.
     wait_frame();
+    frame_slot_ = frame.cloth_slot;
+    frame_reads_stamps_ = !slots_.empty();
 
-    if (upload) std::memcpy(cloth_staging_.mapped, frame.cloth.data(), frame.cloth.size_bytes());
+    if (upload) {
+        std::memcpy(cloth_staging_.mapped, frame.cloth.data(), frame.cloth.size_bytes());
+        const std::uint64_t stamps[2] = {frame.stamp, frame.stamp};
+        std::memcpy(static_cast<std::byte*>(cloth_staging_.mapped) + frame.cloth.size_bytes(), stamps, sizeof stamps);
+    }
     const FrameUniforms frame_u = frame_uniforms(scene_, options_.width, options_.height, options_.shadow_map_size);
     const std::vector<DrawUniforms> draws = draw_uniforms(scene_, frame);
     auto* uniform_bytes = static_cast<std::byte*>(uniforms_.mapped);
@@ -452,15 +474,18 @@ bool VulkanRenderer::record_frame(const RenderFrame& frame, bool& external, Fini
     // Drawn from what the external writer left in the exported buffer: no upload, and the reads are
     // ordered by the timeline (wait for the writer's value, signal ours when done).
     external = exported_ && !upload;
+    // Exported slots belong to the external writer between frames: an upload frame takes them too.
     WEFT_VK_CHECK(vkBeginCommandBuffer(commands_, &begin));
-    record(commands_, draws, upload, external);
+    record(commands_, draws, upload);
     finish(commands_);
-    if (external) external_barrier(commands_, false);
+    if (frame_reads_stamps_) record_stamp_copy(commands_);
+    if (exported_) external_barrier(commands_, frame_slot_, false);
     WEFT_VK_CHECK(vkEndCommandBuffer(commands_));
     return upload;
 }
 
-void VulkanRenderer::submit_frame(const RenderFrame& frame, VkSemaphore wait_binary, VkSemaphore signal_binary) {
+void VulkanRenderer::submit_frame(const RenderFrame& frame, VkSemaphore wait_binary, VkSemaphore signal_binary,
+                                  bool with_commands) {
     // Waits: the writer's timeline value (before vertex input), the acquired swapchain image (before
     // the blit). Signals: the timeline, the window's "rendered" semaphore. Binary semaphores take no
     // value, but with a timeline in the submission every semaphore gets an entry (ignored for them).
@@ -468,9 +493,12 @@ void VulkanRenderer::submit_frame(const RenderFrame& frame, VkSemaphore wait_bin
     std::array<VkPipelineStageFlags, 2> wait_stages{};
     std::array<std::uint64_t, 2> wait_values{}, signal_values{};
     std::uint32_t wait_count = 0, signal_count = 0;
+    ClothSlot* slot = slots_.empty() ? nullptr : &slots_[static_cast<std::size_t>(frame.cloth_slot)];
     if (frame.wait_value != 0) {
-        waits[wait_count] = timeline_;
-        wait_stages[wait_count] = VK_PIPELINE_STAGE_VERTEX_INPUT_BIT;
+        // Every stage that reads the slot waits: the vertex input of the draws and the transfer
+        // that copies its stamps (the acquire barrier chains from the same stages).
+        waits[wait_count] = slot->timeline;
+        wait_stages[wait_count] = kSlotReadStages;
         wait_values[wait_count++] = frame.wait_value;
     }
     if (wait_binary != VK_NULL_HANDLE) {
@@ -478,15 +506,15 @@ void VulkanRenderer::submit_frame(const RenderFrame& frame, VkSemaphore wait_bin
         wait_stages[wait_count++] = VK_PIPELINE_STAGE_TRANSFER_BIT;
     }
     if (frame.signal_value != 0) {
-        signals[signal_count] = timeline_;
+        signals[signal_count] = slot->timeline;
         signal_values[signal_count++] = frame.signal_value;
     }
     if (signal_binary != VK_NULL_HANDLE) signals[signal_count++] = signal_binary;
 
     VkSubmitInfo submit{};
     submit.sType = VK_STRUCTURE_TYPE_SUBMIT_INFO;
-    submit.commandBufferCount = 1;
-    submit.pCommandBuffers = &commands_;
+    submit.commandBufferCount = with_commands ? 1U : 0U;
+    submit.pCommandBuffers = with_commands ? &commands_ : nullptr;
     submit.waitSemaphoreCount = wait_count;
     submit.pWaitSemaphores = waits.data();
     submit.pWaitDstStageMask = wait_stages.data();
@@ -501,20 +529,36 @@ void VulkanRenderer::submit_frame(const RenderFrame& frame, VkSemaphore wait_bin
     if (frame.wait_value != 0 || frame.signal_value != 0) submit.pNext = &timeline;
     WEFT_VK_CHECK(vkQueueSubmit(context_.queue(), 1, &submit, fence_));
     in_flight_ = true;
-    if (frame.signal_value != 0) last_signal_ = frame.signal_value;
+    if (frame.signal_value != 0) slot->last_signal = frame.signal_value;
 }
 
-Image VulkanRenderer::draw(const RenderFrame& frame) {
+void VulkanRenderer::submit(const RenderFrame& frame) {
     bool external = false;
     const bool upload = record_frame(frame, external, [&](VkCommandBuffer commands) { record_readback(commands); });
     submit_frame(frame, VK_NULL_HANDLE, VK_NULL_HANDLE);
-    wait_frame();
     have_picture_ = true;
+    submitted_ = true;
+    // The stamps stay those of the last frame waited for until this one is (wait_frame).
+    transfer_.path = external ? "interop" : "host upload";
+    transfer_.bytes_uploaded = upload ? static_cast<std::uint64_t>(frame.cloth.size_bytes()) : 0;
+}
 
+void VulkanRenderer::skip_frame(const RenderFrame& frame) {
+    if (frame.wait_value == 0 && frame.signal_value == 0) return;
+    if (!exported_ || frame.cloth_slot < 0 || frame.cloth_slot >= static_cast<int>(slots_.size()))
+        throw Error("vulkan renderer: skip_frame() of a frame that names no exported slot");
+    wait_frame();
+    frame_reads_stamps_ = false;  // nothing read: transfer() keeps the last drawn frame's stamps
+    submit_frame(frame, VK_NULL_HANDLE, VK_NULL_HANDLE, false);
+}
+
+Image VulkanRenderer::collect() {
+    if (!submitted_) throw Error("vulkan renderer: collect() without a submitted frame");
+    wait_frame();
+    submitted_ = false;
     invalidate(context_, readback_);
     Image image(options_.width, options_.height);
     std::memcpy(image.rgba.data(), readback_.mapped, image.rgba.size());
-    transfer_ = {external ? "interop" : "host upload", upload ? static_cast<std::uint64_t>(frame.cloth.size_bytes()) : 0};
     return image;
 }
 
@@ -577,7 +621,10 @@ void VulkanRenderer::draw_to_swapchain(const RenderFrame& frame, const Swapchain
     });
     submit_frame(frame, target.acquired, target.rendered);
     have_picture_ = true;
-    transfer_ = {external ? "interop" : "host upload", upload ? static_cast<std::uint64_t>(frame.cloth.size_bytes()) : 0};
+    submitted_ = false;  // the picture went to the window, not to collect()
+    // The stamps stay those of the last frame waited for until this one is (wait_frame).
+    transfer_.path = external ? "interop" : "host upload";
+    transfer_.bytes_uploaded = upload ? static_cast<std::uint64_t>(frame.cloth.size_bytes()) : 0;
 }
 
 Image VulkanRenderer::read_back() {
@@ -596,62 +643,95 @@ std::optional<ClothInterop> VulkanRenderer::export_cloth(std::string& why) {
         why = context_.interop_unavailable_reason();  // the device is in device_description()
         return std::nullopt;
     }
-    if (cloth_vertices_.buffer == VK_NULL_HANDLE) {
+    if (slots_.empty()) {
         why = "the scene has no cloth";
         return std::nullopt;
     }
     const VkDevice device = context_.device();
     wait_frame();  // a window's frame may still read the buffer replaced below
     if (!exported_) {
-        // Replace the cloth buffer by an exportable one (zeros, as load() leaves it).
-        bool dedicated = false;
-        DeviceBuffer exported = create_exportable_buffer(
-            context_, cloth_vertices_.size,
-            VK_BUFFER_USAGE_VERTEX_BUFFER_BIT | VK_BUFFER_USAGE_TRANSFER_DST_BIT | VK_BUFFER_USAGE_TRANSFER_SRC_BIT,
-            dedicated);
+        // Replace the cloth buffer by kSharedSlots exportable ones (zeros, as load() leaves it), each
+        // with its timeline.
+        std::vector<ClothSlot> shared(kSharedSlots);
         try {
+            for (ClothSlot& slot : shared) {
+                slot.buffer = create_exportable_buffer(context_, slots_[0].buffer.size,
+                                                       VK_BUFFER_USAGE_VERTEX_BUFFER_BIT | VK_BUFFER_USAGE_TRANSFER_DST_BIT |
+                                                           VK_BUFFER_USAGE_TRANSFER_SRC_BIT,
+                                                       slot.dedicated);
+                slot.timeline = create_exportable_timeline(context_);
+            }
+            // No fill here: the writer zeroes a slot when it imports it (a Vulkan fill of the
+            // memory was not seen by the first CUDA writes' reader on NVIDIA's driver: the first
+            // frame read the fill's zeros where CUDA had written). Only the ownership goes to the
+            // writer, so that every frame's acquire matches a release.
             context_.submit_and_wait([&](VkCommandBuffer commands) {
-                vkCmdFillBuffer(commands, exported.buffer, 0, VK_WHOLE_SIZE, 0);
+                for (const ClothSlot& slot : shared) {
+                    VkBufferMemoryBarrier release{};
+                    release.sType = VK_STRUCTURE_TYPE_BUFFER_MEMORY_BARRIER;
+                    release.srcQueueFamilyIndex = context_.queue_family();
+                    release.dstQueueFamilyIndex = VK_QUEUE_FAMILY_EXTERNAL;
+                    release.buffer = slot.buffer.buffer;
+                    release.size = VK_WHOLE_SIZE;
+                    vkCmdPipelineBarrier(commands, VK_PIPELINE_STAGE_TOP_OF_PIPE_BIT, VK_PIPELINE_STAGE_BOTTOM_OF_PIPE_BIT,
+                                         0, 0, nullptr, 1, &release, 0, nullptr);
+                }
             });
-            timeline_ = create_exportable_timeline(context_);
         } catch (...) {
-            destroy_buffer(device, exported);
+            for (ClothSlot& slot : shared) {
+                destroy_buffer(device, slot.buffer);
+                if (slot.timeline != VK_NULL_HANDLE) vkDestroySemaphore(device, slot.timeline, nullptr);
+            }
             throw;
         }
-        destroy_buffer(device, cloth_vertices_);
-        cloth_vertices_ = exported;
-        exported_dedicated_ = dedicated;
+        destroy_buffer(device, slots_[0].buffer);
+        slots_ = std::move(shared);
         exported_ = true;
     }
     ClothInterop link;
-    link.memory = export_memory(context_, cloth_vertices_, exported_dedicated_);
     try {
-        link.timeline = export_timeline(context_, timeline_);
+        for (const ClothSlot& slot : slots_) {
+            SharedSlotHandle handle;
+            handle.memory = export_memory(context_, slot.buffer, slot.dedicated);
+            link.slots.push_back(handle);
+            link.slots.back().timeline = export_timeline(context_, slot.timeline);
+            // The last value this renderer signalled is the highest any access asked for (a draw
+            // or skip_frame ends every access), and wait_frame() above saw it reached.
+            link.timeline_values.push_back(slot.last_signal);
+        }
     } catch (...) {
-        ::close(link.memory.fd);
+        for (const SharedSlotHandle& h : link.slots) {
+            if (h.memory.fd >= 0) ::close(h.memory.fd);
+            if (h.timeline.fd >= 0) ::close(h.timeline.fd);
+        }
         throw;
     }
     std::copy(context_.device_uuid().begin(), context_.device_uuid().end(), link.device_uuid.begin());
     return link;
 }
 
-std::vector<RenderVertex> VulkanRenderer::read_cloth() {
+std::vector<RenderVertex> VulkanRenderer::read_cloth(int slot) {
     if (!loaded_) throw Error("vulkan renderer: read_cloth() before load()");
     std::vector<RenderVertex> out(scene_.cloth_vertices);
     if (out.empty()) return out;
-    DeviceBuffer host = create_buffer(context_, cloth_vertices_.size, VK_BUFFER_USAGE_TRANSFER_DST_BIT, MemoryUse::readback);
+    if (slot < 0 || slot >= static_cast<int>(slots_.size()))
+        throw Error("vulkan renderer: read_cloth(" + std::to_string(slot) + ") of " + std::to_string(slots_.size()) +
+                    " slots");
+    wait_frame();
+    const DeviceBuffer& source = slots_[static_cast<std::size_t>(slot)].buffer;
+    DeviceBuffer host = create_buffer(context_, source.size, VK_BUFFER_USAGE_TRANSFER_DST_BIT, MemoryUse::readback);
     try {
         context_.submit_and_wait([&](VkCommandBuffer commands) {
-            if (exported_) external_barrier(commands, true);
-            const VkBufferCopy copy{0, 0, cloth_vertices_.size};
-            vkCmdCopyBuffer(commands, cloth_vertices_.buffer, host.buffer, 1, &copy);
+            if (exported_) external_barrier(commands, slot, true);
+            const VkBufferCopy copy{0, 0, source.size};
+            vkCmdCopyBuffer(commands, source.buffer, host.buffer, 1, &copy);
             VkMemoryBarrier to_host{};
             to_host.sType = VK_STRUCTURE_TYPE_MEMORY_BARRIER;
             to_host.srcAccessMask = VK_ACCESS_TRANSFER_WRITE_BIT;
             to_host.dstAccessMask = VK_ACCESS_HOST_READ_BIT;
             vkCmdPipelineBarrier(commands, VK_PIPELINE_STAGE_TRANSFER_BIT, VK_PIPELINE_STAGE_HOST_BIT, 0, 1, &to_host, 0,
                                  nullptr, 0, nullptr);
-            if (exported_) external_barrier(commands, false);
+            if (exported_) external_barrier(commands, slot, false);
         });
         invalidate(context_, host);
         std::memcpy(out.data(), host.mapped, out.size() * sizeof(RenderVertex));
@@ -663,39 +743,44 @@ std::vector<RenderVertex> VulkanRenderer::read_cloth() {
     return out;
 }
 
-void VulkanRenderer::external_barrier(VkCommandBuffer commands, bool acquire) const {
+void VulkanRenderer::external_barrier(VkCommandBuffer commands, int slot, bool acquire) const {
     VkBufferMemoryBarrier barrier{};
     barrier.sType = VK_STRUCTURE_TYPE_BUFFER_MEMORY_BARRIER;
-    barrier.srcAccessMask = acquire ? 0 : VK_ACCESS_VERTEX_ATTRIBUTE_READ_BIT | VK_ACCESS_TRANSFER_READ_BIT;
-    barrier.dstAccessMask = acquire ? VK_ACCESS_VERTEX_ATTRIBUTE_READ_BIT | VK_ACCESS_TRANSFER_READ_BIT : 0;
+    // Transfer writes too: an upload frame on an exported renderer copies into the slot.
+    const VkAccessFlags access =
+        VK_ACCESS_VERTEX_ATTRIBUTE_READ_BIT | VK_ACCESS_TRANSFER_READ_BIT | VK_ACCESS_TRANSFER_WRITE_BIT;
+    barrier.srcAccessMask = acquire ? 0 : access;
+    barrier.dstAccessMask = acquire ? access : 0;
     barrier.srcQueueFamilyIndex = acquire ? VK_QUEUE_FAMILY_EXTERNAL : context_.queue_family();
     barrier.dstQueueFamilyIndex = acquire ? context_.queue_family() : VK_QUEUE_FAMILY_EXTERNAL;
-    barrier.buffer = cloth_vertices_.buffer;
+    barrier.buffer = slots_[static_cast<std::size_t>(slot)].buffer.buffer;
     barrier.offset = 0;
     barrier.size = VK_WHOLE_SIZE;
-    vkCmdPipelineBarrier(commands, acquire ? VK_PIPELINE_STAGE_TOP_OF_PIPE_BIT : VK_PIPELINE_STAGE_ALL_COMMANDS_BIT,
-                         acquire ? VK_PIPELINE_STAGE_VERTEX_INPUT_BIT | VK_PIPELINE_STAGE_TRANSFER_BIT
-                                 : VK_PIPELINE_STAGE_BOTTOM_OF_PIPE_BIT,
+    // The acquire's first scope is the stages the timeline wait blocks (submit_frame), so that it
+    // comes after the writer's signal; the release follows every read of the frame.
+    const VkPipelineStageFlags all = VK_PIPELINE_STAGE_ALL_COMMANDS_BIT, bottom = VK_PIPELINE_STAGE_BOTTOM_OF_PIPE_BIT;
+    vkCmdPipelineBarrier(commands, acquire ? kSlotReadStages : all, acquire ? kSlotReadStages : bottom,
                          0, 0, nullptr, 1, &barrier, 0, nullptr);
 }
 
-void VulkanRenderer::record(VkCommandBuffer commands, const std::vector<DrawUniforms>& draws, bool upload,
-                            bool external) const {
-    if (external) external_barrier(commands, true);
+void VulkanRenderer::record(VkCommandBuffer commands, const std::vector<DrawUniforms>& draws, bool upload) const {
+    const VkBuffer cloth = slots_.empty() ? VK_NULL_HANDLE : slots_[static_cast<std::size_t>(frame_slot_)].buffer.buffer;
+    if (exported_) external_barrier(commands, frame_slot_, true);
     if (upload) {
         const VkBufferCopy copy{0, 0, cloth_staging_.size};
-        vkCmdCopyBuffer(commands, cloth_staging_.buffer, cloth_vertices_.buffer, 1, &copy);
+        vkCmdCopyBuffer(commands, cloth_staging_.buffer, cloth, 1, &copy);
         VkBufferMemoryBarrier barrier{};
         barrier.sType = VK_STRUCTURE_TYPE_BUFFER_MEMORY_BARRIER;
         barrier.srcAccessMask = VK_ACCESS_TRANSFER_WRITE_BIT;
-        barrier.dstAccessMask = VK_ACCESS_VERTEX_ATTRIBUTE_READ_BIT;
+        barrier.dstAccessMask = VK_ACCESS_VERTEX_ATTRIBUTE_READ_BIT | VK_ACCESS_TRANSFER_READ_BIT;
         barrier.srcQueueFamilyIndex = VK_QUEUE_FAMILY_IGNORED;
         barrier.dstQueueFamilyIndex = VK_QUEUE_FAMILY_IGNORED;
-        barrier.buffer = cloth_vertices_.buffer;
+        barrier.buffer = cloth;
         barrier.offset = 0;
         barrier.size = VK_WHOLE_SIZE;
-        vkCmdPipelineBarrier(commands, VK_PIPELINE_STAGE_TRANSFER_BIT, VK_PIPELINE_STAGE_VERTEX_INPUT_BIT, 0, 0,
-                             nullptr, 1, &barrier, 0, nullptr);
+        vkCmdPipelineBarrier(commands, VK_PIPELINE_STAGE_TRANSFER_BIT,
+                             VK_PIPELINE_STAGE_VERTEX_INPUT_BIT | VK_PIPELINE_STAGE_TRANSFER_BIT, 0, 0, nullptr, 1,
+                             &barrier, 0, nullptr);
     }
 
     VkClearValue depth_clear{};
@@ -727,6 +812,25 @@ void VulkanRenderer::record(VkCommandBuffer commands, const std::vector<DrawUnif
     draw_all(commands, draws, false);
     vkCmdEndRenderPass(commands);
 
+}
+
+void VulkanRenderer::record_stamp_copy(VkCommandBuffer commands) const {
+    // Read after the draws: stamps that match the frame's (first and last) prove the draws saw one
+    // whole state, since the writer stamps before its first vertex and after its last.
+    const DeviceBuffer& slot = slots_[static_cast<std::size_t>(frame_slot_)].buffer;
+    const VkBufferCopy copy{slot.size - kSlotStampBytes, 0, kSlotStampBytes};
+    vkCmdCopyBuffer(commands, slot.buffer, stamp_readback_.buffer, 1, &copy);
+    VkBufferMemoryBarrier to_host{};
+    to_host.sType = VK_STRUCTURE_TYPE_BUFFER_MEMORY_BARRIER;
+    to_host.srcAccessMask = VK_ACCESS_TRANSFER_WRITE_BIT;
+    to_host.dstAccessMask = VK_ACCESS_HOST_READ_BIT;
+    to_host.srcQueueFamilyIndex = VK_QUEUE_FAMILY_IGNORED;
+    to_host.dstQueueFamilyIndex = VK_QUEUE_FAMILY_IGNORED;
+    to_host.buffer = stamp_readback_.buffer;
+    to_host.offset = 0;
+    to_host.size = VK_WHOLE_SIZE;
+    vkCmdPipelineBarrier(commands, VK_PIPELINE_STAGE_TRANSFER_BIT, VK_PIPELINE_STAGE_HOST_BIT, 0, 0, nullptr, 1,
+                         &to_host, 0, nullptr);
 }
 
 void VulkanRenderer::record_readback(VkCommandBuffer commands) const {
@@ -765,7 +869,8 @@ void VulkanRenderer::draw_all(VkCommandBuffer commands, const std::vector<DrawUn
                                         ? scene_.cloths[i].index_count
                                         : static_cast<std::uint32_t>(scene_.colliders[i - cloths].mesh.indices.size());
         if (count == 0) continue;
-        const VkBuffer vertices = cloth ? cloth_vertices_.buffer : static_geometry_.buffer;
+        const VkBuffer vertices =
+            cloth ? slots_[static_cast<std::size_t>(frame_slot_)].buffer.buffer : static_geometry_.buffer;
         if (vertices != bound) {
             vkCmdBindVertexBuffers(commands, 0, 1, &vertices, &zero);
             bound = vertices;
@@ -784,15 +889,20 @@ void VulkanRenderer::draw_all(VkCommandBuffer commands, const std::vector<DrawUn
 void VulkanRenderer::destroy_scene() noexcept {
     const VkDevice device = context_.device();
     destroy_buffer(device, static_geometry_);
-    destroy_buffer(device, cloth_vertices_);
-    destroy_buffer(device, cloth_staging_);
-    destroy_buffer(device, uniforms_);
-    // An exported buffer goes with its scene: a writer that imported it must import the new one
+    // Exported slots go with their scene: a writer that imported them must import the new ones
     // (export_cloth after the next load()).
-    if (timeline_ != VK_NULL_HANDLE) vkDestroySemaphore(device, timeline_, nullptr);
-    timeline_ = VK_NULL_HANDLE;
+    for (ClothSlot& slot : slots_) {
+        destroy_buffer(device, slot.buffer);
+        if (slot.timeline != VK_NULL_HANDLE) vkDestroySemaphore(device, slot.timeline, nullptr);
+    }
+    slots_.clear();
+    destroy_buffer(device, cloth_staging_);
+    destroy_buffer(device, stamp_readback_);
+    destroy_buffer(device, uniforms_);
     exported_ = false;
-    last_signal_ = 0;
+    frame_slot_ = 0;
+    frame_reads_stamps_ = false;
+    submitted_ = false;
     collider_first_index_.clear();
     collider_first_vertex_.clear();
     loaded_ = false;

@@ -41,11 +41,12 @@ public:
     [[nodiscard]] std::string_view name() const override { return "vulkan"; }
     [[nodiscard]] std::string device_description() const override { return context_.description(); }
     void load(const RenderScene& scene) override;
-    [[nodiscard]] Image draw(const RenderFrame& frame) override;
+    void submit(const RenderFrame& frame) override;
+    [[nodiscard]] Image collect() override;
     [[nodiscard]] TransferStats transfer() const override { return transfer_; }
     [[nodiscard]] int validation_messages() const override { return context_.validation_messages(); }
     [[nodiscard]] std::optional<ClothInterop> export_cloth(std::string& why) override;
-    [[nodiscard]] std::vector<RenderVertex> read_cloth() override;
+    [[nodiscard]] std::vector<RenderVertex> read_cloth(int slot) override;
 
     // ---- the window path ---------------------------------------------------------------------
     [[nodiscard]] const VulkanContext& context() const { return context_; }
@@ -59,11 +60,13 @@ public:
     [[nodiscard]] int width() const { return options_.width; }
     [[nodiscard]] int height() const { return options_.height; }
     /// Waits until the last submitted frame is done with its command buffer and mapped buffers
-    /// (its fence). A no-op when none is in flight.
+    /// (its fence), and takes its frame stamps into transfer(). A no-op when none is in flight.
     void wait_frame();
     /// Draws `frame` like draw() and blits the resolved picture into `target` (scaled when the sizes
     /// differ), without waiting: the next frame, wait_frame() or read_back() waits for it.
     void draw_to_swapchain(const RenderFrame& frame, const SwapchainTarget& target);
+    /// (Renderer::skip_frame) The wait and signal values go through an empty submission.
+    void skip_frame(const RenderFrame& frame) override;
     /// The overlay pass (vulkan_pipelines.h), made on the first call with its framebuffer over the
     /// resolved picture (remade on resize()).
     [[nodiscard]] VkRenderPass overlay_pass();
@@ -81,16 +84,20 @@ private:
     void create_descriptors();
     /// Writes the frame's uniforms and staged vertices and records its command buffer: upload, the
     /// shadow and surface passes, then `finish` (the copy to the host, or the blit to a swapchain
-    /// image). Returns whether the cloth was uploaded; sets `external`.
+    /// image), then the copy of the slot's frame stamps. Returns whether the cloth was uploaded;
+    /// sets `external`.
     template <typename Finish>
     bool record_frame(const RenderFrame& frame, bool& external, Finish&& finish);
     /// Submits the recorded frame with its timeline values and the window's semaphores (may be null).
-    void submit_frame(const RenderFrame& frame, VkSemaphore wait_binary, VkSemaphore signal_binary);
-    void record(VkCommandBuffer commands, const std::vector<DrawUniforms>& draws, bool upload, bool external) const;
+    /// `with_commands` false: no command buffer, only the semaphore operations (skip_frame).
+    void submit_frame(const RenderFrame& frame, VkSemaphore wait_binary, VkSemaphore signal_binary,
+                      bool with_commands = true);
+    void record(VkCommandBuffer commands, const std::vector<DrawUniforms>& draws, bool upload) const;
+    void record_stamp_copy(VkCommandBuffer commands) const;
     void record_readback(VkCommandBuffer commands) const;
-    /// The queue-family ownership transfer of the exported cloth buffer: acquired from the external
+    /// The queue-family ownership transfer of exported cloth slot `slot`: acquired from the external
     /// writer (CUDA) before the frame reads it, released back after.
-    void external_barrier(VkCommandBuffer commands, bool acquire) const;
+    void external_barrier(VkCommandBuffer commands, int slot, bool acquire) const;
     void draw_all(VkCommandBuffer commands, const std::vector<DrawUniforms>& draws, bool casters_only) const;
     void destroy_scene() noexcept;
     void destroy() noexcept;
@@ -120,6 +127,7 @@ private:
     VkFence fence_ = VK_NULL_HANDLE;
     bool in_flight_ = false;     ///< a submitted frame whose fence has not been waited for
     bool have_picture_ = false;  ///< resolved_ holds a drawn frame (read_back)
+    bool submitted_ = false;     ///< submit() without collect() yet
     DeviceBuffer readback_;      ///< the resolved picture, width·height·4 bytes
 
     // The scene, made by load().
@@ -129,13 +137,22 @@ private:
     VkDeviceSize index_offset_ = 0;  ///< of the first index in static_geometry_
     std::vector<std::uint32_t> collider_first_index_;  ///< into the index range, per collider
     std::vector<std::int32_t> collider_first_vertex_;  ///< into the colliders' vertices, per collider
-    DeviceBuffer cloth_vertices_, cloth_staging_;
-    // Zero-copy (export_cloth): the cloth buffer is exported, a timeline orders the writer's writes
-    // against this renderer's reads.
+    /// A cloth vertex buffer: RenderScene::cloth_vertices vertices, then kSlotStampBytes of stamps.
+    /// One until export_cloth(); then kSharedSlots, exported, each with a timeline that orders the
+    /// writer's writes against this renderer's reads.
+    struct ClothSlot {
+        DeviceBuffer buffer;
+        VkSemaphore timeline = VK_NULL_HANDLE;
+        std::uint64_t last_signal = 0;
+        bool dedicated = false;
+    };
+    static constexpr int kSharedSlots = 2;
+    std::vector<ClothSlot> slots_;
+    DeviceBuffer cloth_staging_;   ///< host → slot uploads (vertices and stamps)
+    DeviceBuffer stamp_readback_;  ///< the drawn slot's stamps, copied after the frame's draws
     bool exported_ = false;
-    bool exported_dedicated_ = false;
-    VkSemaphore timeline_ = VK_NULL_HANDLE;
-    std::uint64_t last_signal_ = 0;
+    int frame_slot_ = 0;               ///< the slot the frame being recorded or in flight draws from
+    bool frame_reads_stamps_ = false;  ///< it copies the slot's stamps to stamp_readback_
     DeviceBuffer uniforms_;  ///< Frame at 0, Draw i at draw_base_ + i·draw_stride_
     VkDeviceSize draw_base_ = 0, draw_stride_ = 0;
     TransferStats transfer_{"host upload", 0};

@@ -159,7 +159,10 @@ struct Window::Impl {
 
     void present(const RenderFrame& frame) {
         const VkExtent2D size = framebuffer_size(window.handle);
-        if (size.width == 0 || size.height == 0) return;  // minimised: nothing to show
+        if (size.width == 0 || size.height == 0) {  // minimised: nothing to show
+            renderer.skip_frame(frame);
+            return;
+        }
         if (input.take_resized()) recreate = true;
         if (recreate) recreate_swapchain();
         renderer.set_camera(input.camera().camera());
@@ -172,6 +175,7 @@ struct Window::Impl {
             acquired_status = swapchain->acquire(acquired, index);
             if (acquired_status == detail::Swapchain::Status::out_of_date) {
                 recreate = true;  // still changing size: try again next frame
+                renderer.skip_frame(frame);
                 return;
             }
         }
@@ -257,6 +261,8 @@ OverlayVulkan Window::overlay_vulkan() {
     };
     return out;
 }
+
+Renderer& Window::renderer() { return impl_->renderer; }
 
 int Window::validation_messages() const { return impl_->renderer.validation_messages(); }
 

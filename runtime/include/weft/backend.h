@@ -11,6 +11,7 @@
 #include <string_view>
 #include <vector>
 
+#include "weft/interop.h"
 #include "weft/model.h"
 #include "weft/stats.h"
 
@@ -41,6 +42,12 @@ public:
     virtual void write_state(std::size_t cloth, std::span<const Vec3d> positions, std::span<const Vec3d> velocities) = 0;
     /// Bytes of simulation state held (host or device).
     [[nodiscard]] virtual std::size_t memory_bytes() const = 0;
+    /// Zero-copy output (weft/interop.h): imports `slots` (each holds one 24-byte vertex per world
+    /// vertex, positions then normals in float, then kSlotStampBytes) made on the GPU `device`, and
+    /// returns their writer. The fds belong to the backend from the call on, imported or closed.
+    /// nullptr, with the reason in `why`, where the backend cannot (host memory, another GPU).
+    [[nodiscard]] virtual std::unique_ptr<SharedOutput> share_output(std::span<const SharedSlotHandle> slots,
+                                                                     const DeviceUuid& device, std::string& why);
 };
 
 /// Options a backend factory receives.

@@ -69,9 +69,13 @@ public:
     /// Runs every later substep on `stream` (nullptr: the backend's own stream). The backend
     /// still synchronises with the stream at the end of `substep()` to report stats.
     virtual void set_stream(CUstream_st* stream) = 0;
+    /// The stream the substeps run on (the one given to set_stream, or the backend's own).
+    [[nodiscard]] virtual CUstream_st* stream() const = 0;
     /// After every substep, writes one `OutputVertex` per vertex of the world (cloths concatenated in
-    /// order) to `device_buffer`, `stride` bytes apart; nullptr stops it. The buffer must hold
-    /// `vertex_count` entries and stay valid until unbound.
+    /// order) to `device_buffer`, `stride` bytes apart, and waits for the write: the buffer is
+    /// complete when step() returns. nullptr stops it. The buffer must hold `vertex_count` entries
+    /// and stay valid until unbound. (A renderer sharing its buffers uses `Backend::share_output`
+    /// instead, ordered by timeline semaphores without host waits.)
     virtual void set_output(void* device_buffer, std::size_t stride = sizeof(OutputVertex)) = 0;
     /// Total vertices of the world as laid out in the output buffer.
     [[nodiscard]] virtual std::size_t vertex_count() const = 0;

@@ -4,6 +4,7 @@
 /// it, the parameter table and the stats history. Panels, keys and scripts all change it through
 /// this object, so the three share one code path.
 #include <filesystem>
+#include <functional>
 #include <map>
 #include <memory>
 #include <optional>
@@ -61,6 +62,9 @@ public:
     /// settings and materials, the pause state and the time scale; clears the stats.
     void reset();
     [[nodiscard]] int resets() const { return resets_; }
+    /// Called by reset() before the old world goes: whatever holds on to it (the editor's ClothFeed,
+    /// which the backend writes the renderer's buffers through) lets go here.
+    void set_before_rebuild(std::function<void()> callback) { before_rebuild_ = std::move(callback); }
 
 private:
     SceneDesc scene_;
@@ -75,6 +79,7 @@ private:
     std::int64_t steps_before_reset_ = 0;  ///< so that step counts keep rising across resets
     int resets_ = 0;
     std::string message_;
+    std::function<void()> before_rebuild_;
 };
 
 }  // namespace weft::editor

@@ -97,6 +97,10 @@ struct RenderFrame {
     /// they are done (0: no signal; otherwise larger than any value signalled before).
     std::uint64_t wait_value = 0;
     std::uint64_t signal_value = 0;
+    /// The cloth slot drawn from (0 or 1 once exported; 0 otherwise), and the state's frame stamp:
+    /// written into the slot's tail with an upload, expected there from the writer otherwise.
+    int cloth_slot = 0;
+    std::uint64_t stamp = 0;
 };
 
 /// The scene of `world` seen from `camera`: one draw per cloth (colours from a fixed palette, by

@@ -31,16 +31,28 @@ struct RendererOptions {
 struct TransferStats {
     std::string path;                 ///< "host upload" or "interop"
     std::uint64_t bytes_uploaded = 0;  ///< host → device bytes in the last frame
+    /// The frame stamps found in the tail of the cloth slot when the last frame waited for (collect(),
+    /// or a window's next present) had drawn from it (weft/interop.h, kSlotStampBytes): both equal
+    /// to the frame's RenderFrame::stamp when it read one whole state (a frame that read a slot
+    /// mid-write shows them differing).
+    std::uint64_t stamp_first = 0, stamp_last = 0;
 };
 
-/// The zero-copy link (docs/rendering.md): the renderer's cloth vertex buffer and a timeline semaphore,
-/// exported for a GPU backend on the same device to import (weft/cuda/external_memory.h). The writer
-/// waits until the timeline reaches the value the renderer last signalled (its reads are done),
-/// writes, and signals a new value; the renderer's frame waits on that value (RenderFrame::wait_value).
+/// Whether the frame that `t` reports read exactly the state stamped `stamp`, whole (no tearing).
+[[nodiscard]] inline bool frame_intact(const TransferStats& t, std::uint64_t stamp) {
+    return t.stamp_first == stamp && t.stamp_last == stamp;
+}
+
+/// The zero-copy link (docs/rendering.md): the renderer's cloth slots, each a vertex buffer
+/// (RenderScene::cloth_vertices RenderVertex, 24 bytes apart, then kSlotStampBytes of frame stamps)
+/// with its own timeline semaphore, exported for a GPU backend on the same device to import
+/// (Backend::share_output). Two slots let the writer fill one while a frame draws from the other.
 struct ClothInterop {
-    ExternalMemoryHandle memory;    ///< RenderScene::cloth_vertices RenderVertex, 24 bytes apart
-    ExternalTimelineHandle timeline;
-    DeviceUuid device_uuid{};       ///< the GPU they live on
+    std::vector<SharedSlotHandle> slots;
+    /// Per slot, the timeline's value now, reached: a new writer (after a world was rebuilt)
+    /// continues above it, since a timeline only moves up.
+    std::vector<std::uint64_t> timeline_values;
+    DeviceUuid device_uuid{};  ///< the GPU they live on
 };
 
 class Renderer {
@@ -56,16 +68,29 @@ public:
     [[nodiscard]] virtual std::string device_description() const = 0;
     /// Uploads the static geometry of `scene` (kept by copy) and sizes the cloth buffer.
     virtual void load(const RenderScene& scene) = 0;
-    /// Draws `frame` (shadow pass, then the scene with MSAA, resolved) and reads the picture back.
-    [[nodiscard]] virtual Image draw(const RenderFrame& frame) = 0;
+    /// Starts drawing `frame` (shadow pass, then the scene with MSAA, resolved, the picture copied
+    /// for the host) without waiting for it: work between submit() and collect() overlaps the
+    /// drawing. A frame already submitted is collected first (its picture dropped).
+    virtual void submit(const RenderFrame& frame) = 0;
+    /// Waits for the submitted frame and returns its picture. Throws weft::Error when none is.
+    [[nodiscard]] virtual Image collect() = 0;
+    /// submit() then collect().
+    [[nodiscard]] Image draw(const RenderFrame& frame) {
+        submit(frame);
+        return collect();
+    }
+    /// A frame that will not be drawn: its timeline values (if any) are still waited for and
+    /// signalled, so a writer waiting on them goes on (a no-op for host-upload frames).
+    virtual void skip_frame(const RenderFrame& frame) = 0;
     [[nodiscard]] virtual TransferStats transfer() const = 0;
-    /// After load(): exports the cloth buffer and a timeline semaphore (new fds, owned by the caller
-    /// until imported). From then on a frame with no cloth vertices is drawn from what the writer
-    /// put in the buffer, with RenderFrame's wait and signal values. std::nullopt, with the reason in
-    /// `why`, where the device or the API cannot export (lavapipe, the EGL path so far).
+    /// After load(): exports two cloth slots with a timeline semaphore each (new fds, owned by the
+    /// caller until imported). From then on a frame with no cloth vertices is drawn from what the
+    /// writer put in slot RenderFrame::cloth_slot, with RenderFrame's wait and signal values on that
+    /// slot's timeline. std::nullopt, with the reason in `why`, where the device or the API cannot
+    /// export (lavapipe, the EGL path so far).
     [[nodiscard]] virtual std::optional<ClothInterop> export_cloth(std::string& why) = 0;
-    /// Copies the cloth vertex buffer back to the host: what the renderer draws from (tests).
-    [[nodiscard]] virtual std::vector<RenderVertex> read_cloth() = 0;
+    /// Copies cloth slot `slot` back to the host: what the renderer draws from (tests).
+    [[nodiscard]] virtual std::vector<RenderVertex> read_cloth(int slot = 0) = 0;
     /// Validation or debug messages of warning or error severity so far (0 without validation).
     [[nodiscard]] virtual int validation_messages() const = 0;
 };

@@ -74,6 +74,9 @@ public:
     /// The Vulkan objects an overlay is made with (window_overlay.h; creates the overlay pass on
     /// the first call).
     [[nodiscard]] OverlayVulkan overlay_vulkan();
+    /// The Vulkan renderer that draws the window's pictures: what a ClothFeed (cloth_feed.h) links
+    /// the world to. Frames go through present(), not its submit().
+    [[nodiscard]] Renderer& renderer();
     /// As Renderer::validation_messages and Renderer::transfer.
     [[nodiscard]] int validation_messages() const;
     [[nodiscard]] TransferStats transfer() const;

@@ -1,0 +1,127 @@
+// SharedOutput on the CUDA backend (see shared_output.h). Per display frame, on the solver's stream:
+//   wait(slot timeline ≥ wait_value) → first stamp → current state → every step's output → last
+//   stamp → signal(signal_value)
+// so the reader (the renderer) never sees a slot half written, and no host thread waits.
+#include "shared_output.h"
+
+#include <unistd.h>
+
+#include <algorithm>
+#include <vector>
+
+#include <cuda_runtime_api.h>
+
+#include "cuda_check.h"
+#include "device_solver.h"
+#include "kernels.h"
+#include "weft/cuda/cuda_backend.h"
+#include "weft/cuda/external_memory.h"
+#include "weft/error.h"
+
+namespace weft::cuda {
+namespace {
+
+void close_all(std::span<const SharedSlotHandle> slots, std::size_t from) {
+    for (std::size_t s = from; s < slots.size(); ++s) {
+        if (slots[s].memory.fd >= 0) ::close(slots[s].memory.fd);
+        if (slots[s].timeline.fd >= 0) ::close(slots[s].timeline.fd);
+    }
+}
+
+class CudaSharedOutput final : public SharedOutput {
+public:
+    CudaSharedOutput(DeviceSolver& solver, int device, std::span<const SharedSlotHandle> slots)
+        : solver_(solver), device_(device) {
+        for (std::size_t s = 0; s < slots.size(); ++s) {
+            try {
+                Slot slot;
+                // Each import owns its fd from the call on (closed on failure too); the ones after it
+                // are closed here when it throws.
+                slot.buffer = std::make_unique<ImportedBuffer>(device, slots[s].memory);
+                slot.timeline = std::make_unique<ImportedTimeline>(device, slots[s].timeline);
+                // Defined contents (zeros, stamps 0) before the first frame writes it.
+                WEFT_CUDA_CHECK(cudaMemset(slot.buffer->device_pointer(), 0, slot.buffer->size()));
+                slots_.push_back(std::move(slot));
+            } catch (...) {
+                close_all(slots, s + 1);
+                throw;
+            }
+        }
+    }
+
+    ~CudaSharedOutput() override {
+        if (bound_ >= 0) solver_.set_output(nullptr, sizeof(OutputVertex), false);
+    }
+
+    int slots() const override { return static_cast<int>(slots_.size()); }
+
+    void begin_frame(int slot, std::uint64_t wait_value, std::uint64_t stamp) override {
+        if (slot < 0 || slot >= slots())
+            throw Error("CUDA shared output: slot " + std::to_string(slot) + " of " + std::to_string(slots()));
+        if (bound_ >= 0) throw Error("CUDA shared output: begin_frame() twice without end_frame()");
+        const Slot& s = slots_[static_cast<std::size_t>(slot)];
+        WEFT_CUDA_CHECK(cudaSetDevice(device_));
+        cudaStream_t stream = solver_.stream();
+        if (wait_value > 0) s.timeline->wait(wait_value, stream);
+        launch_write_stamp(stamp_at(s, 0), stamp, stream);
+        solver_.set_output(s.buffer->device_pointer(), sizeof(OutputVertex), false);  // writes the state now
+        bound_ = slot;
+        stamp_ = stamp;
+    }
+
+    void end_frame(std::uint64_t signal_value) override {
+        if (bound_ < 0) throw Error("CUDA shared output: end_frame() without begin_frame()");
+        const Slot& s = slots_[static_cast<std::size_t>(bound_)];
+        WEFT_CUDA_CHECK(cudaSetDevice(device_));
+        cudaStream_t stream = solver_.stream();
+        launch_write_stamp(stamp_at(s, 1), stamp_, stream);
+        s.timeline->signal(signal_value, stream);
+        solver_.set_output(nullptr, sizeof(OutputVertex), false);
+        bound_ = -1;
+    }
+
+private:
+    struct Slot {
+        std::unique_ptr<ImportedBuffer> buffer;
+        std::unique_ptr<ImportedTimeline> timeline;
+    };
+
+    void* stamp_at(const Slot& s, int which) const {
+        return static_cast<unsigned char*>(s.buffer->device_pointer()) + solver_.vertex_count() * sizeof(OutputVertex) +
+               static_cast<std::size_t>(which) * sizeof(std::uint64_t);
+    }
+
+    DeviceSolver& solver_;
+    int device_ = 0;
+    std::vector<Slot> slots_;
+    int bound_ = -1;
+    std::uint64_t stamp_ = 0;
+};
+
+}  // namespace
+
+std::unique_ptr<SharedOutput> make_shared_output(DeviceSolver& solver, const DeviceInfo& device,
+                                                 std::span<const SharedSlotHandle> slots, const DeviceUuid& uuid,
+                                                 std::string& why) {
+    if (!std::equal(uuid.begin(), uuid.end(), std::begin(device.uuid))) {
+        close_all(slots, 0);
+        why = "the renderer's GPU is not the CUDA backend's (" + device.name + ", device " +
+              std::to_string(device.ordinal) + ")";
+        return nullptr;
+    }
+    const std::uint64_t needed = solver.vertex_count() * sizeof(OutputVertex) + kSlotStampBytes;
+    for (const SharedSlotHandle& s : slots)
+        if (s.memory.size < needed) {
+            close_all(slots, 0);
+            why = "a shared slot holds " + std::to_string(s.memory.size) + " bytes, the world needs " +
+                  std::to_string(needed);
+            return nullptr;
+        }
+    if (slots.empty()) {
+        why = "no slots to share";
+        return nullptr;
+    }
+    return std::make_unique<CudaSharedOutput>(solver, device.ordinal, slots);
+}
+
+}  // namespace weft::cuda

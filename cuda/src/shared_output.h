@@ -1,0 +1,22 @@
+#pragma once
+// The CUDA backend's writer into renderer-owned slots (weft/interop.h, SharedOutput): each slot's
+// memory and timeline imported once, the solver's output bound to one slot per display frame.
+#include <memory>
+#include <span>
+#include <string>
+
+#include "weft/interop.h"
+
+namespace weft::cuda {
+
+class DeviceSolver;
+struct DeviceInfo;
+
+/// Imports `slots` for `solver` on `device` (nullptr and `why` when `uuid` names another GPU or a
+/// slot is too small for the solver's vertices; the fds are closed then). Throws weft::Error when
+/// CUDA refuses an import.
+[[nodiscard]] std::unique_ptr<SharedOutput> make_shared_output(DeviceSolver& solver, const DeviceInfo& device,
+                                                               std::span<const SharedSlotHandle> slots,
+                                                               const DeviceUuid& uuid, std::string& why);
+
+}  // namespace weft::cuda

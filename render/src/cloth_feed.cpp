@@ -1,0 +1,103 @@
+// The frame pipeline's link between a world and a renderer (see weft/render/cloth_feed.h).
+//
+// Slot timelines. Slot s's semaphore counts every access to it in order: the writer waits for the
+// value the last draw of s signals, writes, signals the next value; the draw waits for that one and
+// signals the next. values_[s] is the last value asked for, so the two never reuse or reorder a
+// value (a timeline only moves up), whether or not steps ran in the frame.
+#include "weft/render/cloth_feed.h"
+
+#include "weft/error.h"
+
+namespace weft::render {
+
+ClothFeed::ClothFeed(World& world, Renderer& renderer, const RenderScene& scene, Options options)
+    : world_(world), renderer_(renderer), scene_(scene) {
+    if (!options.zero_copy) {
+        why_ = "zero-copy switched off";
+        return;
+    }
+    if (scene.cloth_vertices == 0) {
+        why_ = "the scene has no cloth";
+        return;
+    }
+    std::string why;
+    std::optional<ClothInterop> link = renderer.export_cloth(why);
+    if (!link) {
+        why_ = std::string(renderer.name()) + ": " + why;
+        return;
+    }
+    output_ = world.backend().share_output(link->slots, link->device_uuid, why);
+    if (!output_) {
+        why_ = why;
+        return;
+    }
+    values_ = link->timeline_values;
+    prime();
+}
+
+// One whole write-and-draw round per slot before the first frame, its picture dropped. On NVIDIA's
+// driver (580, H100) the first draw from each slot read stale stamps ("0/1", "0/0" where CUDA had
+// written and signalled "1/1") while every later frame read what was written; these rounds take
+// that first use. Whether one round is always enough is not yet measured (docs/rendering.md,
+// "Known problems"); primed() keeps what the rounds read. Their stamps are ones no frame uses
+// (frames count from 1).
+void ClothFeed::prime() {
+    for (int slot = 0; slot < output_->slots(); ++slot) {
+        std::uint64_t& value = values_[static_cast<std::size_t>(slot)];
+        const std::uint64_t stamp = ~std::uint64_t{0} - static_cast<std::uint64_t>(slot);
+        output_->begin_frame(slot, value, stamp);
+        output_->end_frame(++value);
+        RenderFrame frame;
+        frame.stamp = stamp;
+        frame.cloth_slot = slot;
+        frame.wait_value = value;
+        frame.signal_value = ++value;
+        frame.collider_models = collider_models(scene_, world_.model(), world_.time());
+        (void)renderer_.draw(frame);
+        primed_.push_back(renderer_.transfer());
+    }
+}
+
+ClothFeed::~ClothFeed() = default;
+
+std::string ClothFeed::describe() const {
+    if (output_) return "interop (zero-copy, " + std::to_string(output_->slots()) + " slots)";
+    return "host upload (" + why_ + ")";
+}
+
+RenderFrame ClothFeed::simulate(const std::function<void()>& steps) {
+    RenderFrame frame;
+    frame.stamp = static_cast<std::uint64_t>(++frames_);
+    if (output_) {
+        // Frames alternate between the slots: this one's writes never touch the slot the frame
+        // before is being drawn from.
+        const int slot = static_cast<int>((frames_ - 1) % output_->slots());
+        std::uint64_t& value = values_[static_cast<std::size_t>(slot)];
+        output_->begin_frame(slot, value, frame.stamp);
+        try {
+            if (steps) steps();
+        } catch (...) {
+            output_->end_frame(++value);  // the slot's next draw may still come; keep the count right
+            throw;
+        }
+        output_->end_frame(++value);
+        frame.cloth_slot = slot;
+        frame.wait_value = value;
+        frame.signal_value = ++value;
+    } else {
+        if (steps) steps();
+        cloth_vertices(world_, scene_, vertices_);
+        frame.cloth = vertices_;
+    }
+    frame.collider_models = collider_models(scene_, world_.model(), world_.time());
+    return frame;
+}
+
+bool ClothFeed::check(const RenderFrame& frame, const TransferStats& drawn) {
+    ++checked_;
+    const bool intact = frame_intact(drawn, frame.stamp);
+    if (!intact) ++torn_;
+    return intact;
+}
+
+}  // namespace weft::render

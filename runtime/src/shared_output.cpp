@@ -1,0 +1,19 @@
+// Backend::share_output for backends that keep the cloth in host memory: no zero-copy output, the
+// renderer uploads (weft/interop.h). The fds passed in are closed so that they never leak.
+#include <unistd.h>
+
+#include "weft/backend.h"
+
+namespace weft {
+
+std::unique_ptr<SharedOutput> Backend::share_output(std::span<const SharedSlotHandle> slots, const DeviceUuid& /*device*/,
+                                                    std::string& why) {
+    for (const SharedSlotHandle& s : slots) {
+        if (s.memory.fd >= 0) ::close(s.memory.fd);
+        if (s.timeline.fd >= 0) ::close(s.timeline.fd);
+    }
+    why = "the " + std::string(name()) + " backend keeps the cloth in host memory";
+    return nullptr;
+}
+
+}  // namespace weft
