@@ -8,6 +8,7 @@
 #include <iomanip>
 #include <sstream>
 #include <system_error>
+#include <utility>
 #include <vector>
 
 #include "weft/error.h"
@@ -39,7 +40,7 @@ void make_parent(const std::filesystem::path& file) {
 /// and the commands after it see its result. `frame N` waits for the Nth displayed frame.
 class ScriptRunner {
 public:
-    explicit ScriptRunner(const Script& script) : script_(script) {}
+    explicit ScriptRunner(Script script) : script_(std::move(script)) {}
 
     enum class Outcome : unsigned char { next_frame, quit, failed };
 
@@ -47,7 +48,7 @@ public:
     template <typename Screenshot>
     Outcome run(Session& session, int shown, Screenshot&& shot, std::ostream& out, std::ostream& err) {
         while (next_ < script_.commands.size()) {
-            const ScriptCommand& c = script_.commands[next_];
+            ScriptCommand& c = script_.commands[next_];
             const std::string where = script_.name + ":" + std::to_string(c.line) + ": ";
             using K = ScriptCommand::Kind;
             switch (c.kind) {
@@ -56,10 +57,12 @@ public:
                     ++next_;
                     break;
                 case K::set:
+                    if (!checked(session, next_, err)) return Outcome::failed;
                     session.parameters().set_pending(c.key, c.number);
                     ++next_;
                     return Outcome::next_frame;
                 case K::expect:
+                    if (!checked(session, next_, err)) return Outcome::failed;
                     if (!expect(session, c, where, err)) return Outcome::failed;
                     ++next_;
                     break;
@@ -93,6 +96,10 @@ public:
                     out << "saved " << c.text << std::endl;
                     ++next_;
                     break;
+                case K::open:
+                    session.requests().open = c.text;
+                    ++next_;
+                    return Outcome::next_frame;
                 case K::quit:
                     next_ = script_.commands.size();
                     return Outcome::quit;
@@ -104,6 +111,19 @@ public:
     [[nodiscard]] int expectations() const { return expectations_; }
 
 private:
+    // Commands after an `open` are checked against the scene open when they run.
+    bool checked(Session& session, std::size_t k, std::ostream& err) {
+        ScriptCommand& c = script_.commands[k];
+        if (c.checked) return true;
+        try {
+            check_command(script_.name, c, session.parameters());
+            return true;
+        } catch (const Error& e) {
+            err << "weft edit: " << e.what() << " (scene " << session.scene().name << ")" << std::endl;
+            return false;
+        }
+    }
+
     bool expect(Session& session, const ScriptCommand& c, const std::string& where, std::ostream& err) {
         const Parameter* p = session.parameters().find(c.key);
         const double have = p->get(session.world());
@@ -127,7 +147,7 @@ private:
         return true;
     }
 
-    const Script& script_;
+    Script script_;
     std::size_t next_ = 0;
     int expectations_ = 0;
 };
@@ -159,17 +179,18 @@ std::filesystem::path default_ini_file() {
 int run_editor(const SceneDesc& scene, std::unique_ptr<World> world, EditorOptions options, std::ostream& out,
                std::ostream& err) {
     if (!options.screenshot.empty()) make_parent(options.screenshot);
-    const std::string name = scene.name.empty() ? std::string("scene") : scene.name;
-    Session session(scene, options.backend, options.backend_options, std::move(world), options.time_scale);
+    std::string name = scene.name.empty() ? std::string("scene") : scene.name;
+    auto session =
+        std::make_unique<Session>(scene, options.backend, options.backend_options, std::move(world), options.time_scale);
     const bool scripted = options.script.has_value();
-    if (scripted) check_script(*options.script, session.parameters());  // before any window opens
+    if (scripted) check_script(*options.script, session->parameters());  // before any window opens
 
     render::RendererOptions renderer;
     renderer.width = options.width;
     renderer.height = options.height;
     renderer.validation = options.validation;
     render::Window window(renderer, "weft edit " + name);
-    const render::RenderScene render_scene = render::make_render_scene(session.world(), scene.camera);
+    render::RenderScene render_scene = render::make_render_scene(session->world(), scene.camera);
     window.load(render_scene);
     // Scripted runs keep no layout: a test must not depend on what a person left behind.
     ImGuiLayer imgui(window, scripted ? std::filesystem::path{} : options.ini_file);
@@ -179,7 +200,7 @@ int run_editor(const SceneDesc& scene, std::unique_ptr<World> world, EditorOptio
     // The cloth reaches the window zero-copy where the backend shares its GPU (cloth_feed.h); a
     // reset builds a new world, so the feed is let go first and linked to the new one after.
     std::unique_ptr<render::ClothFeed> feed;
-    session.set_before_rebuild([&] { feed.reset(); });
+    session->set_before_rebuild([&] { feed.reset(); });
     render::RenderFrame previous;
     bool have_previous = false;
     std::int64_t torn = 0;
@@ -194,15 +215,15 @@ int run_editor(const SceneDesc& scene, std::unique_ptr<World> world, EditorOptio
     while (window.poll_events()) {
         // Keys of the viewer: the same requests as the play panel's buttons.
         const render::ViewerRequests keys = window.take_requests();
-        PlayRequests& asked = session.requests();
-        if (keys.toggle_pause) asked.paused = !session.loop().paused();
+        PlayRequests& asked = session->requests();
+        if (keys.toggle_pause) asked.paused = !session->loop().paused();
         asked.single_steps += keys.single_steps;
         if (keys.time_scale_steps != 0)
             asked.time_scale =
-                std::clamp(session.loop().time_scale() * std::ldexp(1.0, keys.time_scale_steps), 0.01, 100.0);
+                std::clamp(session->loop().time_scale() * std::ldexp(1.0, keys.time_scale_steps), 0.01, 100.0);
 
         if (runner) {
-            const ScriptRunner::Outcome o = runner->run(session, shown, shot, out, err);
+            const ScriptRunner::Outcome o = runner->run(*session, shown, shot, out, err);
             if (o == ScriptRunner::Outcome::failed) {
                 status = 1;
                 break;
@@ -211,26 +232,52 @@ int run_editor(const SceneDesc& scene, std::unique_ptr<World> world, EditorOptio
         }
 
         imgui.begin_frame();
-        draw_panels(session, PanelLayout{static_cast<float>(window.width()), static_cast<float>(window.height()), fps});
+        draw_panels(*session, PanelLayout{static_cast<float>(window.width()), static_cast<float>(window.height()), fps,
+                                          options.open_scene ? &options.scene_names : nullptr});
         imgui.end_frame();
+
+        // Scenes panel or script: another scene replaces the session, the render scene and the feed.
+        if (std::optional<std::string> wanted = std::exchange(session->requests().open, std::nullopt)) {
+            try {
+                if (!options.open_scene) throw Error("this editor was started without a scene folder");
+                OpenedScene opened = options.open_scene(*wanted);
+                const double scale = session->loop().time_scale();
+                feed.reset();  // before the old world goes: the backend writes the window's slots
+                session = std::make_unique<Session>(opened.scene, options.backend, options.backend_options,
+                                                    std::move(opened.world), scale);
+                session->set_before_rebuild([&] { feed.reset(); });
+                name = opened.scene.name.empty() ? *wanted : opened.scene.name;
+                render_scene = render::make_render_scene(session->world(), opened.scene.camera);
+                window.load(render_scene);
+                session->set_message("opened " + name);
+                out << "opened " << name << std::endl;
+            } catch (const std::exception& e) {
+                session->set_message(std::string("open failed: ") + e.what());
+                err << "weft edit: open " << *wanted << ": " << e.what() << std::endl;
+                if (runner) {  // a script that cannot open its scene cannot go on
+                    status = 1;
+                    break;
+                }
+            }
+        }
 
         // Scripted: exactly the wall time of one step per frame (at the current scale), so that the
         // run steps once per displayed frame whatever the machine's speed.
         const Clock::time_point now = Clock::now();
         if (!feed) {
-            feed = std::make_unique<render::ClothFeed>(session.world(), window.renderer(), render_scene);
+            feed = std::make_unique<render::ClothFeed>(session->world(), window.renderer(), render_scene);
             have_previous = false;  // the frame before belongs to the old feed: not checked
         }
         render::RenderFrame frame = feed->simulate([&] {
-            FrameLoop& loop = session.loop();
+            FrameLoop& loop = session->loop();
             const double wall = shown == 0 ? 0.0
-                                : scripted ? session.world().settings().solver.dt / loop.time_scale()
+                                : scripted ? session->world().settings().solver.dt / loop.time_scale()
                                            : seconds(now - last);
             const std::int64_t before = loop.steps();
             (void)loop.advance(wall);
-            if (loop.steps() > before) session.history().record(loop.last_stats());
+            if (loop.steps() > before) session->history().record(loop.last_stats());
         });
-        if (shown > 0) session.history().frame_ms.push(1000.0 * seconds(now - last));
+        if (shown > 0) session->history().frame_ms.push(1000.0 * seconds(now - last));
         last = now;
         window.present(frame);
         // present() waited for the frame before: its stamps are in transfer() now.
@@ -249,13 +296,13 @@ int run_editor(const SceneDesc& scene, std::unique_ptr<World> world, EditorOptio
             fps = fps_frames / seconds(after - fps_at);
             fps_frames = 0;
             fps_at = after;
-            window.set_title(title_of(name, fps, session));
+            window.set_title(title_of(name, fps, *session));
         }
         if (options.frames && shown >= *options.frames) break;
     }
     // A script that ends waiting for a frame the --frames limit cut off still gets its last word.
     if (runner && status == 0 && shown > 0) {
-        if (runner->run(session, shown, shot, out, err) == ScriptRunner::Outcome::failed) status = 1;
+        if (runner->run(*session, shown, shot, out, err) == ScriptRunner::Outcome::failed) status = 1;
     }
     const double shown_seconds = seconds(Clock::now() - first_shown);
     if (!options.screenshot.empty() && shown > 0) {
@@ -265,7 +312,7 @@ int run_editor(const SceneDesc& scene, std::unique_ptr<World> world, EditorOptio
     const double mean_fps = shown > 1 && shown_seconds > 0.0 ? (shown - 1) / shown_seconds : 0.0;
     out << std::fixed << std::setprecision(1) << "weft edit: " << shown << (shown == 1 ? " frame" : " frames")
         << " of " << name << " at " << window.width() << "x" << window.height() << ", " << mean_fps << " fps, "
-        << std::setprecision(2) << "simulated " << session.world().time() << " s in " << session.loop().steps()
+        << std::setprecision(2) << "simulated " << session->world().time() << " s in " << session->loop().steps()
         << " steps, on " << window.device_description() << "; cloth by " << (feed ? feed->describe() : "-")
         << ", " << torn << " frames torn" << std::endl;
     if (runner && status == 0)
@@ -279,7 +326,7 @@ int run_editor(const SceneDesc& scene, std::unique_ptr<World> world, EditorOptio
         err << "weft: " << torn << " frames drew from a cloth slot holding parts of two states" << std::endl;
         status = 1;
     }
-    session.set_before_rebuild({});
+    session->set_before_rebuild({});
     return status;
 }
 

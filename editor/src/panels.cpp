@@ -3,6 +3,7 @@
 #include "weft/editor/panels.h"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstdint>
 #include <cstdio>
@@ -149,7 +150,11 @@ void play_controls(Session& session, bool visible) {
     steps += asked.single_steps;
     reset = reset || asked.reset;
     if (asked.time_scale) scale = *asked.time_scale;
-    asked = {};
+    // Only what this panel applies: an `open` request waits for the editor's loop.
+    asked.paused.reset();
+    asked.single_steps = 0;
+    asked.reset = false;
+    asked.time_scale.reset();
 
     if (reset) session.reset();
     FrameLoop& current = session.loop();  // reset() made a new one
@@ -235,6 +240,21 @@ void warning_banner(Session& session, const PanelLayout& layout) {
     ImGui::PopStyleColor();
 }
 
+// The scene browser: the shipped scenes by name, and any scene file by path. Opening replaces the
+// session (the editor's loop does it after the panels, docs/editor.md "Scenes").
+void scene_browser(Session& session, const PanelLayout& layout) {
+    if (layout.scenes != nullptr) {
+        for (const std::string& name : *layout.scenes)
+            if (ImGui::Selectable(name.c_str(), name == session.scene().name)) session.requests().open = name;
+        if (layout.scenes->empty()) ImGui::TextDisabled("no scene folder found");
+    }
+    // One text field for the whole process: ImGui widgets keep their text in the caller's buffer.
+    static std::array<char, 1024> path{};
+    ImGui::InputTextWithHint("##file", "a scene file (.toml)", path.data(), path.size());
+    ImGui::SameLine();
+    if (ImGui::Button("Open file") && path[0] != '\0') session.requests().open = std::string(path.data());
+}
+
 }  // namespace
 
 // The keys and mouse actions (docs/editor.md, "Keys and mouse"), listed where the user looks for them.
@@ -262,6 +282,7 @@ void draw_panels(Session& session, const PanelLayout& layout) {
     const bool play = open && ImGui::CollapsingHeader("Play", ImGuiTreeNodeFlags_DefaultOpen);
     play_controls(session, play);
     if (play) status_lines(session, layout);
+    if (open && ImGui::CollapsingHeader("Scenes")) scene_browser(session, layout);
     parameter_rows(session, "solver", open && ImGui::CollapsingHeader("Solver", ImGuiTreeNodeFlags_DefaultOpen));
     parameter_rows(session, "materials", open && ImGui::CollapsingHeader("Materials", ImGuiTreeNodeFlags_DefaultOpen));
     parameter_rows(session, "collision", open && ImGui::CollapsingHeader("Collision"));

@@ -21,6 +21,7 @@ constexpr Spelling kCommands[] = {
     {"expect", ScriptCommand::Kind::expect, 2},         {"pause", ScriptCommand::Kind::pause, 0},
     {"play", ScriptCommand::Kind::play, 0},             {"step", ScriptCommand::Kind::step, 0},
     {"reset", ScriptCommand::Kind::reset, 0},           {"timescale", ScriptCommand::Kind::timescale, 1},
+    {"open", ScriptCommand::Kind::open, 1},
     {"screenshot", ScriptCommand::Kind::screenshot, 1}, {"save", ScriptCommand::Kind::save, 1},
     {"quit", ScriptCommand::Kind::quit, 0},
 };
@@ -95,6 +96,7 @@ Script parse_script(std::string_view text, const std::string& name) {
                 break;
             case ScriptCommand::Kind::screenshot:
             case ScriptCommand::Kind::save:
+            case ScriptCommand::Kind::open:
                 c.text = words[1];
                 break;
             default:
@@ -114,18 +116,25 @@ Script read_script(const std::filesystem::path& file) {
     return parse_script(text.str(), file.string());
 }
 
+void check_command(const std::string& script_name, ScriptCommand& c, const ParameterTable& table) {
+    const std::string where = script_name + ":" + std::to_string(c.line) + ": ";
+    const Parameter* p = table.find(c.key);
+    if (p == nullptr)
+        throw Error(where + "unknown parameter '" + c.key + "' (the keys are listed in docs/editor.md)");
+    try {
+        c.number = ParameterTable::parse_value(*p, c.text);
+    } catch (const Error& e) {
+        throw Error(where + e.what());
+    }
+    c.checked = true;
+}
+
 void check_script(Script& script, const ParameterTable& table) {
     for (ScriptCommand& c : script.commands) {
-        if (c.kind != ScriptCommand::Kind::set && c.kind != ScriptCommand::Kind::expect) continue;
-        const std::string where = script.name + ":" + std::to_string(c.line) + ": ";
-        const Parameter* p = table.find(c.key);
-        if (p == nullptr)
-            throw Error(where + "unknown parameter '" + c.key + "' (the keys are listed in docs/editor.md)");
-        try {
-            c.number = ParameterTable::parse_value(*p, c.text);
-        } catch (const Error& e) {
-            throw Error(where + e.what());
-        }
+        // After an `open`, the keys belong to another scene: checked when they run.
+        if (c.kind == ScriptCommand::Kind::open) break;
+        if (c.kind == ScriptCommand::Kind::set || c.kind == ScriptCommand::Kind::expect)
+            check_command(script.name, c, table);
     }
 }
 

@@ -56,7 +56,7 @@ TEST(Script, ParsesEveryCommand) {
 TEST(Script, ErrorsNameTheLine) {
     EXPECT_EQ(error_of("frame 1\njump 3\n"),
               "s.txt:2: unknown command 'jump' (commands: frame, set, expect, pause, play, step, reset, timescale, "
-              "screenshot, save, quit)");
+              "open, screenshot, save, quit)");
     EXPECT_EQ(error_of("set solver.substeps\n"), "s.txt:1: 'set' takes 2 arguments, got 1");
     EXPECT_EQ(error_of("pause now\n"), "s.txt:1: 'pause' takes 0 arguments, got 1");
     EXPECT_EQ(error_of("\nframe ten\n"), "s.txt:2: frame expects a frame count in [1, 100000000], got 'ten'");
@@ -92,6 +92,28 @@ TEST(Script, CheckNamesBadKeysAndValues) {
     check_script(good, table);
     EXPECT_DOUBLE_EQ(good.commands[0].number, 0.5);
     EXPECT_DOUBLE_EQ(good.commands[1].number, 0.0);  // the index of "float"
+}
+
+// After `open`, the keys belong to the scene opened: check_script leaves them to check_command,
+// which the editor calls when they run, with the same messages.
+TEST(Script, KeysAfterAnOpenAreCheckedWhenTheyRun) {
+    const std::unique_ptr<World> owned = small_world();
+    const ParameterTable table(*owned);
+    Script s = parse_script("set solver.substeps 3\nopen layers\nset cloth.sheets.material.friction 0.2\n", "s.txt");
+    ASSERT_EQ(s.commands.size(), 3U);
+    EXPECT_EQ(s.commands[1].kind, ScriptCommand::Kind::open);
+    EXPECT_EQ(s.commands[1].text, "layers");
+    EXPECT_NO_THROW(check_script(s, table)) << "a key of the other scene is not checked against this one";
+    EXPECT_TRUE(s.commands[0].checked);
+    EXPECT_FALSE(s.commands[2].checked);
+    try {
+        check_command(s.name, s.commands[2], table);
+        ADD_FAILURE() << "the key is not in this scene";
+    } catch (const Error& e) {
+        EXPECT_EQ(std::string(e.what()),
+                  "s.txt:3: unknown parameter 'cloth.sheets.material.friction' (the keys are listed in docs/editor.md)");
+    }
+    EXPECT_THROW((void)parse_script("open\n", "s.txt"), Error) << "open takes the scene";
 }
 
 TEST(Parameters, PendingValuesReachTheWorldThroughApply) {

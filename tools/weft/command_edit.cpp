@@ -2,7 +2,10 @@
 // `weft run` does.
 #include "weft/error.h"
 
+#include <filesystem>
+
 #include "commands.h"
+#include "scene_lookup.h"
 #include "world_setup.h"
 
 #if WEFT_HAVE_EDITOR
@@ -30,6 +33,18 @@ int edit_command(const EditOptions& options, std::ostream& out, std::ostream& er
     editor.screenshot = options.screenshot;
     editor.ini_file = editor::default_ini_file();
     if (loaded.desc.name.empty()) loaded.desc.name = options.scene;
+    // The Scenes panel: every scene in the first scene folder that exists, opened as this one was
+    // (same backend, threads and --set overrides).
+    for (const std::filesystem::path& folder : scene_folders())
+        if (std::filesystem::is_directory(folder)) {
+            editor.scene_names = scene_names(folder);
+            break;
+        }
+    editor.open_scene = [sim = options.sim](const std::string& scene) {
+        LoadedScene l = load_world(scene, sim);
+        if (l.desc.name.empty()) l.desc.name = scene;
+        return editor::OpenedScene{std::move(l.desc), std::move(l.world)};
+    };
     return editor::run_editor(loaded.desc, std::move(loaded.world), std::move(editor), out, err);
 }
 

@@ -4,10 +4,12 @@
 /// with the ImGui panels over it, played by weft::FrameLoop; with a script, driven by it instead of
 /// a person, one step per displayed frame so that nothing depends on timing.
 #include <filesystem>
+#include <functional>
 #include <memory>
 #include <optional>
 #include <ostream>
 #include <string>
+#include <vector>
 
 #include "weft/backend.h"
 #include "weft/scene.h"
@@ -16,6 +18,12 @@
 #include "weft/editor/script.h"
 
 namespace weft::editor {
+
+/// A scene opened from the Scenes panel or a script's `open`.
+struct OpenedScene {
+    SceneDesc scene;
+    std::unique_ptr<World> world;  ///< built on EditorOptions::backend
+};
 
 struct EditorOptions {
     std::string backend = "cpu";  ///< resolved backend name; reset() rebuilds the world on it
@@ -28,6 +36,10 @@ struct EditorOptions {
     std::optional<Script> script;      ///< scripted mode (checked against the scene's parameters here)
     /// Where ImGui keeps the layout; empty: nowhere. Scripted runs never use one.
     std::filesystem::path ini_file;
+    /// Opens a scene by name (from `scene_names`) or file, as `weft edit SCENE` would; throws
+    /// weft::Error saying why not. Unset: the Scenes panel lists nothing and `open` fails.
+    std::function<OpenedScene(const std::string&)> open_scene;
+    std::vector<std::string> scene_names;  ///< the Scenes panel's list
 };
 
 /// Runs the editor on `world`, built from `scene` on `options.backend`, until the window closes,

@@ -11,10 +11,13 @@
 ///     timescale 0.5                the play controls' time scale, [0.01, 100]
 ///     screenshot out/edit.png      the last displayed frame, with the panels, as PNG
 ///     save out/tuned.toml          the scene with what was tuned, as the Save button writes it
+///     open layers                  open a scene (a name from the browser, or a file), as the
+///                                  Scenes panel does; the commands after it act on that scene
 ///     quit                         end (so does the end of the script)
 ///
 /// Parsing checks the commands and their argument counts and numbers; parameter keys and values
-/// are checked against the scene's parameters before the window opens (`check_script`).
+/// are checked against the scene's parameters before the window opens (`check_script`), those after
+/// an `open` against the opened scene's when they run (`check_command`).
 #include <filesystem>
 #include <string>
 #include <string_view>
@@ -25,13 +28,14 @@
 namespace weft::editor {
 
 struct ScriptCommand {
-    enum class Kind : unsigned char { frame, set, expect, pause, play, step, reset, timescale, screenshot, save, quit };
+    enum class Kind : unsigned char { frame, set, expect, pause, play, step, reset, timescale, screenshot, save, open, quit };
     Kind kind = Kind::quit;
     int line = 0;         ///< 1-based line in the script
     int frame = 0;        ///< frame: the displayed-frame count to reach
     std::string key;      ///< set, expect: the parameter's key
-    std::string text;     ///< set, expect: the value as written; screenshot, save: the path
+    std::string text;     ///< set, expect: the value as written; screenshot, save: the path; open: the scene
     double number = 0.0;  ///< timescale; set, expect: the value once checked (check_script)
+    bool checked = false;  ///< set, expect: key and value checked against the scene's parameters
 };
 
 struct Script {
@@ -44,8 +48,11 @@ struct Script {
 [[nodiscard]] Script parse_script(std::string_view text, const std::string& name);
 /// Reads and parses `file`; throws weft::Error when it cannot be read.
 [[nodiscard]] Script read_script(const std::filesystem::path& file);
-/// Checks every `set`/`expect` key and value against `table` and stores the values (`number`).
-/// Throws weft::Error "NAME:LINE: …" naming the first bad one.
+/// Checks every `set`/`expect` key and value before the first `open` against `table` and stores the
+/// values (`number`). Throws weft::Error "NAME:LINE: …" naming the first bad one.
 void check_script(Script& script, const ParameterTable& table);
+/// Checks one `set`/`expect` command of `script_name` against `table` (the scene open when it
+/// runs), as check_script does.
+void check_command(const std::string& script_name, ScriptCommand& command, const ParameterTable& table);
 
 }  // namespace weft::editor

@@ -27,6 +27,9 @@ struct PlayRequests {
     int single_steps = 0;
     bool reset = false;
     std::optional<double> time_scale;
+    /// A scene to open (a name from the browser or a file), taken by the editor's loop after the
+    /// panels: the Scenes panel and the script's `open`.
+    std::optional<std::string> open;
 };
 
 class Session {
