@@ -13,6 +13,7 @@
 
 #include "weft/error.h"
 #include "weft/render/cloth_feed.h"
+#include "weft/render/frame_sequence.h"
 #include "weft/render/image.h"
 #include "weft/render/render_scene.h"
 #include "weft/render/window.h"
@@ -98,6 +99,14 @@ public:
                     break;
                 case K::open:
                     session.requests().open = c.text;
+                    ++next_;
+                    return Outcome::next_frame;
+                case K::record:
+                    session.requests().record = std::filesystem::path(c.text);
+                    ++next_;
+                    return Outcome::next_frame;
+                case K::stop:
+                    session.requests().stop_recording = true;
                     ++next_;
                     return Outcome::next_frame;
                 case K::quit:
@@ -211,6 +220,16 @@ int run_editor(const SceneDesc& scene, std::unique_ptr<World> world, EditorOptio
     int fps_frames = 0;
     double fps = 0.0;
     auto shot = [&](const std::filesystem::path& file) { render::write_png(file, window.screenshot()); };
+    std::optional<render::FrameSequence> recording;
+    // Ends the recording: the MP4 at the simulation's frame rate when ffmpeg is there.
+    auto finish_recording = [&] {
+        RecordingStatus& rec = session->recording();
+        const render::FrameSequence::Video video = recording->encode_mp4(1.0 / session->world().settings().solver.dt);
+        rec.active = false;
+        rec.video = video.file.empty() ? "none (" + video.note + ")" : video.file.string();
+        out << "recorded " << rec.frames << " frames to " << rec.folder.string() << "; video: " << rec.video << std::endl;
+        recording.reset();
+    };
 
     while (window.poll_events()) {
         // Keys of the viewer: the same requests as the play panel's buttons.
@@ -241,6 +260,7 @@ int run_editor(const SceneDesc& scene, std::unique_ptr<World> world, EditorOptio
             try {
                 if (!options.open_scene) throw Error("this editor was started without a scene folder");
                 OpenedScene opened = options.open_scene(*wanted);
+                if (recording) finish_recording();  // the recording belongs to the scene it showed
                 const double scale = session->loop().time_scale();
                 feed.reset();  // before the old world goes: the backend writes the window's slots
                 session = std::make_unique<Session>(opened.scene, options.backend, options.backend_options,
@@ -284,6 +304,28 @@ int run_editor(const SceneDesc& scene, std::unique_ptr<World> world, EditorOptio
         if (have_previous && !feed->check(previous, window.transfer())) ++torn;
         previous = std::move(frame);
         have_previous = true;
+        // Recording: start and stop as asked (panel or script), then this frame as displayed.
+        RecordingStatus& rec = session->recording();
+        PlayRequests& wants = session->requests();
+        if (wants.stop_recording && recording) {
+            finish_recording();
+        }
+        wants.stop_recording = false;
+        if (std::optional<std::filesystem::path> folder = std::exchange(wants.record, std::nullopt)) {
+            if (recording) finish_recording();
+            try {
+                recording.emplace(*folder);
+                rec = RecordingStatus{true, *folder, 0, {}};
+                out << "recording to " << folder->string() << std::endl;
+            } catch (const std::exception& e) {
+                session->set_message(std::string("record failed: ") + e.what());
+                err << "weft edit: record " << folder->string() << ": " << e.what() << std::endl;
+            }
+        }
+        if (recording) {
+            recording->write(rec.frames, window.screenshot());
+            ++rec.frames;
+        }
         if (++shown == 1) first_shown = Clock::now();
         ++fps_frames;
         if (keys.screenshot) {
@@ -300,6 +342,7 @@ int run_editor(const SceneDesc& scene, std::unique_ptr<World> world, EditorOptio
         }
         if (options.frames && shown >= *options.frames) break;
     }
+    if (recording) finish_recording();
     // A script that ends waiting for a frame the --frames limit cut off still gets its last word.
     if (runner && status == 0 && shown > 0) {
         if (runner->run(*session, shown, shot, out, err) == ScriptRunner::Outcome::failed) status = 1;

@@ -139,6 +139,35 @@ void play_controls(Session& session, bool visible) {
             }
         }
         if (ImGui::IsItemHovered()) ImGui::SetTooltip("write %s", session.default_save_path().string().c_str());
+        // Save as: any path (the script's `save FILE` takes the same code path).
+        static std::array<char, 1024> save_as{};
+        ImGui::InputTextWithHint("##saveas", "save as (.toml)", save_as.data(), save_as.size());
+        ImGui::SameLine();
+        if (ImGui::Button("Save as") && save_as[0] != '\0') {
+            const std::filesystem::path file(save_as.data());
+            try {
+                session.save(file);
+                session.set_message("saved " + file.string());
+            } catch (const std::exception& e) {
+                session.set_message(std::string("save failed: ") + e.what());
+            }
+        }
+        // Recording: every displayed frame, panels included, as numbered PNGs (and an MP4 at the
+        // end when ffmpeg is installed).
+        static std::array<char, 1024> record_to{"weft_recording"};
+        RecordingStatus& rec = session.recording();
+        if (rec.active) {
+            if (ImGui::Button("Stop recording")) asked.stop_recording = true;
+            ImGui::SameLine();
+            ImGui::Text("%d frames to %s", rec.frames, rec.folder.string().c_str());
+        } else {
+            ImGui::InputText("##record", record_to.data(), record_to.size());
+            ImGui::SameLine();
+            if (ImGui::Button("Record") && record_to[0] != '\0') asked.record = std::filesystem::path(record_to.data());
+            if (!rec.folder.empty())
+                ImGui::TextWrapped("last: %d frames in %s; video: %s", rec.frames, rec.folder.string().c_str(),
+                                   rec.video.c_str());
+        }
         if (!session.message().empty()) ImGui::TextWrapped("%s", session.message().c_str());
         const double lo = 0.01, hi = 100.0;
         ImGui::SliderScalar("time scale", ImGuiDataType_Double, &scale, &lo, &hi, "%.3g x",

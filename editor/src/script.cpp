@@ -21,7 +21,8 @@ constexpr Spelling kCommands[] = {
     {"expect", ScriptCommand::Kind::expect, 2},         {"pause", ScriptCommand::Kind::pause, 0},
     {"play", ScriptCommand::Kind::play, 0},             {"step", ScriptCommand::Kind::step, 0},
     {"reset", ScriptCommand::Kind::reset, 0},           {"timescale", ScriptCommand::Kind::timescale, 1},
-    {"open", ScriptCommand::Kind::open, 1},
+    {"open", ScriptCommand::Kind::open, 1},             {"record", ScriptCommand::Kind::record, 1},
+    {"stop", ScriptCommand::Kind::stop, 0},
     {"screenshot", ScriptCommand::Kind::screenshot, 1}, {"save", ScriptCommand::Kind::save, 1},
     {"quit", ScriptCommand::Kind::quit, 0},
 };
@@ -97,6 +98,7 @@ Script parse_script(std::string_view text, const std::string& name) {
             case ScriptCommand::Kind::screenshot:
             case ScriptCommand::Kind::save:
             case ScriptCommand::Kind::open:
+            case ScriptCommand::Kind::record:
                 c.text = words[1];
                 break;
             default:

@@ -51,12 +51,19 @@ TEST(Script, ParsesEveryCommand) {
     EXPECT_EQ(s.commands[8].text, "out/a.png");
     EXPECT_EQ(s.commands[10].kind, K::quit);
     EXPECT_EQ(s.commands[10].line, 13);
+
+    const Script r = parse_script("record out/rec\nstop\n", "r.txt");
+    ASSERT_EQ(r.commands.size(), 2U);
+    EXPECT_EQ(r.commands[0].kind, K::record);
+    EXPECT_EQ(r.commands[0].text, "out/rec");
+    EXPECT_EQ(r.commands[1].kind, K::stop);
+    EXPECT_THROW((void)parse_script("record\n", "r.txt"), Error) << "record takes the folder";
 }
 
 TEST(Script, ErrorsNameTheLine) {
     EXPECT_EQ(error_of("frame 1\njump 3\n"),
               "s.txt:2: unknown command 'jump' (commands: frame, set, expect, pause, play, step, reset, timescale, "
-              "open, screenshot, save, quit)");
+              "open, record, stop, screenshot, save, quit)");
     EXPECT_EQ(error_of("set solver.substeps\n"), "s.txt:1: 'set' takes 2 arguments, got 1");
     EXPECT_EQ(error_of("pause now\n"), "s.txt:1: 'pause' takes 0 arguments, got 1");
     EXPECT_EQ(error_of("\nframe ten\n"), "s.txt:2: frame expects a frame count in [1, 100000000], got 'ten'");

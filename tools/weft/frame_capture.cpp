@@ -7,12 +7,10 @@
 #include <algorithm>
 #include <chrono>
 #include <cstdio>
-#include <cstdlib>
-#include <iomanip>
 #include <optional>
-#include <sstream>
 
 #include "weft/render/cloth_feed.h"
+#include "weft/render/frame_sequence.h"
 #include "weft/render/renderer.h"
 #include "weft/scene.h"
 #include "weft/world.h"
@@ -29,19 +27,12 @@ double ms_since(std::chrono::steady_clock::time_point start) {
     return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
 }
 
-bool have_ffmpeg() { return std::system("command -v ffmpeg > /dev/null 2>&1") == 0; }
-
-std::string shell_quote(const std::string& s) {
-    std::string out = "'";
-    for (const char c : s) out += c == '\'' ? std::string("'\\''") : std::string(1, c);
-    return out + "'";
-}
-
 }  // namespace
 
 struct FrameCapture::State {
     std::string renderer_name;
     std::filesystem::path dir;
+    std::optional<render::FrameSequence> pictures;
     std::unique_ptr<render::Renderer> renderer;
     render::RenderScene scene;
     std::unique_ptr<render::ClothFeed> feed;
@@ -65,9 +56,11 @@ FrameCapture::FrameCapture(const std::string& renderer, std::filesystem::path di
     s.dir = std::move(dir);
     s.last_frame = last_frame;
     s.digits = std::max(4, static_cast<int>(std::to_string(last_frame).size()));
-    std::error_code ec;
-    std::filesystem::create_directories(s.dir, ec);
-    if (ec) throw Error("capture: cannot create " + s.dir.string() + ": " + ec.message());
+    try {
+        s.pictures.emplace(s.dir, s.digits);
+    } catch (const Error& e) {
+        throw Error(std::string("capture: ") + e.what());
+    }
     render::RendererOptions options;
     options.width = width;
     options.height = height;
@@ -110,9 +103,7 @@ void FrameCapture::capture(int frame, const std::function<void()>& steps) {
 void FrameCapture::write_image(int frame, const render::Image& image) {
     State& s = *state_;
     const auto clock = std::chrono::steady_clock::now();
-    std::ostringstream name;
-    name << "frame_" << std::setw(s.digits) << std::setfill('0') << frame << ".png";
-    render::write_png(s.dir / name.str(), image);
+    s.pictures->write(frame, image);
     s.write_ms.push_back(ms_since(clock));
     ++s.frames;
     if (std::find(s.sheet_frames.begin(), s.sheet_frames.end(), frame) != s.sheet_frames.end() &&
@@ -146,22 +137,9 @@ CaptureSummary FrameCapture::finish(double fps) {
         render::write_png(sheet_path, render::contact_sheet(s.sheet, kSheetColumns, scale));
         out.contact_sheet = sheet_path.string();
     }
-    if (s.frames < 2) {
-        out.video_note = "fewer than 2 frames";
-    } else if (!have_ffmpeg()) {
-        out.video_note = "ffmpeg not installed";
-    } else {
-        const auto video = s.dir / "capture.mp4";
-        std::ostringstream cmd;
-        cmd << "ffmpeg -y -loglevel error -framerate " << std::max(1.0, fps) << " -i "
-            << shell_quote((s.dir / ("frame_%0" + std::to_string(s.digits) + "d.png")).string())
-            << " -pix_fmt yuv420p -vf 'pad=ceil(iw/2)*2:ceil(ih/2)*2' " << shell_quote(video.string());
-        if (std::system(cmd.str().c_str()) == 0) {
-            out.video = video.string();
-        } else {
-            out.video_note = "ffmpeg failed (command: " + cmd.str() + ")";
-        }
-    }
+    const render::FrameSequence::Video video = s.pictures->encode_mp4(fps);
+    out.video = video.file.string();
+    out.video_note = video.note;
     return out;
 }
 

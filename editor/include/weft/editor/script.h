@@ -11,6 +11,8 @@
 ///     timescale 0.5                the play controls' time scale, [0.01, 100]
 ///     screenshot out/edit.png      the last displayed frame, with the panels, as PNG
 ///     save out/tuned.toml          the scene with what was tuned, as the Save button writes it
+///     record out/rec               record every displayed frame to out/rec/frame_NNNN.png
+///     stop                         stop recording (and make out/rec/capture.mp4 with ffmpeg)
 ///     open layers                  open a scene (a name from the browser, or a file), as the
 ///                                  Scenes panel does; the commands after it act on that scene
 ///     quit                         end (so does the end of the script)
@@ -28,12 +30,12 @@
 namespace weft::editor {
 
 struct ScriptCommand {
-    enum class Kind : unsigned char { frame, set, expect, pause, play, step, reset, timescale, screenshot, save, open, quit };
+    enum class Kind : unsigned char { frame, set, expect, pause, play, step, reset, timescale, screenshot, save, open, record, stop, quit };
     Kind kind = Kind::quit;
     int line = 0;         ///< 1-based line in the script
     int frame = 0;        ///< frame: the displayed-frame count to reach
     std::string key;      ///< set, expect: the parameter's key
-    std::string text;     ///< set, expect: the value as written; screenshot, save: the path; open: the scene
+    std::string text;     ///< set, expect: the value as written; screenshot, save, record: the path; open: the scene
     double number = 0.0;  ///< timescale; set, expect: the value once checked (check_script)
     bool checked = false;  ///< set, expect: key and value checked against the scene's parameters
 };

@@ -30,6 +30,18 @@ struct PlayRequests {
     /// A scene to open (a name from the browser or a file), taken by the editor's loop after the
     /// panels: the Scenes panel and the script's `open`.
     std::optional<std::string> open;
+    /// Start recording every displayed frame into this folder / stop it (the play panel, the
+    /// script's `record` and `stop`); taken by the editor's loop.
+    std::optional<std::filesystem::path> record;
+    bool stop_recording = false;
+};
+
+/// The viewport recording, as the play panel shows it.
+struct RecordingStatus {
+    bool active = false;
+    std::filesystem::path folder;  ///< of the current or the last recording
+    int frames = 0;                ///< written to it so far
+    std::string video;             ///< the MP4 of the last recording, or why there is none
 };
 
 class Session {
@@ -44,6 +56,7 @@ public:
     [[nodiscard]] ParameterTable& parameters() { return parameters_; }
     [[nodiscard]] StatsHistory& history() { return history_; }
     [[nodiscard]] PlayRequests& requests() { return requests_; }
+    [[nodiscard]] RecordingStatus& recording() { return recording_; }
 
     /// Sets `p` to `value` (clamped to its range) on the world — the one setter of panels and
     /// scripts. Remembers the step count, so that `expect` knows when a step has used it.
@@ -78,6 +91,7 @@ private:
     ParameterTable parameters_;
     StatsHistory history_;
     PlayRequests requests_;
+    RecordingStatus recording_;
     std::map<std::string, std::int64_t> applied_at_;
     std::int64_t steps_before_reset_ = 0;  ///< so that step counts keep rising across resets
     int resets_ = 0;
