@@ -9,6 +9,7 @@
 #include <filesystem>
 #include <optional>
 
+#include "render_checks.h"
 #include "weft/error.h"
 #include "weft/frame_loop.h"
 #include "weft/render/cloth_feed.h"
@@ -18,17 +19,15 @@
 namespace weft::render {
 namespace {
 
+// The renderer, or (skip) why this machine has none.
 std::unique_ptr<Renderer> try_renderer(const std::string& name, std::string& why) {
     RendererOptions o;
     o.width = 160;
     o.height = 120;
     o.validation = true;
-    try {
-        return create_renderer(name, o);
-    } catch (const Error& e) {
-        why = e.what();
-        return nullptr;
-    }
+    test::Created c = test::create(name, o, [](const Error& e) { return std::string(e.what()); });
+    why = c.skip;
+    return std::move(c.renderer);
 }
 
 std::unique_ptr<World> small_flag(SceneDesc& desc) {

@@ -60,6 +60,21 @@ VkSampleCountFlagBits sample_count(const VkPhysicalDeviceLimits& limits, int req
     return VK_SAMPLE_COUNT_1_BIT;
 }
 
+// A transfer's writes into `buffer` made visible to the host once the submission's fence signals.
+void to_host_barrier(VkCommandBuffer commands, VkBuffer buffer) {
+    VkBufferMemoryBarrier to_host{};
+    to_host.sType = VK_STRUCTURE_TYPE_BUFFER_MEMORY_BARRIER;
+    to_host.srcAccessMask = VK_ACCESS_TRANSFER_WRITE_BIT;
+    to_host.dstAccessMask = VK_ACCESS_HOST_READ_BIT;
+    to_host.srcQueueFamilyIndex = VK_QUEUE_FAMILY_IGNORED;
+    to_host.dstQueueFamilyIndex = VK_QUEUE_FAMILY_IGNORED;
+    to_host.buffer = buffer;
+    to_host.offset = 0;
+    to_host.size = VK_WHOLE_SIZE;
+    vkCmdPipelineBarrier(commands, VK_PIPELINE_STAGE_TRANSFER_BIT, VK_PIPELINE_STAGE_HOST_BIT, 0, 0, nullptr, 1,
+                         &to_host, 0, nullptr);
+}
+
 // The clear colour goes to the UNORM target as it is, so it is encoded like the shader's output.
 float to_srgb(float c) {
     c = std::clamp(c, 0.0F, 1.0F);
@@ -820,17 +835,7 @@ void VulkanRenderer::record_stamp_copy(VkCommandBuffer commands) const {
     const DeviceBuffer& slot = slots_[static_cast<std::size_t>(frame_slot_)].buffer;
     const VkBufferCopy copy{slot.size - kSlotStampBytes, 0, kSlotStampBytes};
     vkCmdCopyBuffer(commands, slot.buffer, stamp_readback_.buffer, 1, &copy);
-    VkBufferMemoryBarrier to_host{};
-    to_host.sType = VK_STRUCTURE_TYPE_BUFFER_MEMORY_BARRIER;
-    to_host.srcAccessMask = VK_ACCESS_TRANSFER_WRITE_BIT;
-    to_host.dstAccessMask = VK_ACCESS_HOST_READ_BIT;
-    to_host.srcQueueFamilyIndex = VK_QUEUE_FAMILY_IGNORED;
-    to_host.dstQueueFamilyIndex = VK_QUEUE_FAMILY_IGNORED;
-    to_host.buffer = stamp_readback_.buffer;
-    to_host.offset = 0;
-    to_host.size = VK_WHOLE_SIZE;
-    vkCmdPipelineBarrier(commands, VK_PIPELINE_STAGE_TRANSFER_BIT, VK_PIPELINE_STAGE_HOST_BIT, 0, 0, nullptr, 1,
-                         &to_host, 0, nullptr);
+    to_host_barrier(commands, stamp_readback_.buffer);
 }
 
 void VulkanRenderer::record_readback(VkCommandBuffer commands) const {
@@ -840,17 +845,7 @@ void VulkanRenderer::record_readback(VkCommandBuffer commands) const {
     copy.imageSubresource = {VK_IMAGE_ASPECT_COLOR_BIT, 0, 0, 1};
     copy.imageExtent = {extent_.width, extent_.height, 1};
     vkCmdCopyImageToBuffer(commands, resolved_.image, VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL, readback_.buffer, 1, &copy);
-    VkBufferMemoryBarrier to_host{};
-    to_host.sType = VK_STRUCTURE_TYPE_BUFFER_MEMORY_BARRIER;
-    to_host.srcAccessMask = VK_ACCESS_TRANSFER_WRITE_BIT;
-    to_host.dstAccessMask = VK_ACCESS_HOST_READ_BIT;
-    to_host.srcQueueFamilyIndex = VK_QUEUE_FAMILY_IGNORED;
-    to_host.dstQueueFamilyIndex = VK_QUEUE_FAMILY_IGNORED;
-    to_host.buffer = readback_.buffer;
-    to_host.offset = 0;
-    to_host.size = VK_WHOLE_SIZE;
-    vkCmdPipelineBarrier(commands, VK_PIPELINE_STAGE_TRANSFER_BIT, VK_PIPELINE_STAGE_HOST_BIT, 0, 0, nullptr, 1,
-                         &to_host, 0, nullptr);
+    to_host_barrier(commands, readback_.buffer);
 }
 
 void VulkanRenderer::draw_all(VkCommandBuffer commands, const std::vector<DrawUniforms>& draws,
