@@ -109,6 +109,10 @@ public:
                     session.requests().stop_recording = true;
                     ++next_;
                     return Outcome::next_frame;
+                case K::cells:
+                    session.requests().recook = PlayRequests::GridChange{c.key, c.cells_x, c.cells_y};
+                    ++next_;
+                    return Outcome::next_frame;
                 case K::quit:
                     next_ = script_.commands.size();
                     return Outcome::quit;
@@ -221,6 +225,7 @@ int run_editor(const SceneDesc& scene, std::unique_ptr<World> world, EditorOptio
     double fps = 0.0;
     auto shot = [&](const std::filesystem::path& file) { render::write_png(file, window.screenshot()); };
     std::optional<render::FrameSequence> recording;
+    int drawn_resets = 0;  // Session::resets() of the world the window's scene was made from
     // Ends the recording: the MP4 at the simulation's frame rate when ffmpeg is there.
     auto finish_recording = [&] {
         RecordingStatus& rec = session->recording();
@@ -255,6 +260,27 @@ int run_editor(const SceneDesc& scene, std::unique_ptr<World> world, EditorOptio
                                           options.open_scene ? &options.scene_names : nullptr});
         imgui.end_frame();
 
+        // A new grid resolution (Mesh panel, script): the fabric is cooked again, timed.
+        if (const std::optional<PlayRequests::GridChange> change = std::exchange(session->requests().recook, std::nullopt)) {
+            try {
+                (void)session->recook_grid(change->cloth, change->cells_x, change->cells_y);
+            } catch (const std::exception& e) {
+                session->set_message(std::string("re-cook failed: ") + e.what());
+                err << "weft edit: " << e.what() << std::endl;
+                if (runner) {
+                    status = 1;
+                    break;
+                }
+            }
+        }
+        // A re-cook rebuilt the world with other meshes: the window draws the new cloth buffer.
+        if (session->resets() != drawn_resets) {
+            drawn_resets = session->resets();
+            render_scene = render::make_render_scene(session->world(), session->scene().camera);
+            window.load(render_scene);
+            if (runner) out << session->message() << std::endl;
+        }
+
         // Scenes panel or script: another scene replaces the session, the render scene and the feed.
         if (std::optional<std::string> wanted = std::exchange(session->requests().open, std::nullopt)) {
             try {
@@ -269,6 +295,7 @@ int run_editor(const SceneDesc& scene, std::unique_ptr<World> world, EditorOptio
                 name = opened.scene.name.empty() ? *wanted : opened.scene.name;
                 render_scene = render::make_render_scene(session->world(), opened.scene.camera);
                 window.load(render_scene);
+                drawn_resets = session->resets();
                 session->set_message("opened " + name);
                 out << "opened " << name << std::endl;
             } catch (const std::exception& e) {

@@ -8,7 +8,9 @@
 #include <cstdint>
 #include <cstdio>
 #include <filesystem>
+#include <map>
 #include <string>
+#include <utility>
 
 #include <imgui.h>
 
@@ -269,6 +271,34 @@ void warning_banner(Session& session, const PanelLayout& layout) {
     ImGui::PopStyleColor();
 }
 
+// Grid resolutions: a change the live world cannot take. The panel says so, and the Re-cook
+// button rebuilds the fabric (timed, in the message under the play controls).
+void mesh_rows(Session& session) {
+    // What each field holds, per scene and cloth, until re-cooked.
+    static std::map<std::string, std::array<int, 2>> fields;
+    const SceneDesc& scene = session.scene();
+    for (std::size_t e = 0; e < scene.cloth_placements.size(); ++e) {
+        const std::string& name = scene.cloth_placements[e].name;
+        const auto cloth = std::find_if(scene.cloths.begin(), scene.cloths.end(),
+                                        [&](const SceneCloth& c) { return c.entry == e; });
+        if (cloth == scene.cloths.end()) continue;
+        if (cloth->source.kind != ClothSource::Kind::Grid) {
+            ImGui::TextDisabled("%s: from %s", name.c_str(), cloth->source.file.filename().string().c_str());
+            continue;
+        }
+        const std::array<int, 2> cooked{cloth->source.cells_x, cloth->source.cells_y};
+        std::array<int, 2>& v = fields.try_emplace(scene.name + "/" + name, cooked).first->second;
+        ImGui::InputInt2(("cells " + name).c_str(), v.data());
+        if (ImGui::IsItemHovered()) ImGui::SetTooltip("grid resolution, [1, 4096] per side");
+        if (v != cooked) {
+            ImGui::TextColored(ImVec4(1.0F, 0.8F, 0.3F, 1.0F), "needs re-cooking (the fabric is built again)");
+            ImGui::SameLine();
+            if (ImGui::Button(("Re-cook##" + name).c_str()))
+                session.requests().recook = PlayRequests::GridChange{name, v[0], v[1]};
+        }
+    }
+}
+
 // The scene browser: the shipped scenes by name, and any scene file by path. Opening replaces the
 // session (the editor's loop does it after the panels, docs/editor.md "Scenes").
 void scene_browser(Session& session, const PanelLayout& layout) {
@@ -315,6 +345,7 @@ void draw_panels(Session& session, const PanelLayout& layout) {
     parameter_rows(session, "solver", open && ImGui::CollapsingHeader("Solver", ImGuiTreeNodeFlags_DefaultOpen));
     parameter_rows(session, "materials", open && ImGui::CollapsingHeader("Materials", ImGuiTreeNodeFlags_DefaultOpen));
     parameter_rows(session, "collision", open && ImGui::CollapsingHeader("Collision"));
+    if (open && ImGui::CollapsingHeader("Mesh (re-cook)")) mesh_rows(session);
     parameter_rows(session, "world", open && ImGui::CollapsingHeader("Wind and gravity"));
     if (open && ImGui::CollapsingHeader("Help: keys and mouse")) help_rows();
     ImGui::PopItemWidth();

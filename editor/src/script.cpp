@@ -22,7 +22,7 @@ constexpr Spelling kCommands[] = {
     {"play", ScriptCommand::Kind::play, 0},             {"step", ScriptCommand::Kind::step, 0},
     {"reset", ScriptCommand::Kind::reset, 0},           {"timescale", ScriptCommand::Kind::timescale, 1},
     {"open", ScriptCommand::Kind::open, 1},             {"record", ScriptCommand::Kind::record, 1},
-    {"stop", ScriptCommand::Kind::stop, 0},
+    {"stop", ScriptCommand::Kind::stop, 0},             {"cells", ScriptCommand::Kind::cells, 3},
     {"screenshot", ScriptCommand::Kind::screenshot, 1}, {"save", ScriptCommand::Kind::save, 1},
     {"quit", ScriptCommand::Kind::quit, 0},
 };
@@ -95,6 +95,17 @@ Script parse_script(std::string_view text, const std::string& name) {
                 c.key = words[1];
                 c.text = words[2];
                 break;
+            case ScriptCommand::Kind::cells: {
+                c.key = words[1];
+                int* targets[2] = {&c.cells_x, &c.cells_y};
+                for (int k = 0; k < 2; ++k) {
+                    const std::string& w = words[2 + static_cast<std::size_t>(k)];
+                    const auto [ptr, ec] = std::from_chars(w.data(), w.data() + w.size(), *targets[k]);
+                    if (ec != std::errc{} || ptr != w.data() + w.size() || *targets[k] < 1 || *targets[k] > 4096)
+                        throw Error(where + "cells expects two cell counts in [1, 4096], got '" + w + "'");
+                }
+                break;
+            }
             case ScriptCommand::Kind::screenshot:
             case ScriptCommand::Kind::save:
             case ScriptCommand::Kind::open:

@@ -1,8 +1,12 @@
 // The editor's session (see session.h).
 #include "weft/editor/session.h"
 
+#include <chrono>
+#include <cstdio>
 #include <utility>
 #include <vector>
+
+#include "weft/error.h"
 
 namespace weft::editor {
 
@@ -62,6 +66,47 @@ void Session::reset() {
     loop_->set_paused(paused);
     history_.clear();
     ++resets_;
+}
+
+double Session::recook_grid(const std::string& cloth, int cells_x, int cells_y) {
+    std::size_t entry = scene_.cloth_placements.size();
+    for (std::size_t e = 0; e < scene_.cloth_placements.size(); ++e)
+        if (scene_.cloth_placements[e].name == cloth) entry = e;
+    if (entry == scene_.cloth_placements.size()) throw Error("re-cook: no cloth '" + cloth + "' in the scene");
+    if (cells_x < 1 || cells_y < 1 || cells_x > 4096 || cells_y > 4096)
+        throw Error("re-cook: " + std::to_string(cells_x) + "x" + std::to_string(cells_y) +
+                    " cells is outside [1, 4096] per side");
+    std::size_t triangles_before = 0, triangles_after = 0;
+    int old_x = 0, old_y = 0;
+    SceneDesc changed = scene_;
+    for (SceneCloth& c : changed.cloths) {
+        if (c.entry != entry) continue;
+        if (c.source.kind != ClothSource::Kind::Grid)
+            throw Error("re-cook: cloth '" + cloth + "' comes from a mesh file, not a grid");
+        old_x = c.source.cells_x;
+        old_y = c.source.cells_y;
+        triangles_before += 2 * static_cast<std::size_t>(old_x) * static_cast<std::size_t>(old_y);
+        triangles_after += 2 * static_cast<std::size_t>(cells_x) * static_cast<std::size_t>(cells_y);
+        c.source.cells_x = cells_x;
+        c.source.cells_y = cells_y;
+    }
+    // What was tuned goes into the changed scene too, so that reset() keeps it.
+    update_scene_from_world(changed, *world_);
+    const SceneDesc previous = std::exchange(scene_, std::move(changed));
+    const auto start = std::chrono::steady_clock::now();
+    try {
+        reset();
+    } catch (...) {
+        scene_ = previous;
+        reset();
+        throw;
+    }
+    const double ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
+    char text[256];
+    std::snprintf(text, sizeof text, "re-cooked cloth '%s': %dx%d -> %dx%d cells (%zu -> %zu triangles) in %.1f ms",
+                  cloth.c_str(), old_x, old_y, cells_x, cells_y, triangles_before, triangles_after, ms);
+    message_ = text;
+    return ms;
 }
 
 }  // namespace weft::editor

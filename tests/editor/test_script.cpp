@@ -58,12 +58,21 @@ TEST(Script, ParsesEveryCommand) {
     EXPECT_EQ(r.commands[0].text, "out/rec");
     EXPECT_EQ(r.commands[1].kind, K::stop);
     EXPECT_THROW((void)parse_script("record\n", "r.txt"), Error) << "record takes the folder";
+
+    const Script c = parse_script("cells flag 80 48\n", "c.txt");
+    ASSERT_EQ(c.commands.size(), 1U);
+    EXPECT_EQ(c.commands[0].kind, K::cells);
+    EXPECT_EQ(c.commands[0].key, "flag");
+    EXPECT_EQ(c.commands[0].cells_x, 80);
+    EXPECT_EQ(c.commands[0].cells_y, 48);
+    EXPECT_THROW((void)parse_script("cells flag 0 48\n", "c.txt"), Error) << "at least one cell";
+    EXPECT_THROW((void)parse_script("cells flag 80\n", "c.txt"), Error) << "two counts";
 }
 
 TEST(Script, ErrorsNameTheLine) {
     EXPECT_EQ(error_of("frame 1\njump 3\n"),
               "s.txt:2: unknown command 'jump' (commands: frame, set, expect, pause, play, step, reset, timescale, "
-              "open, record, stop, screenshot, save, quit)");
+              "open, record, stop, cells, screenshot, save, quit)");
     EXPECT_EQ(error_of("set solver.substeps\n"), "s.txt:1: 'set' takes 2 arguments, got 1");
     EXPECT_EQ(error_of("pause now\n"), "s.txt:1: 'pause' takes 0 arguments, got 1");
     EXPECT_EQ(error_of("\nframe ten\n"), "s.txt:2: frame expects a frame count in [1, 100000000], got 'ten'");

@@ -13,6 +13,7 @@
 ///     save out/tuned.toml          the scene with what was tuned, as the Save button writes it
 ///     record out/rec               record every displayed frame to out/rec/frame_NNNN.png
 ///     stop                         stop recording (and make out/rec/capture.mp4 with ffmpeg)
+///     cells flag 80 48             re-cook a grid cloth at 80×48 cells, as the Mesh panel does
 ///     open layers                  open a scene (a name from the browser, or a file), as the
 ///                                  Scenes panel does; the commands after it act on that scene
 ///     quit                         end (so does the end of the script)
@@ -30,7 +31,7 @@
 namespace weft::editor {
 
 struct ScriptCommand {
-    enum class Kind : unsigned char { frame, set, expect, pause, play, step, reset, timescale, screenshot, save, open, record, stop, quit };
+    enum class Kind : unsigned char { frame, set, expect, pause, play, step, reset, timescale, screenshot, save, open, record, stop, cells, quit };
     Kind kind = Kind::quit;
     int line = 0;         ///< 1-based line in the script
     int frame = 0;        ///< frame: the displayed-frame count to reach
@@ -38,6 +39,7 @@ struct ScriptCommand {
     std::string text;     ///< set, expect: the value as written; screenshot, save, record: the path; open: the scene
     double number = 0.0;  ///< timescale; set, expect: the value once checked (check_script)
     bool checked = false;  ///< set, expect: key and value checked against the scene's parameters
+    int cells_x = 0, cells_y = 0;  ///< cells: the grid resolution (the cloth's name is `key`)
 };
 
 struct Script {

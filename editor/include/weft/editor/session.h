@@ -34,6 +34,13 @@ struct PlayRequests {
     /// script's `record` and `stop`); taken by the editor's loop.
     std::optional<std::filesystem::path> record;
     bool stop_recording = false;
+    /// A new grid resolution for a cloth (the Mesh panel, the script's `cells`): applied by the
+    /// editor's loop after the panels with Session::recook_grid.
+    struct GridChange {
+        std::string cloth;  ///< the `[[cloth]]` table's name
+        int cells_x = 0, cells_y = 0;
+    };
+    std::optional<GridChange> recook;
 };
 
 /// The viewport recording, as the play panel shows it.
@@ -78,6 +85,12 @@ public:
     /// settings and materials, the pause state and the time scale; clears the stats.
     void reset();
     [[nodiscard]] int resets() const { return resets_; }
+    /// Gives the grid cloth `cloth` (a `[[cloth]]` table's name) cells_x × cells_y cells ([1, 4096]
+    /// each). The live world cannot take this: the fabric is cooked again, so the world is rebuilt
+    /// from the changed scene as reset() does, keeping what was tuned. Returns the rebuild's wall
+    /// time, ms, and says what changed in message(). Throws weft::Error, the session unchanged, for
+    /// an unknown cloth, a cloth from a mesh file, or cells out of range.
+    double recook_grid(const std::string& cloth, int cells_x, int cells_y);
     /// Called by reset() before the old world goes: whatever holds on to it (the editor's ClothFeed,
     /// which the backend writes the renderer's buffers through) lets go here.
     void set_before_rebuild(std::function<void()> callback) { before_rebuild_ = std::move(callback); }
