@@ -4,8 +4,6 @@
 // so the reader (the renderer) never sees a slot half written, and no host thread waits.
 #include "shared_output.h"
 
-#include <unistd.h>
-
 #include <algorithm>
 #include <vector>
 
@@ -20,13 +18,6 @@
 
 namespace weft::cuda {
 namespace {
-
-void close_all(std::span<const SharedSlotHandle> slots, std::size_t from) {
-    for (std::size_t s = from; s < slots.size(); ++s) {
-        if (slots[s].memory.fd >= 0) ::close(slots[s].memory.fd);
-        if (slots[s].timeline.fd >= 0) ::close(slots[s].timeline.fd);
-    }
-}
 
 class CudaSharedOutput final : public SharedOutput {
 public:
@@ -43,7 +34,7 @@ public:
                 WEFT_CUDA_CHECK(cudaMemset(slot.buffer->device_pointer(), 0, slot.buffer->size()));
                 slots_.push_back(std::move(slot));
             } catch (...) {
-                close_all(slots, s + 1);
+                close_slot_handles(slots.subspan(s + 1));
                 throw;
             }
         }
@@ -104,7 +95,7 @@ std::unique_ptr<SharedOutput> make_shared_output(DeviceSolver& solver, const Dev
                                                  std::span<const SharedSlotHandle> slots, const DeviceUuid& uuid,
                                                  std::string& why) {
     if (!std::equal(uuid.begin(), uuid.end(), std::begin(device.uuid))) {
-        close_all(slots, 0);
+        close_slot_handles(slots);
         why = "the renderer's GPU is not the CUDA backend's (" + device.name + ", device " +
               std::to_string(device.ordinal) + ")";
         return nullptr;
@@ -112,7 +103,7 @@ std::unique_ptr<SharedOutput> make_shared_output(DeviceSolver& solver, const Dev
     const std::uint64_t needed = solver.vertex_count() * sizeof(OutputVertex) + kSlotStampBytes;
     for (const SharedSlotHandle& s : slots)
         if (s.memory.size < needed) {
-            close_all(slots, 0);
+            close_slot_handles(slots);
             why = "a shared slot holds " + std::to_string(s.memory.size) + " bytes, the world needs " +
                   std::to_string(needed);
             return nullptr;

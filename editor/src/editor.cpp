@@ -225,7 +225,7 @@ int run_editor(const SceneDesc& scene, std::unique_ptr<World> world, EditorOptio
     double fps = 0.0;
     auto shot = [&](const std::filesystem::path& file) { render::write_png(file, window.screenshot()); };
     std::optional<render::FrameSequence> recording;
-    int drawn_resets = 0;  // Session::resets() of the world the window's scene was made from
+    int drawn_resets = 0;  // Session::resets() of the world the window's scene was made from (-1: none)
     // Ends the recording: the MP4 at the simulation's frame rate when ffmpeg is there.
     auto finish_recording = [&] {
         RecordingStatus& rec = session->recording();
@@ -264,6 +264,7 @@ int run_editor(const SceneDesc& scene, std::unique_ptr<World> world, EditorOptio
         if (const std::optional<PlayRequests::GridChange> change = std::exchange(session->requests().recook, std::nullopt)) {
             try {
                 (void)session->recook_grid(change->cloth, change->cells_x, change->cells_y);
+                if (runner) out << session->message() << std::endl;
             } catch (const std::exception& e) {
                 session->set_message(std::string("re-cook failed: ") + e.what());
                 err << "weft edit: " << e.what() << std::endl;
@@ -273,14 +274,6 @@ int run_editor(const SceneDesc& scene, std::unique_ptr<World> world, EditorOptio
                 }
             }
         }
-        // A re-cook rebuilt the world with other meshes: the window draws the new cloth buffer.
-        if (session->resets() != drawn_resets) {
-            drawn_resets = session->resets();
-            render_scene = render::make_render_scene(session->world(), session->scene().camera);
-            window.load(render_scene);
-            if (runner) out << session->message() << std::endl;
-        }
-
         // Scenes panel or script: another scene replaces the session, the render scene and the feed.
         if (std::optional<std::string> wanted = std::exchange(session->requests().open, std::nullopt)) {
             try {
@@ -293,9 +286,7 @@ int run_editor(const SceneDesc& scene, std::unique_ptr<World> world, EditorOptio
                                                     std::move(opened.world), scale);
                 session->set_before_rebuild([&] { feed.reset(); });
                 name = opened.scene.name.empty() ? *wanted : opened.scene.name;
-                render_scene = render::make_render_scene(session->world(), opened.scene.camera);
-                window.load(render_scene);
-                drawn_resets = session->resets();
+                drawn_resets = -1;  // a new world: the window loads its scene below
                 session->set_message("opened " + name);
                 out << "opened " << name << std::endl;
             } catch (const std::exception& e) {
@@ -306,6 +297,12 @@ int run_editor(const SceneDesc& scene, std::unique_ptr<World> world, EditorOptio
                     break;
                 }
             }
+        }
+        // A re-cook, a reset or an open made a new world: the window draws its cloth buffer and colliders.
+        if (session->resets() != drawn_resets) {
+            drawn_resets = session->resets();
+            render_scene = render::make_render_scene(session->world(), session->scene().camera);
+            window.load(render_scene);
         }
 
         // Scripted: exactly the wall time of one step per frame (at the current scale), so that the

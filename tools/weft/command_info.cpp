@@ -7,7 +7,6 @@
 #include "weft/backend.h"
 #include "weft/mesh.h"
 #if WEFT_HAVE_RENDER
-#include <unistd.h>
 
 #include "weft/render/renderer.h"
 #endif
@@ -84,10 +83,7 @@ int info_command(std::ostream& out) {
             renderer->load(probe);
             std::string why;
             if (auto link = renderer->export_cloth(why)) {
-                for (const SharedSlotHandle& slot : link->slots) {
-                    ::close(slot.memory.fd);
-                    ::close(slot.timeline.fd);
-                }
+                close_slot_handles(link->slots);
                 path = "available (" + std::to_string(link->slots.size()) +
                        " exported cloth slots, a timeline semaphore each)";
             } else {

@@ -78,26 +78,29 @@ void FrameCapture::capture(int frame, const std::function<void()>& steps) {
     State& s = *state_;
     // The steps run while the GPU draws the frame submitted last time.
     render::RenderFrame next = s.feed->simulate(steps);
-    const render::RenderFrame* previous = s.drawing ? &*s.drawing : nullptr;
-    std::optional<render::Image> image;
-    auto clock = std::chrono::steady_clock::now();
-    double collect_ms = 0.0;
-    if (previous != nullptr) {
-        image = s.renderer->collect();
-        (void)s.feed->check(*previous, s.renderer->transfer());
-        collect_ms = ms_since(clock);
-    }
     const int previous_number = s.drawing_number;
-    clock = std::chrono::steady_clock::now();
+    std::optional<render::Image> image = collect_drawing();
+    const auto clock = std::chrono::steady_clock::now();
     s.renderer->submit(next);
-    const double submit_ms = ms_since(clock);
-    if (previous != nullptr) s.render_ms.push_back(s.drawing_submit_ms + collect_ms);
+    s.drawing_submit_ms = ms_since(clock);
     s.drawing = std::move(next);
     s.drawing_number = frame;
-    s.drawing_submit_ms = submit_ms;
     s.bytes_per_frame = s.renderer->transfer().bytes_uploaded;
     // The previous picture is written while the GPU draws this one.
     if (image) write_image(previous_number, *image);
+}
+
+// The picture of the frame in flight (none: nothing), its stamps checked and its host time (submit
+// plus collect) recorded.
+std::optional<render::Image> FrameCapture::collect_drawing() {
+    State& s = *state_;
+    if (!s.drawing) return std::nullopt;
+    const auto clock = std::chrono::steady_clock::now();
+    render::Image image = s.renderer->collect();
+    (void)s.feed->check(*s.drawing, s.renderer->transfer());
+    s.render_ms.push_back(s.drawing_submit_ms + ms_since(clock));
+    s.drawing.reset();
+    return image;
 }
 
 void FrameCapture::write_image(int frame, const render::Image& image) {
@@ -113,14 +116,7 @@ void FrameCapture::write_image(int frame, const render::Image& image) {
 
 CaptureSummary FrameCapture::finish(double fps) {
     State& s = *state_;
-    if (s.drawing) {
-        const auto clock = std::chrono::steady_clock::now();
-        const render::Image image = s.renderer->collect();
-        (void)s.feed->check(*s.drawing, s.renderer->transfer());
-        s.render_ms.push_back(s.drawing_submit_ms + ms_since(clock));
-        s.drawing.reset();
-        write_image(s.drawing_number, image);
-    }
+    if (std::optional<render::Image> image = collect_drawing()) write_image(s.drawing_number, *image);
     CaptureSummary out;
     out.renderer = s.renderer_name;
     out.device = s.renderer->device_description();
@@ -159,7 +155,6 @@ FrameCapture::FrameCapture(const std::string& renderer, std::filesystem::path, i
 }
 FrameCapture::~FrameCapture() = default;
 void FrameCapture::capture(int, const std::function<void()>&) {}
-void FrameCapture::write_image(int, const render::Image&) {}
 CaptureSummary FrameCapture::finish(double) { return {}; }
 
 }  // namespace weft::cli

@@ -12,6 +12,7 @@
 #include <filesystem>
 #include <functional>
 #include <memory>
+#include <optional>
 #include <ostream>
 #include <string>
 #include <vector>
@@ -62,6 +63,7 @@ public:
 
 private:
     void write_image(int frame, const render::Image& image);
+    [[nodiscard]] std::optional<render::Image> collect_drawing();
 
     struct State;
     std::unique_ptr<State> state_;

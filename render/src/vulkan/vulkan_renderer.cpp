@@ -20,8 +20,6 @@
 #include <string>
 #include <vector>
 
-#include <unistd.h>
-
 #include "weft/error.h"
 
 #include "frame_uniforms.h"
@@ -715,10 +713,7 @@ std::optional<ClothInterop> VulkanRenderer::export_cloth(std::string& why) {
             link.timeline_values.push_back(slot.last_signal);
         }
     } catch (...) {
-        for (const SharedSlotHandle& h : link.slots) {
-            if (h.memory.fd >= 0) ::close(h.memory.fd);
-            if (h.timeline.fd >= 0) ::close(h.timeline.fd);
-        }
+        close_slot_handles(link.slots);
         throw;
     }
     std::copy(context_.device_uuid().begin(), context_.device_uuid().end(), link.device_uuid.begin());

@@ -5,6 +5,7 @@
 /// (Vulkan's opaque fd handles), the backend imports them, and neither includes the other's headers.
 #include <array>
 #include <cstdint>
+#include <span>
 
 namespace weft {
 
@@ -44,6 +45,10 @@ struct SharedSlotHandle {
     ExternalMemoryHandle memory;
     ExternalTimelineHandle timeline;
 };
+
+/// Closes the fds of `slots` that are open (≥ 0): what a side that took them and cannot import
+/// them must do, so that none leaks.
+void close_slot_handles(std::span<const SharedSlotHandle> slots);
 
 /// A backend's writer into renderer-owned slots (Backend::share_output). A display frame that
 /// writes slot `s` is bracketed by begin_frame and end_frame: the backend's device work after
