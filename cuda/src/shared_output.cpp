@@ -4,17 +4,18 @@
 // so the reader (the renderer) never sees a slot half written, and no host thread waits.
 #include "shared_output.h"
 
+#include <cuda_runtime_api.h>
+
 #include <algorithm>
 #include <vector>
 
-#include <cuda_runtime_api.h>
+#include "weft/cuda/cuda_backend.h"
+#include "weft/cuda/external_memory.h"
+#include "weft/error.h"
 
 #include "cuda_check.h"
 #include "device_solver.h"
 #include "kernels.h"
-#include "weft/cuda/cuda_backend.h"
-#include "weft/cuda/external_memory.h"
-#include "weft/error.h"
 
 namespace weft::cuda {
 namespace {
@@ -22,7 +23,7 @@ namespace {
 class CudaSharedOutput final : public SharedOutput {
 public:
     CudaSharedOutput(DeviceSolver& solver, int device, std::span<const SharedSlotHandle> slots)
-        : solver_(solver), device_(device) {
+        : solver_(solver), device_(device), vertices_(solver.vertex_count()) {
         for (std::size_t s = 0; s < slots.size(); ++s) {
             try {
                 Slot slot;
@@ -30,8 +31,13 @@ public:
                 // are closed here when it throws.
                 slot.buffer = std::make_unique<ImportedBuffer>(device, slots[s].memory);
                 slot.timeline = std::make_unique<ImportedTimeline>(device, slots[s].timeline);
-                // Defined contents (zeros, stamps 0) before the first frame writes it.
-                WEFT_CUDA_CHECK(cudaMemset(slot.buffer->device_pointer(), 0, slot.buffer->size()));
+                // Defined contents (zeros, stamps 0) before the first frame writes it. On the
+                // solver's stream: the solver's stream is non-blocking, so a cudaMemset on the legacy
+                // stream is not ordered before the first frame's writes and could land after them
+                // (the first draw from each slot then read zeros where CUDA had written).
+                WEFT_CUDA_CHECK(cudaSetDevice(device));
+                WEFT_CUDA_CHECK(
+                    cudaMemsetAsync(slot.buffer->device_pointer(), 0, slot.buffer->size(), solver.stream()));
                 slots_.push_back(std::move(slot));
             } catch (...) {
                 close_slot_handles(slots.subspan(s + 1));
@@ -50,6 +56,11 @@ public:
         if (slot < 0 || slot >= slots())
             throw Error("CUDA shared output: slot " + std::to_string(slot) + " of " + std::to_string(slots()));
         if (bound_ >= 0) throw Error("CUDA shared output: begin_frame() twice without end_frame()");
+        // The stamps sit after the vertices: a world rebuilt with another vertex count since the
+        // slots were shared would write them where the reader does not look.
+        if (solver_.vertex_count() != vertices_)
+            throw Error("CUDA shared output: the world has " + std::to_string(solver_.vertex_count()) +
+                        " vertices, the slots were shared for " + std::to_string(vertices_) + " (share them again)");
         const Slot& s = slots_[static_cast<std::size_t>(slot)];
         WEFT_CUDA_CHECK(cudaSetDevice(device_));
         cudaStream_t stream = solver_.stream();
@@ -78,12 +89,13 @@ private:
     };
 
     void* stamp_at(const Slot& s, int which) const {
-        return static_cast<unsigned char*>(s.buffer->device_pointer()) + solver_.vertex_count() * sizeof(OutputVertex) +
+        return static_cast<unsigned char*>(s.buffer->device_pointer()) + vertices_ * sizeof(OutputVertex) +
                static_cast<std::size_t>(which) * sizeof(std::uint64_t);
     }
 
     DeviceSolver& solver_;
     int device_ = 0;
+    std::size_t vertices_ = 0;  ///< the world's vertex count when shared: the stamps follow them
     std::vector<Slot> slots_;
     int bound_ = -1;
     std::uint64_t stamp_ = 0;
@@ -110,6 +122,11 @@ std::unique_ptr<SharedOutput> make_shared_output(DeviceSolver& solver, const Dev
         }
     if (slots.empty()) {
         why = "no slots to share";
+        return nullptr;
+    }
+    if (solver.vertex_count() == 0) {
+        close_slot_handles(slots);
+        why = "the world is not built yet (World::share_output builds it)";
         return nullptr;
     }
     return std::make_unique<CudaSharedOutput>(solver, device.ordinal, slots);

@@ -26,36 +26,12 @@ ClothFeed::ClothFeed(World& world, Renderer& renderer, const RenderScene& scene,
         why_ = std::string(renderer.name()) + ": " + why;
         return;
     }
-    output_ = world.backend().share_output(link->slots, link->device_uuid, why);
+    output_ = world.share_output(link->slots, link->device_uuid, why);
     if (!output_) {
         why_ = why;
         return;
     }
     values_ = link->timeline_values;
-    prime();
-}
-
-// One whole write-and-draw round per slot before the first frame, its picture dropped. On NVIDIA's
-// driver (580, H100) the first draw from each slot read stale stamps ("0/1", "0/0" where CUDA had
-// written and signalled "1/1") while every later frame read what was written; these rounds take
-// that first use. Whether one round is always enough is not yet measured (docs/rendering.md,
-// "Known problems"); primed() keeps what the rounds read. Their stamps are ones no frame uses
-// (frames count from 1).
-void ClothFeed::prime() {
-    for (int slot = 0; slot < output_->slots(); ++slot) {
-        std::uint64_t& value = values_[static_cast<std::size_t>(slot)];
-        const std::uint64_t stamp = ~std::uint64_t{0} - static_cast<std::uint64_t>(slot);
-        output_->begin_frame(slot, value, stamp);
-        output_->end_frame(++value);
-        RenderFrame frame;
-        frame.stamp = stamp;
-        frame.cloth_slot = slot;
-        frame.wait_value = value;
-        frame.signal_value = ++value;
-        frame.collider_models = collider_models(scene_, world_.model(), world_.time());
-        (void)renderer_.draw(frame);
-        primed_.push_back(renderer_.transfer());
-    }
 }
 
 ClothFeed::~ClothFeed() = default;

@@ -105,6 +105,12 @@ void World::ensure_built() const {
     built_version_ = model_.topology_version;
 }
 
+std::unique_ptr<SharedOutput> World::share_output(std::span<const SharedSlotHandle> slots, const DeviceUuid& device,
+                                                 std::string& why) {
+    ensure_built();
+    return backend_->share_output(slots, device, why);
+}
+
 const StepStats& World::step() {
     validate(model_.settings.solver);
     validate(model_.settings.collision);

@@ -89,9 +89,6 @@ TEST(RenderInterop, CudaWritesTheSlotsVulkanDrawsWithoutACopy) {
     ASSERT_TRUE(feed.zero_copy()) << "an NVIDIA Vulkan device on the backend's GPU must share: "
                                   << feed.fallback_reason();
     std::printf("[ interop  ] %s on %s\n", feed.describe().c_str(), rig->renderer->device_description().c_str());
-    for (const render::TransferStats& t : feed.primed())
-        std::printf("[ interop  ] priming round read stamps %llx/%llx\n", static_cast<unsigned long long>(t.stamp_first),
-                    static_cast<unsigned long long>(t.stamp_last));
 
     constexpr int kFrames = 30;
     render::Image picture;
@@ -222,6 +219,31 @@ TEST(RenderInterop, HostUploadFallbackDrawsTheSamePicture) {
     const render::ImageDifference d = render::compare(pa, pb, 16);
     EXPECT_LT(d.mean, 0.5);
     EXPECT_LT(d.fraction_over, 0.002);
+}
+
+// The writer puts each slot's stamps after the world's vertices, so it must know them when it
+// imports the slots. A world is built at its first step or read; sharing before that through the
+// backend directly is refused with the reason, and World::share_output builds it first. (Sharing an
+// unbuilt world once put the stamps at offset 0: the first frames read stale stamps and no cloth.)
+TEST(RenderInterop, SharingNeedsABuiltWorld) {
+    WEFT_REQUIRE_GPU();
+    std::string why;
+    std::optional<Rig> rig = make_rig(why);
+    if (!rig) GTEST_SKIP() << "no Vulkan renderer: " << why;
+    std::optional<render::ClothInterop> link = rig->renderer->export_cloth(why);
+    ASSERT_TRUE(link) << why;
+    std::string refused;
+    EXPECT_EQ(rig->world->backend().share_output(link->slots, link->device_uuid, refused), nullptr);
+    EXPECT_NE(refused.find("not built"), std::string::npos) << refused;
+
+    // A new export (the first one's fds were given up above), now through the world: its first
+    // frame reads its own stamps.
+    render::ClothFeed feed(*rig->world, *rig->renderer, rig->scene);
+    ASSERT_TRUE(feed.zero_copy()) << feed.fallback_reason();
+    const render::RenderFrame frame = feed.simulate({});
+    (void)rig->renderer->draw(frame);
+    EXPECT_TRUE(feed.check(frame, rig->renderer->transfer()))
+        << "stamps " << rig->renderer->transfer().stamp_first << "/" << rig->renderer->transfer().stamp_last;
 }
 
 }  // namespace

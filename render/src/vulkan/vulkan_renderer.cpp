@@ -674,10 +674,9 @@ std::optional<ClothInterop> VulkanRenderer::export_cloth(std::string& why) {
                                                        slot.dedicated);
                 slot.timeline = create_exportable_timeline(context_);
             }
-            // No fill here: the writer zeroes a slot when it imports it (a Vulkan fill of the
-            // memory was not seen by the first CUDA writes' reader on NVIDIA's driver: the first
-            // frame read the fill's zeros where CUDA had written). Only the ownership goes to the
-            // writer, so that every frame's acquire matches a release.
+            // No fill here: the writer zeroes a slot when it imports it, on its own stream, so the
+            // zeros are ordered before its first frame. Only the ownership goes to the writer, so
+            // that every frame's acquire matches a release.
             context_.submit_and_wait([&](VkCommandBuffer commands) {
                 for (const ClothSlot& slot : shared) {
                     VkBufferMemoryBarrier release{};

@@ -61,6 +61,13 @@ public:
     /// Kinetic + gravitational potential + elastic energy of all cloths, J (diagnostics and tests).
     [[nodiscard]] double energy() const;
 
+    /// Zero-copy output (weft/interop.h, Backend::share_output) for the world as it is now: builds
+    /// the backend first, so that the writer knows how many vertices precede each slot's stamps.
+    /// Adding a cloth or collider afterwards rebuilds the world; the writer then refuses to write
+    /// (share again). nullptr, with the reason in `why`, where the backend cannot share.
+    [[nodiscard]] std::unique_ptr<SharedOutput> share_output(std::span<const SharedSlotHandle> slots,
+                                                             const DeviceUuid& device, std::string& why);
+
     [[nodiscard]] Backend& backend() { return *backend_; }
     [[nodiscard]] const Backend& backend() const { return *backend_; }
 

@@ -62,12 +62,7 @@ public:
     [[nodiscard]] std::int64_t checked_frames() const { return checked_; }
     [[nodiscard]] std::int64_t torn_frames() const { return torn_; }
 
-    /// What the renderer read in the rounds that primed each slot (zero-copy path; see prime()).
-    [[nodiscard]] const std::vector<TransferStats>& primed() const { return primed_; }
-
 private:
-    void prime();
-
     World& world_;
     Renderer& renderer_;
     const RenderScene& scene_;
@@ -75,7 +70,6 @@ private:
     std::string why_;
     std::vector<std::uint64_t> values_;  ///< per slot: the last timeline value asked for
     std::vector<RenderVertex> vertices_;  ///< the upload path's frame
-    std::vector<TransferStats> primed_;
     std::int64_t frames_ = 0, checked_ = 0, torn_ = 0;
 };
 
