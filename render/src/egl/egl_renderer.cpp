@@ -318,6 +318,10 @@ void EglRenderer::load(const RenderScene& scene) {
     glNamedBufferStorage(o.draw_uniforms.get(), static_cast<GLsizeiptr>(o.draw_staging.size()), nullptr,
                          GL_DYNAMIC_STORAGE_BIT);
     gl::check_errors("load");
+    // The load's uploads finish before the first frame is drawn: on NVIDIA's driver without a debug
+    // context, the first frame of a process drew without its cloth (docs/rendering.md, "Known
+    // problems"). Once per scene load, so it costs no frame anything.
+    glFinish();
     loaded_ = std::move(o);
 }
 
