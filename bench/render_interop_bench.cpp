@@ -11,7 +11,7 @@
 // offscreen and includes the picture's read-back (the capture path), the same in every mode.
 //
 //   build/bin/weft_render_interop_bench --json out/interop.json            # 200K and 1.2M triangles
-//   build/bin/weft_render_interop_bench --sizes 400x250 --frames 1000
+//   build/bin/weft_render_interop_bench --sizes 400x250:1000 --modes interop,upload --host-wait spin,block
 
 #include <algorithm>
 #include <chrono>
@@ -26,13 +26,15 @@
 #include <string>
 #include <vector>
 
-#include "json_writer.h"
-#include "text_table.h"
+#include "weft/backend.h"
 #include "weft/cuda/cuda_backend.h"
 #include "weft/error.h"
 #include "weft/render/cloth_feed.h"
 #include "weft/render/renderer.h"
 #include "weft/scene.h"
+
+#include "json_writer.h"
+#include "text_table.h"
 
 namespace {
 
@@ -45,8 +47,21 @@ struct Size {
     int frames = 1000;
 };
 
+struct Mode {
+    const char* name;
+    const char* key;  // --modes
+    bool interop;
+    bool overlap;
+};
+constexpr Mode kModes[] = {{"interop, overlapped", "interop", true, true},
+                           {"interop, serial", "interop-serial", true, false},
+                           {"upload, overlapped", "upload", false, true},
+                           {"upload, serial", "upload-serial", false, false}};
+
 struct Options {
     std::vector<Size> sizes{{400, 250, 1000}, {1000, 600, 200}};
+    std::vector<Mode> modes{kModes[0], kModes[1], kModes[2]};
+    std::vector<HostWait> waits{HostWait::automatic};
     int warmup = 20;
     int width = 960, height = 540;
     std::filesystem::path json_file;
@@ -62,6 +77,11 @@ GPU whose Vulkan driver exports memory and timeline semaphores.
 Options:
   --sizes LIST   comma-separated CXxCY[:FRAMES] grid cells (default 400x250:1000,1000x600:200;
                  triangles = 2·CX·CY); 1000x600 runs at dt 1/250 s, 1 substep (the P-Cloth setting)
+  --modes LIST   comma-separated, of interop, interop-serial, upload, upload-serial; default
+                 interop,interop-serial,upload (ratios are against the first)
+  --host-wait LIST
+                 comma-separated host waits for the CUDA backend (auto, spin, yield, block), each
+                 mode run under each; default auto
   --warmup N     untimed frames per run; default 20
   --size WxH     picture size; default 960x540
   --json FILE    write the results as JSON
@@ -84,6 +104,17 @@ int parse_positive(const std::string& text, const std::string& what) {
     }
 }
 
+std::vector<std::string> split(const std::string& list) {
+    std::vector<std::string> items;
+    std::size_t start = 0;
+    while (start <= list.size()) {
+        const std::size_t comma = std::min(list.find(',', start), list.size());
+        items.push_back(list.substr(start, comma - start));
+        start = comma + 1;
+    }
+    return items;
+}
+
 Options parse(int argc, char** argv) {
     Options o;
     for (int i = 1; i < argc; ++i) {
@@ -97,20 +128,35 @@ Options parse(int argc, char** argv) {
             std::exit(0);
         } else if (a == "--sizes") {
             o.sizes.clear();
-            std::string list = value();
-            std::size_t start = 0;
-            while (start <= list.size()) {
-                const std::size_t comma = std::min(list.find(',', start), list.size());
-                const std::string item = list.substr(start, comma - start);
+            for (const std::string& item : split(value())) {
                 const std::size_t x = item.find('x'), colon = item.find(':');
                 if (x == std::string::npos) usage_error("--sizes expects CXxCY[:FRAMES], got '" + item + "'");
                 Size s;
                 s.cells_x = parse_positive(item.substr(0, x), "--sizes");
-                s.cells_y = parse_positive(item.substr(x + 1, colon == std::string::npos ? std::string::npos : colon - x - 1),
-                                           "--sizes");
+                s.cells_y = parse_positive(
+                    item.substr(x + 1, colon == std::string::npos ? std::string::npos : colon - x - 1), "--sizes");
                 if (colon != std::string::npos) s.frames = parse_positive(item.substr(colon + 1), "--sizes");
                 o.sizes.push_back(s);
-                start = comma + 1;
+            }
+        } else if (a == "--modes") {
+            o.modes.clear();
+            for (const std::string& item : split(value())) {
+                const Mode* found = nullptr;
+                for (const Mode& m : kModes)
+                    if (item == m.key) found = &m;
+                if (found == nullptr)
+                    usage_error("--modes: unknown mode '" + item +
+                                "' (interop, interop-serial, upload, upload-serial)");
+                o.modes.push_back(*found);
+            }
+        } else if (a == "--host-wait") {
+            o.waits.clear();
+            for (const std::string& item : split(value())) {
+                try {
+                    o.waits.push_back(parse_host_wait(item));
+                } catch (const Error& e) {
+                    usage_error(std::string("--host-wait: ") + e.what());
+                }
             }
         } else if (a == "--warmup") {
             o.warmup = parse_positive(value(), a);
@@ -142,16 +188,8 @@ double percentile(std::vector<double> v, double p) {
     return v[std::min(k, v.size() - 1)];
 }
 
-struct Mode {
-    const char* name;
-    bool interop;
-    bool overlap;
-};
-constexpr Mode kModes[] = {{"interop, overlapped", true, true}, {"interop, serial", true, false},
-                           {"upload, overlapped", false, true}};
-
 struct Result {
-    std::string mode;
+    std::string mode, host_wait;
     int cells_x = 0, cells_y = 0;
     std::size_t triangles = 0, vertices = 0;
     int frames = 0;
@@ -161,7 +199,7 @@ struct Result {
     std::string device, path;
 };
 
-Result run(const Options& o, const Size& size, const Mode& mode) {
+Result run(const Options& o, const Size& size, const Mode& mode, HostWait wait) {
     const auto file = std::filesystem::path(WEFT_SOURCE_DIR) / "assets" / "scenes" / "flag.toml";
     std::vector<std::string> overrides{"cloth.flag.mesh.grid.cells=[" + std::to_string(size.cells_x) + "," +
                                        std::to_string(size.cells_y) + "]"};
@@ -170,7 +208,9 @@ Result run(const Options& o, const Size& size, const Mode& mode) {
         overrides.emplace_back("solver.substeps=1");
     }
     const SceneDesc desc = load_scene(file, overrides);
-    auto world = build_world(desc, "cuda");
+    BackendOptions backend;
+    backend.host_wait = wait;
+    auto world = build_world(desc, "cuda", backend);
     render::RendererOptions ro;
     ro.width = o.width;
     ro.height = o.height;
@@ -216,6 +256,7 @@ Result run(const Options& o, const Size& size, const Mode& mode) {
 
     Result r;
     r.mode = mode.name;
+    r.host_wait = host_wait_name(wait);
     r.cells_x = size.cells_x;
     r.cells_y = size.cells_y;
     r.triangles = scene.cloth_indices.size() / 3;
@@ -246,28 +287,41 @@ int main(int argc, char** argv) {
         cuda::register_cuda_backend();
         if (cuda::devices().empty()) throw Error("no CUDA device: " + cuda::unavailable_reason());
         std::vector<Result> results;
-        constexpr std::size_t kModeCount = std::size(kModes);
+        const std::size_t runs_per_size = o.modes.size() * o.waits.size();
         for (const Size& s : o.sizes)
-            for (const Mode& m : kModes) {
-                results.push_back(run(o, s, m));
-                const Result& r = results.back();
-                std::printf("%s, %zu triangles: p50 %.2f ms, p99 %.2f ms, step %.2f ms, CPU %.2f ms/frame, %.0f B/frame, "
-                            "%lld torn (%s)\n",
-                            r.mode.c_str(), r.triangles, r.p50, r.p99, r.step_ms, r.cpu_ms, r.bytes_per_frame,
-                            static_cast<long long>(r.torn), r.path.c_str());
-                std::fflush(stdout);
-            }
-        // The headline ratio: each mode's p50 against the first mode's (interop, overlapped).
-        cli::TextTable table({{"triangles"}, {"mode", cli::TextTable::Align::Left}, {"frames"}, {"p50 ms"}, {"p99 ms"},
-                              {"mean ms"}, {"step p50 ms"}, {"CPU ms/frame"}, {"bus B/frame"}, {"torn"},
-                              {"p50 / interop overlapped"}});
+            for (const HostWait w : o.waits)
+                for (const Mode& m : o.modes) {
+                    results.push_back(run(o, s, m, w));
+                    const Result& r = results.back();
+                    std::printf(
+                        "%s, host wait %s, %zu triangles: p50 %.2f ms, p99 %.2f ms, step %.2f ms, CPU %.2f ms/frame, "
+                        "%.0f B/frame, "
+                        "%lld torn (%s)\n",
+                        r.mode.c_str(), r.host_wait.c_str(), r.triangles, r.p50, r.p99, r.step_ms, r.cpu_ms,
+                        r.bytes_per_frame, static_cast<long long>(r.torn), r.path.c_str());
+                    std::fflush(stdout);
+                }
+        // The headline ratio: each run's p50 against the first run of its size (by default interop,
+        // overlapped, the driver's host wait).
+        cli::TextTable table({{"triangles"},
+                              {"mode", cli::TextTable::Align::Left},
+                              {"host wait"},
+                              {"frames"},
+                              {"p50 ms"},
+                              {"p99 ms"},
+                              {"mean ms"},
+                              {"step p50 ms"},
+                              {"CPU ms/frame"},
+                              {"bus B/frame"},
+                              {"torn"},
+                              {"p50 / first"}});
         for (std::size_t k = 0; k < results.size(); ++k) {
             const Result& r = results[k];
-            const Result& base = results[k - k % kModeCount];
-            table.add_row({std::to_string(r.triangles), r.mode, std::to_string(r.frames), format_fixed(r.p50, 2),
-                           format_fixed(r.p99, 2), format_fixed(r.mean, 2), format_fixed(r.step_ms, 2),
-                           format_fixed(r.cpu_ms, 2), format_fixed(r.bytes_per_frame, 0), std::to_string(r.torn),
-                           format_fixed(r.p50 / base.p50, 3) + "x"});
+            const Result& base = results[k - k % runs_per_size];
+            table.add_row({std::to_string(r.triangles), r.mode, r.host_wait, std::to_string(r.frames),
+                           format_fixed(r.p50, 2), format_fixed(r.p99, 2), format_fixed(r.mean, 2),
+                           format_fixed(r.step_ms, 2), format_fixed(r.cpu_ms, 2), format_fixed(r.bytes_per_frame, 0),
+                           std::to_string(r.torn), format_fixed(r.p50 / base.p50, 3) + "x"});
         }
         std::printf("\nflag on %s, %dx%d pictures, offscreen draw with read-back\n", results.front().device.c_str(),
                     o.width, o.height);
@@ -278,11 +332,19 @@ int main(int argc, char** argv) {
             json.begin_array();
             for (const Result& r : results) {
                 json.begin_object();
-                json.field("mode", r.mode).field("device", r.device).field("triangles", static_cast<double>(r.triangles));
+                json.field("mode", r.mode)
+                    .field("host_wait", r.host_wait)
+                    .field("device", r.device)
+                    .field("triangles", static_cast<double>(r.triangles));
                 json.field("vertices", static_cast<double>(r.vertices)).field("frames", r.frames);
-                json.field("p50_ms", r.p50).field("p99_ms", r.p99).field("mean_ms", r.mean).field("cpu_ms_per_frame", r.cpu_ms);
+                json.field("p50_ms", r.p50)
+                    .field("p99_ms", r.p99)
+                    .field("mean_ms", r.mean)
+                    .field("cpu_ms_per_frame", r.cpu_ms);
                 json.field("bus_bytes_per_frame", r.bytes_per_frame).field("width", o.width).field("height", o.height);
-                json.field("step_ms_p50", r.step_ms).field("torn_frames", static_cast<double>(r.torn)).field("path", r.path);
+                json.field("step_ms_p50", r.step_ms)
+                    .field("torn_frames", static_cast<double>(r.torn))
+                    .field("path", r.path);
                 json.end_object();
             }
             json.end_array();

@@ -25,6 +25,20 @@ std::string format_gib(std::size_t bytes) {
     return buf;
 }
 
+// The device's scheduling flags (weft/backend.h, HostWait). They belong to the device's primary
+// context, so they hold for every backend of the process on that device; setting them on a context
+// already in use replaces the flags it had (CUDA 11 and later).
+void set_host_wait(int device, HostWait wait) {
+    unsigned flag = cudaDeviceScheduleAuto;
+    if (wait == HostWait::spin) flag = cudaDeviceScheduleSpin;
+    if (wait == HostWait::yield) flag = cudaDeviceScheduleYield;
+    if (wait == HostWait::block) flag = cudaDeviceScheduleBlockingSync;
+    WEFT_CUDA_CHECK(cudaSetDevice(device));
+    if (const cudaError_t e = cudaSetDeviceFlags(flag); e != cudaSuccess)
+        throw Error(std::string("CUDA backend: host wait '") + host_wait_name(wait) + "' could not be set on device " +
+                    std::to_string(device) + ": " + cudaGetErrorString(e));
+}
+
 class CudaBackend final : public Backend, public CudaBackendApi {
 public:
     explicit CudaBackend(const BackendOptions& options) {
@@ -37,6 +51,7 @@ public:
             throw Error("CUDA backend: --gpus " + std::to_string(options.gpus) +
                         " needs the multi-GPU solver, which is not built yet; use one GPU");
         info_ = all[static_cast<std::size_t>(options.device)];
+        set_host_wait(info_.ordinal, options.host_wait);
         solver_ = std::make_unique<DeviceSolver>(info_.ordinal);
         // WEFT_CUDA_GRAPHS=0 runs the same kernels without graphs: for tools that cannot follow
         // conditional graph nodes (compute-sanitizer's racecheck) and for comparing the two paths.

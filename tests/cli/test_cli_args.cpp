@@ -7,6 +7,8 @@
 #include <string_view>
 #include <vector>
 
+#include "weft/error.h"
+
 #include "cli_args.h"
 #include "usage.h"
 
@@ -84,6 +86,24 @@ TEST(CliArgs, RunAllFlags) {
     EXPECT_EQ(inv.run.sim.overrides[1], "wind.velocity=[1, 0, 0]");  // only the first '=' splits
     EXPECT_EQ(inv.run.sim.threads, 3);
     EXPECT_TRUE(inv.run.quiet);
+}
+
+TEST(CliArgs, HostWait) {
+    EXPECT_EQ(parse({"run", "flag"}).run.sim.host_wait, HostWait::automatic);
+    EXPECT_EQ(parse({"run", "flag", "--host-wait", "block"}).run.sim.host_wait, HostWait::block);
+    EXPECT_EQ(parse({"bench", "flag", "--host-wait=spin"}).bench.sim.host_wait, HostWait::spin);
+    EXPECT_EQ(parse({"view", "flag", "--host-wait", "yield"}).view.sim.host_wait, HostWait::yield);
+    EXPECT_EQ(error_of({"run", "flag", "--host-wait", "sleep"}),
+              "--host-wait expects auto, spin, yield or block, got 'sleep'");
+    // The names round-trip, and an unknown one is named in the error.
+    for (const HostWait w : {HostWait::automatic, HostWait::spin, HostWait::yield, HostWait::block})
+        EXPECT_EQ(parse_host_wait(host_wait_name(w)), w);
+    try {
+        (void)parse_host_wait("busy");
+        ADD_FAILURE() << "parse_host_wait accepted 'busy'";
+    } catch (const Error& e) {
+        EXPECT_NE(std::string(e.what()).find("'busy'"), std::string::npos) << e.what();
+    }
 }
 
 TEST(CliArgs, FramesZeroWritesInitialStateOnly) { EXPECT_EQ(parse({"run", "flag", "--frames", "0"}).run.frames, 0); }

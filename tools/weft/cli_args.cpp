@@ -141,6 +141,14 @@ bool apply_simulation_flag(std::string_view command, SimulationOptions& sim, std
         sim.backend = std::string(value);
     } else if (name == "--threads") {
         sim.threads = parse_int(command, name, value, 0, 4096);
+    } else if (name == "--host-wait") {
+        bool known = false;
+        for (const HostWait w : {HostWait::automatic, HostWait::spin, HostWait::yield, HostWait::block})
+            if (value == host_wait_name(w)) {
+                sim.host_wait = w;
+                known = true;
+            }
+        if (!known) throw UsageError(command, "--host-wait expects auto, spin, yield or block, got " + quoted(value));
     } else if (name == "--set") {
         sim.overrides.push_back(parse_override(command, value));
     } else {
@@ -149,15 +157,15 @@ bool apply_simulation_flag(std::string_view command, SimulationOptions& sim, std
     return true;
 }
 
-constexpr FlagSpec kRunFlags[] = {{"--backend", true}, {"--threads", true}, {"--set", true},   {"--frames", true},
+constexpr FlagSpec kRunFlags[] = {{"--backend", true}, {"--threads", true}, {"--host-wait", true}, {"--set", true},   {"--frames", true},
                                   {"--out", true},     {"--format", true},  {"--stats", true}, {"--quiet", false},
                                   {"--check", false},  {"--capture", true}, {"--size", true}};
 
-constexpr FlagSpec kViewFlags[] = {{"--backend", true}, {"--threads", true},    {"--set", true},
+constexpr FlagSpec kViewFlags[] = {{"--backend", true}, {"--threads", true}, {"--host-wait", true},    {"--set", true},
                                    {"--frames", true},  {"--screenshot", true}, {"--size", true},
                                    {"--time-scale", true}, {"--validation", false}};
 
-constexpr FlagSpec kEditFlags[] = {{"--backend", true},    {"--threads", true},    {"--set", true},
+constexpr FlagSpec kEditFlags[] = {{"--backend", true},    {"--threads", true}, {"--host-wait", true},    {"--set", true},
                                    {"--frames", true},     {"--screenshot", true}, {"--size", true},
                                    {"--time-scale", true}, {"--validation", false}, {"--script", true}};
 
@@ -180,7 +188,7 @@ void parse_size(std::string_view cmd, std::string_view name, std::string_view va
     height = parse_int(cmd, name, value.substr(x + 1), 16, 8192);
 }
 
-constexpr FlagSpec kBenchFlags[] = {{"--backend", true}, {"--threads", true}, {"--set", true},
+constexpr FlagSpec kBenchFlags[] = {{"--backend", true}, {"--threads", true}, {"--host-wait", true}, {"--set", true},
                                     {"--frames", true},  {"--warmup", true},  {"--json", true}};
 
 Invocation help_for(std::string_view topic) {

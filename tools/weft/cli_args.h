@@ -13,6 +13,8 @@
 #include <string_view>
 #include <vector>
 
+#include "weft/backend.h"
+
 namespace weft::cli {
 
 /// Exit codes of the `weft` command.
@@ -41,6 +43,7 @@ enum class MeshFormat : std::uint8_t { Ply, Obj };
 struct SimulationOptions {
     std::string backend = "auto";  ///< "auto": cuda when a GPU is present, else cpu
     int threads = 0;                     ///< 0 = all cores
+    HostWait host_wait = HostWait::automatic;  ///< how the host waits for a GPU backend (--host-wait)
     std::vector<std::string> overrides;  ///< "dotted.key=value", in command-line order
 };
 

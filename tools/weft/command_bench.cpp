@@ -37,7 +37,7 @@ BenchResult bench_scene(const std::string& scene, const BenchOptions& options, s
     for (int i = 0; i < options.frames; ++i) stats.push_back(world.step());
     BenchResult result;
     result.wall_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-    result.context = describe_run(loaded.desc, world, options.sim.threads);
+    result.context = describe_run(loaded.desc, world, options.sim.threads, options.sim.host_wait);
     result.summary = summarize(stats);
     return result;
 }

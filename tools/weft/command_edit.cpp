@@ -25,6 +25,7 @@ int edit_command(const EditOptions& options, std::ostream& out, std::ostream& er
     LoadedScene loaded = load_world(options.scene, options.sim);
     editor.backend = resolve_backend(options.sim.backend);
     editor.backend_options.threads = options.sim.threads;
+    editor.backend_options.host_wait = options.sim.host_wait;
     editor.width = options.width;
     editor.height = options.height;
     editor.time_scale = options.time_scale;

@@ -57,7 +57,7 @@ int run_command(const RunOptions& options, std::ostream& out, std::ostream& err)
                         loaded.desc.camera, frames);
     }
 
-    const RunContext before = describe_run(loaded.desc, world, options.sim.threads);
+    const RunContext before = describe_run(loaded.desc, world, options.sim.threads, options.sim.host_wait);
     if (!options.quiet) {
         out << "simulating " << frames << (frames == 1 ? " frame of " : " frames of ") << before.scene << " ("
             << before.vertices << " vertices, " << before.triangles << " triangles) on " << before.backend << ": "
@@ -91,7 +91,7 @@ int run_command(const RunOptions& options, std::ostream& out, std::ostream& err)
     const double wall_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
 
     // Describe again: backends may grow scratch memory while stepping (reported, STYLE.md item 3).
-    const RunContext context = describe_run(loaded.desc, world, options.sim.threads);
+    const RunContext context = describe_run(loaded.desc, world, options.sim.threads, options.sim.host_wait);
     const RunSummary summary = summarize(stats);
     std::optional<CaptureSummary> captured;
     if (capture) captured = capture->finish(1.0 / world.settings().solver.dt);

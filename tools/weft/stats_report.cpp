@@ -87,7 +87,7 @@ RunSummary summarize(std::span<const StepStats> frames) {
     return s;
 }
 
-RunContext describe_run(const SceneDesc& scene, const World& world, int threads) {
+RunContext describe_run(const SceneDesc& scene, const World& world, int threads, HostWait host_wait) {
     RunContext c;
     c.scene = scene.name;
     c.scene_file = scene.path.string();
@@ -95,6 +95,7 @@ RunContext describe_run(const SceneDesc& scene, const World& world, int threads)
     c.culled_pairs_counted = world.model().settings.collision.count_culled && c.backend == "cpu";
     c.device = world.backend().device_description();
     c.threads = threads;
+    c.host_wait = host_wait_name(host_wait);
     const Model& model = world.model();
     const SolverSettings& solver = model.settings.solver;
     c.dt = solver.dt;
@@ -170,7 +171,7 @@ void write_summary_fields(JsonWriter& json, const RunContext& c, const RunSummar
     json.field("scene", c.scene).field("scene_file", c.scene_file);
     json.field("backend", c.backend).field("device", c.device);
     json.key("devices").begin_array(true).value(c.device).end_array();
-    json.field("threads", c.threads);
+    json.field("threads", c.threads).field("host_wait", c.host_wait);
     json.field("cloths", c.cloths).field("vertices", c.vertices).field("triangles", c.triangles);
     json.field("steps", s.frames).field("dt", c.dt).field("substeps", c.substeps);
     json.field("newton_iterations", c.newton_iterations);

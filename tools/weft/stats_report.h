@@ -12,6 +12,7 @@
 #include <string>
 #include <vector>
 
+#include "weft/backend.h"
 #include "weft/stats.h"
 
 #include "frame_capture.h"
@@ -83,6 +84,7 @@ struct RunContext {
     std::string backend;
     std::string device;
     int threads = 0;  ///< as requested (0 = all cores)
+    std::string host_wait = "auto";  ///< how the host waits for a GPU backend (--host-wait)
     std::size_t cloths = 0;
     std::size_t vertices = 0;
     std::size_t triangles = 0;
@@ -103,7 +105,8 @@ struct RunContext {
         return triangles > 0 ? static_cast<double>(memory_bytes()) / static_cast<double>(triangles) : 0.0;
     }
 };
-[[nodiscard]] RunContext describe_run(const SceneDesc& scene, const World& world, int threads);
+[[nodiscard]] RunContext describe_run(const SceneDesc& scene, const World& world, int threads,
+                                      HostWait host_wait = HostWait::automatic);
 
 /// One line per problem: solves that did not converge, non-finite events, cook warnings.
 [[nodiscard]] std::vector<std::string> run_warnings(const RunContext& context, const RunSummary& summary);

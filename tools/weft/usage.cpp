@@ -32,6 +32,8 @@ Options:
   --backend NAME     simulation backend: cpu, cuda (see 'weft info'); default auto:
                      cuda when a GPU is present, else cpu
   --threads N        CPU worker threads, 0 = all cores; results do not depend on it
+  --host-wait MODE   how the host waits for the GPU: spin (lowest latency, keeps a core
+                     busy), block (sleeps, frees the core), yield, auto (the driver's choice, default)
   --frames N         frames to simulate; default: the scene's 'frames'
   --out DIR          write a mesh per cloth per frame: DIR/frame_0000_<cloth>.ply (frame 0 = initial state)
   --format ply|obj   mesh format for --out; default ply
@@ -64,6 +66,8 @@ Options:
   --json FILE        write the results as a JSON array (one object per scene)
   --backend NAME     simulation backend: cpu, cuda; default auto (cuda when a GPU is present)
   --threads N        CPU worker threads, 0 = all cores
+  --host-wait MODE   how the host waits for the GPU: spin (lowest latency, keeps a core
+                     busy), block (sleeps, frees the core), yield, auto (the driver's choice, default)
   --set KEY=VALUE    override a scene key in every scene; repeatable
   -h, --help         this text
 )";
@@ -88,6 +92,8 @@ Keys and mouse:
 Options:
   --backend NAME     simulation backend: cpu, cuda (see 'weft info'); default auto
   --threads N        CPU worker threads, 0 = all cores
+  --host-wait MODE   how the host waits for the GPU: spin (lowest latency, keeps a core
+                     busy), block (sleeps, frees the core), yield, auto (the driver's choice, default)
   --set KEY=VALUE    override a scene key, as if written in the file; repeatable
   --frames N         quit after N displayed frames (scripted runs, tests)
   --screenshot FILE.png
@@ -121,6 +127,8 @@ Keys and mouse (when the panels do not have them):
 Options:
   --backend NAME     simulation backend: cpu, cuda (see 'weft info'); default auto
   --threads N        CPU worker threads, 0 = all cores
+  --host-wait MODE   how the host waits for the GPU: spin (lowest latency, keeps a core
+                     busy), block (sleeps, frees the core), yield, auto (the driver's choice, default)
   --set KEY=VALUE    override a scene key, as if written in the file; repeatable
   --script FILE      run FILE's commands instead of waiting for a person, one step per
                      displayed frame (frame N, set KEY VALUE, expect KEY VALUE, pause, play,

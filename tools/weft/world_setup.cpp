@@ -38,6 +38,7 @@ LoadedScene load_world(std::string_view scene, const SimulationOptions& sim) {
     loaded.desc = load_scene(find_scene(scene), sim.overrides);
     BackendOptions options;
     options.threads = sim.threads;
+    options.host_wait = sim.host_wait;
     const std::string backend = resolve_backend(sim.backend);
     loaded.world = build_world(loaded.desc, backend, options);
     return loaded;
