@@ -347,6 +347,8 @@ void draw_panels(Session& session, const PanelLayout& layout) {
     parameter_rows(session, "collision", open && ImGui::CollapsingHeader("Collision"));
     if (open && ImGui::CollapsingHeader("Mesh (re-cook)")) mesh_rows(session);
     parameter_rows(session, "world", open && ImGui::CollapsingHeader("Wind and gravity"));
+    if (!session.world().model().motions.empty())
+        parameter_rows(session, "motions", open && ImGui::CollapsingHeader("Motions (pins and colliders follow)"));
     if (open && ImGui::CollapsingHeader("Help: keys and mouse")) help_rows();
     ImGui::PopItemWidth();
     ImGui::End();

@@ -106,7 +106,7 @@ Parameter component(std::string key, std::string panel, std::string label, std::
 
 }  // namespace
 
-ParameterTable::ParameterTable(const World& world) {
+ParameterTable::ParameterTable(const World& world, std::span<const std::string> motion_names) {
     using S = SolverSettings;
     auto solver = [](World& w) -> S& { return w.settings().solver; };
     auto& P = parameters_;
@@ -221,6 +221,48 @@ ParameterTable::ParameterTable(const World& world) {
             aliases_.emplace("cloth." + std::to_string(i) + ".material." + f.key, P.size());
             P.push_back(std::move(p));
         }
+    }
+
+    // ---- motions: live (World::motion), what pins and colliders following them do from the next
+    // step on. The initial rotation is left to the file: changing it mid-run would turn everything
+    // that follows the motion about its origin at once.
+    for (std::size_t i = 0; i < world.model().motions.size(); ++i) {
+        const int index = static_cast<int>(i);
+        const std::string name = i < motion_names.size() && !motion_names[i].empty() ? motion_names[i] : std::to_string(i);
+        const auto alias = [&](const std::string& suffix) {
+            aliases_.emplace("motion." + std::to_string(i) + "." + suffix, P.size());
+        };
+        struct VectorField {
+            const char* key;
+            const char* label;
+            const char* unit;
+            double max;
+            Vec3d Motion::*member;
+        };
+        const VectorField vectors[] = {
+            {"origin", "origin", "m", 1e4, &Motion::origin},
+            {"linear_velocity", "velocity", "m/s", 1e3, &Motion::linear_velocity},
+            {"angular_velocity", "angular velocity", "rad/s", 1e3, &Motion::angular_velocity},
+            {"amplitude", "amplitude", "m", 1e3, &Motion::amplitude},
+        };
+        for (const VectorField& f : vectors)
+            for (int a = 0; a < 3; ++a) {
+                Vec3d Motion::*member = f.member;
+                const std::string suffix = std::string(f.key) + "." + axes[a];
+                alias(suffix);
+                P.push_back(component("motion." + name + "." + suffix, "motions", std::string(f.label) + " " + axes[a],
+                                      f.unit, f.max, a,
+                                      [index, member](World& w) -> Vec3d& { return w.motion(index).*member; }));
+                P.back().group = name;
+            }
+        alias("frequency");
+        P.push_back(number<double>("motion." + name + ".frequency", "motions", "frequency", "Hz", 0.0, 1000.0, false,
+                                   [index](World& w) -> double& { return w.motion(index).frequency; }));
+        P.back().group = name;
+        alias("phase");
+        P.push_back(number<double>("motion." + name + ".phase", "motions", "phase", "rad", -1e3, 1e3, false,
+                                   [index](World& w) -> double& { return w.motion(index).phase; }));
+        P.back().group = name;
     }
 }
 

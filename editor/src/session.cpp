@@ -9,6 +9,15 @@
 #include "weft/error.h"
 
 namespace weft::editor {
+namespace {
+
+std::vector<std::string> motion_names(const SceneDesc& scene) {
+    std::vector<std::string> names;
+    for (const SceneMotion& m : scene.motions) names.push_back(m.name);
+    return names;
+}
+
+}  // namespace
 
 Session::Session(SceneDesc scene, std::string backend, BackendOptions options, std::unique_ptr<World> world,
                  double time_scale)
@@ -16,7 +25,7 @@ Session::Session(SceneDesc scene, std::string backend, BackendOptions options, s
       backend_(std::move(backend)),
       options_(options),
       world_(std::move(world)),
-      parameters_(*world_) {
+      parameters_(*world_, motion_names(scene_)) {
     FrameLoop::Options loop_options;
     loop_options.time_scale = time_scale;
     loop_ = std::make_unique<FrameLoop>(*world_, loop_options);

@@ -227,6 +227,12 @@ void update_scene_from_world(SceneDesc& scene, const World& world) {
                         scene.cloths[i].desc.name + "' in the scene");
         scene.cloths[i].desc.material = model.cloths[i].material;
     }
+    // Motions are live too (World::motion). The file's rotation stays as written: the editor does
+    // not change a motion's initial rotation.
+    if (model.motions.size() != scene.motions.size())
+        throw Error("update scene: the world has " + std::to_string(model.motions.size()) + " motions, the scene " +
+                    std::to_string(scene.motions.size()));
+    for (std::size_t i = 0; i < scene.motions.size(); ++i) scene.motions[i].motion = model.motions[i];
 }
 
 }  // namespace weft

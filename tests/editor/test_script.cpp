@@ -170,6 +170,35 @@ TEST(Parameters, VectorsKeepTheirLengthInRange) {
     EXPECT_NEAR(std::sqrt(g.x * g.x + g.y * g.y + g.z * g.z), 1000.0, 1e-9);
 }
 
+// Motions are in the table by their scene names (and by index), and what a pin following one does
+// changes at the next step.
+TEST(Parameters, MotionsAreLiveAndNamed) {
+    auto world = std::make_unique<World>(WorldDesc{}, "cpu");
+    const int spin = world->add_motion(Motion{});
+    world->add_cloth({.name = "sheet", .fabric = Fabric::cook(make_grid(1.0, 1.0, 2, 2)), .pins = {{0, spin}}});
+    const std::string names[] = {"carrier"};
+    ParameterTable table(*world, names);
+    const Parameter* vx = table.find("motion.carrier.linear_velocity.x");
+    ASSERT_NE(vx, nullptr);
+    EXPECT_EQ(table.find("motion.0.linear_velocity.x"), vx) << "the index alias";
+    EXPECT_EQ(vx->panel, "motions");
+    EXPECT_EQ(vx->group, "carrier");
+    EXPECT_EQ(vx->unit, "m/s");
+    for (const char* key : {"motion.carrier.origin.y", "motion.carrier.angular_velocity.z", "motion.carrier.amplitude.x",
+                            "motion.carrier.frequency", "motion.carrier.phase"})
+        EXPECT_NE(table.find(key), nullptr) << key;
+
+    const double x0 = world->positions(0)[0].x;
+    ParameterTable::apply(*vx, *world, 2.0);
+    EXPECT_EQ(world->motion(spin).linear_velocity.x, 2.0);
+    (void)world->step();
+    EXPECT_NEAR(world->positions(0)[0].x - x0, 2.0 * world->time(), 1e-9) << "the pinned vertex follows the motion";
+
+    // A table without names keys motions by index.
+    const ParameterTable unnamed(*world);
+    EXPECT_NE(unnamed.find("motion.0.frequency"), nullptr);
+}
+
 // Every collision knob of docs/scene-format.md is in the table, reaching the world's settings.
 TEST(Parameters, EveryCollisionKnobIsEditable) {
     const std::unique_ptr<World> owned = small_world();

@@ -152,6 +152,35 @@ TEST(SceneWriter, WhatIsTunedLiveIsWhatIsSaved) {
     }
 }
 
+// Motions are tuned live too (the editor's Motions panel): what the world's motions hold is saved,
+// and a world whose motions are not the scene's is refused.
+TEST(SceneWriter, TunedMotionsAreSaved) {
+    SceneDesc scene = load_scene(kScenes / "twist.toml");
+    ASSERT_FALSE(scene.motions.empty());
+    auto world = build_world(scene);
+    world->motion(0).angular_velocity = {0.0, 2.5, 0.0};
+    world->motion(0).frequency = 0.75;
+    update_scene_from_world(scene, *world);
+    const auto file = std::filesystem::temp_directory_path() / ("weft_motion_" + std::to_string(::getpid()) + ".toml");
+    save_scene(scene, file);
+    const SceneDesc saved = load_scene(file);
+    std::filesystem::remove(file);
+    ASSERT_EQ(saved.motions.size(), scene.motions.size());
+    EXPECT_EQ(saved.motions[0].name, scene.motions[0].name);
+    EXPECT_EQ(saved.motions[0].motion.angular_velocity.y, 2.5);
+    EXPECT_EQ(saved.motions[0].motion.frequency, 0.75);
+
+    SceneDesc other = load_scene(kScenes / "twist.toml");
+    other.motions.push_back(other.motions[0]);
+    other.motions.back().name = "extra";
+    try {
+        update_scene_from_world(other, *world);
+        FAIL() << "no error";
+    } catch (const Error& e) {
+        EXPECT_NE(std::string(e.what()).find("motions"), std::string::npos) << e.what();
+    }
+}
+
 TEST(SceneWriter, UnwritableFileIsAnErrorNamingIt) {
     const SceneDesc scene = load_scene(kScenes / "flag.toml");
     try {

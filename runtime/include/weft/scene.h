@@ -111,7 +111,8 @@ struct SceneDesc {
 /// Writes scene_to_toml() to `path` (relative to its folder). Throws `weft::Error` naming the file on failure.
 void save_scene(const SceneDesc& scene, const std::filesystem::path& path);
 /// Copies what can be tuned live in `world` into `scene`: the world settings (solver, gravity, wind,
-/// collisions) and each cloth's material. Throws `weft::Error` if the world's cloths are not the scene's.
+/// collisions), each cloth's material and each motion. Throws `weft::Error` if the world's cloths or
+/// motions are not the scene's.
 void update_scene_from_world(SceneDesc& scene, const World& world);
 
 /// Cooks the fabrics (loading mesh files), loads the meshes of mesh colliders, resolves pins and

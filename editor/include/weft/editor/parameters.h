@@ -9,6 +9,7 @@
 #include <functional>
 #include <map>
 #include <optional>
+#include <span>
 #include <string>
 #include <string_view>
 #include <vector>
@@ -27,8 +28,8 @@ enum class ParameterKind : unsigned char {
 
 struct Parameter {
     std::string key;    ///< what scripts name it by, as in the scene file: "solver.substeps"
-    std::string panel;  ///< "solver", "materials", "collision", "world"
-    std::string group;  ///< a heading inside the panel ("" for none): the cloth's name for materials
+    std::string panel;  ///< "solver", "materials", "collision", "world", "motions"
+    std::string group;  ///< a heading inside the panel ("" for none): the cloth's or motion's name
     std::string label;  ///< the widget's label
     std::string unit;   ///< SI unit, "" when dimensionless
     std::string hint;   ///< shown in the tooltip: what a special value means ("0: automatic")
@@ -46,9 +47,11 @@ struct Parameter {
 /// The parameters of one world: solver, collision, wind and gravity, and per cloth its material.
 class ParameterTable {
 public:
-    /// Builds the table for `world`'s settings and cloths (materials keyed by the cloth's name:
-    /// "cloth.flag.material.stretch_stiffness"; "cloth.0.material…" finds the same).
-    explicit ParameterTable(const World& world);
+    /// Builds the table for `world`'s settings, cloths and motions (materials keyed by the cloth's
+    /// name: "cloth.flag.material.stretch_stiffness"; "cloth.0.material…" finds the same; motions by
+    /// `motion_names`, the scene's `[[motion]]` names in order: "motion.spin.angular_velocity.y",
+    /// "motion.0…" finds the same, and a motion without a name is keyed by its index).
+    explicit ParameterTable(const World& world, std::span<const std::string> motion_names = {});
 
     [[nodiscard]] const std::vector<Parameter>& parameters() const { return parameters_; }
     /// The parameter for `key`, or nullptr.
