@@ -206,7 +206,7 @@ int run_editor(const SceneDesc& scene, std::unique_ptr<World> world, EditorOptio
     render::RenderScene render_scene = render::make_render_scene(session->world(), scene.camera);
     window.load(render_scene);
     // Scripted runs keep no layout: a test must not depend on what a person left behind.
-    ImGuiLayer imgui(window, scripted ? std::filesystem::path{} : options.ini_file);
+    ImGuiLayer imgui(window, scripted ? std::filesystem::path{} : options.ini_file, options.ui_scale);
 
     std::optional<ScriptRunner> runner;
     if (scripted) runner.emplace(*options.script);
@@ -381,7 +381,7 @@ int run_editor(const SceneDesc& scene, std::unique_ptr<World> world, EditorOptio
         << " of " << name << " at " << window.width() << "x" << window.height() << ", " << mean_fps << " fps, "
         << std::setprecision(2) << "simulated " << session->world().time() << " s in " << session->loop().steps()
         << " steps, on " << window.device_description() << "; cloth by " << (feed ? feed->describe() : "-")
-        << ", " << torn << " frames torn" << std::endl;
+        << ", " << torn << " frames torn; panels at scale " << std::setprecision(2) << imgui.scale() << std::endl;
     if (runner && status == 0)
         out << "script " << options.script->name << ": " << options.script->commands.size() << " commands, "
             << runner->expectations() << " expectations met" << std::endl;

@@ -3,9 +3,11 @@
 
 #include <vulkan/vulkan.h>
 
+#include <algorithm>
 #include <array>
 #include <string>
 
+#include <GLFW/glfw3.h>
 #include <imgui.h>
 #include <imgui_impl_glfw.h>
 #include <imgui_impl_vulkan.h>
@@ -38,9 +40,12 @@ struct ImGuiLayer::Impl {
     bool context = false, glfw = false, backend = false;
     bool frame_ended = false;  ///< ImGui::Render() ran since the last begin_frame
 
-    Impl(render::Window& w, const std::filesystem::path& ini_file) : window(w), vulkan(w.overlay_vulkan()) {
+    float scale = 1.0F;
+
+    Impl(render::Window& w, const std::filesystem::path& ini_file, float requested_scale)
+        : window(w), vulkan(w.overlay_vulkan()) {
         try {
-            start(ini_file);
+            start(ini_file, requested_scale);
         } catch (...) {
             stop();
             throw;
@@ -50,7 +55,7 @@ struct ImGuiLayer::Impl {
     Impl(const Impl&) = delete;
     Impl& operator=(const Impl&) = delete;
 
-    void start(const std::filesystem::path& ini_file) {
+    void start(const std::filesystem::path& ini_file, float requested_scale) {
         IMGUI_CHECKVERSION();
         ImGui::CreateContext();
         context = true;
@@ -58,6 +63,20 @@ struct ImGuiLayer::Impl {
         ini = ini_file.string();
         io.IniFilename = ini.empty() ? nullptr : ini.c_str();
         ImGui::StyleColorsDark();
+        // High-DPI screens: the font is rasterised at the scaled size (sharp, not a stretched
+        // 13-pixel atlas) and every padding and spacing grows with it.
+        scale = requested_scale;
+        if (scale <= 0.0F) {
+            float x = 1.0F, y = 1.0F;
+            glfwGetWindowContentScale(vulkan.window, &x, &y);
+            scale = std::clamp(std::max(x, y), 0.5F, 4.0F);
+        }
+        if (scale != 1.0F) {
+            ImFontConfig font;
+            font.SizePixels = 13.0F * scale;
+            io.Fonts->AddFontDefault(&font);
+            ImGui::GetStyle().ScaleAllSizes(scale);
+        }
         // The callbacks chain to those the viewer installed (camera, keys), which ask wants_mouse().
         if (!ImGui_ImplGlfw_InitForVulkan(vulkan.window, true)) throw Error("editor: ImGui's GLFW backend did not start");
         glfw = true;
@@ -106,12 +125,14 @@ struct ImGuiLayer::Impl {
     }
 };
 
-ImGuiLayer::ImGuiLayer(render::Window& window, const std::filesystem::path& ini_file)
-    : impl_(std::make_unique<Impl>(window, ini_file)) {
+ImGuiLayer::ImGuiLayer(render::Window& window, const std::filesystem::path& ini_file, float scale)
+    : impl_(std::make_unique<Impl>(window, ini_file, scale)) {
     window.set_overlay(this);
 }
 
 ImGuiLayer::~ImGuiLayer() { impl_->window.set_overlay(nullptr); }
+
+float ImGuiLayer::scale() const { return impl_->scale; }
 
 void ImGuiLayer::begin_frame() {
     ImGui_ImplVulkan_NewFrame();

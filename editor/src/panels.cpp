@@ -17,7 +17,12 @@
 namespace weft::editor {
 namespace {
 
-constexpr float kColumn = 340.0F;  ///< width of the two side columns, screen pixels
+constexpr float kColumn = 340.0F;  ///< width of the two side columns at ImGui's 13-pixel font, screen pixels
+
+/// The side columns grow with the panels' scale (the font), up to 45 % of the window each.
+float column_width(float window_width) {
+    return std::min(kColumn * ImGui::GetFontSize() / 13.0F, 0.45F * window_width);
+}
 
 // "%.4g N/m": the unit in the slider's own text, so that every value is shown with it.
 std::string format_with_unit(const Parameter& p, const char* number) {
@@ -213,8 +218,9 @@ void plot(const char* label, const Series& s, const char* format, float height =
 }
 
 void stats_panel(Session& session, const PanelLayout& layout) {
-    ImGui::SetNextWindowPos(ImVec2(layout.width - kColumn, 0.0F), ImGuiCond_FirstUseEver);
-    ImGui::SetNextWindowSize(ImVec2(kColumn, layout.height), ImGuiCond_FirstUseEver);
+    const float column = column_width(layout.width);
+    ImGui::SetNextWindowPos(ImVec2(layout.width - column, 0.0F), ImGuiCond_FirstUseEver);
+    ImGui::SetNextWindowSize(ImVec2(column, layout.height), ImGuiCond_FirstUseEver);
     if (!ImGui::Begin("Stats")) {
         ImGui::End();
         return;
@@ -253,7 +259,7 @@ void warning_banner(Session& session, const PanelLayout& layout) {
     const bool not_converged = h.last.cg_not_converged > 0;
     const bool non_finite = h.last.non_finite;
     if (!not_converged && !non_finite) return;
-    const float width = std::max(200.0F, layout.width - 2.0F * kColumn - 20.0F);
+    const float width = std::max(200.0F, layout.width - 2.0F * column_width(layout.width) - 20.0F);
     ImGui::SetNextWindowPos(ImVec2((layout.width - width) * 0.5F, 8.0F), ImGuiCond_Always);
     ImGui::SetNextWindowSize(ImVec2(width, 0.0F), ImGuiCond_Always);
     ImGui::PushStyleColor(ImGuiCol_WindowBg, ImVec4(0.75F, 0.08F, 0.08F, 0.95F));
@@ -334,7 +340,7 @@ void help_rows() {
 
 void draw_panels(Session& session, const PanelLayout& layout) {
     ImGui::SetNextWindowPos(ImVec2(0.0F, 0.0F), ImGuiCond_FirstUseEver);
-    ImGui::SetNextWindowSize(ImVec2(kColumn, layout.height), ImGuiCond_FirstUseEver);
+    ImGui::SetNextWindowSize(ImVec2(column_width(layout.width), layout.height), ImGuiCond_FirstUseEver);
     const bool open = ImGui::Begin(("Weft: " + session.scene().name).c_str());
     ImGui::PushItemWidth(-150.0F);
     // Play first: a reset replaces the world the other panels edit.

@@ -167,7 +167,8 @@ constexpr FlagSpec kViewFlags[] = {{"--backend", true}, {"--threads", true}, {"-
 
 constexpr FlagSpec kEditFlags[] = {{"--backend", true},    {"--threads", true}, {"--host-wait", true},    {"--set", true},
                                    {"--frames", true},     {"--screenshot", true}, {"--size", true},
-                                   {"--time-scale", true}, {"--validation", false}, {"--script", true}};
+                                   {"--time-scale", true}, {"--validation", false}, {"--script", true},
+                                   {"--ui-scale", true}};
 
 /// `--screenshot FILE.png`.
 std::filesystem::path parse_png(std::string_view cmd, std::string_view name, std::string_view value) {
@@ -319,6 +320,8 @@ Invocation parse_edit(std::span<const std::string_view> args) {
             edit.time_scale = parse_double(cmd, name, value, 0.01, 100.0);
         } else if (name == "--validation") {
             edit.validation = true;
+        } else if (name == "--ui-scale") {
+            edit.ui_scale = static_cast<float>(parse_double(cmd, name, value, 0.5, 4.0));
         }
     });
     if (!positionals) return help_for(cmd);

@@ -93,6 +93,7 @@ struct EditOptions {
     int height = 720;
     double time_scale = 1.0;           ///< simulated seconds per wall second, [0.01, 100]
     bool validation = false;           ///< Vulkan validation layer; a message makes the run fail
+    float ui_scale = 0.0F;             ///< the panels' size, [0.5, 4]; 0: the monitor's content scale
 };
 
 struct Invocation {

@@ -29,6 +29,7 @@ int edit_command(const EditOptions& options, std::ostream& out, std::ostream& er
     editor.width = options.width;
     editor.height = options.height;
     editor.time_scale = options.time_scale;
+    editor.ui_scale = options.ui_scale;
     editor.validation = options.validation;
     editor.frames = options.frames;
     editor.screenshot = options.screenshot;

@@ -140,6 +140,7 @@ Options:
   --size WxH         window size, pixels; default 1280x720
   --time-scale X     simulated seconds per wall second, 0.01 to 100; default 1
   --validation       enable the Vulkan validation layer; a message makes the exit code 1
+  --ui-scale S       the panels' size, 0.5 to 4 (fonts and spacing); default: the monitor's scale
   -h, --help         this text
 )";
 

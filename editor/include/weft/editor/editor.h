@@ -30,6 +30,7 @@ struct EditorOptions {
     BackendOptions backend_options{};
     int width = 1280, height = 720;  ///< window size, screen pixels
     double time_scale = 1.0;         ///< [0.01, 100]
+    float ui_scale = 0.0F;           ///< panels' size, [0.5, 4]; 0: the monitor's content scale
     bool validation = false;         ///< Vulkan validation layer; any message makes the run fail
     std::optional<int> frames;       ///< quit after this many displayed frames
     std::filesystem::path screenshot;  ///< the last displayed frame as PNG at exit (empty: none)

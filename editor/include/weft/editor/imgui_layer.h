@@ -16,8 +16,12 @@ public:
     /// Creates the ImGui context and its backends on `window` and registers itself as its overlay.
     /// `ini_file`: where ImGui keeps the panels' layout between runs; empty: nowhere (scripted runs,
     /// so that a test never depends on a layout a person left behind). Throws weft::Error when a
-    /// backend cannot start or the fonts cannot be uploaded.
-    ImGuiLayer(render::Window& window, const std::filesystem::path& ini_file);
+    /// backend cannot start or the fonts cannot be uploaded. `scale`: the panels' size against
+    /// ImGui's defaults (font pixels and every padding and spacing); 0: the monitor's content scale
+    /// as GLFW reports it (1 on a 96-dpi screen, 2 on a "200 %" one).
+    ImGuiLayer(render::Window& window, const std::filesystem::path& ini_file, float scale = 0.0F);
+    /// The scale in use (see the constructor).
+    [[nodiscard]] float scale() const;
     /// Unregisters from the window, waits for the device, shuts the backends down.
     ~ImGuiLayer() override;
 
