@@ -9,6 +9,8 @@
 #include <system_error>
 #include <vector>
 
+#include "weft/error.h"
+
 namespace weft::cli {
 
 std::string_view extension(MeshFormat format) { return format == MeshFormat::Obj ? ".obj" : ".ply"; }
@@ -142,13 +144,11 @@ bool apply_simulation_flag(std::string_view command, SimulationOptions& sim, std
     } else if (name == "--threads") {
         sim.threads = parse_int(command, name, value, 0, 4096);
     } else if (name == "--host-wait") {
-        bool known = false;
-        for (const HostWait w : {HostWait::automatic, HostWait::spin, HostWait::yield, HostWait::block})
-            if (value == host_wait_name(w)) {
-                sim.host_wait = w;
-                known = true;
-            }
-        if (!known) throw UsageError(command, "--host-wait expects auto, spin, yield or block, got " + quoted(value));
+        try {
+            sim.host_wait = parse_host_wait(value);
+        } catch (const Error&) {
+            throw UsageError(command, "--host-wait expects auto, spin, yield or block, got " + quoted(value));
+        }
     } else if (name == "--set") {
         sim.overrides.push_back(parse_override(command, value));
     } else {
