@@ -1,7 +1,9 @@
-// Simulate-plus-draw per frame on one GPU: the CUDA backend steps the flag and the Vulkan renderer
-// draws it through the frame pipeline (weft/render/cloth_feed.h), with the cloth handed over either
-//   interop: the solver's output kernel writes one of the renderer's two exported slots, timeline
-//            semaphores order writer and reader (docs/rendering.md), no cloth byte crosses the bus; or
+// Simulate-plus-draw per frame on one GPU: the CUDA backend steps the flag and a renderer (Vulkan, or
+// the EGL capture's OpenGL) draws it through the frame pipeline (weft/render/cloth_feed.h), with the
+// cloth handed over either
+//   interop: the solver's output kernel writes one of the renderer's two exported slots (Vulkan:
+//            timeline semaphores order writer and reader; OpenGL: CUDA maps and unmaps the
+//            registered buffer; docs/rendering.md), no cloth byte crosses the bus; or
 //   upload:  the feed's fallback, the state read back to the host (normals computed there) and
 //            uploaded again, what runs where interop is unavailable;
 // and the frames either overlapped (the steps of frame N+1 run while the GPU draws frame N: submit,
@@ -12,6 +14,7 @@
 //
 //   build/bin/weft_render_interop_bench --json out/interop.json            # 200K and 1.2M triangles
 //   build/bin/weft_render_interop_bench --sizes 400x250:1000 --modes interop,upload --host-wait spin,block
+//   build/bin/weft_render_interop_bench --renderers vulkan,egl --sizes 400x250:1000 --modes interop,upload
 
 #include <algorithm>
 #include <chrono>
@@ -62,6 +65,7 @@ struct Options {
     std::vector<Size> sizes{{400, 250, 1000}, {1000, 600, 200}};
     std::vector<Mode> modes{kModes[0], kModes[1], kModes[2]};
     std::vector<HostWait> waits{HostWait::automatic};
+    std::vector<std::string> renderers{"vulkan"};
     int warmup = 20;
     int width = 960, height = 540;
     std::filesystem::path json_file;
@@ -69,10 +73,11 @@ struct Options {
 
 constexpr const char* kUsage = R"(Usage: weft_render_interop_bench [options]
 
-The flag scene stepped by the CUDA backend and drawn by the Vulkan renderer each frame, with the cloth
-shared zero-copy (interop) or copied through the host (upload), the steps of a frame overlapping the
-draw of the one before or not (serial): frame time p50/p99, CPU ms per frame, bytes per frame. Needs a
-GPU whose Vulkan driver exports memory and timeline semaphores.
+The flag scene stepped by the CUDA backend and drawn by a renderer each frame, with the cloth shared
+zero-copy (interop) or copied through the host (upload), the steps of a frame overlapping the draw of
+the one before or not (serial): frame time p50/p99, CPU ms per frame, bytes per frame. Needs a GPU
+whose Vulkan driver exports memory and timeline semaphores (vulkan), or an EGL device whose OpenGL
+context CUDA can share buffers with (egl).
 
 Options:
   --sizes LIST   comma-separated CXxCY[:FRAMES] grid cells (default 400x250:1000,1000x600:200;
@@ -82,6 +87,8 @@ Options:
   --host-wait LIST
                  comma-separated host waits for the CUDA backend (auto, spin, yield, block), each
                  mode run under each; default auto
+  --renderers LIST
+                 comma-separated, of vulkan, egl; default vulkan (ratios are per renderer)
   --warmup N     untimed frames per run; default 20
   --size WxH     picture size; default 960x540
   --json FILE    write the results as JSON
@@ -158,6 +165,10 @@ Options parse(int argc, char** argv) {
                     usage_error(std::string("--host-wait: ") + e.what());
                 }
             }
+        } else if (a == "--renderers") {
+            o.renderers = split(value());
+            for (const std::string& r : o.renderers)
+                if (r != "vulkan" && r != "egl") usage_error("--renderers: unknown renderer '" + r + "' (vulkan, egl)");
         } else if (a == "--warmup") {
             o.warmup = parse_positive(value(), a);
         } else if (a == "--size") {
@@ -189,7 +200,7 @@ double percentile(std::vector<double> v, double p) {
 }
 
 struct Result {
-    std::string mode, host_wait;
+    std::string renderer, mode, host_wait;
     int cells_x = 0, cells_y = 0;
     std::size_t triangles = 0, vertices = 0;
     int frames = 0;
@@ -199,7 +210,7 @@ struct Result {
     std::string device, path;
 };
 
-Result run(const Options& o, const Size& size, const Mode& mode, HostWait wait) {
+Result run(const Options& o, const std::string& renderer_name, const Size& size, const Mode& mode, HostWait wait) {
     const auto file = std::filesystem::path(WEFT_SOURCE_DIR) / "assets" / "scenes" / "flag.toml";
     std::vector<std::string> overrides{"cloth.flag.mesh.grid.cells=[" + std::to_string(size.cells_x) + "," +
                                        std::to_string(size.cells_y) + "]"};
@@ -214,7 +225,7 @@ Result run(const Options& o, const Size& size, const Mode& mode, HostWait wait) 
     render::RendererOptions ro;
     ro.width = o.width;
     ro.height = o.height;
-    auto renderer = render::create_renderer("vulkan", ro);
+    auto renderer = render::create_renderer(renderer_name, ro);
     const render::RenderScene scene = render::make_render_scene(*world, desc.camera);
     renderer->load(scene);
     render::ClothFeed feed(*world, *renderer, scene, render::ClothFeed::Options{mode.interop});
@@ -255,6 +266,7 @@ Result run(const Options& o, const Size& size, const Mode& mode, HostWait wait) 
     }
 
     Result r;
+    r.renderer = renderer_name;
     r.mode = mode.name;
     r.host_wait = host_wait_name(wait);
     r.cells_x = size.cells_x;
@@ -288,22 +300,23 @@ int main(int argc, char** argv) {
         if (cuda::devices().empty()) throw Error("no CUDA device: " + cuda::unavailable_reason());
         std::vector<Result> results;
         const std::size_t runs_per_size = o.modes.size() * o.waits.size();
-        for (const Size& s : o.sizes)
-            for (const HostWait w : o.waits)
-                for (const Mode& m : o.modes) {
-                    results.push_back(run(o, s, m, w));
-                    const Result& r = results.back();
-                    std::printf(
-                        "%s, host wait %s, %zu triangles: p50 %.2f ms, p99 %.2f ms, step %.2f ms, CPU %.2f ms/frame, "
-                        "%.0f B/frame, "
-                        "%lld torn (%s)\n",
-                        r.mode.c_str(), r.host_wait.c_str(), r.triangles, r.p50, r.p99, r.step_ms, r.cpu_ms,
-                        r.bytes_per_frame, static_cast<long long>(r.torn), r.path.c_str());
-                    std::fflush(stdout);
-                }
-        // The headline ratio: each run's p50 against the first run of its size (by default interop,
-        // overlapped, the driver's host wait).
-        cli::TextTable table({{"triangles"},
+        const auto run_and_print = [&](const std::string& name, const Size& s, HostWait w, const Mode& m) {
+            results.push_back(run(o, name, s, m, w));
+            const Result& r = results.back();
+            std::printf("%s: %s, host wait %s, %zu triangles: p50 %.2f ms, p99 %.2f ms, step %.2f ms, CPU %.2f ms/frame, "
+                        "%.0f B/frame, %lld torn (%s)\n",
+                        r.renderer.c_str(), r.mode.c_str(), r.host_wait.c_str(), r.triangles, r.p50, r.p99, r.step_ms,
+                        r.cpu_ms, r.bytes_per_frame, static_cast<long long>(r.torn), r.path.c_str());
+            std::fflush(stdout);
+        };
+        for (const std::string& name : o.renderers)
+            for (const Size& s : o.sizes)
+                for (const HostWait w : o.waits)
+                    for (const Mode& m : o.modes) run_and_print(name, s, w, m);
+        // The headline ratio: each run's p50 against the first run of its renderer and size (by
+        // default interop, overlapped, the driver's host wait).
+        cli::TextTable table({{"renderer", cli::TextTable::Align::Left},
+                              {"triangles"},
                               {"mode", cli::TextTable::Align::Left},
                               {"host wait"},
                               {"frames"},
@@ -318,13 +331,15 @@ int main(int argc, char** argv) {
         for (std::size_t k = 0; k < results.size(); ++k) {
             const Result& r = results[k];
             const Result& base = results[k - k % runs_per_size];
-            table.add_row({std::to_string(r.triangles), r.mode, r.host_wait, std::to_string(r.frames),
+            table.add_row({r.renderer, std::to_string(r.triangles), r.mode, r.host_wait, std::to_string(r.frames),
                            format_fixed(r.p50, 2), format_fixed(r.p99, 2), format_fixed(r.mean, 2),
                            format_fixed(r.step_ms, 2), format_fixed(r.cpu_ms, 2), format_fixed(r.bytes_per_frame, 0),
                            std::to_string(r.torn), format_fixed(r.p50 / base.p50, 3) + "x"});
         }
-        std::printf("\nflag on %s, %dx%d pictures, offscreen draw with read-back\n", results.front().device.c_str(),
-                    o.width, o.height);
+        std::printf("\nflag, %dx%d pictures, offscreen draw with read-back, on\n", o.width, o.height);
+        for (std::size_t k = 0; k < results.size(); ++k)
+            if (k == 0 || results[k].renderer != results[k - 1].renderer)
+                std::printf("  %s: %s\n", results[k].renderer.c_str(), results[k].device.c_str());
         table.print(std::cout);
         if (!o.json_file.empty()) {
             std::ofstream out(o.json_file);
@@ -332,7 +347,8 @@ int main(int argc, char** argv) {
             json.begin_array();
             for (const Result& r : results) {
                 json.begin_object();
-                json.field("mode", r.mode)
+                json.field("renderer", r.renderer)
+                    .field("mode", r.mode)
                     .field("host_wait", r.host_wait)
                     .field("device", r.device)
                     .field("triangles", static_cast<double>(r.triangles));

@@ -20,6 +20,7 @@
 namespace weft::cuda {
 namespace {
 
+/// The Vulkan kind (SlotApi::vulkan_fd): imported fds, ordered by the slots' timelines.
 class CudaSharedOutput final : public SharedOutput {
 public:
     CudaSharedOutput(DeviceSolver& solver, int device, std::span<const SharedSlotHandle> slots)
@@ -106,30 +107,34 @@ private:
 std::unique_ptr<SharedOutput> make_shared_output(DeviceSolver& solver, const DeviceInfo& device,
                                                  std::span<const SharedSlotHandle> slots, const DeviceUuid& uuid,
                                                  std::string& why) {
-    if (!std::equal(uuid.begin(), uuid.end(), std::begin(device.uuid))) {
+    const auto refuse = [&](std::string reason) -> std::unique_ptr<SharedOutput> {
         close_slot_handles(slots);
-        why = "the renderer's GPU is not the CUDA backend's (" + device.name + ", device " +
-              std::to_string(device.ordinal) + ")";
+        why = std::move(reason);
         return nullptr;
-    }
+    };
+    if (slots.empty()) return refuse("no slots to share");
+    const SlotApi api = slots.front().api;
+    if (std::any_of(slots.begin(), slots.end(), [&](const SharedSlotHandle& s) { return s.api != api; }))
+        return refuse("the slots mix Vulkan and OpenGL handles");
+    if (api == SlotApi::vulkan_fd && !std::equal(uuid.begin(), uuid.end(), std::begin(device.uuid)))
+        return refuse("the renderer's GPU is not the CUDA backend's (" + device.name + ", device " +
+                      std::to_string(device.ordinal) + ")");
+    if (solver.vertex_count() == 0) return refuse("the world is not built yet (World::share_output builds it)");
     const std::uint64_t needed = solver.vertex_count() * sizeof(OutputVertex) + kSlotStampBytes;
     for (const SharedSlotHandle& s : slots)
-        if (s.memory.size < needed) {
-            close_slot_handles(slots);
-            why = "a shared slot holds " + std::to_string(s.memory.size) + " bytes, the world needs " +
-                  std::to_string(needed);
-            return nullptr;
-        }
-    if (slots.empty()) {
-        why = "no slots to share";
-        return nullptr;
-    }
-    if (solver.vertex_count() == 0) {
-        close_slot_handles(slots);
-        why = "the world is not built yet (World::share_output builds it)";
-        return nullptr;
-    }
+        if (slot_bytes(s) < needed)
+            return refuse("a shared slot holds " + std::to_string(slot_bytes(s)) + " bytes, the world needs " +
+                          std::to_string(needed));
+    if (api == SlotApi::opengl_buffer) return make_gl_shared_output(solver, device, slots, why);
     return std::make_unique<CudaSharedOutput>(solver, device.ordinal, slots);
 }
+
+#ifndef WEFT_CUDA_OPENGL
+std::unique_ptr<SharedOutput> make_gl_shared_output(DeviceSolver& /*solver*/, const DeviceInfo& /*device*/,
+                                                    std::span<const SharedSlotHandle> /*slots*/, std::string& why) {
+    why = "this build of the CUDA backend has no OpenGL interop (GL/gl.h was not found)";
+    return nullptr;
+}
+#endif
 
 }  // namespace weft::cuda

@@ -26,6 +26,8 @@ ClothFeed::ClothFeed(World& world, Renderer& renderer, const RenderScene& scene,
         why_ = std::string(renderer.name()) + ": " + why;
         return;
     }
+    make_current_ = std::move(link->make_current);
+    if (make_current_) make_current_();
     output_ = world.share_output(link->slots, link->device_uuid, why);
     if (!output_) {
         why_ = why;
@@ -34,7 +36,16 @@ ClothFeed::ClothFeed(World& world, Renderer& renderer, const RenderScene& scene,
     values_ = link->timeline_values;
 }
 
-ClothFeed::~ClothFeed() = default;
+ClothFeed::~ClothFeed() {
+    // A GL writer lets its buffers go through the context that owns them.
+    if (output_ && make_current_) {
+        try {
+            make_current_();
+        } catch (...) {  // NOLINT(bugprone-empty-catch): a destructor must not throw; the release goes on
+        }
+    }
+    output_.reset();
+}
 
 std::string ClothFeed::describe() const {
     if (output_) return "interop (zero-copy, " + std::to_string(output_->slots()) + " slots)";
@@ -49,13 +60,16 @@ RenderFrame ClothFeed::simulate(const std::function<void()>& steps) {
         // before is being drawn from.
         const int slot = static_cast<int>((frames_ - 1) % output_->slots());
         std::uint64_t& value = values_[static_cast<std::size_t>(slot)];
+        if (make_current_) make_current_();
         output_->begin_frame(slot, value, frame.stamp);
         try {
             if (steps) steps();
         } catch (...) {
+            if (make_current_) make_current_();
             output_->end_frame(++value);  // the slot's next draw may still come; keep the count right
             throw;
         }
+        if (make_current_) make_current_();  // the steps may have drawn with another context
         output_->end_frame(++value);
         frame.cloth_slot = slot;
         frame.wait_value = value;

@@ -1,14 +1,18 @@
-// Zero-copy interop between the CUDA backend and the Vulkan renderer (docs/rendering.md), on a GPU
-// host, through the frame pipeline's ClothFeed: the renderer exports two cloth slots with a timeline
-// semaphore each, the backend imports them, its output kernel writes positions and normals straight
-// into one slot while Vulkan draws the frame before from the other, the timelines ordering the two
-// on the GPU with no host wait between them.
-// - The slot Vulkan draws from holds exactly the solver's state (positions bit for bit).
+// Zero-copy interop between the CUDA backend and each renderer (docs/rendering.md), on a GPU host,
+// through the frame pipeline's ClothFeed: the renderer exports two cloth slots, the backend takes
+// them, its output kernel writes positions and normals straight into one slot while the renderer
+// draws the frame before from the other, with no host wait between them.
+// - Vulkan: memory and a timeline semaphore per slot exported as fds, imported by CUDA; the
+//   timelines order writer and reader on the GPU.
+// - EGL + OpenGL: two buffer objects registered with CUDA (cudaGraphicsGLRegisterBuffer); the
+//   writer's map and unmap order it against GL's draws.
+// Each test runs once per renderer ("vulkan", "egl").
+// - The slot the renderer draws from holds exactly the solver's state (positions bit for bit).
 // - The picture equals the host-upload picture of the same state.
 // - No cloth byte crosses the bus: the renderer uploads 0 bytes per frame on this path.
 // - 1,000 frames of the frame loop with simulation and drawing overlapped: every frame drew one
 //   whole state, its own (the frame stamps the writer puts before and after the vertices, read back
-//   by Vulkan after its draws), and the slot's contents equal the state of that frame.
+//   by the renderer after its draws), and the slot's contents equal the state of that frame.
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -27,15 +31,16 @@
 namespace weft {
 namespace {
 
-std::unique_ptr<render::Renderer> vulkan_renderer(std::string& why) {
+std::unique_ptr<render::Renderer> make_renderer(const std::string& name, std::string& why) {
     render::RendererOptions o;
     o.width = 320;
     o.height = 240;
-    // Validation where the layer is installed (the GPU host gets it from .gpu-deps), else without.
+    // Validation where the layer (or a GL debug context) is there (the GPU host gets the Vulkan
+    // layer from .gpu-deps), else without.
     for (const bool validation : {true, false}) {
         o.validation = validation;
         try {
-            return render::create_renderer("vulkan", o);
+            return render::create_renderer(name, o);
         } catch (const Error& e) {
             why = e.what();
         }
@@ -50,10 +55,10 @@ struct Rig {
     render::RenderScene scene;
 };
 
-// The flag on the cuda backend, drawn by a Vulkan renderer; nullopt (with `why`) without one.
-std::optional<Rig> make_rig(std::string& why) {
+// The flag on the cuda backend, drawn by renderer `name`; nullopt (with `why`) without one.
+std::optional<Rig> make_rig(const std::string& name, std::string& why) {
     Rig r;
-    r.renderer = vulkan_renderer(why);
+    r.renderer = make_renderer(name, why);
     if (!r.renderer) return std::nullopt;
     const auto file = std::filesystem::path(WEFT_SOURCE_DIR) / "assets" / "scenes" / "flag.toml";
     r.desc = load_scene(file, {});
@@ -80,13 +85,15 @@ Difference compare(const std::vector<render::RenderVertex>& slot, const std::vec
     return d;
 }
 
-TEST(RenderInterop, CudaWritesTheSlotsVulkanDrawsWithoutACopy) {
+class RenderInterop : public ::testing::TestWithParam<std::string> {};
+
+TEST_P(RenderInterop, CudaWritesTheSlotsTheRendererDrawsWithoutACopy) {
     WEFT_REQUIRE_GPU();
     std::string why;
-    std::optional<Rig> rig = make_rig(why);
-    if (!rig) GTEST_SKIP() << "no Vulkan renderer: " << why;
+    std::optional<Rig> rig = make_rig(GetParam(), why);
+    if (!rig) GTEST_SKIP() << "no " << GetParam() << " renderer: " << why;
     render::ClothFeed feed(*rig->world, *rig->renderer, rig->scene);
-    ASSERT_TRUE(feed.zero_copy()) << "an NVIDIA Vulkan device on the backend's GPU must share: "
+    ASSERT_TRUE(feed.zero_copy()) << "an NVIDIA " << GetParam() << " device on the backend's GPU must share: "
                                   << feed.fallback_reason();
     std::printf("[ interop  ] %s on %s\n", feed.describe().c_str(), rig->renderer->device_description().c_str());
 
@@ -105,7 +112,7 @@ TEST(RenderInterop, CudaWritesTheSlotsVulkanDrawsWithoutACopy) {
             << rig->renderer->transfer().stamp_last;
     }
 
-    // What Vulkan drew from is the solver's state after the last step: positions bit for bit (the
+    // What the renderer drew from is the solver's state after the last step: positions bit for bit (the
     // state is float on the device; the host reads it as double and rounds it back).
     const std::vector<render::RenderVertex> slot = rig->renderer->read_cloth(last.cloth_slot);
     std::vector<render::RenderVertex> host;
@@ -118,7 +125,7 @@ TEST(RenderInterop, CudaWritesTheSlotsVulkanDrawsWithoutACopy) {
     EXPECT_LT(d.normal, 1e-4);
 
     // The picture drawn from the shared slot equals the host-upload picture of the same state.
-    auto reference = vulkan_renderer(why);
+    auto reference = make_renderer(GetParam(), why);
     ASSERT_TRUE(reference) << why;
     reference->load(rig->scene);
     render::RenderFrame upload;
@@ -138,11 +145,11 @@ TEST(RenderInterop, CudaWritesTheSlotsVulkanDrawsWithoutACopy) {
 // The frame loop of a game: each display frame runs the steps due (FrameLoop, 60 Hz display), and
 // they run while the GPU draws the frame before: submit(N) → simulate(N+1) → collect(N). 1,000
 // frames; every frame must have drawn one whole state, its own.
-TEST(RenderInterop, ThousandOverlappedFramesDrawWholeStatesOnly) {
+TEST_P(RenderInterop, ThousandOverlappedFramesDrawWholeStatesOnly) {
     WEFT_REQUIRE_GPU();
     std::string why;
-    std::optional<Rig> rig = make_rig(why);
-    if (!rig) GTEST_SKIP() << "no Vulkan renderer: " << why;
+    std::optional<Rig> rig = make_rig(GetParam(), why);
+    if (!rig) GTEST_SKIP() << "no " << GetParam() << " renderer: " << why;
     render::ClothFeed feed(*rig->world, *rig->renderer, rig->scene);
     ASSERT_TRUE(feed.zero_copy()) << feed.fallback_reason();
     FrameLoop loop(*rig->world);
@@ -195,12 +202,12 @@ TEST(RenderInterop, ThousandOverlappedFramesDrawWholeStatesOnly) {
 }
 
 // The same feed with zero-copy off takes the host path on the same GPU and draws the same picture.
-TEST(RenderInterop, HostUploadFallbackDrawsTheSamePicture) {
+TEST_P(RenderInterop, HostUploadFallbackDrawsTheSamePicture) {
     WEFT_REQUIRE_GPU();
     std::string why;
-    std::optional<Rig> a = make_rig(why);
-    if (!a) GTEST_SKIP() << "no Vulkan renderer: " << why;
-    std::optional<Rig> b = make_rig(why);
+    std::optional<Rig> a = make_rig(GetParam(), why);
+    if (!a) GTEST_SKIP() << "no " << GetParam() << " renderer: " << why;
+    std::optional<Rig> b = make_rig(GetParam(), why);
     ASSERT_TRUE(b) << why;
     render::ClothFeed shared(*a->world, *a->renderer, a->scene);
     render::ClothFeed uploaded(*b->world, *b->renderer, b->scene, render::ClothFeed::Options{false});
@@ -225,11 +232,11 @@ TEST(RenderInterop, HostUploadFallbackDrawsTheSamePicture) {
 // imports the slots. A world is built at its first step or read; sharing before that through the
 // backend directly is refused with the reason, and World::share_output builds it first. (Sharing an
 // unbuilt world once put the stamps at offset 0: the first frames read stale stamps and no cloth.)
-TEST(RenderInterop, SharingNeedsABuiltWorld) {
+TEST_P(RenderInterop, SharingNeedsABuiltWorld) {
     WEFT_REQUIRE_GPU();
     std::string why;
-    std::optional<Rig> rig = make_rig(why);
-    if (!rig) GTEST_SKIP() << "no Vulkan renderer: " << why;
+    std::optional<Rig> rig = make_rig(GetParam(), why);
+    if (!rig) GTEST_SKIP() << "no " << GetParam() << " renderer: " << why;
     std::optional<render::ClothInterop> link = rig->renderer->export_cloth(why);
     ASSERT_TRUE(link) << why;
     std::string refused;
@@ -245,6 +252,9 @@ TEST(RenderInterop, SharingNeedsABuiltWorld) {
     EXPECT_TRUE(feed.check(frame, rig->renderer->transfer()))
         << "stamps " << rig->renderer->transfer().stamp_first << "/" << rig->renderer->transfer().stamp_last;
 }
+
+INSTANTIATE_TEST_SUITE_P(Renderers, RenderInterop, ::testing::Values("vulkan", "egl"),
+                         [](const ::testing::TestParamInfo<std::string>& p) { return p.param; });
 
 }  // namespace
 }  // namespace weft

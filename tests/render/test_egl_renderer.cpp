@@ -7,6 +7,8 @@
 #include <gtest/gtest.h>
 
 #include <cstdio>
+#include <cstring>
+#include <optional>
 #include <string>
 
 #include "weft/error.h"
@@ -95,6 +97,75 @@ TEST(EglRenderer, SeveralRenderersLiveSideBySide) {
     ASSERT_TRUE(third.renderer) << third.skip;
     third.renderer->load(t.scene);
     EXPECT_EQ(third.renderer->draw(t.frame).rgba, a.rgba);
+}
+
+// The slots the EGL renderer shares with CUDA (SlotApi::opengl_buffer): two buffer objects sized
+// for the vertices and the stamps. Without CUDA here, a host frame fills slot 1 (an uploaded frame
+// goes into its slot once slots exist); a frame with no vertices then draws from that slot without
+// an upload, gives the same picture, and reads the slot's stamps (zeros: no writer stamped it).
+TEST(EglRenderer, DrawsFromAnExportedSlotWithoutAnUpload) {
+    const test::Created c = create(test::small_options(4, /*validation=*/true));
+    if (!c.renderer) GTEST_SKIP() << c.skip;
+    Renderer& r = *c.renderer;
+    const test::TestScene t = test::sheet_over_ball();
+    r.load(t.scene);
+    std::string why;
+    const std::optional<ClothInterop> link = r.export_cloth(why);
+    ASSERT_TRUE(link) << why;
+    ASSERT_EQ(link->slots.size(), 2U);
+    const std::uint64_t bytes = t.scene.cloth_vertices * sizeof(RenderVertex) + kSlotStampBytes;
+    for (const SharedSlotHandle& s : link->slots) {
+        EXPECT_EQ(s.api, SlotApi::opengl_buffer);
+        EXPECT_NE(s.gl_buffer.name, 0U);
+        EXPECT_EQ(slot_bytes(s), bytes);
+        EXPECT_EQ(s.memory.fd, -1) << "nothing to close: GL shares names, not fds";
+    }
+    EXPECT_NE(link->slots[0].gl_buffer.name, link->slots[1].gl_buffer.name);
+    for (const RenderVertex& v : r.read_cloth(0)) ASSERT_EQ(v.position[0], 0.0F) << "a slot starts zeroed";
+
+    RenderFrame upload = t.frame;
+    upload.cloth_slot = 1;
+    upload.stamp = 5;
+    const Image uploaded = r.draw(upload);
+    EXPECT_EQ(r.transfer().path, "host upload");
+    EXPECT_TRUE(frame_intact(r.transfer(), 5));
+    const std::vector<RenderVertex> slot1 = r.read_cloth(1);
+    ASSERT_EQ(slot1.size(), t.vertices.size());
+    EXPECT_EQ(std::memcmp(slot1.data(), t.vertices.data(), slot1.size() * sizeof(RenderVertex)), 0);
+    EXPECT_EQ(r.read_cloth(0)[0].position[0], 0.0F) << "slot 0 untouched";
+
+    RenderFrame shared = t.frame;
+    shared.cloth = {};
+    shared.cloth_slot = 1;
+    shared.stamp = 6;
+    r.submit(shared);
+    EXPECT_EQ(r.transfer().path, "interop");
+    EXPECT_EQ(r.transfer().bytes_uploaded, 0U);
+    const Image drawn = r.collect();
+    EXPECT_EQ(drawn.rgba, uploaded.rgba) << "the slot's vertices, drawn as uploaded";
+    EXPECT_EQ(r.transfer().stamp_first, 0U);
+    EXPECT_EQ(r.transfer().stamp_last, 0U);
+    EXPECT_FALSE(frame_intact(r.transfer(), 6)) << "no writer stamped the slot: not this frame's state";
+
+    shared.cloth_slot = 2;
+    EXPECT_THROW(r.submit(shared), Error);
+    EXPECT_THROW(r.read_cloth(2), Error);
+    EXPECT_EQ(r.validation_messages(), 0);
+}
+
+// submit() only queues (the picture lands in a pixel buffer behind a fence); collect() returns the
+// same picture draw() does, once: a second collect() has nothing to wait for.
+TEST(EglRenderer, SubmitQueuesAndCollectReturnsThePictureOnce) {
+    const test::Created c = create(test::small_options());
+    if (!c.renderer) GTEST_SKIP() << c.skip;
+    Renderer& r = *c.renderer;
+    const test::TestScene t = test::sheet_over_ball();
+    r.load(t.scene);
+    const Image expected = r.draw(t.frame);
+    r.submit(t.frame);
+    r.submit(t.frame);  // the first is collected and dropped
+    EXPECT_EQ(r.collect().rgba, expected.rgba);
+    EXPECT_THROW((void)r.collect(), Error);
 }
 
 }  // namespace

@@ -84,8 +84,17 @@ int info_command(std::ostream& out) {
             std::string why;
             if (auto link = renderer->export_cloth(why)) {
                 close_slot_handles(link->slots);
-                path = "available (" + std::to_string(link->slots.size()) +
-                       " exported cloth slots, a timeline semaphore each)";
+                const bool gl = !link->slots.empty() && link->slots.front().api == SlotApi::opengl_buffer;
+                // GL buffers always export; CUDA takes them only from a context on its own GPU, and
+                // Mesa's software rasteriser keeps them in host memory.
+                if (gl && (device.find("llvmpipe") != std::string::npos || device.find("softpipe") != std::string::npos))
+                    path = "no, host upload: a software rasteriser's buffers are host memory";
+                else if (gl)
+                    path = "available (" + std::to_string(link->slots.size()) +
+                           " GL buffer objects, registered by CUDA where its GPU runs this context)";
+                else
+                    path = "available (" + std::to_string(link->slots.size()) +
+                           " exported cloth slots, a timeline semaphore each)";
             } else {
                 path = "no, host upload: " + why;
             }

@@ -3,10 +3,13 @@
 // from an EGL device (or Mesa's surfaceless platform, see egl_context.h), every target is a
 // framebuffer object.
 //
-// Per frame: the cloth vertices are uploaded into the one shared cloth buffer, a depth-only pass
-// from the key light fills the shadow map, the scene is drawn into multisampled renderbuffers, and
-// the resolved image is read back. The Vulkan renderer does the same with the same uniforms
-// (frame_uniforms.h), so the two give the same picture.
+// Per frame: the cloth vertices are uploaded into the cloth buffer (or, on the zero-copy path, one
+// of two exported slot buffers that the CUDA backend wrote holds them: export_cloth), a depth-only
+// pass from the key light fills the shadow map, the scene is drawn into multisampled
+// renderbuffers, and the resolved image is read into a pixel buffer with a fence after it: submit()
+// returns without waiting, collect() waits for the fence and copies the picture out. The Vulkan
+// renderer does the same with the same uniforms (frame_uniforms.h), so the two give the same
+// picture.
 #include "egl/egl_renderer.h"
 
 #include <algorithm>
@@ -18,6 +21,7 @@
 #include <optional>
 #include <span>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "egl/egl_context.h"
@@ -98,6 +102,36 @@ struct Mesh {
     GLsizei index_count = 0;
 };
 
+/// A fence on the GL command stream, deleted when dropped.
+class Fence {
+public:
+    Fence() = default;
+    ~Fence() { reset(); }
+    Fence(const Fence&) = delete;
+    Fence& operator=(const Fence&) = delete;
+    /// A new fence after every command issued so far (the old one dropped), flushed so that it signals.
+    void insert() {
+        reset();
+        sync_ = glFenceSync(GL_SYNC_GPU_COMMANDS_COMPLETE, 0);
+        glFlush();
+    }
+    /// Blocks until the commands before the fence are done. Throws weft::Error when GL says the wait failed.
+    void wait() const {
+        if (sync_ == nullptr) return;
+        for (;;) {
+            const GLenum r = glClientWaitSync(sync_, GL_SYNC_FLUSH_COMMANDS_BIT, 100'000'000);  // 0.1 s a try
+            if (r == GL_ALREADY_SIGNALED || r == GL_CONDITION_SATISFIED) return;
+            if (r == GL_WAIT_FAILED) throw Error("egl renderer: glClientWaitSync failed on the frame's fence");
+        }
+    }
+    void reset() {
+        if (sync_ != nullptr) glDeleteSync(std::exchange(sync_, nullptr));
+    }
+
+private:
+    GLsync sync_ = nullptr;
+};
+
 /// `vertex_flags`: GL_DYNAMIC_STORAGE_BIT for the cloth buffer rewritten every frame, 0 for the
 /// static colliders.
 Mesh make_mesh(std::span<const RenderVertex> vertices, std::span<const std::uint32_t> indices, GLbitfield vertex_flags) {
@@ -126,7 +160,9 @@ Mesh make_mesh(std::span<const RenderVertex> vertices, std::span<const std::uint
 /// The GL objects of a loaded scene.
 struct SceneObjects {
     RenderScene scene;
-    Mesh cloth;                  ///< the shared cloth buffer (all cloths) and all cloths' indices
+    Mesh cloth;                  ///< the host-upload cloth buffer (all cloths) and all cloths' indices
+    /// The exported cloth slots (export_cloth): vertices, then kSlotStampBytes of frame stamps.
+    std::vector<gl::Buffer> slots;
     std::vector<Mesh> colliders;  ///< one per RenderScene::colliders entry
     gl::Buffer draw_uniforms;     ///< one DrawUniforms per draw, `draw_stride` apart
     GLsizeiptr draw_stride = 0;
@@ -141,18 +177,19 @@ public:
     [[nodiscard]] std::string_view name() const override { return "egl"; }
     [[nodiscard]] std::string device_description() const override { return description_; }
     void load(const RenderScene& scene) override;
-    /// GL queues the work, but the picture is read back here at once (glReadPixels): collect()
-    /// returns it. (An asynchronous read through a pixel buffer would let the caller overlap.)
+    /// Queues the frame's passes and the read of its picture into a pixel buffer, then a fence:
+    /// nothing waits here, so the caller's work until collect() overlaps the drawing.
     void submit(const RenderFrame& frame) override;
+    /// Waits for the fence and copies the picture (and, from a shared slot, its stamps) out.
     [[nodiscard]] Image collect() override;
-    void skip_frame(const RenderFrame& /*frame*/) override {}  // nothing is shared: no timeline to keep
+    // GL slots are ordered by the writer's map and unmap, not by timeline values: nothing to keep.
+    void skip_frame(const RenderFrame& /*frame*/) override {}
     [[nodiscard]] TransferStats transfer() const override { return transfer_; }
     [[nodiscard]] int validation_messages() const override { return debug_log_.messages; }
-    [[nodiscard]] std::optional<ClothInterop> export_cloth(std::string& why) override {
-        // CUDA shares a GL buffer through cudaGraphicsGLRegisterBuffer instead, not through fds.
-        why = "the EGL path shares with CUDA through cudaGraphicsGLRegisterBuffer, not built yet";
-        return std::nullopt;
-    }
+    /// Two buffer objects of this renderer's context, shared as SlotApi::opengl_buffer (the CUDA
+    /// backend registers them). The context must stay current on the thread that shares them and
+    /// runs the frames; a later load() drops them.
+    [[nodiscard]] std::optional<ClothInterop> export_cloth(std::string& why) override;
     [[nodiscard]] std::vector<RenderVertex> read_cloth(int slot) override;
 
 private:
@@ -179,8 +216,12 @@ private:
     std::optional<SceneObjects> loaded_;
 
     TransferStats transfer_{"host upload", 0};
-    std::vector<std::uint8_t> pixels_;  ///< read-back rows, bottom to top as GL gives them
-    std::optional<Image> submitted_;     ///< the picture of the frame submitted and not collected
+    gl::Buffer readback_;               ///< the submitted frame's picture, rows bottom to top as GL gives them
+    gl::Buffer stamp_readback_;         ///< the stamps of the slot the submitted frame drew from
+    Fence drawn_;                       ///< after the submitted frame's last command
+    bool submitted_ = false;            ///< a frame was submitted and not collected
+    bool stamps_from_slot_ = false;     ///< the submitted frame drew from a slot: its stamps are in stamp_readback_
+    std::vector<std::uint8_t> pixels_;  ///< read-back rows
 };
 
 EglRenderer::EglRenderer(const RendererOptions& options) : options_(options), context_(options.validation) {
@@ -267,6 +308,15 @@ EglRenderer::EglRenderer(const RendererOptions& options) : options_(options), co
     glNamedFramebufferReadBuffer(resolve_target_.get(), GL_COLOR_ATTACHMENT0);
     check_framebuffer(resolve_target_.get(), "resolve");
 
+    // The picture's pixel buffer: written by the GPU, read by the host (GL_CLIENT_STORAGE_BIT asks
+    // for host memory, where the read costs no second copy).
+    readback_ = gl::create_buffer();
+    glNamedBufferStorage(readback_.get(), static_cast<GLsizeiptr>(w) * h * 4, nullptr,
+                         GL_MAP_READ_BIT | GL_CLIENT_STORAGE_BIT);
+    stamp_readback_ = gl::create_buffer();
+    glNamedBufferStorage(stamp_readback_.get(), static_cast<GLsizeiptr>(kSlotStampBytes), nullptr,
+                         GL_MAP_READ_BIT | GL_CLIENT_STORAGE_BIT);
+
     // Fixed state: depth test, no blending, no culling (cloth is two-sided: the fragment shader
     // picks the colour by gl_FrontFacing, front = counter-clockwise, GL's default).
     glEnable(GL_DEPTH_TEST);
@@ -292,6 +342,7 @@ EglRenderer::~EglRenderer() {
 
 void EglRenderer::load(const RenderScene& scene) {
     context_.make_current();
+    if (submitted_) (void)collect();  // the frame in flight draws from the objects replaced here
     for (const ClothDraw& c : scene.cloths)
         if (std::size_t{c.first_index} + c.index_count > scene.cloth_indices.size() ||
             std::size_t{c.first_vertex} + c.vertex_count > scene.cloth_vertices)
@@ -355,39 +406,106 @@ void EglRenderer::draw_meshes(const std::vector<DrawUniforms>& draws, bool shado
     glBindVertexArray(0);
 }
 
+std::optional<ClothInterop> EglRenderer::export_cloth(std::string& why) {
+    if (!loaded_) throw Error("egl renderer: export_cloth() before load()");
+    SceneObjects& o = *loaded_;
+    if (o.scene.cloth_vertices == 0) {
+        why = "the scene has no cloth";
+        return std::nullopt;
+    }
+    context_.make_current();
+    if (submitted_) (void)collect();  // a frame in flight may draw from the slots replaced here
+    const std::uint64_t bytes = o.scene.cloth_vertices * sizeof(RenderVertex) + kSlotStampBytes;
+    const std::vector<std::uint8_t> zeros(bytes, 0);
+    ClothInterop link;
+    link.make_current = [this] { context_.make_current(); };
+    o.slots.clear();
+    for (int k = 0; k < 2; ++k) {
+        gl::Buffer slot = gl::create_buffer();
+        // Dynamic: a host-upload frame (the backend would not share) is uploaded into its slot, as
+        // on the Vulkan path, so that read_cloth(slot) is what frames of that slot drew.
+        glNamedBufferStorage(slot.get(), static_cast<GLsizeiptr>(bytes), zeros.data(), GL_DYNAMIC_STORAGE_BIT);
+        SharedSlotHandle h;
+        h.api = SlotApi::opengl_buffer;
+        h.gl_buffer = {slot.get(), bytes};
+        link.slots.push_back(h);
+        link.timeline_values.push_back(0);
+        o.slots.push_back(std::move(slot));
+    }
+    gl::check_errors("export_cloth");
+    // The buffers exist on the device before another API looks them up (glFlush would order the
+    // commands; glFinish also completes the zero fill, once per export).
+    glFinish();
+    return link;
+}
+
 std::vector<RenderVertex> EglRenderer::read_cloth(int slot) {
     if (!loaded_) throw Error("egl renderer: read_cloth() before load()");
-    if (slot != 0) throw Error("egl renderer: cloth slot " + std::to_string(slot) + " (it has one, 0)");
+    const SceneObjects& o = *loaded_;
+    const int slots = o.slots.empty() ? 1 : static_cast<int>(o.slots.size());
+    if (slot < 0 || slot >= slots)
+        throw Error("egl renderer: cloth slot " + std::to_string(slot) + " (it has " + std::to_string(slots) + ")");
     context_.make_current();
-    std::vector<RenderVertex> out(loaded_->scene.cloth_vertices);
+    const GLuint buffer = o.slots.empty() ? o.cloth.vertices.get() : o.slots[static_cast<std::size_t>(slot)].get();
+    std::vector<RenderVertex> out(o.scene.cloth_vertices);
     if (!out.empty())
-        glGetNamedBufferSubData(loaded_->cloth.vertices.get(), 0, static_cast<GLsizeiptr>(out.size() * sizeof(RenderVertex)),
-                                out.data());
+        glGetNamedBufferSubData(buffer, 0, static_cast<GLsizeiptr>(out.size() * sizeof(RenderVertex)), out.data());
     return out;
 }
 
 Image EglRenderer::collect() {
     if (!submitted_) throw Error("egl renderer: collect() without a submitted frame");
-    Image image = std::move(*submitted_);
-    submitted_.reset();
+    context_.make_current();
+    submitted_ = false;
+    drawn_.wait();
+    drawn_.reset();
+    const GLint w = options_.width;
+    const GLint h = options_.height;
+    const std::size_t row = static_cast<std::size_t>(w) * 4;
+    pixels_.resize(row * static_cast<std::size_t>(h));
+    glGetNamedBufferSubData(readback_.get(), 0, static_cast<GLsizeiptr>(pixels_.size()), pixels_.data());
+    if (stamps_from_slot_) {
+        std::uint64_t stamps[2] = {0, 0};
+        glGetNamedBufferSubData(stamp_readback_.get(), 0, sizeof stamps, stamps);
+        transfer_.stamp_first = stamps[0];
+        transfer_.stamp_last = stamps[1];
+    }
+    gl::check_errors("collect");
+
+    // GL's rows run bottom to top, the image's top to bottom.
+    Image image(w, h);
+    for (GLint y = 0; y < h; ++y)
+        std::memcpy(image.rgba.data() + static_cast<std::size_t>(y) * row,
+                    pixels_.data() + static_cast<std::size_t>(h - 1 - y) * row, row);
     return image;
 }
 
 void EglRenderer::submit(const RenderFrame& frame) {
     if (!loaded_) throw Error("egl renderer: draw() before load()");
-    if (frame.cloth_slot != 0 || frame.wait_value != 0 || frame.signal_value != 0)
-        throw Error("egl renderer: a frame for shared cloth slots, but nothing is exported");
     context_.make_current();
+    if (submitted_) (void)collect();  // one frame in flight: the one before is dropped
     SceneObjects& o = *loaded_;
+    const bool exported = !o.slots.empty();
+    const bool from_slot = frame.cloth.empty() && exported;
+    if (!exported && (frame.cloth_slot != 0 || frame.wait_value != 0 || frame.signal_value != 0))
+        throw Error("egl renderer: a frame for shared cloth slots, but nothing is exported");
+    if (exported && (frame.cloth_slot < 0 || static_cast<std::size_t>(frame.cloth_slot) >= o.slots.size()))
+        throw Error("egl renderer: cloth slot " + std::to_string(frame.cloth_slot) + " of " +
+                    std::to_string(o.slots.size()));
 
-    // Cloth vertices from the host; none given: the buffer already holds them (filled on the device).
-    // The buffer has no stamp tail: the stamps reported are the uploaded frame's own.
-    transfer_ = {"host upload", 0, frame.stamp, frame.stamp};
+    // Cloth vertices from the host (into the frame's slot once slots are exported), or from the slot
+    // the backend wrote (no host copy: the backend's unmap ordered its writes before these draws).
+    // An uploaded frame's stamps are its own; a shared slot's are read back with the picture.
+    const GLuint cloth_buffer =
+        exported ? o.slots[static_cast<std::size_t>(frame.cloth_slot)].get() : o.cloth.vertices.get();
+    if (o.cloth.index_count > 0) glVertexArrayVertexBuffer(o.cloth.array.get(), 0, cloth_buffer, 0, sizeof(RenderVertex));
+    transfer_ = from_slot ? TransferStats{"interop", 0, 0, 0} : TransferStats{"host upload", 0, frame.stamp, frame.stamp};
+    stamps_from_slot_ = from_slot;
     if (!frame.cloth.empty()) {
         if (frame.cloth.size() != o.scene.cloth_vertices)
             throw Error("egl renderer: the frame has " + std::to_string(frame.cloth.size()) +
                         " cloth vertices, the scene " + std::to_string(o.scene.cloth_vertices));
-        glNamedBufferSubData(o.cloth.vertices.get(), 0, static_cast<GLsizeiptr>(frame.cloth.size_bytes()),
+        glNamedBufferSubData(cloth_buffer, 0, static_cast<GLsizeiptr>(frame.cloth.size_bytes()),
                              frame.cloth.data());
         transfer_.bytes_uploaded = frame.cloth.size_bytes();
     }
@@ -422,24 +540,23 @@ void EglRenderer::submit(const RenderFrame& frame) {
     glUseProgram(surface_program_.get());
     draw_meshes(draws, false);
 
-    // Resolve and read back.
+    // Resolve, and read into the pixel buffer: queued, collect() waits for it.
     const GLint w = options_.width;
     const GLint h = options_.height;
     glBlitNamedFramebuffer(scene_target_.get(), resolve_target_.get(), 0, 0, w, h, 0, 0, w, h, GL_COLOR_BUFFER_BIT,
                            GL_NEAREST);
     glBindFramebuffer(GL_READ_FRAMEBUFFER, resolve_target_.get());
-    const std::size_t row = static_cast<std::size_t>(w) * 4;
-    pixels_.resize(row * static_cast<std::size_t>(h));
-    glReadPixels(0, 0, w, h, GL_RGBA, GL_UNSIGNED_BYTE, pixels_.data());
+    glBindBuffer(GL_PIXEL_PACK_BUFFER, readback_.get());
+    glReadPixels(0, 0, w, h, GL_RGBA, GL_UNSIGNED_BYTE, nullptr);
+    glBindBuffer(GL_PIXEL_PACK_BUFFER, 0);
     glBindFramebuffer(GL_READ_FRAMEBUFFER, 0);
+    if (from_slot)  // the stamps of what the draws read, after them in GL's order
+        glCopyNamedBufferSubData(cloth_buffer, stamp_readback_.get(),
+                                 static_cast<GLintptr>(o.scene.cloth_vertices * sizeof(RenderVertex)), 0,
+                                 static_cast<GLsizeiptr>(kSlotStampBytes));
     gl::check_errors("draw");
-
-    // GL's rows run bottom to top, the image's top to bottom.
-    Image image(w, h);
-    for (GLint y = 0; y < h; ++y)
-        std::memcpy(image.rgba.data() + static_cast<std::size_t>(y) * row,
-                    pixels_.data() + static_cast<std::size_t>(h - 1 - y) * row, row);
-    submitted_ = std::move(image);
+    drawn_.insert();
+    submitted_ = true;
 }
 
 }  // namespace

@@ -39,12 +39,38 @@ namespace weft {
 /// part of another (the tearing check of docs/rendering.md).
 inline constexpr std::uint64_t kSlotStampBytes = 16;
 
-/// One shared cloth slot: the memory (vertices, then the stamps) and the timeline semaphore that
-/// orders its writer against its reader.
-struct SharedSlotHandle {
-    ExternalMemoryHandle memory;
-    ExternalTimelineHandle timeline;
+/// How a renderer hands a cloth slot to a backend.
+enum class SlotApi : std::uint8_t {
+    /// Vulkan: the memory and a timeline semaphore exported as opaque fds (`memory`, `timeline`).
+    /// The timeline orders the writer against the reader on the GPU.
+    vulkan_fd,
+    /// OpenGL: a buffer object of the context that is current on the thread that shares the slots
+    /// and begins and ends every frame (`gl_buffer`). The backend registers it (CUDA:
+    /// cudaGraphicsGLRegisterBuffer) and maps it around each frame's writes: mapping orders the
+    /// writes after the GL work issued before, unmapping orders the GL work issued after behind
+    /// them, so the timeline values of a frame are not used.
+    opengl_buffer,
 };
+
+/// An OpenGL buffer object shared as a cloth slot (SlotApi::opengl_buffer).
+struct GlBufferHandle {
+    std::uint32_t name = 0;  ///< the buffer object's name in the current context
+    std::uint64_t size = 0;  ///< bytes of its storage
+};
+
+/// One shared cloth slot: the memory (vertices, then the stamps) and, for Vulkan, the timeline
+/// semaphore that orders its writer against its reader.
+struct SharedSlotHandle {
+    SlotApi api = SlotApi::vulkan_fd;
+    ExternalMemoryHandle memory;      ///< SlotApi::vulkan_fd
+    ExternalTimelineHandle timeline;  ///< SlotApi::vulkan_fd
+    GlBufferHandle gl_buffer;         ///< SlotApi::opengl_buffer
+};
+
+/// The bytes a slot holds for the writer: the exported buffer's, or the GL buffer's.
+[[nodiscard]] inline std::uint64_t slot_bytes(const SharedSlotHandle& slot) {
+    return slot.api == SlotApi::opengl_buffer ? slot.gl_buffer.size : slot.memory.size;
+}
 
 /// Closes the fds of `slots` that are open (≥ 0): what a side that took them and cannot import
 /// them must do, so that none leaks.

@@ -66,6 +66,7 @@ private:
     World& world_;
     Renderer& renderer_;
     const RenderScene& scene_;
+    std::function<void()> make_current_;  ///< ClothInterop::make_current (GL slots), else empty
     std::unique_ptr<SharedOutput> output_;
     std::string why_;
     std::vector<std::uint64_t> values_;  ///< per slot: the last timeline value asked for

@@ -4,6 +4,7 @@
 /// RenderScene offscreen and read the picture back. Both render the same image up to rasterisation
 /// rounding (tests/render/ holds them to it).
 #include <cstdint>
+#include <functional>
 #include <memory>
 #include <string>
 #include <string_view>
@@ -52,7 +53,12 @@ struct ClothInterop {
     /// Per slot, the timeline's value now, reached: a new writer (after a world was rebuilt)
     /// continues above it, since a timeline only moves up.
     std::vector<std::uint64_t> timeline_values;
-    DeviceUuid device_uuid{};  ///< the GPU they live on
+    DeviceUuid device_uuid{};  ///< the GPU they live on (Vulkan slots; GL slots are found through the context)
+    /// OpenGL slots: makes the context that owns them current on the calling thread. The backend
+    /// finds a GL buffer through the current context, so ClothFeed calls this before it shares the
+    /// slots, begins or ends a frame, and lets them go (another renderer's context may be current
+    /// then). Empty for Vulkan slots.
+    std::function<void()> make_current;
 };
 
 class Renderer {
@@ -83,11 +89,13 @@ public:
     /// signalled, so a writer waiting on them goes on (a no-op for host-upload frames).
     virtual void skip_frame(const RenderFrame& frame) = 0;
     [[nodiscard]] virtual TransferStats transfer() const = 0;
-    /// After load(): exports two cloth slots with a timeline semaphore each (new fds, owned by the
-    /// caller until imported). From then on a frame with no cloth vertices is drawn from what the
-    /// writer put in slot RenderFrame::cloth_slot, with RenderFrame's wait and signal values on that
-    /// slot's timeline. std::nullopt, with the reason in `why`, where the device or the API cannot
-    /// export (lavapipe, the EGL path so far).
+    /// After load(): exports two cloth slots. Vulkan: exportable memory with a timeline semaphore
+    /// each (new fds, owned by the caller until imported). EGL: two GL buffer objects
+    /// (SlotApi::opengl_buffer) and ClothInterop::make_current. From then on a frame with no cloth
+    /// vertices is drawn from what the writer put in slot RenderFrame::cloth_slot (Vulkan: with
+    /// RenderFrame's wait and signal values on that slot's timeline), and a frame with vertices is
+    /// uploaded into that slot. std::nullopt, with the reason in `why`, where the device cannot
+    /// export (lavapipe).
     [[nodiscard]] virtual std::optional<ClothInterop> export_cloth(std::string& why) = 0;
     /// Copies cloth slot `slot` back to the host: what the renderer draws from (tests).
     [[nodiscard]] virtual std::vector<RenderVertex> read_cloth(int slot = 0) = 0;
