@@ -3,13 +3,17 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstdio>
+#include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <string>
 
 #include <unistd.h>
 
 #include "render_test_scenes.h"
 #include "weft/error.h"
+#include "weft/render/frame_sequence.h"
 #include "weft/render/image.h"
 #include "weft/render/render_scene.h"
 
@@ -197,6 +201,43 @@ TEST(RenderScene, ColliderMeshesFaceOutwards) {
     const glm::vec3 b(v[1].position[0], v[1].position[1], v[1].position[2]);
     const glm::vec3 c(v[2].position[0], v[2].position[1], v[2].position[2]);
     EXPECT_GT(glm::cross(b - a, c - a).y, 0.0F) << "the ground faces up";
+}
+
+// Numbered frames, and the MP4 made from them where ffmpeg is installed (skipped, saying so,
+// where it is not): ffprobe finds as many frames as were written, at the frame rate asked for,
+// padded to even sizes for yuv420p.
+TEST(FrameSequence, WritesNumberedFramesAndTheirVideo) {
+    const std::filesystem::path folder = temp_file("sequence");
+    std::filesystem::remove_all(folder);
+    FrameSequence frames(folder);
+    EXPECT_EQ(frames.pattern(), (folder / "frame_%04d.png").string());
+    frames.write(0, gradient(33, 17));
+    EXPECT_EQ(frames.encode_mp4(30).note, "fewer than 2 frames");
+    for (int k = 1; k < 12; ++k) frames.write(k, gradient(33, 17));
+    EXPECT_EQ(frames.frames_written(), 12);
+    EXPECT_TRUE(std::filesystem::exists(folder / "frame_0011.png"));
+    EXPECT_EQ(read_png(folder / "frame_0007.png").rgba, gradient(33, 17).rgba);
+
+    if (std::system("command -v ffmpeg > /dev/null 2>&1 && command -v ffprobe > /dev/null 2>&1") != 0) {
+        EXPECT_EQ(frames.encode_mp4(30).note, "ffmpeg not installed");
+        std::filesystem::remove_all(folder);
+        GTEST_SKIP() << "ffmpeg/ffprobe not installed: the MP4 is not made here";
+    }
+    const FrameSequence::Video video = frames.encode_mp4(24);
+    ASSERT_FALSE(video.file.empty()) << video.note;
+    EXPECT_EQ(video.file, folder / "capture.mp4");
+    const std::string probe = "ffprobe -v error -select_streams v:0 -count_frames -show_entries "
+                              "stream=nb_read_frames,width,height,r_frame_rate -of csv=p=0 '" +
+                              video.file.string() + "'";
+    FILE* pipe = ::popen(probe.c_str(), "r");
+    ASSERT_NE(pipe, nullptr);
+    char line[256] = {};
+    const bool read = std::fgets(line, sizeof line, pipe) != nullptr;
+    ::pclose(pipe);
+    ASSERT_TRUE(read) << probe;
+    // width,height,r_frame_rate,nb_read_frames
+    EXPECT_EQ(std::string(line).substr(0, std::string(line).find_last_not_of("\r\n") + 1), "34,18,24/1,12") << probe;
+    std::filesystem::remove_all(folder);
 }
 
 }  // namespace
