@@ -40,6 +40,10 @@ struct StepParams {
     double cg_eps2 = 0;
     std::uint32_t cloth_offset = 0, shape_offset = 0, friction_offset = 0, pin_target_offset = 0;
     std::uint32_t shape_start_offset = 0;  ///< the shapes at the start of the substep (swept test)
+    /// Model::grab: the global vertex (0xFFFFFFFF when there is none), its target (m) and spring.
+    std::uint32_t grab_vertex = 0xFFFFFFFFu;
+    float grab_stiffness = 0, grab_damping = 0;
+    V3 grab_target{};
 };
 
 /// The PCG state that lives on the device, so the loop needs no host round trip.

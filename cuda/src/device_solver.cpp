@@ -301,6 +301,13 @@ void DeviceSolver::fill_staging(const Model& model, double t, double h) {
     p.cg_max_iterations = w.solver.cg_max_iterations;
     p.cg_warm_start = w.solver.cg_warm_start ? 1 : 0;
     p.cg_eps2 = w.solver.cg_tolerance * w.solver.cg_tolerance;
+    p.grab_vertex = 0xFFFFFFFFu;
+    if (model.grab && model.grab->cloth < model.cloths.size()) {
+        p.grab_vertex = flat_->cloth_vertex_offset[model.grab->cloth] + model.grab->vertex;
+        p.grab_target = to_float(model.grab->target);
+        p.grab_stiffness = static_cast<float>(model.grab->stiffness);
+        p.grab_damping = static_cast<float>(model.grab->damping);
+    }
     std::memcpy(base, &p, sizeof(p));
 
     auto* cloths = reinterpret_cast<ClothParams*>(base + p.cloth_offset);

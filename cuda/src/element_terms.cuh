@@ -38,6 +38,13 @@ __device__ inline int vertex_terms(const DeviceView& d, const StepParams& sp, st
             block += -h * c.dfdv + -h2 * c.dfdx;
         }
     }
+    if (i == sp.grab_vertex && !d.fixed[i]) {
+        // The grab spring (weft/grab.h), as on the CPU: h·f − h²k(v_k − w_k) into b, (hc + h²k)·I into A.
+        const V3 x = load3(d.x0, i, d.n) + h * wk;
+        const float k = sp.grab_stiffness, c = sp.grab_damping;
+        rhs += h * (k * (sp.grab_target - x) - c * vk) - (h2 * k) * (vk - wk);
+        block += M3::diagonal(h * c + h2 * k);
+    }
     return active;
 }
 

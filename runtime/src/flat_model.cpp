@@ -81,7 +81,7 @@ FlatModel flatten(const Model& model) {
         for (const PinDesc& pin : cloth.pins) {
             const std::uint32_t v = vo + pin.vertex;
             if (f.vertex_pin[v] >= 0) continue;  // pinned twice: keep the first
-            Vec3d local = f.initial_positions[v];
+            Vec3d local = pin.position ? *pin.position : f.initial_positions[v];
             if (pin.motion >= 0) {
                 const Transform frame = model.motions.at(static_cast<std::size_t>(pin.motion)).at(0.0);
                 local = physics::transpose(frame.rotation) * (local - frame.translation);

@@ -3,6 +3,7 @@
 
 #include "collision/world_check.h"
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <string>
@@ -101,8 +102,69 @@ std::size_t World::add_collider(const ColliderDesc& collider) {
 
 void World::ensure_built() const {
     if (built_version_ == model_.topology_version) return;
+    // A world built before keeps the state of each cloth that is still the same size: adding a
+    // pin, a collider or another cloth does not send the others back to their start.
+    std::vector<std::vector<Vec3d>> x, v;
+    if (built_version_ != ~std::uint64_t{0})
+        for (std::size_t c = 0; c < built_vertex_counts_.size() && c < model_.cloths.size(); ++c) {
+            if (model_.cloths[c].fabric->vertex_count() != built_vertex_counts_[c]) break;
+            x.emplace_back(built_vertex_counts_[c]);
+            v.emplace_back(built_vertex_counts_[c]);
+            backend_->read_state(c, x.back(), v.back());
+        }
     backend_->build(model_);
+    for (std::size_t c = 0; c < x.size(); ++c) backend_->write_state(c, x[c], v[c]);
     built_version_ = model_.topology_version;
+    built_vertex_counts_.clear();
+    for (const ClothDesc& c : model_.cloths) built_vertex_counts_.push_back(c.fabric->vertex_count());
+}
+
+void World::set_grab(const VertexGrab& grab) {
+    if (grab.cloth >= model_.cloths.size())
+        throw Error("grab: cloth " + std::to_string(grab.cloth) + " of " + std::to_string(model_.cloths.size()));
+    const std::size_t vertices = model_.cloths[grab.cloth].fabric->vertex_count();
+    if (grab.vertex >= vertices)
+        throw Error("grab: vertex " + std::to_string(grab.vertex) + " of cloth '" + model_.cloths[grab.cloth].name +
+                    "', which has " + std::to_string(vertices));
+    check_range("grab", "stiffness", grab.stiffness, 0.0, 1e9);
+    check_range("grab", "damping", grab.damping, 0.0, 1e6);
+    for (int k = 0; k < 3; ++k)
+        if (!std::isfinite(grab.target[k])) throw Error("grab: the target is not finite");
+    model_.grab = grab;
+}
+
+namespace {
+void check_vertex(const Model& m, std::size_t cloth, std::uint32_t vertex, const char* what) {
+    if (cloth >= m.cloths.size())
+        throw Error(std::string(what) + ": cloth " + std::to_string(cloth) + " of " + std::to_string(m.cloths.size()));
+    if (vertex >= m.cloths[cloth].fabric->vertex_count())
+        throw Error(std::string(what) + ": vertex " + std::to_string(vertex) + " of cloth '" + m.cloths[cloth].name +
+                    "', which has " + std::to_string(m.cloths[cloth].fabric->vertex_count()));
+}
+}  // namespace
+
+bool World::is_pinned(std::size_t cloth, std::uint32_t vertex) const {
+    check_vertex(model_, cloth, vertex, "pin");
+    const auto& pins = model_.cloths[cloth].pins;
+    return std::any_of(pins.begin(), pins.end(), [&](const PinDesc& p) { return p.vertex == vertex; });
+}
+
+bool World::pin(std::size_t cloth, std::uint32_t vertex) {
+    if (is_pinned(cloth, vertex)) return false;
+    PinDesc p;
+    p.vertex = vertex;
+    p.position = positions(cloth)[vertex];
+    model_.cloths[cloth].pins.push_back(p);
+    ++model_.topology_version;
+    return true;
+}
+
+bool World::unpin(std::size_t cloth, std::uint32_t vertex) {
+    if (!is_pinned(cloth, vertex)) return false;
+    auto& pins = model_.cloths[cloth].pins;
+    pins.erase(std::remove_if(pins.begin(), pins.end(), [&](const PinDesc& p) { return p.vertex == vertex; }), pins.end());
+    ++model_.topology_version;
+    return true;
 }
 
 std::unique_ptr<SharedOutput> World::share_output(std::span<const SharedSlotHandle> slots, const DeviceUuid& device,

@@ -4,6 +4,7 @@
 
 #include <cstdint>
 #include <memory>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -19,6 +20,10 @@ namespace weft {
 struct PinDesc {
     std::uint32_t vertex = 0;
     int motion = -1;
+    /// Where the pin holds the vertex (m, world; for a pin that follows a motion, where it is at
+    /// time 0). Unset: where the vertex starts (the fabric's rest shape placed by the transform).
+    /// World::pin sets it to where the vertex is when pinned.
+    std::optional<Vec3d> position;
 };
 
 struct ClothDesc {

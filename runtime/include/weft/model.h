@@ -5,11 +5,13 @@
 
 #include <algorithm>
 #include <cstdint>
+#include <optional>
 #include <span>
 #include <vector>
 
 #include "weft/cloth.h"
 #include "weft/collider.h"
+#include "weft/grab.h"
 #include "weft/settings.h"
 
 namespace weft {
@@ -19,6 +21,8 @@ struct Model {
     std::vector<ClothDesc> cloths;
     std::vector<ColliderDesc> colliders;
     std::vector<Motion> motions;
+    /// A spring pulling one vertex (an editor's drag): a parameter like wind, read every substep.
+    std::optional<VertexGrab> grab;
     /// Incremented whenever something that a backend cooks changes (cloths, pins, colliders added or
     /// removed). Parameter edits (materials, settings, wind) do not change it: backends read them
     /// at every substep.

@@ -52,6 +52,26 @@ public:
     [[nodiscard]] Motion& motion(int index) { return model_.motions.at(static_cast<std::size_t>(index)); }
     [[nodiscard]] const Model& model() const { return model_; }
 
+    /// Analytic collider `index`: its sizes, friction and motion are read at every substep, so
+    /// changes apply at the next step. Its shape (and a mesh collider's triangles) are cooked: add
+    /// a new collider for those.
+    [[nodiscard]] ColliderDesc& collider(std::size_t index) { return model_.colliders.at(index); }
+
+    /// Pulls a vertex toward a point with a spring from the next step on, replacing any grab (an
+    /// editor's drag; weft/grab.h). Moving it is setting it again. Throws `weft::Error` naming the
+    /// value for a cloth or vertex out of range or a stiffness or damping outside its range.
+    void set_grab(const VertexGrab& grab);
+    void release_grab() { model_.grab.reset(); }
+    [[nodiscard]] const std::optional<VertexGrab>& grab() const { return model_.grab; }
+
+    /// Pins vertex `vertex` of cloth `cloth` where it is now (false: it was pinned already). Pins
+    /// are cooked into the solver: the backend is rebuilt at the next step, and every cloth keeps
+    /// its state through it. Throws `weft::Error` for a cloth or vertex out of range.
+    bool pin(std::size_t cloth, std::uint32_t vertex);
+    /// Removes every pin of vertex `vertex` of cloth `cloth` (false: it had none); rebuilt as pin().
+    bool unpin(std::size_t cloth, std::uint32_t vertex);
+    [[nodiscard]] bool is_pinned(std::size_t cloth, std::uint32_t vertex) const;
+
     /// Current positions (m) and velocities (m/s) of a cloth, copied from the backend.
     [[nodiscard]] std::vector<Vec3d> positions(std::size_t cloth) const;
     [[nodiscard]] std::vector<Vec3d> velocities(std::size_t cloth) const;
@@ -76,6 +96,9 @@ private:
     Model model_;
     std::unique_ptr<Backend> backend_;
     mutable std::uint64_t built_version_ = ~std::uint64_t{0};
+    /// Each cloth's vertex count at the last build: a rebuild carries the state of a cloth whose
+    /// count did not change (a pin added) instead of starting it again.
+    mutable std::vector<std::size_t> built_vertex_counts_;
     double time_ = 0.0;
     std::size_t steps_ = 0;
     StepStats stats_{};

@@ -84,6 +84,14 @@ void CpuSolver<T>::prepare_parameters(const Model& model, double t, double h) {
     turbulence_scale_ = static_cast<T>(w.wind.turbulence_scale);
     contact_stiffness_ = static_cast<T>(w.solver.contact_stiffness);
     time_ = static_cast<T>(t);
+    grab_vertex_ = n_;
+    if (model.grab && model.grab->cloth < model.cloths.size()) {
+        const VertexGrab& g = *model.grab;
+        grab_vertex_ = flat_->cloth_vertex_offset[g.cloth] + g.vertex;
+        grab_target_ = to<T>(g.target);
+        grab_stiffness_ = static_cast<T>(g.stiffness);
+        grab_damping_ = static_cast<T>(g.damping);
+    }
 
     cloth_params_.resize(model.cloths.size());
     for (std::size_t c = 0; c < model.cloths.size(); ++c) {
@@ -230,6 +238,14 @@ int CpuSolver<T>::evaluate_vertices(const Model& model, T h) {
                     rhs += h * c.force + h2 * (c.dfdx * d);
                     block += T(-1) * h * c.dfdv + T(-1) * h2 * c.dfdx;
                 }
+            }
+            if (i == grab_vertex_ && !fixed_[i]) {
+                // The grab spring f = k(target − x) − c·v at x = x0 + h·w_k, linearised as a contact
+                // is: h·f − h²k(v_k − w_k) into b, (h·c + h²·k)·I into A (weft/grab.h).
+                const V3 x = x0_[i] + h * wk_[i];
+                const T k = grab_stiffness_, c = grab_damping_;
+                rhs += h * (k * (grab_target_ - x) - c * vk_[i]) - (h2 * k) * (vk_[i] - wk_[i]);
+                block += M3::diagonal(h * c + h2 * k);
             }
             contacts_[i] = active;
             count += active;

@@ -95,6 +95,10 @@ private:
     T turbulence_ = T(0), turbulence_frequency_ = T(0), turbulence_scale_ = T(1), air_density_ = T(0);
     T contact_stiffness_ = T(0);
     T time_ = T(0);
+    // Model::grab for this substep: the global vertex (n_ when there is none) and its spring.
+    std::size_t grab_vertex_ = 0;
+    V3 grab_target_{};
+    T grab_stiffness_ = T(0), grab_damping_ = T(0);
     ContactTerms<T> test_contacts_;  // set_contacts_for_test
     std::vector<V3> test_kinematic_x1_, test_kinematic_v_;
     bool has_test_contacts_ = false;
