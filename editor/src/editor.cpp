@@ -113,6 +113,30 @@ public:
                     session.requests().recook = PlayRequests::GridChange{c.key, c.cells_x, c.cells_y};
                     ++next_;
                     return Outcome::next_frame;
+                case K::grab:
+                case K::drag:
+                case K::release:
+                case K::pin: {
+                    using M = PlayRequests::MouseAction::Kind;
+                    const M kind = c.kind == K::grab ? M::grab : c.kind == K::drag ? M::drag : c.kind == K::pin ? M::pin : M::release;
+                    session.requests().mouse.push_back({kind, c.x, c.y});
+                    ++next_;
+                    return Outcome::next_frame;
+                }
+                case K::held: {
+                    const std::optional<double> d = session.grab_distance();
+                    if (!d || *d > c.x) {
+                        err << "weft edit: " << where << "held " << c.x << ": "
+                            << (d ? "the grabbed vertex is " + std::to_string(*d) + " m from the grab's target"
+                                  : std::string("nothing is grabbed"))
+                            << std::endl;
+                        return Outcome::failed;
+                    }
+                    out << "held: the grabbed vertex is " << *d << " m from the grab's target" << std::endl;
+                    ++expectations_;
+                    ++next_;
+                    break;
+                }
                 case K::quit:
                     next_ = script_.commands.size();
                     return Outcome::quit;
@@ -304,6 +328,47 @@ int run_editor(const SceneDesc& scene, std::unique_ptr<World> world, EditorOptio
             render_scene = render::make_render_scene(session->world(), session->scene().camera);
             window.load(render_scene);
         }
+
+        // The mouse on the cloth: Ctrl+drag grabs the vertex under the cursor and pulls it with a
+        // spring, Shift+click pins or unpins it (docs/editor.md, "Mouse"); scripts ask the same.
+        using MouseKind = PlayRequests::MouseAction::Kind;
+        if (!scripted) {
+            const ImGuiLayer::Mouse m = imgui.mouse();
+            std::vector<PlayRequests::MouseAction>& actions = session->requests().mouse;
+            if (m.pressed && !m.on_panels && m.ctrl) actions.push_back({MouseKind::grab, m.x, m.y});
+            else if (m.pressed && !m.on_panels && m.shift) actions.push_back({MouseKind::pin, m.x, m.y});
+            else if (session->grab_anchor() && m.down && m.moved) actions.push_back({MouseKind::drag, m.x, m.y});
+            if (session->grab_anchor() && m.released) actions.push_back({MouseKind::release, m.x, m.y});
+        }
+        for (const PlayRequests::MouseAction& a : std::exchange(session->requests().mouse, {})) {
+            const render::Camera& camera = window.camera();
+            const int w = window.width(), h = window.height();
+            if (a.kind == MouseKind::drag) {
+                if (session->grab_anchor()) session->drag_to(drag_target(camera, w, h, a.x, a.y, *session->grab_anchor()));
+                continue;
+            }
+            if (a.kind == MouseKind::release) {
+                session->release_grab();
+                if (runner) out << session->message() << std::endl;
+                continue;
+            }
+            const std::optional<VertexPick> pick = pick_vertex(session->world(), camera, w, h, a.x, a.y);
+            if (!pick) {
+                session->set_message("no cloth under the cursor");
+                if (runner) {  // a script that grabs or pins nothing cannot check what it meant to
+                    err << "weft edit: no cloth vertex within 12 pixels of (" << a.x << ", " << a.y << ")" << std::endl;
+                    status = 1;
+                    break;
+                }
+                continue;
+            }
+            if (a.kind == MouseKind::grab)
+                session->grab(*pick);
+            else
+                (void)session->toggle_pin(pick->cloth, pick->vertex);
+            if (runner) out << session->message() << std::endl;
+        }
+        if (status != 0) break;
 
         // Scripted: exactly the wall time of one step per frame (at the current scale), so that the
         // run steps once per displayed frame whatever the machine's speed.

@@ -154,7 +154,26 @@ void ImGuiLayer::record(VkCommandBuffer commands, VkExtent2D /*extent*/) {
     throw_if_failed("ImGui_ImplVulkan_RenderDrawData");
 }
 
-bool ImGuiLayer::wants_mouse() const { return ImGui::GetIO().WantCaptureMouse; }
+// Ctrl and Shift turn the left button to the cloth (grab, pin): the camera must not orbit then.
+bool ImGuiLayer::wants_mouse() const {
+    const ImGuiIO& io = ImGui::GetIO();
+    return io.WantCaptureMouse || io.KeyCtrl || io.KeyShift;
+}
+
+ImGuiLayer::Mouse ImGuiLayer::mouse() const {
+    const ImGuiIO& io = ImGui::GetIO();
+    Mouse m;
+    m.x = static_cast<double>(io.MousePos.x * io.DisplayFramebufferScale.x);
+    m.y = static_cast<double>(io.MousePos.y * io.DisplayFramebufferScale.y);
+    m.on_panels = io.WantCaptureMouse;
+    m.pressed = io.MouseClicked[0];
+    m.down = io.MouseDown[0];
+    m.released = io.MouseReleased[0];
+    m.moved = io.MouseDelta.x != 0.0F || io.MouseDelta.y != 0.0F;
+    m.ctrl = io.KeyCtrl;
+    m.shift = io.KeyShift;
+    return m;
+}
 
 bool ImGuiLayer::wants_keyboard() const { return ImGui::GetIO().WantCaptureKeyboard; }
 

@@ -24,8 +24,19 @@ constexpr Spelling kCommands[] = {
     {"open", ScriptCommand::Kind::open, 1},             {"record", ScriptCommand::Kind::record, 1},
     {"stop", ScriptCommand::Kind::stop, 0},             {"cells", ScriptCommand::Kind::cells, 3},
     {"screenshot", ScriptCommand::Kind::screenshot, 1}, {"save", ScriptCommand::Kind::save, 1},
-    {"quit", ScriptCommand::Kind::quit, 0},
+    {"grab", ScriptCommand::Kind::grab, 2},             {"drag", ScriptCommand::Kind::drag, 2},
+    {"held", ScriptCommand::Kind::held, 1},             {"release", ScriptCommand::Kind::release, 0},
+    {"pin", ScriptCommand::Kind::pin, 2},               {"quit", ScriptCommand::Kind::quit, 0},
 };
+
+// A number in [lo, hi] written alone, or an error naming the line and the word.
+double number_in(const std::string& w, double lo, double hi, const std::string& where, const char* what) {
+    double v = 0.0;
+    const auto [ptr, ec] = std::from_chars(w.data(), w.data() + w.size(), v);
+    if (ec != std::errc{} || ptr != w.data() + w.size() || !(v >= lo && v <= hi))
+        throw Error(where + what + ", got '" + w + "'");
+    return v;
+}
 
 std::string command_list() {
     std::string out;
@@ -106,6 +117,15 @@ Script parse_script(std::string_view text, const std::string& name) {
                 }
                 break;
             }
+            case ScriptCommand::Kind::grab:
+            case ScriptCommand::Kind::drag:
+            case ScriptCommand::Kind::pin:
+                c.x = number_in(words[1], 0.0, 16384.0, where, (words[0] + " expects picture pixels x y in [0, 16384]").c_str());
+                c.y = number_in(words[2], 0.0, 16384.0, where, (words[0] + " expects picture pixels x y in [0, 16384]").c_str());
+                break;
+            case ScriptCommand::Kind::held:
+                c.x = number_in(words[1], 0.0, 100.0, where, "held expects a distance in [0, 100] m");
+                break;
             case ScriptCommand::Kind::screenshot:
             case ScriptCommand::Kind::save:
             case ScriptCommand::Kind::open:

@@ -1,7 +1,9 @@
 // The editor's session (see session.h).
 #include "weft/editor/session.h"
 
+#include <algorithm>
 #include <chrono>
+#include <cmath>
 #include <cstdio>
 #include <utility>
 #include <vector>
@@ -65,6 +67,7 @@ void Session::reset() {
     steps_before_reset_ += loop_->steps();
 
     loop_.reset();
+    grab_anchor_.reset();  // the new world has no grab
     if (before_rebuild_) before_rebuild_();
     world_.reset();
     world_ = build_world(scene_, backend_, options_);
@@ -75,6 +78,62 @@ void Session::reset() {
     loop_->set_paused(paused);
     history_.clear();
     ++resets_;
+}
+
+void Session::grab(const VertexPick& pick) {
+    double mass = 0.0;
+    for (const double m : world_->model().cloths.at(pick.cloth).fabric->masses()) mass += m;
+    // Strong enough to carry the whole cloth (2 cm of sag under its weight) and to win against its
+    // membrane: ten times the stretch stiffness (N/m), so that the vertex follows the cursor to
+    // within about a tenth of how far the cloth is stretched to get there.
+    const double k = std::max(grab_stiffness_for(mass), 10.0 * world_->material(pick.cloth).stretch_stiffness);
+    // Damping near critical for the grabbed vertex on its own (c = 2·sqrt(k·m_vertex)): the drag
+    // does not ring, and the rest of the cloth keeps its own damping.
+    const double vertex_mass = world_->model().cloths[pick.cloth].fabric->masses()[pick.vertex];
+    world_->set_grab({.cloth = pick.cloth, .vertex = pick.vertex, .target = pick.position, .stiffness = k,
+                      .damping = std::min(1e6, 2.0 * std::sqrt(k * vertex_mass))});
+    grab_anchor_ = pick.position;
+    char text[200];
+    std::snprintf(text, sizeof text, "grabbed vertex %u of cloth '%s' (spring %.3g N/m)", pick.vertex,
+                  world_->model().cloths[pick.cloth].name.c_str(), k);
+    message_ = text;
+}
+
+void Session::drag_to(const Vec3d& target) {
+    if (!world_->grab()) return;
+    VertexGrab g = *world_->grab();
+    g.target = target;
+    world_->set_grab(g);
+}
+
+void Session::release_grab() {
+    if (!world_->grab()) return;
+    const std::optional<double> d = grab_distance();
+    char text[160];
+    std::snprintf(text, sizeof text, "released vertex %u, %.3f m from the cursor", world_->grab()->vertex, d.value_or(0.0));
+    message_ = text;
+    world_->release_grab();
+    grab_anchor_.reset();
+}
+
+std::optional<double> Session::grab_distance() {
+    if (!world_->grab()) return std::nullopt;
+    const VertexGrab& g = *world_->grab();
+    return physics::length(world_->positions(g.cloth)[g.vertex] - g.target);
+}
+
+bool Session::toggle_pin(std::size_t cloth, std::uint32_t vertex) {
+    if (before_rebuild_) before_rebuild_();
+    const bool pinned = world_->is_pinned(cloth, vertex) ? !world_->unpin(cloth, vertex) : world_->pin(cloth, vertex);
+    // The rebuild happens at the next read or step; timed here so that the panel can say what it cost.
+    const auto start = std::chrono::steady_clock::now();
+    (void)world_->positions(cloth);
+    const double ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
+    char text[200];
+    std::snprintf(text, sizeof text, "%s vertex %u of cloth '%s' (solver rebuilt in %.1f ms, state kept)",
+                  pinned ? "pinned" : "unpinned", vertex, world_->model().cloths[cloth].name.c_str(), ms);
+    message_ = text;
+    return pinned;
 }
 
 double Session::recook_grid(const std::string& cloth, int cells_x, int cells_y) {

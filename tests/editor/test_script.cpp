@@ -10,6 +10,7 @@
 
 #include "weft/editor/parameters.h"
 #include "weft/editor/script.h"
+#include "weft/editor/vertex_picking.h"
 #include "weft/error.h"
 #include "weft/fabric.h"
 #include "weft/mesh.h"
@@ -67,12 +68,26 @@ TEST(Script, ParsesEveryCommand) {
     EXPECT_EQ(c.commands[0].cells_y, 48);
     EXPECT_THROW((void)parse_script("cells flag 0 48\n", "c.txt"), Error) << "at least one cell";
     EXPECT_THROW((void)parse_script("cells flag 80\n", "c.txt"), Error) << "two counts";
+
+    const Script m = parse_script("grab 10 20.5\ndrag 30 40\nheld 0.05\nrelease\npin 7 8\n", "m.txt");
+    ASSERT_EQ(m.commands.size(), 5U);
+    EXPECT_EQ(m.commands[0].kind, K::grab);
+    EXPECT_DOUBLE_EQ(m.commands[0].x, 10.0);
+    EXPECT_DOUBLE_EQ(m.commands[0].y, 20.5);
+    EXPECT_EQ(m.commands[1].kind, K::drag);
+    EXPECT_EQ(m.commands[2].kind, K::held);
+    EXPECT_DOUBLE_EQ(m.commands[2].x, 0.05);
+    EXPECT_EQ(m.commands[3].kind, K::release);
+    EXPECT_EQ(m.commands[4].kind, K::pin);
+    EXPECT_EQ(error_of("grab -1 5\n"), "s.txt:1: grab expects picture pixels x y in [0, 16384], got '-1'");
+    EXPECT_EQ(error_of("held far\n"), "s.txt:1: held expects a distance in [0, 100] m, got 'far'");
+    EXPECT_EQ(error_of("pin 5\n"), "s.txt:1: 'pin' takes 2 arguments, got 1");
 }
 
 TEST(Script, ErrorsNameTheLine) {
     EXPECT_EQ(error_of("frame 1\njump 3\n"),
               "s.txt:2: unknown command 'jump' (commands: frame, set, expect, pause, play, step, reset, timescale, "
-              "open, record, stop, cells, screenshot, save, quit)");
+              "open, record, stop, cells, screenshot, save, grab, drag, held, release, pin, quit)");
     EXPECT_EQ(error_of("set solver.substeps\n"), "s.txt:1: 'set' takes 2 arguments, got 1");
     EXPECT_EQ(error_of("pause now\n"), "s.txt:1: 'pause' takes 0 arguments, got 1");
     EXPECT_EQ(error_of("\nframe ten\n"), "s.txt:2: frame expects a frame count in [1, 100000000], got 'ten'");
@@ -223,6 +238,44 @@ TEST(Script, SaveNeedsAPath) {
     EXPECT_EQ(s.commands[1].kind, ScriptCommand::Kind::save);
     EXPECT_EQ(s.commands[1].text, "out/tuned.toml");
     EXPECT_THROW((void)parse_script("save\n", "s.txt"), Error);
+}
+
+// Picking is geometry on the renderers' camera: the pixel a vertex is drawn at gives a ray through
+// it, picks it (the nearer of two in line), and a drag keeps it at its depth.
+TEST(VertexPicking, TheRayThroughAVertexPicksItAndDragsKeepItsDepth) {
+    auto world = small_world();  // a 1 m sheet in the XY plane at the origin, 3×3 vertices
+    render::Camera camera;
+    camera.position = {0.0F, 0.0F, 3.0F};
+    camera.target = {0.0F, 0.0F, 0.0F};
+    const int w = 640, h = 480;
+    // The centre pixel looks down −z through the middle vertex (4).
+    const CursorRay ray = cursor_ray(camera, w, h, 320.0, 240.0);
+    EXPECT_NEAR(ray.direction.z, -1.0, 1e-9);
+    const std::optional<VertexPick> middle = pick_vertex(*world, camera, w, h, 320.0, 240.0);
+    ASSERT_TRUE(middle);
+    EXPECT_EQ(middle->vertex, 4U);
+    EXPECT_LT(middle->pixels, 1e-6);
+    // The top-right corner (0.5, 0.5, 0): up and right on the picture (rows run down).
+    const std::optional<VertexPick> corner = pick_vertex(*world, camera, w, h, 320.0 + 96.0, 240.0 - 96.0, 40.0);
+    ASSERT_TRUE(corner);
+    EXPECT_EQ(corner->vertex, 8U);
+    EXPECT_FALSE(pick_vertex(*world, camera, w, h, 5.0, 5.0)) << "nothing drawn there";
+
+    // A second sheet in front of the first: the pick takes the nearer one.
+    ClothDesc front{.name = "front", .fabric = Fabric::cook(make_grid(1.0, 1.0, 2, 2))};
+    front.transform.translation = {0.0, 0.0, 1.0};
+    world->add_cloth(front);
+    const std::optional<VertexPick> nearer = pick_vertex(*world, camera, w, h, 320.0, 240.0);
+    ASSERT_TRUE(nearer);
+    EXPECT_EQ(nearer->cloth, 1U);
+
+    // Dragging: the target stays on the plane through the picked point that faces the camera.
+    const Vec3d target = drag_target(camera, w, h, 400.0, 200.0, nearer->position);
+    EXPECT_NEAR(target.z, 1.0, 1e-9);
+    EXPECT_GT(target.x, 0.0);
+    EXPECT_GT(target.y, 0.0);
+    const Vec3d back = drag_target(camera, w, h, 320.0, 240.0, nearer->position);
+    EXPECT_NEAR(physics::length(back - nearer->position), 0.0, 1e-9);
 }
 
 }  // namespace

@@ -30,6 +30,16 @@ public:
     /// Ends it: ImGui::Render(). The draw data is recorded by the next Window::present().
     void end_frame();
 
+    /// The left button and the cursor as ImGui saw them in the current frame (between begin_frame
+    /// and the next one), in picture pixels: what the editor's loop turns into grabs and pins.
+    struct Mouse {
+        double x = 0.0, y = 0.0;
+        bool on_panels = false;  ///< over a panel (ImGui takes the mouse)
+        bool pressed = false, down = false, released = false, moved = false;
+        bool ctrl = false, shift = false;
+    };
+    [[nodiscard]] Mouse mouse() const;
+
     void record(VkCommandBuffer commands, VkExtent2D extent) override;
     [[nodiscard]] bool wants_mouse() const override;
     [[nodiscard]] bool wants_keyboard() const override;

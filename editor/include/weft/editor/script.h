@@ -14,6 +14,12 @@
 ///     record out/rec               record every displayed frame to out/rec/frame_NNNN.png
 ///     stop                         stop recording (and make out/rec/capture.mp4 with ffmpeg)
 ///     cells flag 80 48             re-cook a grid cloth at 80×48 cells, as the Mesh panel does
+///     grab 640 300                 Ctrl+press at picture pixel (640, 300): grab the cloth vertex
+///                                  under it (the script fails where there is none)
+///     drag 640 200                 move the mouse there while grabbing: the grab's target follows
+///     held 0.05                    the grabbed vertex is within 0.05 m of the grab's target
+///     release                      let go of the grab
+///     pin 640 300                  Shift+click: pin the vertex under the pixel where it is (or unpin it)
 ///     open layers                  open a scene (a name from the browser, or a file), as the
 ///                                  Scenes panel does; the commands after it act on that scene
 ///     quit                         end (so does the end of the script)
@@ -31,7 +37,10 @@
 namespace weft::editor {
 
 struct ScriptCommand {
-    enum class Kind : unsigned char { frame, set, expect, pause, play, step, reset, timescale, screenshot, save, open, record, stop, cells, quit };
+    enum class Kind : unsigned char {
+        frame, set, expect, pause, play, step, reset, timescale, screenshot, save, open, record, stop, cells,
+        grab, drag, held, release, pin, quit
+    };
     Kind kind = Kind::quit;
     int line = 0;         ///< 1-based line in the script
     int frame = 0;        ///< frame: the displayed-frame count to reach
@@ -40,6 +49,7 @@ struct ScriptCommand {
     double number = 0.0;  ///< timescale; set, expect: the value once checked (check_script)
     bool checked = false;  ///< set, expect: key and value checked against the scene's parameters
     int cells_x = 0, cells_y = 0;  ///< cells: the grid resolution (the cloth's name is `key`)
+    double x = 0.0, y = 0.0;       ///< grab, drag, pin: the picture pixel; held: x is the distance, m
 };
 
 struct Script {

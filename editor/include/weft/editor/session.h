@@ -9,6 +9,7 @@
 #include <memory>
 #include <optional>
 #include <string>
+#include <vector>
 
 #include "weft/backend.h"
 #include "weft/frame_loop.h"
@@ -17,6 +18,7 @@
 
 #include "weft/editor/parameters.h"
 #include "weft/editor/stats_history.h"
+#include "weft/editor/vertex_picking.h"
 
 namespace weft::editor {
 
@@ -41,6 +43,13 @@ struct PlayRequests {
         int cells_x = 0, cells_y = 0;
     };
     std::optional<GridChange> recook;
+    /// The mouse on the cloth (Ctrl+drag grabs, Shift+click pins; the script's grab, drag, release
+    /// and pin), at picture pixels: applied in order by the editor's loop, which has the camera.
+    struct MouseAction {
+        enum class Kind : unsigned char { grab, drag, release, pin } kind = Kind::grab;
+        double x = 0.0, y = 0.0;  ///< pixels from the picture's top-left corner
+    };
+    std::vector<MouseAction> mouse;
 };
 
 /// The viewport recording, as the play panel shows it.
@@ -91,6 +100,23 @@ public:
     /// time, ms, and says what changed in message(). Throws weft::Error, the session unchanged, for
     /// an unknown cloth, a cloth from a mesh file, or cells out of range.
     double recook_grid(const std::string& cloth, int cells_x, int cells_y);
+    /// Starts pulling the picked vertex with a spring that holds its whole cloth within 2 cm of the
+    /// target (weft/grab.h, grab_stiffness_for) and is ten times as stiff as the cloth's membrane
+    /// (stretch stiffness, N/m), the target first where the vertex is. Replaces a grab in progress.
+    void grab(const VertexPick& pick);
+    /// Moves the grab's target (m); nothing without a grab.
+    void drag_to(const Vec3d& target);
+    /// Lets go of the grab (if any).
+    void release_grab();
+    /// The grab in progress: the point its drag plane goes through (the vertex where it was picked).
+    [[nodiscard]] const std::optional<Vec3d>& grab_anchor() const { return grab_anchor_; }
+    /// How far the grabbed vertex is from the grab's target now, m; nothing without a grab.
+    [[nodiscard]] std::optional<double> grab_distance();
+    /// Pins the vertex where it is, or unpins it (World::pin/unpin): the backend is rebuilt at the
+    /// next step, keeping the state, so whatever holds on to the world lets go first (before_rebuild).
+    /// Returns true when it is pinned now; says so, with the rebuild's time, in message().
+    bool toggle_pin(std::size_t cloth, std::uint32_t vertex);
+
     /// Called by reset() before the old world goes: whatever holds on to it (the editor's ClothFeed,
     /// which the backend writes the renderer's buffers through) lets go here.
     void set_before_rebuild(std::function<void()> callback) { before_rebuild_ = std::move(callback); }
@@ -110,6 +136,7 @@ private:
     int resets_ = 0;
     std::string message_;
     std::function<void()> before_rebuild_;
+    std::optional<Vec3d> grab_anchor_;
 };
 
 }  // namespace weft::editor
