@@ -430,12 +430,13 @@ TEST(CudaBackend, SetStateContinuesLikeTheWorldItCameFrom) {
 }
 
 // The editor's mouse on the device: a grab spring pulls a vertex (read from the model each substep,
-// as wind is) and a pin added mid-run holds a vertex where it was, the rebuild keeping the state. Both
-// as the CPU reference does them, within float rounding of the same scene.
+// as wind is) and a pin added mid-run holds a vertex where it was, the rebuild keeping the state. The
+// grabbed sheet is compared with the CPU reference while the spring holds it: a corner pulled 10 cm
+// down, in the sheet's plane, which settles (CPU float against double: 6e-8 m). A pull out of the
+// plane buckles the sheet, and there float and double part by 13 cm (chaotic), so it is no test.
 TEST(CudaBackend, GrabAndPinLikeTheCpuReference) {
     WEFT_REQUIRE_GPU();
-    std::vector<Vec3d> result[2];
-    std::vector<Vec3d> pinned_at[2];
+    std::vector<Vec3d> held[2];
     const char* backends[2] = {"cpu", "cuda"};
     for (int b = 0; b < 2; ++b) {
         const auto world = make_world("hanging", backends[b]);
@@ -443,25 +444,25 @@ TEST(CudaBackend, GrabAndPinLikeTheCpuReference) {
         const std::vector<Vec3d> x = world->positions(0);
         double mass = 0.0;
         for (const double m : world->model().cloths[0].fabric->masses()) mass += m;
-        world->set_grab({.cloth = 0, .vertex = 0, .target = x[0] + Vec3d{0.0, 0.2, 0.3},
-                         .stiffness = grab_stiffness_for(mass)});
-        for (int f = 0; f < 30; ++f) ASSERT_FALSE(world->step().non_finite) << backends[b];
-        EXPECT_LT(physics::length(world->positions(0)[0] - world->grab()->target), 0.05) << backends[b];
+        // The editor's stiffness: ten times the membrane's (5e3 N/m here).
+        world->set_grab({.cloth = 0, .vertex = 0, .target = x[0] + Vec3d{0.0, -0.1, 0.0},
+                         .stiffness = std::max(grab_stiffness_for(mass), 5e4), .damping = 1.0});
+        for (int f = 0; f < 60; ++f) ASSERT_FALSE(world->step().non_finite) << backends[b];
+        EXPECT_LT(physics::length(world->positions(0)[0] - world->grab()->target), 0.005) << backends[b];
+        held[b] = world->positions(0);
         world->release_grab();
         const std::uint32_t v = static_cast<std::uint32_t>(x.size() / 2);
         const std::vector<Vec3d> before = world->positions(0);
         ASSERT_TRUE(world->pin(0, v));
         EXPECT_LE(max_distance(world->positions(0), before), 1e-6) << backends[b] << ": the rebuild kept the state";
         for (int f = 0; f < 20; ++f) (void)world->step();
-        EXPECT_LT(physics::length(world->positions(0)[v] - before[v]), 1e-6) << backends[b];
-        result[b] = world->positions(0);
-        pinned_at[b] = before;
+        EXPECT_LT(physics::length(world->positions(0)[v] - before[v]), 1e-6) << backends[b] << ": the pin holds";
+        EXPECT_GT(max_distance(world->positions(0), before), 1e-3) << backends[b] << ": the rest moved on";
     }
-    const double diff = max_distance(result[0], result[1]), diag = bbox_diagonal(result[0]);
-    std::printf("[ grab+pin ] hanging, cpu against cuda after grab, release and pin: %.3e m apart (%.2e of the diagonal)\n",
+    const double diff = max_distance(held[0], held[1]), diag = bbox_diagonal(held[0]);
+    std::printf("[ grab+pin ] hanging pulled by a grab for 60 frames, cpu against cuda: %.3e m apart (%.2e of the diagonal)\n",
                 diff, diff / diag);
-    EXPECT_LE(diff, 1e-2 * diag);
-    EXPECT_GT(max_distance(result[0], pinned_at[0]), 1e-3) << "the cloth moved on after the pin";
+    EXPECT_LE(diff, 1e-4 * diag);
 }
 
 // ---- options and memory ---------------------------------------------------------------------------
