@@ -326,6 +326,7 @@ void scene_browser(Session& session, const PanelLayout& layout) {
 void help_rows() {
     static constexpr const char* kHelp[][2] = {
         {"left drag", "orbit the camera"},         {"right/middle drag", "pan"},
+        {"Ctrl+left drag", "pull a cloth vertex"}, {"Shift+click", "pin / unpin a vertex"},
         {"scroll", "zoom"},                        {"Space", "pause / resume"},
         {"Right arrow, N", "one step (pauses)"},   {"+ / -", "time scale x2 / /2"},
         {"R", "reset the camera"},                 {"S", "screenshot"},
