@@ -119,20 +119,6 @@ void World::ensure_built() const {
     for (const ClothDesc& c : model_.cloths) built_vertex_counts_.push_back(c.fabric->vertex_count());
 }
 
-void World::set_grab(const VertexGrab& grab) {
-    if (grab.cloth >= model_.cloths.size())
-        throw Error("grab: cloth " + std::to_string(grab.cloth) + " of " + std::to_string(model_.cloths.size()));
-    const std::size_t vertices = model_.cloths[grab.cloth].fabric->vertex_count();
-    if (grab.vertex >= vertices)
-        throw Error("grab: vertex " + std::to_string(grab.vertex) + " of cloth '" + model_.cloths[grab.cloth].name +
-                    "', which has " + std::to_string(vertices));
-    check_range("grab", "stiffness", grab.stiffness, 0.0, 1e9);
-    check_range("grab", "damping", grab.damping, 0.0, 1e6);
-    for (int k = 0; k < 3; ++k)
-        if (!std::isfinite(grab.target[k])) throw Error("grab: the target is not finite");
-    model_.grab = grab;
-}
-
 namespace {
 void check_vertex(const Model& m, std::size_t cloth, std::uint32_t vertex, const char* what) {
     if (cloth >= m.cloths.size())
@@ -142,6 +128,16 @@ void check_vertex(const Model& m, std::size_t cloth, std::uint32_t vertex, const
                     "', which has " + std::to_string(m.cloths[cloth].fabric->vertex_count()));
 }
 }  // namespace
+
+void World::set_grab(const VertexGrab& grab) {
+    check_vertex(model_, grab.cloth, grab.vertex, "grab");
+    check_range("grab", "stiffness", grab.stiffness, 0.0, 1e9);
+    check_range("grab", "damping", grab.damping, 0.0, 1e6);
+    for (int k = 0; k < 3; ++k)
+        if (!std::isfinite(grab.target[k])) throw Error("grab: the target is not finite");
+    model_.grab = grab;
+}
+
 
 bool World::is_pinned(std::size_t cloth, std::uint32_t vertex) const {
     check_vertex(model_, cloth, vertex, "pin");
