@@ -129,18 +129,36 @@ std::shared_ptr<const MeshData> load_collider_mesh(const ColliderMeshSource& src
 
 }  // namespace
 
+std::vector<PinDesc> scene_pins(const SceneDesc& scene, std::size_t cloth_index, const Fabric& fabric) {
+    const SceneCloth& cloth = scene.cloths.at(cloth_index);
+    const std::string where =
+        scene.path.string() + ": cloth[" + std::to_string(cloth.entry) + "] '" + cloth.desc.name + "'";
+    std::vector<PinDesc> pins = cloth.desc.pins;
+    // A vertex selected by several rules keeps the first rule's motion.
+    std::set<std::uint32_t> pinned;
+    for (const PinDesc& p : pins) pinned.insert(p.vertex);
+    for (std::size_t k = 0; k < cloth.pins.size(); ++k) {
+        const std::string pin_where = where + " pin[" + std::to_string(k) + "]";
+        int motion = -1;
+        if (const std::string& name = cloth.pins[k].motion; !name.empty()) {
+            // build_world adds the scene's motions in order, so a motion's index is its place in the list.
+            const auto it = std::find_if(scene.motions.begin(), scene.motions.end(),
+                                         [&](const SceneMotion& m) { return m.name == name; });
+            if (it == scene.motions.end()) throw Error(pin_where + ": unknown motion '" + name + "'");
+            motion = static_cast<int>(it - scene.motions.begin());
+        }
+        for (std::uint32_t v : select(cloth.pins[k], cloth, fabric, pin_where))
+            if (pinned.insert(v).second) pins.push_back({v, motion});
+    }
+    return pins;
+}
+
 std::unique_ptr<World> build_world(const SceneDesc& scene, std::string_view backend, const BackendOptions& options) {
     const std::string file = scene.path.string();
     auto world = std::make_unique<World>(scene.world, backend, options);
 
-    std::map<std::string, int> motion_index;
-    for (const SceneMotion& m : scene.motions) motion_index[m.name] = world->add_motion(m.motion);
-    const auto motion_of = [&](const std::string& name, const std::string& where) {
-        if (name.empty()) return -1;
-        const auto it = motion_index.find(name);
-        if (it == motion_index.end()) throw Error(where + ": unknown motion '" + name + "'");
-        return it->second;
-    };
+    // In the scene's order: scene_pins() relies on it to index a pin's motion.
+    for (const SceneMotion& m : scene.motions) (void)world->add_motion(m.motion);
 
     // Copies made by `repeat` are adjacent and identical up to their placement: they share one fabric.
     std::shared_ptr<const Fabric> shared;
@@ -158,15 +176,7 @@ std::unique_ptr<World> build_world(const SceneDesc& scene, std::string_view back
             }
             shared = desc.fabric;
         }
-        // A vertex selected by several rules keeps the first rule's motion.
-        std::set<std::uint32_t> pinned;
-        for (const PinDesc& p : desc.pins) pinned.insert(p.vertex);
-        for (std::size_t k = 0; k < cloth.pins.size(); ++k) {
-            const std::string pin_where = where + " pin[" + std::to_string(k) + "]";
-            const int motion = motion_of(cloth.pins[k].motion, pin_where);
-            for (std::uint32_t v : select(cloth.pins[k], cloth, *desc.fabric, pin_where))
-                if (pinned.insert(v).second) desc.pins.push_back({v, motion});
-        }
+        desc.pins = scene_pins(scene, c, *desc.fabric);
         world->add_cloth(desc);
     }
     // Colliders that name the same file at the same scale share one mesh.

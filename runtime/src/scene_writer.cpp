@@ -2,9 +2,12 @@
 // those at their defaults, so that a saved scene says everything it means and does not change if a
 // default does. Numbers use the shortest text that reads back to the same double (std::to_chars), so
 // load → save → load is exact.
+#include <algorithm>
 #include <charconv>
 #include <fstream>
 #include <sstream>
+#include <utility>
+#include <vector>
 
 #include "weft/error.h"
 #include "weft/scene.h"
@@ -233,6 +236,61 @@ void update_scene_from_world(SceneDesc& scene, const World& world) {
         throw Error("update scene: the world has " + std::to_string(model.motions.size()) + " motions, the scene " +
                     std::to_string(scene.motions.size()));
     for (std::size_t i = 0; i < scene.motions.size(); ++i) scene.motions[i].motion = model.motions[i];
+
+    // Colliders: what World::collider lets a user change live. A collider that follows a motion keeps
+    // the motion's frame (the motion was copied above); the rest keep their file rotation.
+    if (model.colliders.size() != scene.colliders.size())
+        throw Error("update scene: the world has " + std::to_string(model.colliders.size()) + " colliders, the scene " +
+                    std::to_string(scene.colliders.size()));
+    for (std::size_t k = 0; k < scene.colliders.size(); ++k) {
+        const ColliderDesc& live = model.colliders[k];
+        ColliderDesc& saved = scene.colliders[k];
+        if (live.shape != saved.shape || live.name != saved.name)
+            throw Error("update scene: collider " + std::to_string(k) + " is '" + live.name + "' in the world and '" +
+                        saved.name + "' in the scene");
+        saved.radius = live.radius;
+        saved.half_height = live.half_height;
+        saved.half_extents = live.half_extents;
+        saved.friction = live.friction;
+        if (k >= scene.collider_motions.size() || scene.collider_motions[k].empty()) saved.motion.origin = live.motion.origin;
+    }
+
+    // Pins: the scene's rules while they still say what the world pins, vertex lists once pins were
+    // added or removed live (World::pin/unpin).
+    using PinKey = std::pair<std::uint32_t, int>;  // vertex, motion index
+    const auto pin_set = [](const std::vector<PinDesc>& pins) {
+        std::vector<PinKey> keys;
+        for (const PinDesc& p : pins) keys.emplace_back(p.vertex, p.motion);
+        std::sort(keys.begin(), keys.end());
+        return keys;
+    };
+    std::vector<std::vector<PinKey>> live_pins(scene.cloths.size());
+    for (std::size_t i = 0; i < scene.cloths.size(); ++i) {
+        live_pins[i] = pin_set(model.cloths[i].pins);
+        if (i > 0 && scene.cloths[i - 1].entry == scene.cloths[i].entry && live_pins[i] != live_pins[i - 1])
+            throw Error("update scene: cloths '" + scene.cloths[i - 1].desc.name + "' and '" + scene.cloths[i].desc.name +
+                        "' come from one [[cloth]] table (repeat) but have different pins; a scene file gives all "
+                        "copies one pin set");
+    }
+    for (std::size_t i = 0; i < scene.cloths.size(); ++i) {
+        SceneCloth& cloth = scene.cloths[i];
+        if (pin_set(scene_pins(scene, i, *model.cloths[i].fabric)) == live_pins[i]) continue;
+        cloth.desc.pins.clear();
+        cloth.pins.clear();
+        for (const auto& [vertex, motion] : live_pins[i]) {
+            const std::string name =
+                motion >= 0 && static_cast<std::size_t>(motion) < scene.motions.size() ? scene.motions[motion].name : "";
+            auto rule = std::find_if(cloth.pins.begin(), cloth.pins.end(),
+                                     [&](const PinSelection& s) { return s.motion == name; });
+            if (rule == cloth.pins.end()) {
+                PinSelection s;
+                s.kind = PinSelection::Kind::Vertices;
+                s.motion = name;
+                rule = cloth.pins.insert(cloth.pins.end(), std::move(s));
+            }
+            rule->vertices.push_back(vertex);  // ascending: live_pins is sorted
+        }
+    }
 }
 
 }  // namespace weft

@@ -3,10 +3,12 @@
 // from the saved scene steps bit for bit like the original; what is tuned live is what is saved.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include <unistd.h>
@@ -179,6 +181,103 @@ TEST(SceneWriter, TunedMotionsAreSaved) {
     } catch (const Error& e) {
         EXPECT_NE(std::string(e.what()).find("motions"), std::string::npos) << e.what();
     }
+}
+
+// The world's pins as (vertex, motion) pairs, sorted.
+std::vector<std::pair<std::uint32_t, int>> pin_pairs(const World& world, std::size_t cloth) {
+    std::vector<std::pair<std::uint32_t, int>> out;
+    for (const PinDesc& p : world.model().cloths.at(cloth).pins) out.emplace_back(p.vertex, p.motion);
+    std::sort(out.begin(), out.end());
+    return out;
+}
+
+SceneDesc save_and_load(const SceneDesc& scene, const std::string& tag) {
+    const auto file = std::filesystem::temp_directory_path() / ("weft_" + tag + "_" + std::to_string(::getpid()) + ".toml");
+    save_scene(scene, file);
+    SceneDesc saved = load_scene(file);
+    std::filesystem::remove(file);
+    return saved;
+}
+
+// Pins made and removed live (the editor's Shift+click) are saved: the rules become vertex lists that
+// pin exactly what the world pins, each with its motion. Pins left as the file made them keep the
+// file's rules.
+TEST(SceneWriter, PinsChangedLiveAreSavedAsVertexLists) {
+    SceneDesc scene = load_scene(kScenes / "twist.toml");
+    auto world = build_world(scene);
+    const auto before = pin_pairs(*world, 0);
+    ASSERT_GE(before.size(), 4U);
+    {
+        SceneDesc untouched = scene;
+        update_scene_from_world(untouched, *world);
+        ASSERT_EQ(untouched.cloths[0].pins.size(), scene.cloths[0].pins.size());
+        EXPECT_EQ(untouched.cloths[0].pins[0].kind, scene.cloths[0].pins[0].kind) << "unchanged pins keep their rules";
+    }
+    const std::uint32_t removed = before.front().first;
+    ASSERT_TRUE(world->unpin(0, removed));
+    auto added = static_cast<std::uint32_t>(world->model().cloths[0].fabric->vertex_count() / 2);
+    while (world->is_pinned(0, added)) ++added;  // an inner vertex: the scene pins two edges
+    ASSERT_TRUE(world->pin(0, added));
+    update_scene_from_world(scene, *world);
+    for (const PinSelection& rule : scene.cloths[0].pins) EXPECT_EQ(rule.kind, PinSelection::Kind::Vertices);
+    const SceneDesc saved = save_and_load(scene, "pins");
+    const auto rebuilt = build_world(saved);
+    const auto want = pin_pairs(*world, 0);
+    EXPECT_EQ(pin_pairs(*rebuilt, 0), want);
+    EXPECT_EQ(std::count_if(want.begin(), want.end(), [&](const auto& p) { return p.first == removed; }), 0);
+    EXPECT_EQ(std::count_if(want.begin(), want.end(), [&](const auto& p) { return p.first == added && p.second == -1; }), 1);
+    // The edge pins still follow their motions after the round trip.
+    EXPECT_GT(std::count_if(want.begin(), want.end(), [](const auto& p) { return p.second >= 0; }), 0);
+}
+
+// Copies of one [[cloth]] table share one pin set in the file: copies pinned differently are refused,
+// naming them, instead of saving one copy's pins for all.
+TEST(SceneWriter, CopiesOfOneTableWithDifferentPinsAreAnError) {
+    SceneDesc scene = load_scene(kScenes / "layers.toml");
+    auto world = build_world(scene);
+    ASSERT_GE(world->model().cloths.size(), 2U);
+    ASSERT_TRUE(world->pin(1, 0));
+    try {
+        update_scene_from_world(scene, *world);
+        FAIL() << "no error";
+    } catch (const Error& e) {
+        EXPECT_NE(std::string(e.what()).find("different pins"), std::string::npos) << e.what();
+        EXPECT_NE(std::string(e.what()).find(world->model().cloths[1].name), std::string::npos) << e.what();
+    }
+    ASSERT_TRUE(world->pin(0, 0));
+    for (std::size_t i = 2; i < world->model().cloths.size(); ++i) ASSERT_TRUE(world->pin(i, 0));
+    SceneDesc same_pins = load_scene(kScenes / "layers.toml");
+    update_scene_from_world(same_pins, *world);
+    const auto rebuilt = build_world(save_and_load(same_pins, "layers_pins"));
+    for (std::size_t i = 0; i < world->model().cloths.size(); ++i) EXPECT_EQ(pin_pairs(*rebuilt, i), pin_pairs(*world, i));
+}
+
+// Colliders tuned live (World::collider: sizes, friction, position) are saved; one that follows a
+// motion keeps following it.
+TEST(SceneWriter, TunedCollidersAreSaved) {
+    SceneDesc scene = load_scene(kScenes / "flag.toml");
+    auto world = build_world(scene);
+    ASSERT_EQ(world->model().colliders[0].shape, ColliderShape::Capsule);
+    world->collider(0).radius = 0.045;
+    world->collider(0).half_height = 1.25;
+    world->collider(0).friction = 0.9;
+    world->collider(0).motion.origin = {-0.05, 1.4, 0.1};
+    world->collider(1).motion.origin.y = -0.25;
+    update_scene_from_world(scene, *world);
+    const SceneDesc saved = save_and_load(scene, "colliders");
+    EXPECT_EQ(saved.colliders[0].radius, 0.045);
+    EXPECT_EQ(saved.colliders[0].half_height, 1.25);
+    EXPECT_EQ(saved.colliders[0].friction, 0.9);
+    EXPECT_TRUE(same(saved.colliders[0].motion.origin, Vec3d{-0.05, 1.4, 0.1}));
+    EXPECT_EQ(saved.colliders[1].motion.origin.y, -0.25);
+
+    SceneDesc spinning = load_scene(kScenes / "sphere.toml");
+    auto spin_world = build_world(spinning);
+    spin_world->collider(0).radius = 0.4;
+    update_scene_from_world(spinning, *spin_world);
+    const SceneDesc spun = save_and_load(spinning, "sphere_collider");
+    EXPECT_EQ(spun.colliders[0].radius, 0.4);
+    EXPECT_EQ(spun.collider_motions[0], "spin");
 }
 
 TEST(SceneWriter, UnwritableFileIsAnErrorNamingIt) {

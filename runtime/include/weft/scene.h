@@ -111,9 +111,19 @@ struct SceneDesc {
 /// Writes scene_to_toml() to `path` (relative to its folder). Throws `weft::Error` naming the file on failure.
 void save_scene(const SceneDesc& scene, const std::filesystem::path& path);
 /// Copies what can be tuned live in `world` into `scene`: the world settings (solver, gravity, wind,
-/// collisions), each cloth's material and each motion. Throws `weft::Error` if the world's cloths or
-/// motions are not the scene's.
+/// collisions), each cloth's material and pins, each motion, and each collider's sizes, friction and
+/// (for one that follows no motion) position. Pins are kept as the scene's rules while the world pins
+/// exactly what they select; otherwise (World::pin and unpin were used) the cloth's rules become
+/// vertex lists, one per motion, which pin each vertex where the cloth starts. Throws `weft::Error`
+/// if the world's cloths, motions or colliders are not the scene's, or if the copies of one
+/// `[[cloth]]` table (repeat) have different pins (the format gives them one pin set).
 void update_scene_from_world(SceneDesc& scene, const World& world);
+
+/// The pins of `scene.cloths[cloth]` on its cooked `fabric`: the cloth's own PinDescs, then each
+/// `[[cloth.pin]]` rule's vertices (a vertex chosen by several rules keeps the first rule's motion;
+/// motions indexed in `scene.motions` order, as build_world adds them). Throws `weft::Error` naming
+/// the file, cloth and rule for a rule that selects nothing or names an unknown motion or vertex.
+[[nodiscard]] std::vector<PinDesc> scene_pins(const SceneDesc& scene, std::size_t cloth, const Fabric& fabric);
 
 /// Cooks the fabrics (loading mesh files), loads the meshes of mesh colliders, resolves pins and
 /// motions and creates the world. Copies made by `repeat` share one cooked fabric. Throws
