@@ -21,6 +21,7 @@
 #include "weft/editor/imgui_layer.h"
 #include "weft/editor/panels.h"
 #include "weft/editor/session.h"
+#include "weft/editor/viewport_overlay.h"
 
 namespace weft::editor {
 namespace {
@@ -109,10 +110,36 @@ public:
                     session.requests().stop_recording = true;
                     ++next_;
                     return Outcome::next_frame;
-                case K::cells:
-                    session.requests().recook = PlayRequests::GridChange{c.key, c.cells_x, c.cells_y};
+                case K::cells: {
+                    ClothRecook change;
+                    change.cells = std::array<int, 2>{c.cells_x, c.cells_y};
+                    session.requests().recook = PlayRequests::Recook{c.key, change};
                     ++next_;
                     return Outcome::next_frame;
+                }
+                case K::cook: {
+                    ClothRecook change;
+                    if (c.text == "density") change.density = c.number;
+                    if (c.text == "scale") change.scale = c.number;
+                    if (c.text == "flat_rest_bending") change.flat_rest_bending = c.number != 0.0;
+                    session.requests().recook = PlayRequests::Recook{c.key, change};
+                    ++next_;
+                    return Outcome::next_frame;
+                }
+                case K::preset:
+                    session.requests().preset = PlayRequests::PresetChoice{c.key, c.text};
+                    ++next_;
+                    return Outcome::next_frame;
+                case K::show: {
+                    DisplayOptions& d = session.display();
+                    bool& toggle = c.key == "wireframe" ? d.wireframe
+                                   : c.key == "normals" ? d.normals
+                                   : c.key == "contacts" ? d.contacts
+                                                         : d.pins;
+                    toggle = c.number != 0.0;
+                    ++next_;
+                    return Outcome::next_frame;
+                }
                 case K::grab:
                 case K::drag:
                 case K::release:
@@ -189,6 +216,14 @@ private:
     int expectations_ = 0;
 };
 
+// The sizes of every collider, in order: the render scene's collider meshes are made from them.
+std::vector<double> collider_sizes(const World& world) {
+    std::vector<double> sizes;
+    for (const ColliderDesc& c : world.model().colliders)
+        sizes.insert(sizes.end(), {c.radius, c.half_height, c.half_extents.x, c.half_extents.y, c.half_extents.z});
+    return sizes;
+}
+
 std::string title_of(const std::string& scene, double fps, Session& session) {
     std::ostringstream t;
     t << std::fixed << "weft edit " << scene << " \u2014 " << std::setprecision(1) << fps << " fps, t = "
@@ -250,6 +285,7 @@ int run_editor(const SceneDesc& scene, std::unique_ptr<World> world, EditorOptio
     auto shot = [&](const std::filesystem::path& file) { render::write_png(file, window.screenshot()); };
     std::optional<render::FrameSequence> recording;
     int drawn_resets = 0;  // Session::resets() of the world the window's scene was made from (-1: none)
+    std::vector<double> drawn_sizes = collider_sizes(session->world());  // of the colliders the window draws
     // Ends the recording: the MP4 at the simulation's frame rate when ffmpeg is there.
     auto finish_recording = [&] {
         RecordingStatus& rec = session->recording();
@@ -258,6 +294,13 @@ int run_editor(const SceneDesc& scene, std::unique_ptr<World> world, EditorOptio
         rec.video = video.file.empty() ? "none (" + video.note + ")" : video.file.string();
         out << "recorded " << rec.frames << " frames to " << rec.folder.string() << "; video: " << rec.video << std::endl;
         recording.reset();
+    };
+
+    // A scripted run prints what the session says (a re-cook's time, a pin, a preset): the test's log.
+    int said = 0;
+    auto tell = [&] {
+        if (runner && session->messages() != said) out << session->message() << std::endl;
+        said = session->messages();
     };
 
     while (window.poll_events()) {
@@ -282,13 +325,19 @@ int run_editor(const SceneDesc& scene, std::unique_ptr<World> world, EditorOptio
         imgui.begin_frame();
         draw_panels(*session, PanelLayout{static_cast<float>(window.width()), static_cast<float>(window.height()), fps,
                                           options.open_scene ? &options.scene_names : nullptr});
-        imgui.end_frame();
+        tell();  // a preset, an unpin from the Pins panel
+        // A preset a script asked for that cannot be applied: the script cannot check what it meant to.
+        if (runner && session->message().rfind("preset failed", 0) == 0) {
+            err << "weft edit: " << session->message() << std::endl;
+            status = 1;
+            break;
+        }
 
-        // A new grid resolution (Mesh panel, script): the fabric is cooked again, timed.
-        if (const std::optional<PlayRequests::GridChange> change = std::exchange(session->requests().recook, std::nullopt)) {
+        // A re-cook (Mesh panel, a preset's density, script): the fabric is cooked again, timed.
+        if (const std::optional<PlayRequests::Recook> change = std::exchange(session->requests().recook, std::nullopt)) {
             try {
-                (void)session->recook_grid(change->cloth, change->cells_x, change->cells_y);
-                if (runner) out << session->message() << std::endl;
+                (void)session->recook(change->cloth, change->change);
+                tell();
             } catch (const std::exception& e) {
                 session->set_message(std::string("re-cook failed: ") + e.what());
                 err << "weft edit: " << e.what() << std::endl;
@@ -305,13 +354,16 @@ int run_editor(const SceneDesc& scene, std::unique_ptr<World> world, EditorOptio
                 OpenedScene opened = options.open_scene(*wanted);
                 if (recording) finish_recording();  // the recording belongs to the scene it showed
                 const double scale = session->loop().time_scale();
+                const DisplayOptions display = session->display();
                 feed.reset();  // before the old world goes: the backend writes the window's slots
                 session = std::make_unique<Session>(opened.scene, options.backend, options.backend_options,
                                                     std::move(opened.world), scale);
+                session->display() = display;
                 session->set_before_rebuild([&] { feed.reset(); });
                 name = opened.scene.name.empty() ? *wanted : opened.scene.name;
                 drawn_resets = -1;  // a new world: the window loads its scene below
                 session->set_message("opened " + name);
+                said = session->messages();  // printed below, as "opened"
                 out << "opened " << name << std::endl;
             } catch (const std::exception& e) {
                 session->set_message(std::string("open failed: ") + e.what());
@@ -322,9 +374,12 @@ int run_editor(const SceneDesc& scene, std::unique_ptr<World> world, EditorOptio
                 }
             }
         }
-        // A re-cook, a reset or an open made a new world: the window draws its cloth buffer and colliders.
-        if (session->resets() != drawn_resets) {
+        // A re-cook, a reset or an open made a new world, or a collider's size changed (the Colliders
+        // panel; its mesh is made from the sizes): the window draws the new cloth buffer and colliders.
+        if (session->resets() != drawn_resets || collider_sizes(session->world()) != drawn_sizes) {
             drawn_resets = session->resets();
+            drawn_sizes = collider_sizes(session->world());
+            feed.reset();  // the window's buffers are made again: the backend lets go of them first
             render_scene = render::make_render_scene(session->world(), session->scene().camera);
             window.load(render_scene);
         }
@@ -349,7 +404,7 @@ int run_editor(const SceneDesc& scene, std::unique_ptr<World> world, EditorOptio
             }
             if (a.kind == MouseKind::release) {
                 session->release_grab();
-                if (runner) out << session->message() << std::endl;
+                tell();
                 continue;
             }
             const std::optional<VertexPick> pick = pick_vertex(session->world(), camera, w, h, a.x, a.y);
@@ -366,7 +421,7 @@ int run_editor(const SceneDesc& scene, std::unique_ptr<World> world, EditorOptio
                 session->grab(*pick);
             else
                 (void)session->toggle_pin(pick->cloth, pick->vertex);
-            if (runner) out << session->message() << std::endl;
+            tell();
         }
         if (status != 0) break;
 
@@ -388,6 +443,10 @@ int run_editor(const SceneDesc& scene, std::unique_ptr<World> world, EditorOptio
         });
         if (shown > 0) session->history().frame_ms.push(1000.0 * seconds(now - last));
         last = now;
+        // The View panel's lines and marks, from the state this frame draws; then the ImGui frame ends.
+        draw_viewport_overlay(
+            build_viewport_overlay(session->world(), window.camera(), window.width(), window.height(), session->display()));
+        imgui.end_frame();
         window.present(frame);
         // present() waited for the frame before: its stamps are in transfer() now.
         if (have_previous && !feed->check(previous, window.transfer())) ++torn;

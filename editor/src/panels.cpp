@@ -9,10 +9,14 @@
 #include <cstdio>
 #include <filesystem>
 #include <map>
+#include <optional>
+#include <span>
 #include <string>
 #include <utility>
 
 #include <imgui.h>
+
+#include "weft/editor/presets.h"
 
 namespace weft::editor {
 namespace {
@@ -106,7 +110,7 @@ void parameter_rows(Session& session, const char* panel, bool visible) {
             if (p.group != group) {
                 group = p.group;
                 ImGui::SetNextItemOpen(true, ImGuiCond_Once);
-                group_open = ImGui::TreeNode(("cloth " + group).c_str());
+                group_open = ImGui::TreeNode(group.c_str());
                 if (group_open) ImGui::TreePop();  // flat rows under the node: no nesting to close later
             }
             shown = group_open;
@@ -277,32 +281,137 @@ void warning_banner(Session& session, const PanelLayout& layout) {
     ImGui::PopStyleColor();
 }
 
-// Grid resolutions: a change the live world cannot take. The panel says so, and the Re-cook
-// button rebuilds the fabric (timed, in the message under the play controls).
+// What is cooked into a cloth's fabric: the grid's cells or the mesh file's scale, the density and
+// the rest bending. The live world cannot take a change of these: the panel says so, and the
+// Re-cook button rebuilds the fabric (timed, in the message under the play controls).
 void mesh_rows(Session& session) {
-    // What each field holds, per scene and cloth, until re-cooked.
-    static std::map<std::string, std::array<int, 2>> fields;
+    // What each field holds, per scene and cloth table, until re-cooked.
+    struct Fields {
+        std::array<int, 2> cells{};
+        double scale = 1.0, density = 0.0;
+        bool flat = false;
+    };
+    static std::map<std::string, Fields> edited;
     const SceneDesc& scene = session.scene();
     for (std::size_t e = 0; e < scene.cloth_placements.size(); ++e) {
         const std::string& name = scene.cloth_placements[e].name;
         const auto cloth = std::find_if(scene.cloths.begin(), scene.cloths.end(),
                                         [&](const SceneCloth& c) { return c.entry == e; });
         if (cloth == scene.cloths.end()) continue;
-        if (cloth->source.kind != ClothSource::Kind::Grid) {
-            ImGui::TextDisabled("%s: from %s", name.c_str(), cloth->source.file.filename().string().c_str());
-            continue;
+        const bool grid = cloth->source.kind == ClothSource::Kind::Grid;
+        const Fields cooked{{cloth->source.cells_x, cloth->source.cells_y},
+                            cloth->source.scale,
+                            cloth->fabric.density,
+                            cloth->fabric.flat_rest_bending};
+        // Keyed by what is cooked too: after a re-cook (a button, a preset, a script) the fields
+        // start from the new fabric.
+        char key[160];
+        std::snprintf(key, sizeof key, "/%dx%d/%.17g/%.17g/%d", cooked.cells[0], cooked.cells[1], cooked.scale,
+                      cooked.density, cooked.flat ? 1 : 0);
+        Fields& v = edited.try_emplace(scene.name + "/" + name + key, cooked).first->second;
+        ImGui::PushID(name.c_str());
+        ImGui::TextUnformatted(grid ? ("cloth " + name + " (grid)").c_str()
+                                    : ("cloth " + name + " (" + cloth->source.file.filename().string() + ")").c_str());
+        if (grid) {
+            ImGui::InputInt2("cells", v.cells.data());
+            if (ImGui::IsItemHovered()) ImGui::SetTooltip("grid resolution, [1, 4096] per side");
+        } else {
+            ImGui::InputDouble("scale", &v.scale, 0.0, 0.0, "%.4g");
+            if (ImGui::IsItemHovered()) ImGui::SetTooltip("applied to the file's positions, (0, 1e6]");
         }
-        const std::array<int, 2> cooked{cloth->source.cells_x, cloth->source.cells_y};
-        std::array<int, 2>& v = fields.try_emplace(scene.name + "/" + name, cooked).first->second;
-        ImGui::InputInt2(("cells " + name).c_str(), v.data());
-        if (ImGui::IsItemHovered()) ImGui::SetTooltip("grid resolution, [1, 4096] per side");
-        if (v != cooked) {
+        ImGui::InputDouble("density", &v.density, 0.0, 0.0, "%.4g kg/m\u00b2");
+        if (ImGui::IsItemHovered()) ImGui::SetTooltip("areal density, (0, 100] kg/m\u00b2: the vertex masses");
+        ImGui::Checkbox("flat rest bending", &v.flat);
+        if (ImGui::IsItemHovered()) ImGui::SetTooltip("on: the cloth rests flat; off: it rests in the mesh's folds");
+        ClothRecook change;
+        if (grid && v.cells != cooked.cells) change.cells = v.cells;
+        if (!grid && v.scale != cooked.scale) change.scale = v.scale;
+        if (v.density != cooked.density) change.density = v.density;
+        if (v.flat != cooked.flat) change.flat_rest_bending = v.flat;
+        if (!change.empty()) {
             ImGui::TextColored(ImVec4(1.0F, 0.8F, 0.3F, 1.0F), "needs re-cooking (the fabric is built again)");
             ImGui::SameLine();
-            if (ImGui::Button(("Re-cook##" + name).c_str()))
-                session.requests().recook = PlayRequests::GridChange{name, v[0], v[1]};
+            if (ImGui::Button("Re-cook")) session.requests().recook = PlayRequests::Recook{name, change};
         }
+        ImGui::PopID();
     }
+}
+
+// A preset menu: a click asks for the preset (applied by Session::apply_preset, below).
+void preset_menu(Session& session, const std::string& target, std::span<const Preset> presets) {
+    const std::string label = target == "solver" ? std::string("preset") : "preset: " + target;
+    if (!ImGui::BeginCombo(label.c_str(), "choose...")) return;
+    for (const Preset& p : presets) {
+        if (ImGui::Selectable(p.name.c_str())) session.requests().preset = PlayRequests::PresetChoice{target, p.name};
+        if (ImGui::IsItemHovered()) ImGui::SetTooltip("%s", p.description.c_str());
+    }
+    ImGui::EndCombo();
+}
+
+// A preset asked for by a menu or a script, applied before the parameter rows draw the new values.
+void apply_requested_preset(Session& session) {
+    const std::optional<PlayRequests::PresetChoice> choice = std::exchange(session.requests().preset, std::nullopt);
+    if (!choice) return;
+    try {
+        session.apply_preset(choice->target, choice->name);
+    } catch (const std::exception& e) {
+        session.set_message(std::string("preset failed: ") + e.what());
+    }
+}
+
+// Every pin of every cloth, with an Unpin button each (Shift+click on the cloth pins more).
+void pin_rows(Session& session) {
+    World& world = session.world();
+    ImGui::TextDisabled("Shift+click a cloth vertex to pin or unpin it");
+    std::optional<std::pair<std::size_t, std::uint32_t>> unpin;
+    for (std::size_t c = 0; c < world.model().cloths.size(); ++c) {
+        const ClothDesc& cloth = world.model().cloths[c];
+        const std::string title = "cloth " + cloth.name + ": " + std::to_string(cloth.pins.size()) + " pins";
+        if (!ImGui::TreeNode(title.c_str())) continue;
+        // A long edge pins hundreds of vertices: the list scrolls, drawing only the rows in view.
+        const float row = ImGui::GetFrameHeightWithSpacing();
+        ImGui::BeginChild("pins", ImVec2(0.0F, std::min(8.0F, static_cast<float>(cloth.pins.size()) + 0.5F) * row), true);
+        ImGuiListClipper clipper;
+        clipper.Begin(static_cast<int>(cloth.pins.size()));
+        while (clipper.Step())
+            for (int k = clipper.DisplayStart; k < clipper.DisplayEnd; ++k) {
+                const PinDesc& pin = cloth.pins[static_cast<std::size_t>(k)];
+                ImGui::PushID(k);
+                if (ImGui::SmallButton("Unpin")) unpin = std::make_pair(c, pin.vertex);
+                ImGui::SameLine();
+                if (pin.motion >= 0)
+                    ImGui::Text("vertex %u, follows motion %d", pin.vertex, pin.motion);
+                else
+                    ImGui::Text("vertex %u", pin.vertex);
+                ImGui::PopID();
+            }
+        ImGui::EndChild();
+        ImGui::TreePop();
+    }
+    if (unpin) (void)session.toggle_pin(unpin->first, unpin->second);  // after the list: it changes the pins
+}
+
+// Mesh colliders have no live rows: their triangles are cooked.
+void collider_rows(Session& session, bool visible) {
+    parameter_rows(session, "colliders", visible);
+    if (!visible) return;
+    const auto& colliders = session.world().model().colliders;
+    for (const ColliderDesc& c : colliders)
+        if (!c.is_analytic()) ImGui::TextDisabled("collider %s (mesh): its triangles are cooked (edit the file)", c.name.c_str());
+    if (colliders.empty()) ImGui::TextDisabled("no colliders");
+}
+
+void display_rows(Session& session) {
+    DisplayOptions& d = session.display();
+    ImGui::Checkbox("wireframe", &d.wireframe);
+    ImGui::SameLine();
+    ImGui::Checkbox("normals", &d.normals);
+    ImGui::Checkbox("contacts", &d.contacts);
+    if (ImGui::IsItemHovered()) ImGui::SetTooltip("vertices within their contact thickness of an analytic collider");
+    ImGui::SameLine();
+    ImGui::Checkbox("pins", &d.pins);
+    if (d.wireframe || d.normals || d.contacts)
+        ImGui::TextDisabled("drawn from a copy of the state: zero-copy still draws the cloth");
 }
 
 // The scene browser: the shipped scenes by name, and any scene file by path. Opening replaces the
@@ -349,10 +458,20 @@ void draw_panels(Session& session, const PanelLayout& layout) {
     play_controls(session, play);
     if (play) status_lines(session, layout);
     if (open && ImGui::CollapsingHeader("Scenes")) scene_browser(session, layout);
-    parameter_rows(session, "solver", open && ImGui::CollapsingHeader("Solver", ImGuiTreeNodeFlags_DefaultOpen));
-    parameter_rows(session, "materials", open && ImGui::CollapsingHeader("Materials", ImGuiTreeNodeFlags_DefaultOpen));
+    apply_requested_preset(session);
+    const bool solver = open && ImGui::CollapsingHeader("Solver", ImGuiTreeNodeFlags_DefaultOpen);
+    if (solver) preset_menu(session, "solver", solver_presets());
+    parameter_rows(session, "solver", solver);
+    const bool materials = open && ImGui::CollapsingHeader("Materials", ImGuiTreeNodeFlags_DefaultOpen);
+    if (materials)
+        for (const ClothPlacement& table : session.scene().cloth_placements)
+            preset_menu(session, table.name, material_presets());
+    parameter_rows(session, "materials", materials);
     parameter_rows(session, "collision", open && ImGui::CollapsingHeader("Collision"));
+    collider_rows(session, open && ImGui::CollapsingHeader("Colliders"));
+    if (open && ImGui::CollapsingHeader("Pins")) pin_rows(session);
     if (open && ImGui::CollapsingHeader("Mesh (re-cook)")) mesh_rows(session);
+    if (open && ImGui::CollapsingHeader("View")) display_rows(session);
     parameter_rows(session, "world", open && ImGui::CollapsingHeader("Wind and gravity"));
     if (!session.world().model().motions.empty())
         parameter_rows(session, "motions", open && ImGui::CollapsingHeader("Motions (pins and colliders follow)"));

@@ -106,7 +106,8 @@ Parameter component(std::string key, std::string panel, std::string label, std::
 
 }  // namespace
 
-ParameterTable::ParameterTable(const World& world, std::span<const std::string> motion_names) {
+ParameterTable::ParameterTable(const World& world, std::span<const std::string> motion_names,
+                               std::span<const std::string> collider_motions) {
     using S = SolverSettings;
     auto solver = [](World& w) -> S& { return w.settings().solver; };
     auto& P = parameters_;
@@ -217,7 +218,7 @@ ParameterTable::ParameterTable(const World& world, std::span<const std::string> 
                                          f.max, f.log, [mat, member](World& w) -> double& {
                                              return mat(w).*member;
                                          });
-            p.group = name;
+            p.group = "cloth " + name;
             aliases_.emplace("cloth." + std::to_string(i) + ".material." + f.key, P.size());
             P.push_back(std::move(p));
         }
@@ -229,6 +230,19 @@ ParameterTable::ParameterTable(const World& world, std::span<const std::string> 
     for (std::size_t i = 0; i < world.model().motions.size(); ++i) {
         const int index = static_cast<int>(i);
         const std::string name = i < motion_names.size() && !motion_names[i].empty() ? motion_names[i] : std::to_string(i);
+        // A collider that follows this motion holds a copy of it (ColliderDesc::motion): the copy
+        // is updated with the motion, so that pins and colliders keep moving together.
+        std::vector<std::size_t> followers;
+        for (std::size_t k = 0; k < collider_motions.size() && k < world.model().colliders.size(); ++k)
+            if (!collider_motions[k].empty() && i < motion_names.size() && collider_motions[k] == motion_names[i])
+                followers.push_back(k);
+        const auto follow = [index, followers](Parameter& p) {
+            auto base = p.set;
+            p.set = [base, index, followers](World& w, double v) {
+                base(w, v);
+                for (const std::size_t k : followers) w.collider(k).motion = w.motion(index);
+            };
+        };
         const auto alias = [&](const std::string& suffix) {
             aliases_.emplace("motion." + std::to_string(i) + "." + suffix, P.size());
         };
@@ -253,16 +267,60 @@ ParameterTable::ParameterTable(const World& world, std::span<const std::string> 
                 P.push_back(component("motion." + name + "." + suffix, "motions", std::string(f.label) + " " + axes[a],
                                       f.unit, f.max, a,
                                       [index, member](World& w) -> Vec3d& { return w.motion(index).*member; }));
-                P.back().group = name;
+                follow(P.back());
+                P.back().group = "motion " + name;
             }
         alias("frequency");
         P.push_back(number<double>("motion." + name + ".frequency", "motions", "frequency", "Hz", 0.0, 1000.0, false,
                                    [index](World& w) -> double& { return w.motion(index).frequency; }));
-        P.back().group = name;
+        follow(P.back());
+        P.back().group = "motion " + name;
         alias("phase");
         P.push_back(number<double>("motion." + name + ".phase", "motions", "phase", "rad", -1e3, 1e3, false,
                                    [index](World& w) -> double& { return w.motion(index).phase; }));
-        P.back().group = name;
+        follow(P.back());
+        P.back().group = "motion " + name;
+    }
+
+    // ---- colliders: sizes, friction and (for one that follows no motion) position, read at every
+    // substep (World::collider). A mesh collider's triangles are cooked: it has no live rows.
+    constexpr const char* kShapes[] = {"plane", "sphere", "capsule", "box", "mesh"};
+    for (std::size_t k = 0; k < world.model().colliders.size(); ++k) {
+        const ColliderDesc& c = world.model().colliders[k];
+        if (!c.is_analytic()) continue;
+        const std::string name = c.name.empty() ? std::to_string(k) : c.name;
+        const std::string group = "collider " + name + " (" + kShapes[static_cast<int>(c.shape)] + ")";
+        auto collider = [k](World& w) -> ColliderDesc& { return w.collider(k); };
+        const auto add = [&](const std::string& suffix, Parameter p) {
+            aliases_.emplace("collider." + std::to_string(k) + "." + suffix, P.size());
+            p.group = group;
+            P.push_back(std::move(p));
+        };
+        const std::string key = "collider." + name + ".";
+        if (c.shape == ColliderShape::Sphere || c.shape == ColliderShape::Capsule)
+            add("radius", number<double>(key + "radius", "colliders", "radius", "m", 1e-6, 1e6, true,
+                                         [collider](World& w) -> double& { return collider(w).radius; }));
+        if (c.shape == ColliderShape::Capsule)
+            add("half_height", number<double>(key + "half_height", "colliders", "half height", "m", 0.0, 1e6, true,
+                                              [collider](World& w) -> double& { return collider(w).half_height; }));
+        if (c.shape == ColliderShape::Box)
+            for (int a = 0; a < 3; ++a)
+                add(std::string("half_extents.") + axes[a],
+                    number<double>(key + "half_extents." + axes[a], "colliders", std::string("half extent ") + axes[a],
+                                   "m", 1e-6, 1e6, true, [collider, a](World& w) -> double& {
+                                       Vec3d& e = collider(w).half_extents;
+                                       return a == 0 ? e.x : a == 1 ? e.y : e.z;
+                                   }));
+        Parameter friction = number<double>(key + "friction", "colliders", "friction", "", -1.0, 10.0, false,
+                                            [collider](World& w) -> double& { return collider(w).friction; });
+        friction.hint = "below 0: each cloth's own friction (its material)";
+        add("friction", std::move(friction));
+        const bool follows = k < collider_motions.size() && !collider_motions[k].empty();
+        if (!follows)
+            for (int a = 0; a < 3; ++a)
+                add(std::string("position.") + axes[a],
+                    component(key + "position." + axes[a], "colliders", std::string("position ") + axes[a], "m", 1e4, a,
+                              [collider](World& w) -> Vec3d& { return collider(w).motion.origin; }));
     }
 }
 

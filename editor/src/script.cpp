@@ -23,11 +23,22 @@ constexpr Spelling kCommands[] = {
     {"reset", ScriptCommand::Kind::reset, 0},           {"timescale", ScriptCommand::Kind::timescale, 1},
     {"open", ScriptCommand::Kind::open, 1},             {"record", ScriptCommand::Kind::record, 1},
     {"stop", ScriptCommand::Kind::stop, 0},             {"cells", ScriptCommand::Kind::cells, 3},
-    {"screenshot", ScriptCommand::Kind::screenshot, 1}, {"save", ScriptCommand::Kind::save, 1},
-    {"grab", ScriptCommand::Kind::grab, 2},             {"drag", ScriptCommand::Kind::drag, 2},
-    {"held", ScriptCommand::Kind::held, 1},             {"release", ScriptCommand::Kind::release, 0},
-    {"pin", ScriptCommand::Kind::pin, 2},               {"quit", ScriptCommand::Kind::quit, 0},
+    {"cook", ScriptCommand::Kind::cook, 3},             {"preset", ScriptCommand::Kind::preset, 2},
+    {"show", ScriptCommand::Kind::show, 2},             {"screenshot", ScriptCommand::Kind::screenshot, 1},
+    {"save", ScriptCommand::Kind::save, 1},             {"grab", ScriptCommand::Kind::grab, 2},
+    {"drag", ScriptCommand::Kind::drag, 2},             {"held", ScriptCommand::Kind::held, 1},
+    {"release", ScriptCommand::Kind::release, 0},       {"pin", ScriptCommand::Kind::pin, 2},
+    {"quit", ScriptCommand::Kind::quit, 0},
 };
+
+constexpr std::string_view kDisplayToggles[] = {"wireframe", "normals", "contacts", "pins"};
+
+// "true"/"on"/"1" or "false"/"off"/"0", or an error naming the line and the word.
+bool on_off(const std::string& w, const std::string& where, const std::string& what) {
+    if (w == "on" || w == "true" || w == "1") return true;
+    if (w == "off" || w == "false" || w == "0") return false;
+    throw Error(where + what + " expects on or off, got '" + w + "'");
+}
 
 // A number in [lo, hi] written alone, or an error naming the line and the word.
 double number_in(const std::string& w, double lo, double hi, const std::string& where, const char* what) {
@@ -115,6 +126,31 @@ Script parse_script(std::string_view text, const std::string& name) {
                     if (ec != std::errc{} || ptr != w.data() + w.size() || *targets[k] < 1 || *targets[k] > 4096)
                         throw Error(where + "cells expects two cell counts in [1, 4096], got '" + w + "'");
                 }
+                break;
+            }
+            case ScriptCommand::Kind::cook:
+                c.key = words[1];
+                c.text = words[2];
+                if (c.text == "density")
+                    c.number = number_in(words[3], 1e-12, 100.0, where, "cook density expects kg/m\u00b2 in (0, 100]");
+                else if (c.text == "scale")
+                    c.number = number_in(words[3], 1e-12, 1e6, where, "cook scale expects a scale in (0, 1e6]");
+                else if (c.text == "flat_rest_bending")
+                    c.number = on_off(words[3], where, "cook flat_rest_bending") ? 1.0 : 0.0;
+                else
+                    throw Error(where + "cook: unknown field '" + c.text +
+                                "' (fields: density, scale, flat_rest_bending; cells has its own command)");
+                break;
+            case ScriptCommand::Kind::preset:
+                c.key = words[1];
+                c.text = words[2];
+                break;
+            case ScriptCommand::Kind::show: {
+                c.key = words[1];
+                bool known = false;
+                for (const std::string_view t : kDisplayToggles) known = known || t == c.key;
+                if (!known) throw Error(where + "show: unknown display '" + c.key + "' (wireframe, normals, contacts, pins)");
+                c.number = on_off(words[2], where, "show " + c.key) ? 1.0 : 0.0;
                 break;
             }
             case ScriptCommand::Kind::grab:

@@ -34,6 +34,12 @@ CursorRay cursor_ray(const render::Camera& camera, int width, int height, double
     return {to_vec(a), to_vec(glm::normalize(b - a))};
 }
 
+std::optional<glm::dvec2> project_to_picture(const render::Camera& camera, int width, int height, const Vec3d& p) {
+    const glm::dvec4 clip = view_projection(camera, width, height) * glm::dvec4(p.x, p.y, p.z, 1.0);
+    if (clip.w < static_cast<double>(camera.near_plane)) return std::nullopt;
+    return glm::dvec2((clip.x / clip.w + 1.0) * 0.5 * width, (1.0 - clip.y / clip.w) * 0.5 * height);
+}
+
 std::optional<VertexPick> pick_vertex(World& world, const render::Camera& camera, int width, int height, double x,
                                       double y, double radius) {
     const glm::dmat4 vp = view_projection(camera, width, height);

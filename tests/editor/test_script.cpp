@@ -82,12 +82,35 @@ TEST(Script, ParsesEveryCommand) {
     EXPECT_EQ(error_of("grab -1 5\n"), "s.txt:1: grab expects picture pixels x y in [0, 16384], got '-1'");
     EXPECT_EQ(error_of("held far\n"), "s.txt:1: held expects a distance in [0, 100] m, got 'far'");
     EXPECT_EQ(error_of("pin 5\n"), "s.txt:1: 'pin' takes 2 arguments, got 1");
+
+    const Script k = parse_script("cook flag density 0.3\ncook shirt scale 0.01\ncook flag flat_rest_bending on\n"
+                                  "preset solver fast\npreset flag silk\nshow wireframe on\nshow pins off\n",
+                                  "k.txt");
+    ASSERT_EQ(k.commands.size(), 7U);
+    EXPECT_EQ(k.commands[0].kind, K::cook);
+    EXPECT_EQ(k.commands[0].key, "flag");
+    EXPECT_EQ(k.commands[0].text, "density");
+    EXPECT_DOUBLE_EQ(k.commands[0].number, 0.3);
+    EXPECT_EQ(k.commands[1].text, "scale");
+    EXPECT_DOUBLE_EQ(k.commands[2].number, 1.0);
+    EXPECT_EQ(k.commands[3].kind, K::preset);
+    EXPECT_EQ(k.commands[3].key, "solver");
+    EXPECT_EQ(k.commands[4].text, "silk");
+    EXPECT_EQ(k.commands[5].kind, K::show);
+    EXPECT_EQ(k.commands[5].key, "wireframe");
+    EXPECT_DOUBLE_EQ(k.commands[5].number, 1.0);
+    EXPECT_DOUBLE_EQ(k.commands[6].number, 0.0);
+    EXPECT_EQ(error_of("cook flag density 0\n"), "s.txt:1: cook density expects kg/m\u00b2 in (0, 100], got '0'");
+    EXPECT_EQ(error_of("cook flag colour 3\n"),
+              "s.txt:1: cook: unknown field 'colour' (fields: density, scale, flat_rest_bending; cells has its own command)");
+    EXPECT_EQ(error_of("show grid on\n"), "s.txt:1: show: unknown display 'grid' (wireframe, normals, contacts, pins)");
+    EXPECT_EQ(error_of("show normals maybe\n"), "s.txt:1: show normals expects on or off, got 'maybe'");
 }
 
 TEST(Script, ErrorsNameTheLine) {
     EXPECT_EQ(error_of("frame 1\njump 3\n"),
               "s.txt:2: unknown command 'jump' (commands: frame, set, expect, pause, play, step, reset, timescale, "
-              "open, record, stop, cells, screenshot, save, grab, drag, held, release, pin, quit)");
+              "open, record, stop, cells, cook, preset, show, screenshot, save, grab, drag, held, release, pin, quit)");
     EXPECT_EQ(error_of("set solver.substeps\n"), "s.txt:1: 'set' takes 2 arguments, got 1");
     EXPECT_EQ(error_of("pause now\n"), "s.txt:1: 'pause' takes 0 arguments, got 1");
     EXPECT_EQ(error_of("\nframe ten\n"), "s.txt:2: frame expects a frame count in [1, 100000000], got 'ten'");
@@ -197,7 +220,7 @@ TEST(Parameters, MotionsAreLiveAndNamed) {
     ASSERT_NE(vx, nullptr);
     EXPECT_EQ(table.find("motion.0.linear_velocity.x"), vx) << "the index alias";
     EXPECT_EQ(vx->panel, "motions");
-    EXPECT_EQ(vx->group, "carrier");
+    EXPECT_EQ(vx->group, "motion carrier");
     EXPECT_EQ(vx->unit, "m/s");
     for (const char* key : {"motion.carrier.origin.y", "motion.carrier.angular_velocity.z", "motion.carrier.amplitude.x",
                             "motion.carrier.frequency", "motion.carrier.phase"})

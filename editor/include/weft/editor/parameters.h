@@ -28,8 +28,8 @@ enum class ParameterKind : unsigned char {
 
 struct Parameter {
     std::string key;    ///< what scripts name it by, as in the scene file: "solver.substeps"
-    std::string panel;  ///< "solver", "materials", "collision", "world", "motions"
-    std::string group;  ///< a heading inside the panel ("" for none): the cloth's or motion's name
+    std::string panel;  ///< "solver", "materials", "collision", "world", "motions", "colliders"
+    std::string group;  ///< a heading inside the panel ("" for none): "cloth flag", "motion spin", "collider pole (capsule)"
     std::string label;  ///< the widget's label
     std::string unit;   ///< SI unit, "" when dimensionless
     std::string hint;   ///< shown in the tooltip: what a special value means ("0: automatic")
@@ -51,7 +51,12 @@ public:
     /// name: "cloth.flag.material.stretch_stiffness"; "cloth.0.material…" finds the same; motions by
     /// `motion_names`, the scene's `[[motion]]` names in order: "motion.spin.angular_velocity.y",
     /// "motion.0…" finds the same, and a motion without a name is keyed by its index).
-    explicit ParameterTable(const World& world, std::span<const std::string> motion_names = {});
+    /// Analytic colliders by name ("collider.pole.radius", "collider.0.radius" finds the same):
+    /// sizes for their shape, friction, and the position of one that follows no motion.
+    /// `collider_motions`: per collider, the name of the motion it follows (SceneDesc::collider_motions),
+    /// so that a motion's change moves its colliders with it.
+    explicit ParameterTable(const World& world, std::span<const std::string> motion_names = {},
+                            std::span<const std::string> collider_motions = {});
 
     [[nodiscard]] const std::vector<Parameter>& parameters() const { return parameters_; }
     /// The parameter for `key`, or nullptr.

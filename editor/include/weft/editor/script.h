@@ -14,6 +14,11 @@
 ///     record out/rec               record every displayed frame to out/rec/frame_NNNN.png
 ///     stop                         stop recording (and make out/rec/capture.mp4 with ffmpeg)
 ///     cells flag 80 48             re-cook a grid cloth at 80×48 cells, as the Mesh panel does
+///     cook flag density 0.3        re-cook a cloth with another density (kg/m²), mesh-file scale,
+///                                  or flat_rest_bending (true/false), as the Mesh panel does
+///     preset solver fast           apply a preset, as the preset menus do: "solver" or a cloth's
+///     preset flag silk             name, then the preset's name (docs/editor.md, "Presets")
+///     show wireframe on            a display toggle: wireframe, normals, contacts, pins (on/off)
 ///     grab 640 300                 Ctrl+press at picture pixel (640, 300): grab the cloth vertex
 ///                                  under it (the script fails where there is none)
 ///     drag 640 200                 move the mouse there while grabbing: the grab's target follows
@@ -39,14 +44,17 @@ namespace weft::editor {
 struct ScriptCommand {
     enum class Kind : unsigned char {
         frame, set, expect, pause, play, step, reset, timescale, screenshot, save, open, record, stop, cells,
-        grab, drag, held, release, pin, quit
+        cook, preset, show, grab, drag, held, release, pin, quit
     };
     Kind kind = Kind::quit;
     int line = 0;         ///< 1-based line in the script
     int frame = 0;        ///< frame: the displayed-frame count to reach
-    std::string key;      ///< set, expect: the parameter's key
-    std::string text;     ///< set, expect: the value as written; screenshot, save, record: the path; open: the scene
-    double number = 0.0;  ///< timescale; set, expect: the value once checked (check_script)
+    /// set, expect: the parameter's key; cells, cook: the cloth; preset: the target; show: the toggle
+    std::string key;
+    /// set, expect: the value as written; screenshot, save, record: the path; open: the scene;
+    /// cook: the field (density, scale, flat_rest_bending); preset: the preset's name
+    std::string text;
+    double number = 0.0;  ///< timescale, cook; set, expect: the value once checked (check_script); show: 0 or 1
     bool checked = false;  ///< set, expect: key and value checked against the scene's parameters
     int cells_x = 0, cells_y = 0;  ///< cells: the grid resolution (the cloth's name is `key`)
     double x = 0.0, y = 0.0;       ///< grab, drag, pin: the picture pixel; held: x is the distance, m

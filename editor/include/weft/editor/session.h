@@ -3,6 +3,7 @@
 /// What the editor edits: the scene as loaded, the world built from it, the frame loop that plays
 /// it, the parameter table and the stats history. Panels, keys and scripts all change it through
 /// this object, so the three share one code path.
+#include <array>
 #include <filesystem>
 #include <functional>
 #include <map>
@@ -22,6 +23,16 @@
 
 namespace weft::editor {
 
+/// What a re-cook changes on one `[[cloth]]` table: what is cooked into the fabric, so that the live
+/// world cannot take it (docs/editor.md, "Re-cooking"). Unset fields stay as they are.
+struct ClothRecook {
+    std::optional<std::array<int, 2>> cells;  ///< grid resolution, [1, 4096] per side (grids only)
+    std::optional<double> density;            ///< areal density, kg/m², (0, 100]
+    std::optional<double> scale;              ///< mesh-file scale, (0, 1e6] (mesh files only)
+    std::optional<bool> flat_rest_bending;    ///< rest dihedral angles 0 (flat) instead of the mesh's
+    [[nodiscard]] bool empty() const { return !cells && !density && !scale && !flat_rest_bending; }
+};
+
 /// Play-control requests from keys and scripts, consumed by the play panel (which applies them
 /// with the same calls as its buttons).
 struct PlayRequests {
@@ -36,13 +47,20 @@ struct PlayRequests {
     /// script's `record` and `stop`); taken by the editor's loop.
     std::optional<std::filesystem::path> record;
     bool stop_recording = false;
-    /// A new grid resolution for a cloth (the Mesh panel, the script's `cells`): applied by the
-    /// editor's loop after the panels with Session::recook_grid.
-    struct GridChange {
+    /// A re-cook of a cloth (the Mesh panel, the script's `cells` and `cook`): applied by the
+    /// editor's loop after the panels with Session::recook.
+    struct Recook {
         std::string cloth;  ///< the `[[cloth]]` table's name
-        int cells_x = 0, cells_y = 0;
+        ClothRecook change;
     };
-    std::optional<GridChange> recook;
+    std::optional<Recook> recook;
+    /// A preset to apply (the preset menus, the script's `preset`): taken by the panels, which
+    /// apply it with Session::apply_preset.
+    struct PresetChoice {
+        std::string target;  ///< "solver", or a `[[cloth]]` table's name for a material preset
+        std::string name;
+    };
+    std::optional<PresetChoice> preset;
     /// The mouse on the cloth (Ctrl+drag grabs, Shift+click pins; the script's grab, drag, release
     /// and pin), at picture pixels: applied in order by the editor's loop, which has the camera.
     struct MouseAction {
@@ -50,6 +68,15 @@ struct PlayRequests {
         double x = 0.0, y = 0.0;  ///< pixels from the picture's top-left corner
     };
     std::vector<MouseAction> mouse;
+};
+
+/// What the viewport draws over the shaded scene (the View panel, the script's `show`;
+/// docs/editor.md, "Display").
+struct DisplayOptions {
+    bool wireframe = false;  ///< the cloth's triangle edges
+    bool normals = false;    ///< each vertex's normal, as a short line
+    bool contacts = false;   ///< vertices within their contact distance of an analytic collider
+    bool pins = false;       ///< pinned vertices (the grab's spring is drawn whenever a vertex is grabbed)
 };
 
 /// The viewport recording, as the play panel shows it.
@@ -73,6 +100,7 @@ public:
     [[nodiscard]] StatsHistory& history() { return history_; }
     [[nodiscard]] PlayRequests& requests() { return requests_; }
     [[nodiscard]] RecordingStatus& recording() { return recording_; }
+    [[nodiscard]] DisplayOptions& display() { return display_; }
 
     /// Sets `p` to `value` (clamped to its range) on the world — the one setter of panels and
     /// scripts. Remembers the step count, so that `expect` knows when a step has used it.
@@ -88,18 +116,31 @@ public:
 
     /// The last file operation's outcome, shown under the play controls.
     [[nodiscard]] const std::string& message() const { return message_; }
-    void set_message(std::string message) { message_ = std::move(message); }
+    void set_message(std::string message) {
+        message_ = std::move(message);
+        ++messages_;
+    }
+    /// How many messages were said so far: a script prints each new one.
+    [[nodiscard]] int messages() const { return messages_; }
 
-    /// Builds the world again from the scene (time 0, the initial state), keeping the tuned
-    /// settings and materials, the pause state and the time scale; clears the stats.
+    /// Builds the world again from the scene (time 0, the initial state), keeping what was tuned
+    /// (what Save writes: settings, materials, motions, colliders, pins made or removed live, those
+    /// at the cloth's start position), the pause state and the time scale; clears the stats.
     void reset();
     [[nodiscard]] int resets() const { return resets_; }
-    /// Gives the grid cloth `cloth` (a `[[cloth]]` table's name) cells_x × cells_y cells ([1, 4096]
-    /// each). The live world cannot take this: the fabric is cooked again, so the world is rebuilt
-    /// from the changed scene as reset() does, keeping what was tuned. Returns the rebuild's wall
-    /// time, ms, and says what changed in message(). Throws weft::Error, the session unchanged, for
-    /// an unknown cloth, a cloth from a mesh file, or cells out of range.
-    double recook_grid(const std::string& cloth, int cells_x, int cells_y);
+    /// Re-cooks the `[[cloth]]` table `cloth` with `change` (a new grid resolution, density, mesh
+    /// scale or rest bending). The live world cannot take this: the fabric is cooked again, so the
+    /// world is rebuilt from the changed scene, keeping what was tuned (pins made live on this cloth
+    /// are dropped: they name vertices of the old mesh; message() says so). Returns the rebuild's
+    /// wall time, ms, and says what changed in message(). Throws weft::Error, the session unchanged,
+    /// for an unknown cloth, cells for a mesh file or a scale for a grid, or a value out of range.
+    double recook(const std::string& cloth, const ClothRecook& change);
+    /// Applies preset `name` (presets.h) to `target`: "solver" (solver_presets), or the cloths of
+    /// the `[[cloth]]` table `target` (material_presets; every copy of a repeated table alike). Each
+    /// value goes through apply(), as a widget's would; a material preset whose density differs from
+    /// the cloth's asks for a re-cook (requests().recook), which the editor's loop runs after the
+    /// panels. Says what it did in message(). Throws weft::Error naming an unknown target or preset.
+    void apply_preset(const std::string& target, const std::string& name);
     /// Starts pulling the picked vertex with a spring that holds its whole cloth within 2 cm of the
     /// target (weft/grab.h, grab_stiffness_for) and is ten times as stiff as the cloth's membrane
     /// (stretch stiffness, N/m), the target first where the vertex is. Replaces a grab in progress.
@@ -122,7 +163,14 @@ public:
     void set_before_rebuild(std::function<void()> callback) { before_rebuild_ = std::move(callback); }
 
 private:
+    /// reset() without taking what was tuned into the scene first: the world built from scene_,
+    /// the live settings and materials carried over.
+    void rebuild();
+
     SceneDesc scene_;
+    /// Each cloth's pin rules as the file wrote them: what a re-cook goes back to (pins made live
+    /// name vertices of the old mesh).
+    std::vector<std::vector<PinSelection>> file_pins_;
     std::string backend_;
     BackendOptions options_;
     std::unique_ptr<World> world_;
@@ -131,10 +179,12 @@ private:
     StatsHistory history_;
     PlayRequests requests_;
     RecordingStatus recording_;
+    DisplayOptions display_;
     std::map<std::string, std::int64_t> applied_at_;
     std::int64_t steps_before_reset_ = 0;  ///< so that step counts keep rising across resets
     int resets_ = 0;
     std::string message_;
+    int messages_ = 0;
     std::function<void()> before_rebuild_;
     std::optional<Vec3d> grab_anchor_;
 };

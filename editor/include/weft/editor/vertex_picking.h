@@ -22,6 +22,11 @@ struct CursorRay {
 /// `width`×`height` picture drawn with `camera` (the projection of the renderers, frame_uniforms).
 [[nodiscard]] CursorRay cursor_ray(const render::Camera& camera, int width, int height, double x, double y);
 
+/// Where world point `p` (m) lands on the `width`×`height` picture drawn with `camera`, in pixels
+/// from the top-left corner; std::nullopt behind the near plane.
+[[nodiscard]] std::optional<glm::dvec2> project_to_picture(const render::Camera& camera, int width, int height,
+                                                           const Vec3d& p);
+
 /// A cloth vertex found under the cursor.
 struct VertexPick {
     std::size_t cloth = 0;

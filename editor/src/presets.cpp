@@ -1,0 +1,75 @@
+// The editor's presets (see presets.h). Stretch stiffness is Young's modulus times thickness (N/m),
+// bending stiffness the plate stiffness (N·m), both of the orders reported for woven fabrics and
+// sheets; they are starting points to tune from, not measured fabrics.
+#include "weft/editor/presets.h"
+
+#include <array>
+
+namespace weft::editor {
+namespace {
+
+Preset fabric(std::string name, std::string description, double stretch, double poisson, double bending,
+              double damping, double drag, double lift, double friction, double density) {
+    return Preset{std::move(name),
+                  std::move(description),
+                  {{"stretch_stiffness", stretch},
+                   {"poisson_ratio", poisson},
+                   {"bending_stiffness", bending},
+                   {"damping_stiffness", damping},
+                   {"drag_coefficient", drag},
+                   {"lift_coefficient", lift},
+                   {"friction", friction}},
+                  density};
+}
+
+Preset solver(std::string name, std::string description, int substeps, int newton, double tolerance, int cap,
+              bool single, bool projected) {
+    return Preset{std::move(name),
+                  std::move(description),
+                  {{"solver.substeps", substeps},
+                   {"solver.newton_iterations", newton},
+                   {"solver.cg_tolerance", tolerance},
+                   {"solver.cg_max_iterations", cap},
+                   {"solver.precision", single ? 0.0 : 1.0},
+                   {"solver.hessian", projected ? 1.0 : 0.0}},
+                  0.0};
+}
+
+}  // namespace
+
+std::span<const Preset> material_presets() {
+    static const std::array<Preset, 5> presets{
+        fabric("cotton", "light woven cotton (the defaults)", 5.0e3, 0.3, 1.0e-5, 1.0e-3, 1.0, 0.3, 0.3, 0.2),
+        fabric("silk", "thin and soft: low bending, flutters", 2.0e3, 0.3, 1.0e-6, 5.0e-4, 1.2, 0.4, 0.2, 0.06),
+        fabric("denim", "heavy twill: stiffer, folds in wide curves", 2.0e4, 0.25, 1.0e-4, 2.0e-3, 0.9, 0.2, 0.5, 0.4),
+        fabric("leather", "stiff and heavy, barely stretches", 1.0e5, 0.4, 1.0e-3, 3.0e-3, 0.8, 0.1, 0.6, 0.9),
+        fabric("rubber", "a rubber sheet: stretchy, nearly incompressible, grippy", 1.0e3, 0.49, 1.0e-4, 1.0e-3, 1.0,
+               0.1, 1.0, 1.0),
+    };
+    return presets;
+}
+
+std::span<const Preset> solver_presets() {
+    static const std::array<Preset, 3> presets{
+        solver("fast", "one float Newton step, loose CG (1e-2, at most 50 iterations): for many cloths in real time",
+               1, 1, 1e-2, 50, true, false),
+        solver("balanced", "the defaults: one double Newton step, CG to 1e-4", 1, 1, 1e-4, 500, false, false),
+        solver("accurate", "4 substeps of 3 Newton steps, CG to 1e-6, projected Hessian: for reference runs", 4, 3,
+               1e-6, 2000, false, true),
+    };
+    return presets;
+}
+
+const Preset* find_preset(std::span<const Preset> presets, std::string_view name) {
+    for (const Preset& p : presets)
+        if (p.name == name) return &p;
+    return nullptr;
+}
+
+std::string preset_names(std::span<const Preset> presets) {
+    std::string out;
+    for (const Preset& p : presets) out += (out.empty() ? "" : ", ") + p.name;
+    return out;
+}
+
+}  // namespace weft::editor

@@ -1,0 +1,152 @@
+// The View panel's overlay (see viewport_overlay.h).
+#include "weft/editor/viewport_overlay.h"
+
+#include <algorithm>
+#include <cmath>
+#include <optional>
+#include <utility>
+
+#include <imgui.h>
+
+#include "weft/collider.h"
+#include "weft/editor/vertex_picking.h"
+#include "weft/physics/collider_contact.h"
+
+namespace weft::editor {
+namespace {
+
+constexpr std::uint32_t kWire = overlay_colour(20, 20, 24, 150);
+constexpr std::uint32_t kNormal = overlay_colour(40, 110, 255, 220);
+constexpr std::uint32_t kContact = overlay_colour(255, 140, 0);
+constexpr std::uint32_t kPin = overlay_colour(30, 60, 230);
+constexpr std::uint32_t kGrab = overlay_colour(255, 220, 40);
+
+// Each edge of the triangles once (a shared edge belongs to two triangles), as (low, high) pairs.
+std::vector<std::pair<std::uint32_t, std::uint32_t>> unique_edges(const Fabric& fabric) {
+    std::vector<std::pair<std::uint32_t, std::uint32_t>> edges;
+    edges.reserve(3 * fabric.triangles().size());
+    for (const Triangle& t : fabric.triangles())
+        for (int k = 0; k < 3; ++k) {
+            const std::uint32_t a = t.v[k], b = t.v[(k + 1) % 3];
+            edges.emplace_back(std::min(a, b), std::max(a, b));
+        }
+    std::sort(edges.begin(), edges.end());
+    edges.erase(std::unique(edges.begin(), edges.end()), edges.end());
+    return edges;
+}
+
+// Area-weighted vertex normals (the sum of the incident triangles' cross products), unit length.
+std::vector<Vec3d> vertex_normals(const Fabric& fabric, const std::vector<Vec3d>& x) {
+    std::vector<Vec3d> n(x.size(), Vec3d{});
+    for (const Triangle& t : fabric.triangles()) {
+        const Vec3d c = physics::cross(x[t.v[1]] - x[t.v[0]], x[t.v[2]] - x[t.v[0]]);
+        for (const std::uint32_t v : t.v) n[v] = n[v] + c;
+    }
+    for (Vec3d& v : n) {
+        const double l = physics::length(v);
+        v = l > 0.0 ? (1.0 / l) * v : Vec3d{};
+    }
+    return n;
+}
+
+// The mean rest edge length, m: the scale of a normal's line.
+double rest_spacing(const Fabric& fabric) {
+    const auto rest = fabric.rest_positions();
+    double sum = 0.0;
+    std::size_t count = 0;
+    for (const Triangle& t : fabric.triangles())
+        for (int k = 0; k < 3; ++k) {
+            sum += physics::length(rest[t.v[(k + 1) % 3]] - rest[t.v[k]]);
+            ++count;
+        }
+    return count > 0 ? sum / static_cast<double>(count) : 0.01;
+}
+
+}  // namespace
+
+ViewportOverlay build_viewport_overlay(World& world, const render::Camera& camera, int width, int height,
+                                       const DisplayOptions& options) {
+    ViewportOverlay out;
+    const auto project = [&](const Vec3d& p) { return project_to_picture(camera, width, height, p); };
+    const auto segment = [&](const Vec3d& a, const Vec3d& b, std::uint32_t colour) {
+        const std::optional<glm::dvec2> pa = project(a), pb = project(b);
+        if (!pa || !pb) return false;
+        out.segments.push_back({static_cast<float>(pa->x), static_cast<float>(pa->y), static_cast<float>(pb->x),
+                                static_cast<float>(pb->y), colour});
+        return true;
+    };
+    const auto mark = [&](const Vec3d& p, OverlayMark::Shape shape, float size, std::uint32_t colour) {
+        const std::optional<glm::dvec2> q = project(p);
+        if (!q) return false;
+        out.marks.push_back({shape, static_cast<float>(q->x), static_cast<float>(q->y), size, colour});
+        return true;
+    };
+    const Model& model = world.model();
+    // The analytic colliders where they are now, for the contact marks.
+    std::vector<physics::Shape<double>> shapes;
+    if (options.contacts)
+        for (const ColliderDesc& c : model.colliders)
+            if (c.is_analytic()) shapes.push_back(shape_at<double>(c, world.time()));
+
+    for (std::size_t c = 0; c < model.cloths.size(); ++c) {
+        const ClothDesc& cloth = model.cloths[c];
+        const bool grabbed = model.grab && model.grab->cloth == c;
+        const bool pins = options.pins && !cloth.pins.empty();
+        if (!options.wireframe && !options.normals && !options.contacts && !pins && !grabbed) continue;
+        const Fabric& fabric = *cloth.fabric;
+        const std::vector<Vec3d> x = world.positions(c);
+        if (options.wireframe)
+            for (const auto& [a, b] : unique_edges(fabric)) out.edges += segment(x[a], x[b], kWire) ? 1 : 0;
+        if (options.normals) {
+            const std::vector<Vec3d> n = vertex_normals(fabric, x);
+            const double length = 1.5 * rest_spacing(fabric);
+            for (std::size_t v = 0; v < x.size(); ++v)
+                out.normals += segment(x[v], x[v] + length * n[v], kNormal) ? 1 : 0;
+        }
+        if (options.contacts && !shapes.empty()) {
+            // "Touching": within the cloth's contact thickness (the distance the solver keeps), with
+            // a 10 % margin for the penalty's give.
+            const double reach = 1.1 * cloth.material.contact_thickness;
+            for (const Vec3d& p : x) {
+                bool touching = false;
+                for (const physics::Shape<double>& s : shapes) {
+                    Vec3d normal{};
+                    touching = touching || physics::shape_distance(s, p, normal, static_cast<Mat3d*>(nullptr)) < reach;
+                }
+                if (touching && mark(p, OverlayMark::Shape::dot, 2.5F, kContact)) ++out.contacts;
+            }
+        }
+        if (pins)
+            for (const PinDesc& pin : cloth.pins)
+                out.pins += mark(x[pin.vertex], OverlayMark::Shape::square, 3.0F, kPin) ? 1 : 0;
+        if (grabbed) {
+            const VertexGrab& g = *model.grab;
+            out.grab = segment(x[g.vertex], g.target, kGrab);
+            (void)mark(g.target, OverlayMark::Shape::cross, 6.0F, kGrab);
+            (void)mark(x[g.vertex], OverlayMark::Shape::dot, 3.5F, kGrab);
+        }
+    }
+    return out;
+}
+
+void draw_viewport_overlay(const ViewportOverlay& overlay) {
+    ImDrawList* list = ImGui::GetBackgroundDrawList();
+    for (const OverlaySegment& s : overlay.segments) list->AddLine(ImVec2(s.x0, s.y0), ImVec2(s.x1, s.y1), s.colour, 1.0F);
+    for (const OverlayMark& m : overlay.marks) {
+        const ImVec2 c(m.x, m.y);
+        switch (m.shape) {
+            case OverlayMark::Shape::square:
+                list->AddRectFilled(ImVec2(c.x - m.size, c.y - m.size), ImVec2(c.x + m.size, c.y + m.size), m.colour);
+                break;
+            case OverlayMark::Shape::dot:
+                list->AddCircleFilled(c, m.size, m.colour, 8);
+                break;
+            case OverlayMark::Shape::cross:
+                list->AddLine(ImVec2(c.x - m.size, c.y - m.size), ImVec2(c.x + m.size, c.y + m.size), m.colour, 2.0F);
+                list->AddLine(ImVec2(c.x - m.size, c.y + m.size), ImVec2(c.x + m.size, c.y - m.size), m.colour, 2.0F);
+                break;
+        }
+    }
+}
+
+}  // namespace weft::editor

@@ -1,0 +1,242 @@
+// The editor's session without a window: re-cooking what the live world cannot take (timed, keeping
+// what was tuned), presets through the parameter table, colliders in the table (and moving with the
+// motion they follow), what a reset keeps, and the View panel's overlay geometry.
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cstdio>
+#include <functional>
+#include <cmath>
+#include <filesystem>
+#include <memory>
+#include <numeric>
+#include <string>
+
+#include "weft/error.h"
+#include "weft/scene.h"
+
+#include "weft/editor/parameters.h"
+#include "weft/editor/presets.h"
+#include "weft/editor/session.h"
+#include "weft/editor/viewport_overlay.h"
+
+#if WEFT_TEST_HAVE_ASSETS
+#include "weft/assets/assimp_loader.h"
+#endif
+
+namespace weft::editor {
+namespace {
+
+const std::filesystem::path kScenes = std::filesystem::path(WEFT_SOURCE_DIR) / "assets" / "scenes";
+
+std::unique_ptr<Session> open_session(const std::string& scene_name, std::span<const std::string> overrides = {}) {
+    SceneDesc scene = load_scene(kScenes / (scene_name + ".toml"), overrides);
+    auto world = build_world(scene);
+    return std::make_unique<Session>(std::move(scene), "cpu", BackendOptions{}, std::move(world), 1.0);
+}
+
+double total_mass(World& world, std::size_t cloth) {
+    const auto m = world.model().cloths.at(cloth).fabric->masses();
+    return std::accumulate(m.begin(), m.end(), 0.0);
+}
+
+std::string error_of(const std::function<void()>& f) {
+    try {
+        f();
+    } catch (const Error& e) {
+        return e.what();
+    }
+    return "no error";
+}
+
+const std::string kSmallFlag[] = {"cloth.flag.mesh.grid.cells=[8,6]"};
+
+// A re-cook changes what is cooked (here the density, so the masses), rebuilds the world keeping the
+// tuned material, and says what it did and how long it took.
+TEST(Session, RecookChangesTheFabricAndKeepsWhatWasTuned) {
+    auto session = open_session("flag", kSmallFlag);
+    const double area = 2.0 * 1.2;  // flag.toml's grid, m²
+    ASSERT_NEAR(total_mass(session->world(), 0), session->scene().cloths[0].fabric.density * area, 1e-9);
+    session->apply(*session->parameters().find("cloth.flag.material.stretch_stiffness"), 1234.0);
+    const double density = session->scene().cloths[0].fabric.density;
+    ClothRecook change;
+    change.density = 0.45;
+    const double ms = session->recook("flag", change);
+    EXPECT_GE(ms, 0.0);
+    EXPECT_NEAR(total_mass(session->world(), 0), 0.45 * area, 1e-9) << "the masses come from the new density";
+    EXPECT_EQ(session->world().material(0).stretch_stiffness, 1234.0) << "the tuned material survives";
+    EXPECT_EQ(session->scene().cloths[0].fabric.density, 0.45);
+    char said[64];
+    std::snprintf(said, sizeof said, "density %g -> 0.45 kg/m", density);
+    EXPECT_NE(session->message().find(said), std::string::npos) << session->message();
+    EXPECT_NE(session->message().find(" ms"), std::string::npos) << session->message();
+
+    ClothRecook flat;
+    flat.flat_rest_bending = true;
+    (void)session->recook("flag", flat);
+    EXPECT_TRUE(session->scene().cloths[0].fabric.flat_rest_bending);
+
+    // Errors name what is wrong and leave the session as it was.
+    ClothRecook scale;
+    scale.scale = 2.0;
+    EXPECT_EQ(error_of([&] { (void)session->recook("flag", scale); }),
+              "re-cook: cloth 'flag' is a grid: its size is its width and height, not a scale");
+    ClothRecook heavy;
+    heavy.density = 500.0;
+    EXPECT_NE(error_of([&] { (void)session->recook("flag", heavy); }).find("outside (0, 100]"), std::string::npos);
+    EXPECT_EQ(error_of([&] { (void)session->recook("nosuch", change); }), "re-cook: no cloth 'nosuch' in the scene");
+    EXPECT_NEAR(total_mass(session->world(), 0), 0.45 * area, 1e-9);
+}
+
+// A mesh file's scale is cooked: the rest shape grows with it; cells are refused for it.
+TEST(Session, RecookScalesAMeshFile) {
+#if WEFT_TEST_HAVE_ASSETS
+    weft::assets::install_mesh_loader();
+#else
+    GTEST_SKIP() << "mesh import not built (WEFT_ASSETS off): the skirt is an OBJ file";
+#endif
+    auto session = open_session("skirt");
+    const auto extent = [&] {
+        const auto rest = session->world().model().cloths[0].fabric->rest_positions();
+        double lo = rest[0].x, hi = rest[0].x;
+        for (const Vec3d& p : rest) {
+            lo = std::min(lo, p.x);
+            hi = std::max(hi, p.x);
+        }
+        return hi - lo;
+    };
+    const double before = extent();
+    const std::string name = session->scene().cloth_placements[0].name;
+    ClothRecook change;
+    change.scale = 1.5;
+    (void)session->recook(name, change);
+    EXPECT_NEAR(extent(), 1.5 * before, 1e-9 * before);
+    ClothRecook cells;
+    cells.cells = std::array<int, 2>{4, 4};
+    EXPECT_NE(error_of([&] { (void)session->recook(name, cells); }).find("comes from a mesh file"), std::string::npos);
+}
+
+// Presets go through the parameter table; a material preset covers every copy of a repeated table
+// and asks for a re-cook when its density differs.
+TEST(Session, PresetsApplyThroughTheTable) {
+    auto session = open_session("layers");
+    session->apply_preset("solver", "accurate");
+    const SolverSettings& s = session->world().settings().solver;
+    EXPECT_EQ(s.newton_iterations, 3);
+    EXPECT_EQ(s.cg_tolerance, 1e-6);
+    EXPECT_EQ(s.precision, Precision::Double);
+    EXPECT_EQ(s.hessian, HessianMode::Projected);
+    session->apply_preset("solver", "fast");
+    EXPECT_EQ(session->world().settings().solver.precision, Precision::Float);
+
+    const Preset* denim = find_preset(material_presets(), "denim");
+    ASSERT_NE(denim, nullptr);
+    const std::string table = session->scene().cloth_placements[0].name;
+    session->apply_preset(table, "denim");
+    ASSERT_GE(session->world().model().cloths.size(), 2U);
+    for (std::size_t i = 0; i < session->world().model().cloths.size(); ++i)
+        EXPECT_EQ(session->world().material(i).bending_stiffness, 1e-4) << "copy " << i;
+    ASSERT_TRUE(session->requests().recook.has_value()) << "denim is heavier than the scene's fabric";
+    EXPECT_EQ(session->requests().recook->change.density, denim->density);
+    EXPECT_NE(session->message().find("re-cooking"), std::string::npos) << session->message();
+
+    EXPECT_EQ(error_of([&] { session->apply_preset("solver", "slow"); }),
+              "unknown solver preset 'slow' (presets: fast, balanced, accurate)");
+    EXPECT_NE(error_of([&] { session->apply_preset(table, "velvet"); }).find("cotton, silk, denim, leather, rubber"),
+              std::string::npos);
+    EXPECT_NE(error_of([&] { session->apply_preset("nosuch", "silk"); }).find("no cloth 'nosuch'"), std::string::npos);
+}
+
+// Colliders are in the table by name: sizes for their shape, friction, and a position only for one
+// that follows no motion; a motion's change moves the colliders that follow it.
+TEST(Parameters, CollidersAreLiveAndMoveWithTheirMotion) {
+    auto session = open_session("sphere");
+    ParameterTable& table = session->parameters();
+    World& world = session->world();
+    const Parameter* radius = table.find("collider.ball.radius");
+    ASSERT_NE(radius, nullptr);
+    EXPECT_EQ(table.find("collider.0.radius"), radius);
+    EXPECT_EQ(radius->group, "collider ball (sphere)");
+    EXPECT_EQ(table.find("collider.ball.position.x"), nullptr) << "the ball follows the motion 'spin'";
+    EXPECT_EQ(table.find("collider.ball.half_height"), nullptr) << "a sphere has no half height";
+    ASSERT_NE(table.find("collider.floor.position.y"), nullptr);
+    session->apply(*radius, 0.35);
+    EXPECT_EQ(world.collider(0).radius, 0.35);
+    session->apply(*table.find("collider.floor.position.y"), -0.1);
+    EXPECT_EQ(world.collider(1).motion.origin.y, -0.1);
+    session->apply(*table.find("collider.ball.friction"), -5.0);  // clamped: -1 means the cloth's own
+    EXPECT_EQ(world.collider(0).friction, -1.0);
+
+    session->apply(*table.find("motion.spin.angular_velocity.y"), 4.0);
+    EXPECT_EQ(world.motion(0).angular_velocity.y, 4.0);
+    EXPECT_EQ(world.collider(0).motion.angular_velocity.y, 4.0) << "the ball spins with its motion";
+}
+
+// A reset goes back to the start with what was tuned: pins made live, colliders, motions.
+TEST(Session, ResetKeepsPinsCollidersAndMotions) {
+    auto session = open_session("flag", kSmallFlag);
+    const std::uint32_t corner = 8;  // bottom-right of the 9×7 grid: not on the pinned left edge
+    ASSERT_FALSE(session->world().is_pinned(0, corner));
+    EXPECT_TRUE(session->toggle_pin(0, corner));
+    session->apply(*session->parameters().find("collider.pole.radius"), 0.05);
+    for (int i = 0; i < 5; ++i) (void)session->world().step();
+    session->reset();
+    EXPECT_EQ(session->world().time(), 0.0);
+    EXPECT_TRUE(session->world().is_pinned(0, corner));
+    EXPECT_TRUE(session->world().is_pinned(0, 0)) << "the file's pins stay";
+    EXPECT_EQ(session->world().collider(0).radius, 0.05);
+    EXPECT_EQ(session->resets(), 1);
+    // A re-cook drops pins made live on that cloth (they name the old mesh's vertices) and says so.
+    ClothRecook cells;
+    cells.cells = std::array<int, 2>{10, 6};
+    (void)session->recook("flag", cells);
+    EXPECT_NE(session->message().find("dropped"), std::string::npos) << session->message();
+    EXPECT_EQ(session->world().model().cloths[0].pins.size(), 7U) << "the left edge of 10x6 cells";
+}
+
+// The View panel's lines and marks, for a sheet facing the camera.
+TEST(ViewportOverlay, DrawsEachEdgeOnceAndMarksContactsAndPins) {
+    World world(WorldDesc{}, "cpu");
+    // 2×2 cells in the XY plane, 1 m, at z = 0; pinned at vertex 0.
+    world.add_cloth({.name = "sheet", .fabric = Fabric::cook(make_grid(1.0, 1.0, 2, 2)), .pins = {{0, -1}}});
+    const std::vector<Vec3d> x = world.positions(0);
+    // A sphere touching vertex 4 (the centre) from behind, within the contact thickness.
+    const double thickness = world.model().cloths[0].material.contact_thickness;
+    ColliderDesc ball{.name = "ball", .shape = ColliderShape::Sphere};
+    ball.radius = 0.2;
+    ball.motion.origin = x[4] + Vec3d{0.0, 0.0, -0.2 - 0.5 * thickness};
+    world.add_collider(ball);
+    render::Camera camera;
+    camera.position = {static_cast<float>(x[4].x), static_cast<float>(x[4].y), 3.0F};
+    camera.target = {static_cast<float>(x[4].x), static_cast<float>(x[4].y), 0.0F};
+
+    DisplayOptions nothing;
+    EXPECT_TRUE(build_viewport_overlay(world, camera, 640, 480, nothing).segments.empty());
+    DisplayOptions all{.wireframe = true, .normals = true, .contacts = true, .pins = true};
+    const ViewportOverlay o = build_viewport_overlay(world, camera, 640, 480, all);
+    EXPECT_EQ(o.edges, 16U) << "6 horizontal, 6 vertical, 4 diagonal";
+    EXPECT_EQ(o.normals, 9U);
+    EXPECT_EQ(o.contacts, 1U) << "only the centre touches the ball";
+    EXPECT_EQ(o.pins, 1U);
+    EXPECT_EQ(o.segments.size(), 16U + 9U);
+    // The centre vertex is drawn at the picture's centre: the camera looks straight at it.
+    const auto contact = std::find_if(o.marks.begin(), o.marks.end(), [](const OverlayMark& m) {
+        return m.shape == OverlayMark::Shape::dot;
+    });
+    ASSERT_NE(contact, o.marks.end());
+    EXPECT_NEAR(contact->x, 320.0F, 0.5F);
+    EXPECT_NEAR(contact->y, 240.0F, 0.5F);
+
+    world.set_grab({.cloth = 0, .vertex = 8, .target = x[8] + Vec3d{0.0, 0.0, 0.5}, .stiffness = 100.0, .damping = 1.0});
+    EXPECT_TRUE(build_viewport_overlay(world, camera, 640, 480, nothing).grab) << "a grab is always drawn";
+
+    // Behind the camera nothing is drawn.
+    camera.position.z = -3.0F;
+    camera.target = {camera.position.x, camera.position.y, -6.0F};
+    const ViewportOverlay behind = build_viewport_overlay(world, camera, 640, 480, all);
+    EXPECT_EQ(behind.edges, 0U);
+    EXPECT_TRUE(behind.marks.empty());
+}
+
+}  // namespace
+}  // namespace weft::editor
