@@ -242,12 +242,13 @@ double Session::recook(const std::string& cloth, const ClothRecook& change) {
         throw Error("re-cook: scale " + std::to_string(*change.scale) + " is outside (0, 1e6]");
 
     // What was tuned goes into the changed scene, so that the rebuild keeps it, except pins changed
-    // live on this cloth: they name vertices of the old mesh, so its file rules stay. Taken before the
-    // mesh changes, while the scene's pin rules still describe the world's fabric.
+    // live on this cloth when its grid changes: they name vertices of the old mesh, so its file rules
+    // stay (density, scale and rest bending keep the vertices). Taken before the mesh changes, while
+    // the scene's pin rules still describe the world's fabric.
     SceneDesc changed = scene_;
     update_scene_from_world(changed, *world_);
     bool pins_dropped = false;
-    for (std::size_t i = 0; i < changed.cloths.size(); ++i) {
+    for (std::size_t i = 0; i < changed.cloths.size() && change.cells; ++i) {
         if (changed.cloths[i].entry != entry) continue;
         const std::vector<PinSelection>& file = file_pins_.at(i);
         pins_dropped = pins_dropped || !same_pins(changed.cloths[i].pins, file);

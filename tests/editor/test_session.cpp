@@ -186,7 +186,12 @@ TEST(Session, ResetKeepsPinsCollidersAndMotions) {
     EXPECT_TRUE(session->world().is_pinned(0, 0)) << "the file's pins stay";
     EXPECT_EQ(session->world().collider(0).radius, 0.05);
     EXPECT_EQ(session->resets(), 1);
-    // A re-cook drops pins made live on that cloth (they name the old mesh's vertices) and says so.
+    // A density keeps the vertices, so the pins made live stay; new cells drop them (they name the old
+    // mesh's vertices), and the message says so.
+    ClothRecook density;
+    density.density = 0.3;
+    (void)session->recook("flag", density);
+    EXPECT_TRUE(session->world().is_pinned(0, corner)) << session->message();
     ClothRecook cells;
     cells.cells = std::array<int, 2>{10, 6};
     (void)session->recook("flag", cells);

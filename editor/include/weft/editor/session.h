@@ -131,7 +131,8 @@ public:
     /// Re-cooks the `[[cloth]]` table `cloth` with `change` (a new grid resolution, density, mesh
     /// scale or rest bending). The live world cannot take this: the fabric is cooked again, so the
     /// world is rebuilt from the changed scene, keeping what was tuned (pins made live on this cloth
-    /// are dropped: they name vertices of the old mesh; message() says so). Returns the rebuild's
+    /// are dropped when its cells change: they name vertices of the old mesh; message() says so).
+    /// Returns the rebuild's
     /// wall time, ms, and says what changed in message(). Throws weft::Error, the session unchanged,
     /// for an unknown cloth, cells for a mesh file or a scale for a grid, or a value out of range.
     double recook(const std::string& cloth, const ClothRecook& change);
