@@ -376,9 +376,10 @@ int run_editor(const SceneDesc& scene, std::unique_ptr<World> world, EditorOptio
         }
         // A re-cook, a reset or an open made a new world, or a collider's size changed (the Colliders
         // panel; its mesh is made from the sizes): the window draws the new cloth buffer and colliders.
-        if (session->resets() != drawn_resets || collider_sizes(session->world()) != drawn_sizes) {
+        if (std::vector<double> sizes = collider_sizes(session->world());
+            session->resets() != drawn_resets || sizes != drawn_sizes) {
             drawn_resets = session->resets();
-            drawn_sizes = collider_sizes(session->world());
+            drawn_sizes = std::move(sizes);
             feed.reset();  // the window's buffers are made again: the backend lets go of them first
             render_scene = render::make_render_scene(session->world(), session->scene().camera);
             window.load(render_scene);
