@@ -66,7 +66,7 @@ std::size_t weld_by_position(MeshData& mesh, double tolerance) {
                     const auto it = head.find({c.x + dx, c.y + dy, c.z + dz});
                     if (it == head.end()) continue;
                     for (std::uint32_t r = it->second; r != ~0U && r < best; r = next[r])
-                        if (physics::length_squared(mesh.positions[r] - p) <= tol2) best = r;
+                        if (math::length_squared(mesh.positions[r] - p) <= tol2) best = r;
                 }
         if (best != ~0U) {
             target[i] = best;
@@ -110,7 +110,7 @@ double bounding_box_diagonal(const MeshData& mesh) {
             lo[k] = std::min(lo[k], p[k]);
             hi[k] = std::max(hi[k], p[k]);
         }
-    return physics::length(hi - lo);
+    return math::length(hi - lo);
 }
 
 }  // namespace weft

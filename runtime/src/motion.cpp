@@ -7,7 +7,7 @@
 namespace weft {
 
 Mat3d rotation_from_vector(Vec3d w) {
-    const double angle = physics::length(w);
+    const double angle = math::length(w);
     if (angle < 1e-15) return Mat3d::identity();
     const Vec3d k = w / angle;
     // Rodrigues: R = I + sinθ [k]× + (1 − cosθ) [k]×²
@@ -32,7 +32,7 @@ Vec3d Motion::point_velocity(double t, Vec3d p) const {
     const double c = std::cos(2.0 * std::numbers::pi * frequency * t + phase);
     const Vec3d v = linear_velocity + (2.0 * std::numbers::pi * frequency * c) * amplitude;
     const Vec3d centre = at(t).translation;
-    return v + physics::cross(angular_velocity, p - centre);
+    return v + math::cross(angular_velocity, p - centre);
 }
 
 bool Motion::is_static() const {

@@ -81,7 +81,7 @@ TEST(MeshWeld, MatchesBruteForceAndIsDeterministic) {
     for (std::uint32_t i = 0; i < m.positions.size(); ++i) {
         target[i] = i;
         for (std::uint32_t r : reps)
-            if (physics::length_squared(m.positions[r] - m.positions[i]) <= tol * tol) {
+            if (math::length_squared(m.positions[r] - m.positions[i]) <= tol * tol) {
                 target[i] = r;
                 break;
             }

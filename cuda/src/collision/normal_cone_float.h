@@ -37,7 +37,7 @@
 #include <limits>
 #include <numbers>
 
-#include "weft/physics/host_device.h"
+#include "weft/math/host_device.h"
 #include "weft/physics/vec.h"
 
 namespace weft::cuda::collision {

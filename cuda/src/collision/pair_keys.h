@@ -11,7 +11,7 @@
 #include <string>
 
 #include "weft/error.h"
-#include "weft/physics/host_device.h"
+#include "weft/math/host_device.h"
 
 namespace weft::cuda::collision {
 

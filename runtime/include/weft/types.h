@@ -5,13 +5,13 @@
 
 #include <cstdint>
 
-#include "weft/physics/vec.h"
+#include "weft/math/vec.h"
 
 namespace weft {
 
-using Vec3d = physics::Vec3<double>;
-using Vec3f = physics::Vec3<float>;
-using Mat3d = physics::Mat3<double>;
+using Vec3d = math::Vec3<double>;
+using Vec3f = math::Vec3<float>;
+using Mat3d = math::Mat3<double>;
 
 /// Index triple of a triangle, counter-clockwise seen from the front face.
 struct Triangle {

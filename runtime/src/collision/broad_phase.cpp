@@ -16,6 +16,7 @@
 #include "weft/error.h"
 
 #include "cpu/parallel.h"
+#include "weft/physics/vec.h"
 
 namespace weft::collision {
 namespace {

@@ -1,5 +1,6 @@
 // Continuous 2D simplicity test of a projected contour (contour_test.h).
 #include "collision/contour_test.h"
+#include "weft/physics/vec.h"
 
 #include <algorithm>
 #include <cmath>

@@ -1,6 +1,7 @@
 // Continuous normal cones: the Bernstein control vectors of a moving triangle's normal, and the merge
 // of two cones (see normal_cone.h for the method and its references).
 #include "collision/normal_cone.h"
+#include "weft/physics/vec.h"
 
 #include <algorithm>
 

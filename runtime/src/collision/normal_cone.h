@@ -28,6 +28,7 @@
 #include <limits>
 #include <numbers>
 
+#include "weft/physics/vec.h"
 #include "weft/types.h"
 
 namespace weft::collision {

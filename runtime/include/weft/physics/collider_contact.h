@@ -16,7 +16,7 @@
 #include "weft/physics/eigen_sym.h"
 #include "weft/physics/friction.h"
 #include "weft/physics/hessian.h"
-#include "weft/physics/host_device.h"
+#include "weft/math/host_device.h"
 #include "weft/physics/scalar.h"
 #include "weft/physics/vec.h"
 

@@ -5,7 +5,7 @@
 /// damps only deformation rates (it is zero for rigid motion because K annihilates translations
 /// and, to first order, rotations). Both are linear in v, so their velocity Jacobian is exact.
 
-#include "weft/physics/host_device.h"
+#include "weft/math/host_device.h"
 #include "weft/physics/vec.h"
 
 namespace weft::physics {

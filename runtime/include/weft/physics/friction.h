@@ -12,7 +12,7 @@
 
 #include <cmath>
 
-#include "weft/physics/host_device.h"
+#include "weft/math/host_device.h"
 #include "weft/physics/vec.h"
 
 namespace weft::physics {

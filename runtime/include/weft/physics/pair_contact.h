@@ -22,7 +22,7 @@
 /// springs keep the solver's answer close to collision-free so that they rarely have work to do.
 
 #include "weft/physics/friction.h"
-#include "weft/physics/host_device.h"
+#include "weft/math/host_device.h"
 #include "weft/physics/vec.h"
 
 namespace weft::physics {

@@ -22,7 +22,7 @@
 
 #include <cmath>
 
-#include "weft/physics/host_device.h"
+#include "weft/math/host_device.h"
 #include "weft/physics/scalar.h"
 #include "weft/physics/vec.h"
 

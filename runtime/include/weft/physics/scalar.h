@@ -5,7 +5,7 @@
 /// functions that nvcc only accepts on the device with --expt-relaxed-constexpr, so Weft writes
 /// its own (a handful of lines) and stays compilable with plain nvcc flags.
 
-#include "weft/physics/host_device.h"
+#include "weft/math/host_device.h"
 
 namespace weft::physics {
 

@@ -19,7 +19,7 @@
 #include <cmath>
 
 #include "weft/physics/collider_contact.h"
-#include "weft/physics/host_device.h"
+#include "weft/math/host_device.h"
 #include "weft/physics/vec.h"
 
 namespace weft::physics {

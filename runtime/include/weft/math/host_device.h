@@ -1,8 +1,8 @@
 #pragma once
 /// @file
-/// Portability macros for the single-source physics headers: every function in `weft/physics/`
-/// compiles for the host and, under nvcc, for the device. These headers depend on nothing but the
-/// C++ standard library.
+/// Portability macros for the single-source headers: every function in `weft/math/` and
+/// `weft/physics/` compiles for the host and, under nvcc, for the device. These headers depend on
+/// nothing but the C++ standard library.
 
 #if defined(__CUDACC__)
 /// Marks a function callable from host and device code.
