@@ -38,7 +38,7 @@
 #include "collision/ccd_gpu.h"
 #include "collision/normal_cone_front.h"
 #include "collision/normal_cone_gpu.h"
-#include "collision/patch_hierarchy.h"
+#include "weft/backend/patch_hierarchy.h"
 #include "collision/proximity_gpu.h"
 #include "cuda_check.h"
 #include "device_array.h"

@@ -29,7 +29,7 @@
 #include <string>
 #include <vector>
 
-#include "weft/backend.h"
+#include "weft/backend_options.h"
 #include "weft/cuda/cuda_backend.h"
 #include "weft/error.h"
 #include "weft/render/cloth_feed.h"

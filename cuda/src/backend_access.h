@@ -3,7 +3,7 @@
 // measure kernels in isolation. Not part of the public API.
 
 #include "device_solver.h"
-#include "weft/backend.h"
+#include "weft/backend/backend.h"
 
 namespace weft::cuda {
 

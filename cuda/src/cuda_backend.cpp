@@ -13,7 +13,7 @@
 #include "device_solver.h"
 #include "shared_output.h"
 #include "weft/error.h"
-#include "weft/flat_model.h"
+#include "weft/backend/flat_model.h"
 
 namespace weft::cuda {
 namespace {
@@ -25,7 +25,7 @@ std::string format_gib(std::size_t bytes) {
     return buf;
 }
 
-// The device's scheduling flags (weft/backend.h, HostWait). They belong to the device's primary
+// The device's scheduling flags (weft/backend/backend.h, HostWait). They belong to the device's primary
 // context, so they hold for every backend of the process on that device; setting them on a context
 // already in use replaces the flags it had (CUDA 11 and later).
 void set_host_wait(int device, HostWait wait) {

@@ -9,8 +9,8 @@
 #include <cstddef>
 #include <string>
 
-#include "collision/impact_zones.h"
-#include "collision/patch_hierarchy.h"
+#include "weft/backend/impact_zone_report.h"
+#include "weft/backend/patch_hierarchy.h"
 #include "cuda_check.h"
 #include "kernels.h"
 #include "weft/error.h"

@@ -27,14 +27,14 @@
 
 #include "collision/broad_phase_gpu.h"
 #include "collision/ccd_gpu.h"
-#include "collision/collision_geometry.h"
+#include "weft/backend/collision_geometry.h"
 #include "collision/impact_zones_gpu.h"
 #include "collision/normal_cone_gpu.h"
 #include "collision/proximity_gpu.h"
 #include "device_array.h"
 #include "device_contacts.h"
-#include "weft/flat_model.h"
-#include "weft/model.h"
+#include "weft/backend/flat_model.h"
+#include "weft/backend/model.h"
 #include "weft/stats.h"
 
 namespace weft::cuda {

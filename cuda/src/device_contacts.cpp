@@ -6,7 +6,7 @@
 #include <cstring>
 #include <string>
 
-#include "collision/proximity_contacts.h"
+#include "weft/backend/proximity_contact.h"
 #include "kernels.h"
 #include "weft/error.h"
 

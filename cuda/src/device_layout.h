@@ -20,7 +20,7 @@
 #include <cstdint>
 #include <vector>
 
-#include "weft/flat_model.h"
+#include "weft/backend/flat_model.h"
 
 namespace weft::cuda {
 

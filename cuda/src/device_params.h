@@ -5,6 +5,7 @@
 
 #include <cstdint>
 
+#include "weft/backend/material_terms.h"
 #include "weft/material.h"
 #include "weft/physics/collider_contact.h"
 #include "weft/physics/membrane.h"

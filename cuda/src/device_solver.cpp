@@ -9,6 +9,7 @@
 #include <cstring>
 
 #include "kernels.h"
+#include "weft/backend/collider_shape.h"
 #include "weft/error.h"
 #include "weft/physics/hessian.h"
 #include "weft/physics/swept_collider.h"

@@ -16,8 +16,8 @@
 #include "device_params.h"
 #include "device_view.h"
 #include "weft/cuda/cuda_backend.h"
-#include "weft/flat_model.h"
-#include "weft/model.h"
+#include "weft/backend/flat_model.h"
+#include "weft/backend/model.h"
 #include "weft/stats.h"
 
 namespace weft::cuda {

@@ -1,4 +1,4 @@
-// SharedOutput for OpenGL buffer objects (weft/interop.h, SlotApi::opengl_buffer): the EGL capture
+// SharedOutput for OpenGL buffer objects (weft/backend/interop.h, SlotApi::opengl_buffer): the EGL capture
 // path's zero-copy link. Each slot's buffer object is registered with CUDA once
 // (cudaGraphicsGLRegisterBuffer); per display frame, on the solver's stream:
 //   map → first stamp → current state → every step's output → last stamp → unmap

@@ -1,11 +1,11 @@
 #pragma once
-// The CUDA backend's writer into renderer-owned slots (weft/interop.h, SharedOutput): each slot's
+// The CUDA backend's writer into renderer-owned slots (weft/backend/interop.h, SharedOutput): each slot's
 // memory and timeline imported once, the solver's output bound to one slot per display frame.
 #include <memory>
 #include <span>
 #include <string>
 
-#include "weft/interop.h"
+#include "weft/backend/interop.h"
 
 namespace weft::cuda {
 

@@ -1,4 +1,5 @@
 // The editor's main loop (see editor.h).
+#include "weft/backend/model.h"
 #include "weft/editor/editor.h"
 
 #include <algorithm>

@@ -1,5 +1,6 @@
 // The editor's panels (see panels.h). Every parameter widget comes from the ParameterTable, and
 // every change — a widget moved, or a value a script left pending — goes through Session::apply.
+#include "weft/backend/model.h"
 #include "weft/editor/panels.h"
 
 #include <algorithm>
@@ -364,8 +365,8 @@ void pin_rows(Session& session) {
     World& world = session.world();
     ImGui::TextDisabled("Shift+click a cloth vertex to pin or unpin it");
     std::optional<std::pair<std::size_t, std::uint32_t>> unpin;
-    for (std::size_t c = 0; c < world.model().cloths.size(); ++c) {
-        const ClothDesc& cloth = world.model().cloths[c];
+    for (std::size_t c = 0; c < world.cloth_count(); ++c) {
+        const ClothDesc& cloth = world.cloth(c);
         const std::string title = "cloth " + cloth.name + ": " + std::to_string(cloth.pins.size()) + " pins";
         if (!ImGui::TreeNode(title.c_str())) continue;
         // A long edge pins hundreds of vertices: the list scrolls, drawing only the rows in view.
@@ -473,7 +474,7 @@ void draw_panels(Session& session, const PanelLayout& layout) {
     if (open && ImGui::CollapsingHeader("Mesh (re-cook)")) mesh_rows(session);
     if (open && ImGui::CollapsingHeader("View")) display_rows(session);
     parameter_rows(session, "world", open && ImGui::CollapsingHeader("Wind and gravity"));
-    if (!session.world().model().motions.empty())
+    if (session.world().motion_count() > 0)
         parameter_rows(session, "motions", open && ImGui::CollapsingHeader("Motions (pins and colliders follow)"));
     if (open && ImGui::CollapsingHeader("Help: keys and mouse")) help_rows();
     ImGui::PopItemWidth();

@@ -1,5 +1,6 @@
 // The editor's parameter table (see parameters.h). Ranges are those of docs/scene-format.md and the
 // `Valid range` comments of settings.h and material.h.
+#include "weft/backend/model.h"
 #include "weft/editor/parameters.h"
 
 #include <algorithm>

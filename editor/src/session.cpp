@@ -1,4 +1,5 @@
 // The editor's session (see session.h).
+#include "weft/backend/model.h"
 #include "weft/editor/session.h"
 
 #include <algorithm>
@@ -208,7 +209,7 @@ void Session::release_grab() {
 std::optional<double> Session::grab_distance() {
     if (!world_->grab()) return std::nullopt;
     const VertexGrab& g = *world_->grab();
-    return physics::length(world_->positions(g.cloth)[g.vertex] - g.target);
+    return math::length(world_->positions(g.cloth)[g.vertex] - g.target);
 }
 
 bool Session::toggle_pin(std::size_t cloth, std::uint32_t vertex) {

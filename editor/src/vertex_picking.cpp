@@ -1,4 +1,5 @@
 // Picking and dragging cloth vertices with the mouse (see vertex_picking.h).
+#include "weft/backend/model.h"
 #include "weft/editor/vertex_picking.h"
 
 #include <glm/glm.hpp>
@@ -72,9 +73,9 @@ Vec3d drag_target(const render::Camera& camera, int width, int height, double x,
     const CursorRay ray = cursor_ray(camera, width, height, x, y);
     const glm::dvec3 forward = glm::normalize(glm::dvec3(camera.target) - glm::dvec3(camera.position));
     const Vec3d n{forward.x, forward.y, forward.z};
-    const double along = physics::dot(ray.direction, n);
+    const double along = math::dot(ray.direction, n);
     if (std::abs(along) < 1e-9) return through;
-    const double t = physics::dot(through - ray.origin, n) / along;
+    const double t = math::dot(through - ray.origin, n) / along;
     return ray.origin + t * ray.direction;
 }
 

@@ -1,4 +1,6 @@
 // The View panel's overlay (see viewport_overlay.h).
+#include "weft/backend/collider_shape.h"
+#include "weft/backend/model.h"
 #include "weft/editor/viewport_overlay.h"
 
 #include <algorithm>

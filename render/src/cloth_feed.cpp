@@ -28,7 +28,7 @@ ClothFeed::ClothFeed(World& world, Renderer& renderer, const RenderScene& scene,
     }
     make_current_ = std::move(link->make_current);
     if (make_current_) make_current_();
-    output_ = world.share_output(link->slots, link->device_uuid, why);
+    output_ = share_output(world, link->slots, link->device_uuid, why);
     if (!output_) {
         why_ = why;
         return;

@@ -1,4 +1,5 @@
 // The API-neutral scene both renderers draw (see render_scene.h).
+#include "weft/backend/model.h"
 #include "weft/render/render_scene.h"
 
 #include <algorithm>

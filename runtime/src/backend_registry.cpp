@@ -4,7 +4,7 @@
 #include <string>
 
 #include "cpu/cpu_backend.h"
-#include "weft/backend.h"
+#include "weft/backend/backend.h"
 #include "weft/error.h"
 
 namespace weft {

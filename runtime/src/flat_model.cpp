@@ -1,5 +1,5 @@
-// Flattening of the model into one global system (see weft/flat_model.h).
-#include "weft/flat_model.h"
+// Flattening of the model into one global system (see weft/backend/flat_model.h).
+#include "weft/backend/flat_model.h"
 
 #include <string>
 
@@ -84,7 +84,7 @@ FlatModel flatten(const Model& model) {
             Vec3d local = pin.position ? *pin.position : f.initial_positions[v];
             if (pin.motion >= 0) {
                 const Transform frame = model.motions.at(static_cast<std::size_t>(pin.motion)).at(0.0);
-                local = physics::transpose(frame.rotation) * (local - frame.translation);
+                local = math::transpose(frame.rotation) * (local - frame.translation);
             }
             f.vertex_pin[v] = static_cast<std::int32_t>(f.pin_vertex.size());
             f.pin_vertex.push_back(v);

@@ -1,7 +1,7 @@
-// Names of the host-wait choices (weft/backend.h), for flags, stats and messages.
+// Names of the host-wait choices (weft/backend/backend.h), for flags, stats and messages.
 #include <string>
 
-#include "weft/backend.h"
+#include "weft/backend/backend.h"
 #include "weft/error.h"
 
 namespace weft {

@@ -101,7 +101,7 @@ std::shared_ptr<const MeshData> load_collider_mesh(const ColliderMeshSource& src
     if (mesh.triangles.empty()) throw Error(where + ": " + file + ": the mesh has no triangles");
     for (Vec3d& p : mesh.positions) {
         p = src.scale * p;
-        if (!physics::is_finite(p)) throw Error(where + ": " + file + ": a vertex position is not finite");
+        if (!math::is_finite(p)) throw Error(where + ": " + file + ": a vertex position is not finite");
     }
     std::size_t degenerate = 0, first = 0;
     for (std::size_t k = 0; k < mesh.triangles.size(); ++k) {
@@ -110,9 +110,9 @@ std::shared_ptr<const MeshData> load_collider_mesh(const ColliderMeshSource& src
             throw Error(where + ": " + file + ": triangle " + std::to_string(k) + " has a vertex index out of range");
         const Vec3d a = mesh.positions[t.v[0]], b = mesh.positions[t.v[1]], c = mesh.positions[t.v[2]];
         // The rule Fabric::cook uses: twice the area against the longest edge squared (scale-free).
-        const double area2 = physics::length(physics::cross(b - a, c - a));
-        const double longest = std::max({physics::length_squared(b - a), physics::length_squared(c - b),
-                                         physics::length_squared(a - c)});
+        const double area2 = math::length(math::cross(b - a, c - a));
+        const double longest = std::max({math::length_squared(b - a), math::length_squared(c - b),
+                                         math::length_squared(a - c)});
         if (t.v[0] == t.v[1] || t.v[1] == t.v[2] || t.v[0] == t.v[2] || longest == 0.0 || !(area2 > 1e-10 * longest)) {
             if (degenerate == 0) first = k;
             ++degenerate;

@@ -91,14 +91,14 @@ void read_solver(Table& root, SolverSettings& s) {
 void read_world(Table& root, WorldDesc& w) {
     if (auto t = root.table("world")) {
         w.gravity = t->vec3("gravity", w.gravity);
-        if (physics::length(w.gravity) > 1000.0)
+        if (math::length(w.gravity) > 1000.0)
             t->fail("gravity", t->find("gravity"), "magnitude is over 1000 m/s² (expected a vector of at most 1000 m/s²)");
         t->finish();
     }
     if (auto t = root.table("wind")) {
         WindDesc& wind = w.wind;
         wind.velocity = t->vec3("velocity", wind.velocity);
-        if (physics::length(wind.velocity) > 1000.0)
+        if (math::length(wind.velocity) > 1000.0)
             t->fail("velocity", t->find("velocity"), "speed is over 1000 m/s (expected a vector of at most 1000 m/s)");
         wind.air_density = t->number("air_density", wind.air_density, {0.0, 100.0});
         wind.turbulence = t->number("turbulence", wind.turbulence, {0.0, 1000.0});
@@ -308,7 +308,7 @@ std::optional<Repeat> read_repeat(Table& cloth) {
         t->fail("offset", t->find("offset"),
                 "the copies would all lie on the first (expected a non-zero offset or rotation_step)");
     const Vec3d last = static_cast<double>(r.count - 1) * r.offset;
-    if (!physics::is_finite(last))
+    if (!math::is_finite(last))
         t->fail("offset", t->find("offset"), "the last copy's offset is not finite (expected a smaller offset)");
     return r;
 }

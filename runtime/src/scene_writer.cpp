@@ -9,6 +9,7 @@
 #include <utility>
 #include <vector>
 
+#include "weft/backend/model.h"
 #include "weft/error.h"
 #include "weft/scene.h"
 

@@ -1,6 +1,8 @@
 // World: owns the model and drives the backend one frame at a time.
 #include "weft/world.h"
 
+#include "weft/backend/backend.h"
+
 #include "collision/world_check.h"
 
 #include <algorithm>
@@ -54,10 +56,11 @@ void validate(const CollisionSettings& c) {
 
 }  // namespace
 
-World::World(const WorldDesc& desc, std::string_view backend, const BackendOptions& options) {
+World::World(const WorldDesc& desc, std::string_view backend, const BackendOptions& options)
+    : model_(std::make_unique<Model>()) {
     validate(desc.solver);
     validate(desc.collision);
-    model_.settings = desc;
+    model_->settings = desc;
     BackendOptions o = options;
     if (o.threads == 0) o.threads = desc.solver.threads;
     backend_ = create_backend(backend, o);
@@ -66,9 +69,9 @@ World::World(const WorldDesc& desc, std::string_view backend, const BackendOptio
 World::~World() = default;
 
 int World::add_motion(const Motion& motion) {
-    model_.motions.push_back(motion);
-    ++model_.topology_version;
-    return static_cast<int>(model_.motions.size()) - 1;
+    model_->motions.push_back(motion);
+    ++model_->topology_version;
+    return static_cast<int>(model_->motions.size()) - 1;
 }
 
 std::size_t World::add_cloth(const ClothDesc& cloth) {
@@ -79,12 +82,12 @@ std::size_t World::add_cloth(const ClothDesc& cloth) {
         if (pin.vertex >= cloth.fabric->vertex_count())
             throw Error(where + ": pinned vertex " + std::to_string(pin.vertex) + " is out of range (the fabric has " +
                         std::to_string(cloth.fabric->vertex_count()) + " vertices)");
-        if (pin.motion >= static_cast<int>(model_.motions.size()))
+        if (pin.motion >= static_cast<int>(model_->motions.size()))
             throw Error(where + ": pin follows motion " + std::to_string(pin.motion) + " which does not exist");
     }
-    model_.cloths.push_back(cloth);
-    ++model_.topology_version;
-    return model_.cloths.size() - 1;
+    model_->cloths.push_back(cloth);
+    ++model_->topology_version;
+    return model_->cloths.size() - 1;
 }
 
 std::size_t World::add_collider(const ColliderDesc& collider) {
@@ -95,28 +98,28 @@ std::size_t World::add_collider(const ColliderDesc& collider) {
     if (collider.shape == ColliderShape::Box)
         for (int k = 0; k < 3; ++k) check_range(where, "half_extents", collider.half_extents[k], 1e-6, 1e6);
     if (collider.friction > 10.0) check_range(where, "friction", collider.friction, 0.0, 10.0);
-    model_.colliders.push_back(collider);
-    ++model_.topology_version;
-    return model_.colliders.size() - 1;
+    model_->colliders.push_back(collider);
+    ++model_->topology_version;
+    return model_->colliders.size() - 1;
 }
 
 void World::ensure_built() const {
-    if (built_version_ == model_.topology_version) return;
+    if (built_version_ == model_->topology_version) return;
     // A world built before keeps the state of each cloth that is still the same size: adding a
     // pin, a collider or another cloth does not send the others back to their start.
     std::vector<std::vector<Vec3d>> x, v;
     if (built_version_ != ~std::uint64_t{0})
-        for (std::size_t c = 0; c < built_vertex_counts_.size() && c < model_.cloths.size(); ++c) {
-            if (model_.cloths[c].fabric->vertex_count() != built_vertex_counts_[c]) break;
+        for (std::size_t c = 0; c < built_vertex_counts_.size() && c < model_->cloths.size(); ++c) {
+            if (model_->cloths[c].fabric->vertex_count() != built_vertex_counts_[c]) break;
             x.emplace_back(built_vertex_counts_[c]);
             v.emplace_back(built_vertex_counts_[c]);
             backend_->read_state(c, x.back(), v.back());
         }
-    backend_->build(model_);
+    backend_->build(*model_);
     for (std::size_t c = 0; c < x.size(); ++c) backend_->write_state(c, x[c], v[c]);
-    built_version_ = model_.topology_version;
+    built_version_ = model_->topology_version;
     built_vertex_counts_.clear();
-    for (const ClothDesc& c : model_.cloths) built_vertex_counts_.push_back(c.fabric->vertex_count());
+    for (const ClothDesc& c : model_->cloths) built_vertex_counts_.push_back(c.fabric->vertex_count());
 }
 
 namespace {
@@ -130,18 +133,18 @@ void check_vertex(const Model& m, std::size_t cloth, std::uint32_t vertex, const
 }  // namespace
 
 void World::set_grab(const VertexGrab& grab) {
-    check_vertex(model_, grab.cloth, grab.vertex, "grab");
+    check_vertex(*model_, grab.cloth, grab.vertex, "grab");
     check_range("grab", "stiffness", grab.stiffness, 0.0, 1e9);
     check_range("grab", "damping", grab.damping, 0.0, 1e6);
     for (int k = 0; k < 3; ++k)
         if (!std::isfinite(grab.target[k])) throw Error("grab: the target is not finite");
-    model_.grab = grab;
+    model_->grab = grab;
 }
 
 
 bool World::is_pinned(std::size_t cloth, std::uint32_t vertex) const {
-    check_vertex(model_, cloth, vertex, "pin");
-    const auto& pins = model_.cloths[cloth].pins;
+    check_vertex(*model_, cloth, vertex, "pin");
+    const auto& pins = model_->cloths[cloth].pins;
     return std::any_of(pins.begin(), pins.end(), [&](const PinDesc& p) { return p.vertex == vertex; });
 }
 
@@ -150,45 +153,57 @@ bool World::pin(std::size_t cloth, std::uint32_t vertex) {
     PinDesc p;
     p.vertex = vertex;
     p.position = positions(cloth)[vertex];
-    model_.cloths[cloth].pins.push_back(p);
-    ++model_.topology_version;
+    model_->cloths[cloth].pins.push_back(p);
+    ++model_->topology_version;
     return true;
 }
 
 bool World::unpin(std::size_t cloth, std::uint32_t vertex) {
     if (!is_pinned(cloth, vertex)) return false;
-    auto& pins = model_.cloths[cloth].pins;
+    auto& pins = model_->cloths[cloth].pins;
     pins.erase(std::remove_if(pins.begin(), pins.end(), [&](const PinDesc& p) { return p.vertex == vertex; }), pins.end());
-    ++model_.topology_version;
+    ++model_->topology_version;
     return true;
 }
 
-std::unique_ptr<SharedOutput> World::share_output(std::span<const SharedSlotHandle> slots, const DeviceUuid& device,
-                                                 std::string& why) {
-    ensure_built();
-    return backend_->share_output(slots, device, why);
-}
+void World::build() { ensure_built(); }
+
+WorldDesc& World::settings() { return model_->settings; }
+const WorldDesc& World::settings() const { return model_->settings; }
+Material& World::material(std::size_t cloth) { return model_->cloths.at(cloth).material; }
+Motion& World::motion(int index) { return model_->motions.at(static_cast<std::size_t>(index)); }
+ColliderDesc& World::collider(std::size_t index) { return model_->colliders.at(index); }
+const ClothDesc& World::cloth(std::size_t index) const { return model_->cloths.at(index); }
+std::size_t World::cloth_count() const { return model_->cloths.size(); }
+std::size_t World::collider_count() const { return model_->colliders.size(); }
+std::size_t World::motion_count() const { return model_->motions.size(); }
+const Model& World::model() const { return *model_; }
+std::string_view World::backend_name() const { return backend_->name(); }
+std::string World::device_description() const { return backend_->device_description(); }
+std::size_t World::memory_bytes() const { return backend_->memory_bytes(); }
+void World::release_grab() { model_->grab.reset(); }
+const std::optional<VertexGrab>& World::grab() const { return model_->grab; }
 
 const StepStats& World::step() {
-    validate(model_.settings.solver);
-    validate(model_.settings.collision);
+    validate(model_->settings.solver);
+    validate(model_->settings.collision);
     ensure_built();
     const auto start = std::chrono::steady_clock::now();
     stats_ = StepStats{};
-    const int substeps = model_.settings.solver.substeps;
-    const double h = model_.settings.solver.dt / substeps;
+    const int substeps = model_->settings.solver.substeps;
+    const double h = model_->settings.solver.dt / substeps;
     for (int s = 0; s < substeps; ++s) {
-        backend_->substep(model_, time_, h, stats_);
+        backend_->substep(*model_, time_, h, stats_);
         time_ += h;
         ++stats_.substeps;
     }
     ++steps_;
-    if (model_.settings.collision.check) {
+    if (model_->settings.collision.check) {
         const auto check_start = std::chrono::steady_clock::now();
-        std::vector<std::vector<Vec3d>> x(model_.cloths.size());
+        std::vector<std::vector<Vec3d>> x(model_->cloths.size());
         for (std::size_t c = 0; c < x.size(); ++c) x[c] = positions(c);
         stats_.collision.remaining_intersections =
-            static_cast<std::int64_t>(collision::check_world_intersections(model_, x, time_).intersecting_pairs);
+            static_cast<std::int64_t>(collision::check_world_intersections(*model_, x, time_).intersecting_pairs);
         stats_.ms(Stage::Check) +=
             std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - check_start).count();
     }
@@ -197,7 +212,7 @@ const StepStats& World::step() {
 }
 
 std::vector<Vec3d> World::positions(std::size_t cloth) const {
-    const auto n = model_.cloths.at(cloth).fabric->vertex_count();
+    const auto n = model_->cloths.at(cloth).fabric->vertex_count();
     std::vector<Vec3d> x(n), v(n);
     ensure_built();
     backend_->read_state(cloth, x, v);
@@ -205,7 +220,7 @@ std::vector<Vec3d> World::positions(std::size_t cloth) const {
 }
 
 std::vector<Vec3d> World::velocities(std::size_t cloth) const {
-    const auto n = model_.cloths.at(cloth).fabric->vertex_count();
+    const auto n = model_->cloths.at(cloth).fabric->vertex_count();
     std::vector<Vec3d> x(n), v(n);
     ensure_built();
     backend_->read_state(cloth, x, v);
@@ -213,7 +228,7 @@ std::vector<Vec3d> World::velocities(std::size_t cloth) const {
 }
 
 void World::set_state(std::size_t cloth, std::span<const Vec3d> positions, std::span<const Vec3d> velocities) {
-    const auto n = model_.cloths.at(cloth).fabric->vertex_count();
+    const auto n = model_->cloths.at(cloth).fabric->vertex_count();
     if (positions.size() != n || velocities.size() != n)
         throw Error("set_state: cloth " + std::to_string(cloth) + " has " + std::to_string(n) + " vertices, got " +
                     std::to_string(positions.size()) + " positions and " + std::to_string(velocities.size()) +
@@ -224,8 +239,8 @@ void World::set_state(std::size_t cloth, std::span<const Vec3d> positions, std::
 
 double World::energy() const {
     double e = 0.0;
-    for (std::size_t c = 0; c < model_.cloths.size(); ++c)
-        e += cpu::cloth_energy(model_.cloths[c], model_.settings, positions(c), velocities(c)).total();
+    for (std::size_t c = 0; c < model_->cloths.size(); ++c)
+        e += cpu::cloth_energy(model_->cloths[c], model_->settings, positions(c), velocities(c)).total();
     return e;
 }
 

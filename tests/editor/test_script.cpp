@@ -298,7 +298,7 @@ TEST(VertexPicking, TheRayThroughAVertexPicksItAndDragsKeepItsDepth) {
     EXPECT_GT(target.x, 0.0);
     EXPECT_GT(target.y, 0.0);
     const Vec3d back = drag_target(camera, w, h, 320.0, 240.0, nearer->position);
-    EXPECT_NEAR(physics::length(back - nearer->position), 0.0, 1e-9);
+    EXPECT_NEAR(math::length(back - nearer->position), 0.0, 1e-9);
 }
 
 }  // namespace

@@ -12,6 +12,7 @@
 #include <numeric>
 #include <string>
 
+#include "weft/backend/model.h"
 #include "weft/error.h"
 #include "weft/scene.h"
 

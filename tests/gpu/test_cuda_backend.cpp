@@ -15,6 +15,7 @@
 #include <string>
 #include <vector>
 
+#include "weft/backend/model.h"
 #include "weft/error.h"
 #include "weft/mesh.h"
 #include "weft/scene.h"
@@ -42,12 +43,12 @@ double bbox_diagonal(const std::vector<Vec3d>& x) {
             lo[c] = std::min(lo[c], p[c]);
             hi[c] = std::max(hi[c], p[c]);
         }
-    return physics::length(hi - lo);
+    return math::length(hi - lo);
 }
 
 double max_distance(const std::vector<Vec3d>& a, const std::vector<Vec3d>& b) {
     double m = 0.0;
-    for (std::size_t i = 0; i < a.size(); ++i) m = std::max(m, physics::length(a[i] - b[i]));
+    for (std::size_t i = 0; i < a.size(); ++i) m = std::max(m, math::length(a[i] - b[i]));
     return m;
 }
 
@@ -294,10 +295,10 @@ TEST(CudaBackend, OneLaunchAndPerKernelCgAgree) {
 std::vector<Vec3d> host_normals(const Fabric& fabric, const std::vector<Vec3d>& x) {
     std::vector<Vec3d> n(x.size());
     for (const Triangle& t : fabric.triangles()) {
-        const Vec3d face = physics::cross(x[t.v[1]] - x[t.v[0]], x[t.v[2]] - x[t.v[0]]);
+        const Vec3d face = math::cross(x[t.v[1]] - x[t.v[0]], x[t.v[2]] - x[t.v[0]]);
         for (std::uint32_t v : t.v) n[v] += face;
     }
-    for (Vec3d& v : n) v = physics::normalized(v);
+    for (Vec3d& v : n) v = math::normalized(v);
     return n;
 }
 
@@ -316,8 +317,8 @@ void expect_output_matches(const World& world, std::size_t vertex_count, const s
             for (int k = 0; k < 3; ++k)
                 ASSERT_EQ(o.position[k], static_cast<float>(x[i][k])) << "cloth " << c << " vertex " << i;
             const Vec3d normal{o.normal[0], o.normal[1], o.normal[2]};
-            worst_length = std::max(worst_length, std::fabs(physics::length(normal) - 1.0));
-            worst_normal = std::max(worst_normal, physics::length(normal - n[i]));
+            worst_length = std::max(worst_length, std::fabs(math::length(normal) - 1.0));
+            worst_normal = std::max(worst_normal, math::length(normal - n[i]));
         }
         first += x.size();
     }
@@ -448,7 +449,7 @@ TEST(CudaBackend, GrabAndPinLikeTheCpuReference) {
         world->set_grab({.cloth = 0, .vertex = 0, .target = x[0] + Vec3d{0.0, -0.1, 0.0},
                          .stiffness = std::max(grab_stiffness_for(mass), 5e4), .damping = 1.0});
         for (int f = 0; f < 60; ++f) ASSERT_FALSE(world->step().non_finite) << backends[b];
-        EXPECT_LT(physics::length(world->positions(0)[0] - world->grab()->target), 0.005) << backends[b];
+        EXPECT_LT(math::length(world->positions(0)[0] - world->grab()->target), 0.005) << backends[b];
         held[b] = world->positions(0);
         world->release_grab();
         const std::uint32_t v = static_cast<std::uint32_t>(x.size() / 2);
@@ -456,7 +457,7 @@ TEST(CudaBackend, GrabAndPinLikeTheCpuReference) {
         ASSERT_TRUE(world->pin(0, v));
         EXPECT_LE(max_distance(world->positions(0), before), 1e-6) << backends[b] << ": the rebuild kept the state";
         for (int f = 0; f < 20; ++f) (void)world->step();
-        EXPECT_LT(physics::length(world->positions(0)[v] - before[v]), 1e-6) << backends[b] << ": the pin holds";
+        EXPECT_LT(math::length(world->positions(0)[v] - before[v]), 1e-6) << backends[b] << ": the pin holds";
         EXPECT_GT(max_distance(world->positions(0), before), 1e-3) << backends[b] << ": the rest moved on";
     }
     const double diff = max_distance(held[0], held[1]), diag = bbox_diagonal(held[0]);

@@ -23,7 +23,7 @@
 #include "cpu/cpu_solver.h"
 #include "device_solver.h"
 #include "gpu_test_util.h"
-#include "weft/flat_model.h"
+#include "weft/backend/flat_model.h"
 #include "weft/mesh.h"
 
 namespace weft {

@@ -20,6 +20,8 @@
 #include <vector>
 
 #include "backend_access.h"
+#include "weft/backend/collider_shape.h"
+#include "weft/backend/model.h"
 #include "weft/collider.h"
 #include "weft/mesh.h"
 #include "weft/physics/swept_collider.h"

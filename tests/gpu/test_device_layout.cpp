@@ -15,7 +15,7 @@
 #include <string>
 #include <vector>
 
-#include "weft/flat_model.h"
+#include "weft/backend/flat_model.h"
 #include "weft/scene.h"
 
 #include "device_layout.h"

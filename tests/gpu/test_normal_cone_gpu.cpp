@@ -36,7 +36,7 @@
 #include "collision/normal_cone_float.h"
 #include "collision/normal_cone_front.h"
 #include "collision/normal_cone_gpu.h"
-#include "collision/patch_hierarchy.h"
+#include "weft/backend/patch_hierarchy.h"
 #include "cuda_check.h"
 #include "device_array.h"
 #include "gpu_test_util.h"

@@ -10,6 +10,7 @@
 #include <optional>
 
 #include "render_checks.h"
+#include "weft/backend/backend.h"
 #include "weft/error.h"
 #include "weft/frame_loop.h"
 #include "weft/render/cloth_feed.h"

@@ -9,6 +9,7 @@
 #include <tuple>
 
 #include "scene_test_util.h"
+#include "weft/backend/model.h"
 #include "weft/scene.h"
 
 namespace weft {
@@ -140,7 +141,7 @@ TEST(MeshImport, WriteMeshRoundTrips) {
         std::sort(a.begin(), a.end(), less);
         std::sort(b.begin(), b.end(), less);
         for (std::size_t i = 0; i < a.size(); ++i)
-            ASSERT_LT(physics::length(a[i] - b[i]), 1e-6) << "vertex " << i;
+            ASSERT_LT(math::length(a[i] - b[i]), 1e-6) << "vertex " << i;
         std::filesystem::remove(path);
     }
 }

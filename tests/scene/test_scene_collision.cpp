@@ -7,6 +7,7 @@
 #include <vector>
 
 #include "scene_test_util.h"
+#include "weft/backend/model.h"
 #include "weft/scene.h"
 
 namespace weft {
@@ -250,7 +251,7 @@ TEST(SceneMeshCollider, BuildLoadsTheMeshInTheLocalFrame) {
     EXPECT_EQ(colliders[3].mesh, nullptr);
     // The world steps with mesh colliders in it (the backends skip them in their analytic loops).
     for (int i = 0; i < 3; ++i) (void)world->step();
-    for (const Vec3d& p : world->positions(0)) ASSERT_TRUE(physics::is_finite(p));
+    for (const Vec3d& p : world->positions(0)) ASSERT_TRUE(math::is_finite(p));
 }
 
 TEST(SceneMeshColliderErrors, MissingFileNamesIt) {
@@ -398,7 +399,7 @@ TEST(SceneRepeat, CopiesShareOneFabricAndEachGetsItsPins) {
     EXPECT_NEAR(got.y, 2.2, 1e-12);  // an xz grid lies at the copy's height
     (void)world->step();
     for (std::size_t c = 0; c < m.cloths.size(); ++c)
-        for (const Vec3d& p : world->positions(c)) ASSERT_TRUE(physics::is_finite(p));
+        for (const Vec3d& p : world->positions(c)) ASSERT_TRUE(math::is_finite(p));
 }
 
 TEST(SceneRepeat, Overrides) {

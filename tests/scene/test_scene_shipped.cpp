@@ -13,6 +13,7 @@
 
 #include "collision/intersection_check.h"
 #include "scene_test_util.h"
+#include "weft/backend/model.h"
 #include "weft/physics/proximity.h"
 #include "weft/scene.h"
 

@@ -8,6 +8,7 @@
 #include <string>
 
 #include "scene_test_util.h"
+#include "weft/backend/model.h"
 #include "weft/scene.h"
 
 namespace weft {
@@ -78,7 +79,7 @@ TEST(SceneWorld, ShippedScenesBuildAndStep) {
         // One frame runs and stays finite.
         (void)world->step();
         for (std::size_t c = 0; c < model.cloths.size(); ++c)
-            for (const Vec3d& p : world->positions(c)) ASSERT_TRUE(physics::is_finite(p));
+            for (const Vec3d& p : world->positions(c)) ASSERT_TRUE(math::is_finite(p));
     }
 }
 

@@ -13,6 +13,7 @@
 
 #include <unistd.h>
 
+#include "weft/backend/model.h"
 #include "weft/error.h"
 #include "weft/scene.h"
 

@@ -13,6 +13,7 @@
 #include <sstream>
 #include <string>
 
+#include "weft/backend/model.h"
 #include "weft/error.h"
 #include "weft/mesh.h"
 #include "weft/scene.h"
@@ -46,7 +47,7 @@ Bound bound(std::span<const Vec3d> x0, std::span<const Vec3d> x1, std::initializ
     Bound b{{inf, inf, inf}, {-inf, -inf, -inf}};
     for (std::uint32_t v : vs)
         for (const Vec3d& p : {x0[v], x1[v]}) {
-            b.finite = b.finite && physics::is_finite(p);
+            b.finite = b.finite && math::is_finite(p);
             for (int k = 0; k < 3; ++k) {
                 b.lo[k] = std::min(b.lo[k], p[k]);
                 b.hi[k] = std::max(b.hi[k], p[k]);

@@ -144,7 +144,7 @@ TEST(ClothCollisions, FastBallDoesNotTunnelThroughASheet) {
         hits += s.collision.swept_collider_hits;
         const Vec3d centre = ball.motion.origin + world.time() * ball.motion.linear_velocity;
         for (const Vec3d& p : world.positions(0)) {
-            ASSERT_GE(physics::length(p - centre), ball.radius - 1e-9) << "frame " << frame;
+            ASSERT_GE(math::length(p - centre), ball.radius - 1e-9) << "frame " << frame;
             furthest = std::min(furthest, p.z);
         }
     }

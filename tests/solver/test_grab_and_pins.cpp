@@ -8,6 +8,7 @@
 #include <limits>
 #include <memory>
 
+#include "weft/backend/model.h"
 #include "weft/error.h"
 #include "weft/mesh.h"
 #include "weft/world.h"
@@ -35,7 +36,7 @@ std::uint32_t vertex_near(World& w, const Vec3d& p) {
     const std::vector<Vec3d> x = w.positions(0);
     std::uint32_t best = 0;
     for (std::uint32_t i = 0; i < x.size(); ++i)
-        if (physics::length(x[i] - p) < physics::length(x[best] - p)) best = i;
+        if (math::length(x[i] - p) < math::length(x[best] - p)) best = i;
     return best;
 }
 
@@ -50,16 +51,16 @@ TEST(Grab, PullsAFallingSheetToTheTargetAndLetsGo) {
     world.set_grab(g);
     for (int k = 0; k < 90; ++k) ASSERT_FALSE(world.step().non_finite);
     // The spring carries the whole falling sheet: within twice its design sag of the target.
-    const double held = physics::length(world.positions(0)[corner] - target);
+    const double held = math::length(world.positions(0)[corner] - target);
     EXPECT_LT(held, 0.04) << "the grabbed vertex hangs " << held << " m from the target";
-    const double other = physics::length(world.positions(0)[vertex_near(world, start[kCells])] - target);
+    const double other = math::length(world.positions(0)[vertex_near(world, start[kCells])] - target);
     EXPECT_GT(other, 0.5) << "the rest of the sheet hangs below";
 
     // Moving the grab moves the vertex.
     g.target = target + Vec3d{0.4, 0.0, 0.0};
     world.set_grab(g);
     for (int k = 0; k < 60; ++k) (void)world.step();
-    EXPECT_LT(physics::length(world.positions(0)[corner] - g.target), 0.04);
+    EXPECT_LT(math::length(world.positions(0)[corner] - g.target), 0.04);
 
     // Released, it falls.
     world.release_grab();
@@ -79,8 +80,8 @@ TEST(Grab, StaysFiniteAtTheStiffestSettingAndALargeStep) {
     world.add_cloth({.name = "dummy", .fabric = Fabric::cook(make_grid(0.1, 0.1, 1, 1))});
     world.set_grab({.cloth = 0, .vertex = 0, .target = {3.0, 2.0, 1.0}, .stiffness = 1e9, .damping = 1e6});
     for (int k = 0; k < 40; ++k) ASSERT_FALSE(world.step().non_finite) << "step " << k;
-    for (const Vec3d& p : world.positions(0)) ASSERT_TRUE(physics::is_finite(p));
-    EXPECT_LT(physics::length(world.positions(0)[0] - Vec3d{3.0, 2.0, 1.0}), 0.01);
+    for (const Vec3d& p : world.positions(0)) ASSERT_TRUE(math::is_finite(p));
+    EXPECT_LT(math::length(world.positions(0)[0] - Vec3d{3.0, 2.0, 1.0}), 0.01);
 }
 
 TEST(Grab, BadValuesAreErrorsNamingThem) {
@@ -122,19 +123,19 @@ TEST(Pins, PinningHoldsAVertexWhereItIsAndKeepsTheState) {
         ASSERT_EQ(velocities_after[i], velocities[i]) << "vertex " << i;
     }
     for (int k = 0; k < 40; ++k) (void)world.step();
-    EXPECT_LT(physics::length(world.positions(0)[v] - before[v]), 1e-9) << "held where it was pinned";
-    EXPECT_GT(physics::length(world.positions(0)[kCells] - before[kCells]), 0.05) << "the far corner swings";
+    EXPECT_LT(math::length(world.positions(0)[v] - before[v]), 1e-9) << "held where it was pinned";
+    EXPECT_GT(math::length(world.positions(0)[kCells] - before[kCells]), 0.05) << "the far corner swings";
 
     // A grab on a pinned vertex does nothing.
     world.set_grab({.cloth = 0, .vertex = v, .target = before[v] + Vec3d{1, 0, 0}, .stiffness = 1e4});
     (void)world.step();
-    EXPECT_LT(physics::length(world.positions(0)[v] - before[v]), 1e-9);
+    EXPECT_LT(math::length(world.positions(0)[v] - before[v]), 1e-9);
     world.release_grab();
 
     EXPECT_TRUE(world.unpin(0, v));
     EXPECT_FALSE(world.unpin(0, v)) << "no pin left";
     for (int k = 0; k < 20; ++k) (void)world.step();
-    EXPECT_GT(physics::length(world.positions(0)[v] - before[v]), 0.05) << "unpinned, it falls";
+    EXPECT_GT(math::length(world.positions(0)[v] - before[v]), 0.05) << "unpinned, it falls";
     EXPECT_THROW(world.pin(1, 0), Error);
     EXPECT_THROW(world.pin(0, 999), Error);
 }
@@ -148,8 +149,8 @@ TEST(Pins, ScenePinsHoldTheStartPosition) {
     pinned.pins = {{.vertex = 3}};
     world.add_cloth(pinned);
     for (int k = 0; k < 30; ++k) (void)world.step();
-    EXPECT_LT(physics::length(world.positions(1)[3] - start), 1e-9);
-    EXPECT_GT(physics::length(world.positions(0)[3] - start), 0.05) << "cloth 0 has no pin";
+    EXPECT_LT(math::length(world.positions(1)[3] - start), 1e-9);
+    EXPECT_GT(math::length(world.positions(0)[3] - start), 0.05) << "cloth 0 has no pin";
 }
 
 }  // namespace

@@ -3,6 +3,7 @@
 
 #include <cmath>
 
+#include "weft/backend/model.h"
 #include "weft/mesh.h"
 #include "weft/physics/bending.h"
 #include "weft/physics/membrane.h"

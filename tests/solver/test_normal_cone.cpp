@@ -25,7 +25,7 @@
 #include "collision/contour_test.h"
 #include "collision/normal_cone.h"
 #include "collision/normal_cone_front.h"
-#include "collision/patch_hierarchy.h"
+#include "weft/backend/patch_hierarchy.h"
 #include "random_geometry.h"
 #include "sheet_deformations.h"
 

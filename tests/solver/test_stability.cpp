@@ -45,14 +45,14 @@ TEST_P(Extremes, StaysFiniteAndBounded) {
         const StepStats& s = world.step();
         ASSERT_FALSE(s.non_finite) << "step " << i;
     }
-    for (const Vec3d& p : world.positions(0)) ASSERT_TRUE(physics::is_finite(p));
+    for (const Vec3d& p : world.positions(0)) ASSERT_TRUE(math::is_finite(p));
     // Bounded: no vertex further than the sheet's size plus a free fall from its pins, and the
     // kinetic energy no more than the work gravity and a 4.5 m/s wind can do in half a second.
     const double fall = 0.5 * 9.81 * 0.25 + 2.0;
-    for (const Vec3d& p : world.positions(0)) ASSERT_LT(physics::length(p), fall);
+    for (const Vec3d& p : world.positions(0)) ASSERT_LT(math::length(p), fall);
     double kinetic = 0.0;
     const auto v = world.velocities(0);
-    for (std::size_t i = 0; i < v.size(); ++i) kinetic += 0.5 * fabric->masses()[i] * physics::dot(v[i], v[i]);
+    for (std::size_t i = 0; i < v.size(); ++i) kinetic += 0.5 * fabric->masses()[i] * math::dot(v[i], v[i]);
     EXPECT_LT(kinetic, mass * (0.5 * 25.0 + 9.81 * 2.0) + 10.0 * mass);
 }
 

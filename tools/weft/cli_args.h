@@ -13,7 +13,7 @@
 #include <string_view>
 #include <vector>
 
-#include "weft/backend.h"
+#include "weft/backend_options.h"
 
 namespace weft::cli {
 

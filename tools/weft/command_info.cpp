@@ -4,7 +4,8 @@
 #include <string>
 #include <thread>
 
-#include "weft/backend.h"
+#include "weft/backend/backend.h"
+#include "weft/backend_options.h"
 #include "weft/mesh.h"
 #if WEFT_HAVE_RENDER
 

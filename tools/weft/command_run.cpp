@@ -45,7 +45,7 @@ int run_command(const RunOptions& options, std::ostream& out, std::ostream& err)
     const int frames = options.frames.value_or(loaded.desc.frames);
 
     std::vector<std::string> cloth_names;
-    for (const ClothDesc& cloth : world.model().cloths) cloth_names.push_back(cloth.name);
+    for (std::size_t c = 0; c < world.cloth_count(); ++c) cloth_names.push_back(world.cloth(c).name);
     std::ofstream stats_stream;
     if (!options.stats_file.empty()) stats_stream = open_output_file(options.stats_file, "stats file");
     std::optional<FrameWriter> writer;

@@ -4,6 +4,7 @@
 #include <cstdio>
 #include <system_error>
 
+#include "weft/backend/model.h"
 #include "weft/error.h"
 #include "weft/mesh.h"
 #include "weft/world.h"

@@ -4,6 +4,7 @@
 #include <cmath>
 #include <set>
 
+#include "weft/backend/model.h"
 #include "weft/scene.h"
 #include "weft/world.h"
 
@@ -91,9 +92,9 @@ RunContext describe_run(const SceneDesc& scene, const World& world, int threads,
     RunContext c;
     c.scene = scene.name;
     c.scene_file = scene.path.string();
-    c.backend = std::string(world.backend().name());
+    c.backend = std::string(world.backend_name());
     c.culled_pairs_counted = world.model().settings.collision.count_culled && c.backend == "cpu";
-    c.device = world.backend().device_description();
+    c.device = world.device_description();
     c.threads = threads;
     c.host_wait = host_wait_name(host_wait);
     const Model& model = world.model();
@@ -105,7 +106,7 @@ RunContext describe_run(const SceneDesc& scene, const World& world, int threads,
     c.cg_max_iterations = solver.cg_max_iterations;
     c.precision = solver.precision == Precision::Float ? "float" : "double";
     c.cloths = model.cloths.size();
-    c.backend_memory_bytes = world.backend().memory_bytes();
+    c.backend_memory_bytes = world.memory_bytes();
     std::set<const Fabric*> counted;
     for (const ClothDesc& cloth : model.cloths) {
         if (!cloth.fabric) continue;

@@ -12,7 +12,7 @@
 #include <string>
 #include <vector>
 
-#include "weft/backend.h"
+#include "weft/backend_options.h"
 #include "weft/stats.h"
 
 #include "frame_capture.h"

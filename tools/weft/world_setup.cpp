@@ -3,7 +3,8 @@
 #include <algorithm>
 #include <string>
 
-#include "weft/backend.h"
+#include "weft/backend/backend.h"
+#include "weft/backend_options.h"
 
 #include "scene_lookup.h"
 

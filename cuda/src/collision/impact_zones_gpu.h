@@ -43,7 +43,7 @@
 
 #include "collision/broad_phase_gpu.h"
 #include "collision/ccd_gpu.h"
-#include "collision/impact_zones.h"
+#include "weft/backend/impact_zone_report.h"
 #include "device_array.h"
 
 namespace weft::cuda::collision {
@@ -67,10 +67,10 @@ struct GpuImpactZoneInput {
     /// Gap δ the zones restore along each contact normal, m; finite and > 0.
     double thickness = 0.0;
     /// CCD separation as a fraction of the thickness, in (0, 1): eta = ratio × thickness.
-    double separation_ratio = weft::collision::ImpactZoneInput{}.separation_ratio;
+    double separation_ratio = weft::collision::kImpactZoneSeparationRatio;
     /// Projection rounds before the fallbacks (≥ 0) and fallback rounds of rigid zones (≥ 0).
     int max_iterations = 32;
-    int max_rigid_rounds = weft::collision::ImpactZoneInput{}.max_rigid_rounds;
+    int max_rigid_rounds = weft::collision::kImpactZoneRigidRounds;
     /// Cap on the iterations of one zone's projection per round, ≥ 1. Each is a parallel step over the
     /// whole zone; an unconverged zone is detected again next round. The default and the tolerance's
     /// are the cheapest measured on the 200K twist's heaviest frames (docs/results.md) with the same

@@ -9,7 +9,7 @@
 
 #include "collision/normal_cone_float.h"
 #include "collision/pair_keys.h"
-#include "collision/patch_hierarchy.h"
+#include "weft/backend/patch_hierarchy.h"
 #include "cuda_check.h"
 #include "weft/error.h"
 

@@ -6,7 +6,7 @@
 
 #include "vulkan/vulkan_context.h"
 #include "vulkan/vulkan_resources.h"
-#include "weft/interop.h"
+#include "weft/backend/interop.h"
 
 namespace weft::render::detail {
 

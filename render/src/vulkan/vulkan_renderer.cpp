@@ -372,7 +372,7 @@ void VulkanRenderer::load(const RenderScene& scene) {
     const VkDeviceSize vertex_bytes = vertices.size() * sizeof(RenderVertex);
     const VkDeviceSize index_bytes = indices.size() * sizeof(std::uint32_t);
     index_offset_ = vertex_bytes;
-    // The vertices, then the frame stamps (weft/interop.h).
+    // The vertices, then the frame stamps (weft/backend/interop.h).
     const VkDeviceSize cloth_bytes =
         scene_.cloth_vertices > 0 ? VkDeviceSize{scene_.cloth_vertices} * sizeof(RenderVertex) + kSlotStampBytes : 0;
 

@@ -2,8 +2,6 @@
 /// @file
 /// Cloth material: the physical constants of one cloth instance.
 
-#include "weft/physics/membrane.h"
-
 namespace weft {
 
 /// Material of a cloth. Defaults describe a light cotton-like fabric.
@@ -27,28 +25,5 @@ struct Material {
     /// Coulomb friction coefficient against colliders, dimensionless. Valid range [0, 10].
     double friction = 0.3;
 };
-
-/// A cloth's material in the terms the solvers evaluate, in scalar T: Lamé parameters instead of
-/// stiffness and Poisson ratio, everything else as given. Backends convert once per cloth per substep.
-template <typename T>
-struct MaterialTerms {
-    physics::MembraneMaterial<T> membrane{};
-    T bending{}, damping_mass{}, damping_stiffness{};
-    T drag{}, lift{}, thickness{}, friction{};
-};
-
-template <typename T>
-[[nodiscard]] MaterialTerms<T> material_terms(const Material& m) {
-    MaterialTerms<T> p;
-    p.membrane = physics::membrane_material(static_cast<T>(m.stretch_stiffness), static_cast<T>(m.poisson_ratio));
-    p.bending = static_cast<T>(m.bending_stiffness);
-    p.damping_mass = static_cast<T>(m.damping_mass);
-    p.damping_stiffness = static_cast<T>(m.damping_stiffness);
-    p.drag = static_cast<T>(m.drag_coefficient);
-    p.lift = static_cast<T>(m.lift_coefficient);
-    p.thickness = static_cast<T>(m.contact_thickness);
-    p.friction = static_cast<T>(m.friction);
-    return p;
-}
 
 }  // namespace weft

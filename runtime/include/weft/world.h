@@ -12,14 +12,25 @@
 
 #include <cstddef>
 #include <memory>
+#include <optional>
 #include <span>
+#include <string>
 #include <string_view>
 #include <vector>
 
-#include "weft/backend.h"
-#include "weft/model.h"
+#include "weft/backend_options.h"
+#include "weft/cloth.h"
+#include "weft/collider.h"
+#include "weft/grab.h"
+#include "weft/motion.h"
+#include "weft/settings.h"
+#include "weft/stats.h"
 
 namespace weft {
+
+// The backend kit's types (weft/backend/): a game never needs their definitions.
+class Backend;
+struct Model;
 
 class World {
 public:
@@ -47,22 +58,32 @@ public:
     [[nodiscard]] const StepStats& last_stats() const { return stats_; }
 
     /// Live-editable settings, materials and motions: changes apply at the next step, no rebuild.
-    [[nodiscard]] WorldDesc& settings() { return model_.settings; }
-    [[nodiscard]] Material& material(std::size_t cloth) { return model_.cloths.at(cloth).material; }
-    [[nodiscard]] Motion& motion(int index) { return model_.motions.at(static_cast<std::size_t>(index)); }
-    [[nodiscard]] const Model& model() const { return model_; }
+    [[nodiscard]] WorldDesc& settings();
+    [[nodiscard]] const WorldDesc& settings() const;
+    [[nodiscard]] Material& material(std::size_t cloth);
+    [[nodiscard]] Motion& motion(int index);
 
     /// Analytic collider `index`: its sizes, friction and motion are read at every substep, so
     /// changes apply at the next step. Its shape (and a mesh collider's triangles) are cooked: add
     /// a new collider for those.
-    [[nodiscard]] ColliderDesc& collider(std::size_t index) { return model_.colliders.at(index); }
+    [[nodiscard]] ColliderDesc& collider(std::size_t index);
+
+    /// What was added, in order: cloth `index` as added (its material as tuned since, its pins as
+    /// they are now), and the counts. Throw std::out_of_range for an index out of range.
+    [[nodiscard]] const ClothDesc& cloth(std::size_t index) const;
+    [[nodiscard]] std::size_t cloth_count() const;
+    [[nodiscard]] std::size_t collider_count() const;
+    [[nodiscard]] std::size_t motion_count() const;
+
+    /// Everything the backend simulates (weft/backend/model.h): for tools and backends.
+    [[nodiscard]] const Model& model() const;
 
     /// Pulls a vertex toward a point with a spring from the next step on, replacing any grab (an
     /// editor's drag; weft/grab.h). Moving it is setting it again. Throws `weft::Error` naming the
     /// value for a cloth or vertex out of range or a stiffness or damping outside its range.
     void set_grab(const VertexGrab& grab);
-    void release_grab() { model_.grab.reset(); }
-    [[nodiscard]] const std::optional<VertexGrab>& grab() const { return model_.grab; }
+    void release_grab();
+    [[nodiscard]] const std::optional<VertexGrab>& grab() const;
 
     /// Pins vertex `vertex` of cloth `cloth` where it is now (false: it was pinned already). Pins
     /// are cooked into the solver: the backend is rebuilt at the next step, and every cloth keeps
@@ -81,19 +102,26 @@ public:
     /// Kinetic + gravitational potential + elastic energy of all cloths, J (diagnostics and tests).
     [[nodiscard]] double energy() const;
 
-    /// Zero-copy output (weft/interop.h, Backend::share_output) for the world as it is now: builds
-    /// the backend first, so that the writer knows how many vertices precede each slot's stamps.
-    /// Adding a cloth or collider afterwards rebuilds the world; the writer then refuses to write
-    /// (share again). nullptr, with the reason in `why`, where the backend cannot share.
-    [[nodiscard]] std::unique_ptr<SharedOutput> share_output(std::span<const SharedSlotHandle> slots,
-                                                             const DeviceUuid& device, std::string& why);
+    /// Builds the backend for the world as it is now (every allocation of the simulation), so that
+    /// the next `step()` does not pay for it. `step()` builds when cloths, pins or colliders changed;
+    /// calling this is never needed, only earlier. Zero-copy output (weft/backend/interop.h,
+    /// `share_output`) needs the built world.
+    void build();
 
+    /// The backend's name ("cpu", "cuda"), where it runs (CPU model and threads, GPU name), and the
+    /// bytes of simulation state it holds (host or device).
+    [[nodiscard]] std::string_view backend_name() const;
+    [[nodiscard]] std::string device_description() const;
+    [[nodiscard]] std::size_t memory_bytes() const;
+
+    /// The backend that steps this world (weft/backend/backend.h): for tools and backend-specific
+    /// hooks such as `weft::cuda::as_cuda(world.backend())`.
     [[nodiscard]] Backend& backend() { return *backend_; }
     [[nodiscard]] const Backend& backend() const { return *backend_; }
 
 private:
     void ensure_built() const;
-    Model model_;
+    std::unique_ptr<Model> model_;
     std::unique_ptr<Backend> backend_;
     mutable std::uint64_t built_version_ = ~std::uint64_t{0};
     /// Each cloth's vertex count at the last build: a rebuild carries the state of a cloth whose

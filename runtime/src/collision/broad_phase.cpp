@@ -15,7 +15,7 @@
 
 #include "weft/error.h"
 
-#include "cpu/parallel.h"
+#include "deterministic_parallel.h"
 #include "weft/physics/vec.h"
 
 namespace weft::collision {
@@ -221,7 +221,7 @@ void BroadPhase::find(const BroadPhaseInput& in, BroadPhaseResult& out) {
     const double nan = std::numeric_limits<double>::quiet_NaN();
     const double th = in.thickness;
     const auto finite_box = [](const Box& b) { return physics::is_finite(b.lo) && physics::is_finite(b.hi); };
-    cpu::parallel_chunks(n, [&](std::size_t b, std::size_t e) {
+    parallel_chunks(n, [&](std::size_t b, std::size_t e) {
         for (std::size_t i = b; i < e; ++i) {
             Box& box = box_[i];
             // std::min would silently drop a NaN, so a non-finite position poisons the whole box.
@@ -245,10 +245,10 @@ void BroadPhase::find(const BroadPhaseInput& in, BroadPhaseResult& out) {
         }
         if (!finite) box.lo = box.hi = {nan, nan, nan};
     };
-    cpu::parallel_chunks(ne, [&](std::size_t b, std::size_t e) {
+    parallel_chunks(ne, [&](std::size_t b, std::size_t e) {
         for (std::size_t i = b; i < e; ++i) unite(box_[edge0 + i], in.edges[i].v);
     });
-    cpu::parallel_chunks(nt, [&](std::size_t b, std::size_t e) {
+    parallel_chunks(nt, [&](std::size_t b, std::size_t e) {
         for (std::size_t i = b; i < e; ++i) unite(box_[tri0 + i], in.triangles[i].v);
     });
 
@@ -267,7 +267,7 @@ void BroadPhase::find(const BroadPhaseInput& in, BroadPhaseResult& out) {
         // The median rather than the mean: one exploding vertex must not blow every cell up to the
         // size of its bound (a mean over 300K edges moves 30 % for one 1 km edge among 1 cm ones).
         extent_.resize(ne);
-        cpu::parallel_chunks(ne, [&](std::size_t b, std::size_t e) {
+        parallel_chunks(ne, [&](std::size_t b, std::size_t e) {
             for (std::size_t i = b; i < e; ++i) {
                 const Box& box = box_[edge0 + i];
                 const Vec3d d = box.hi - box.lo;
@@ -299,7 +299,7 @@ void BroadPhase::find(const BroadPhaseInput& in, BroadPhaseResult& out) {
     cell_lo_.resize(prims);
     cell_hi_.resize(prims);
     offset_.resize(prims + 1);
-    cpu::parallel_chunks(prims, [&](std::size_t b, std::size_t e) {
+    parallel_chunks(prims, [&](std::size_t b, std::size_t e) {
         for (std::size_t p = b; p < e; ++p) {
             const Box& box = box_[p];
             offset_[p] = 0;
@@ -342,7 +342,7 @@ void BroadPhase::find(const BroadPhaseInput& in, BroadPhaseResult& out) {
 
     // ---- Entries, sorted by cell ----------------------------------------------------------------
     entries_.resize(total);
-    cpu::parallel_chunks(prims, [&](std::size_t b, std::size_t e) {
+    parallel_chunks(prims, [&](std::size_t b, std::size_t e) {
         for (std::size_t p = b; p < e; ++p) {
             if (state_[p] != kHashed) continue;
             std::size_t at = offset_[p];
@@ -500,7 +500,7 @@ void BroadPhase::find(const BroadPhaseInput& in, BroadPhaseResult& out) {
     // from one side only: the vertex for vertex–face, the lower edge for edge–edge.
     for (std::uint32_t p : oversized_) {
         if (p < edge0) {
-            cpu::parallel_chunks(nt, [&](std::size_t b, std::size_t e) {
+            parallel_chunks(nt, [&](std::size_t b, std::size_t e) {
                 Local& l = local_.local();
                 for (std::size_t i = b; i < e; ++i) {
                     const auto t = static_cast<std::uint32_t>(tri0 + i);
@@ -513,7 +513,7 @@ void BroadPhase::find(const BroadPhaseInput& in, BroadPhaseResult& out) {
                 }
             });
         } else if (p < tri0) {
-            cpu::parallel_chunks(ne, [&](std::size_t b, std::size_t e) {
+            parallel_chunks(ne, [&](std::size_t b, std::size_t e) {
                 Local& l = local_.local();
                 for (std::size_t i = b; i < e; ++i) {
                     const auto q = static_cast<std::uint32_t>(edge0 + i);
@@ -526,7 +526,7 @@ void BroadPhase::find(const BroadPhaseInput& in, BroadPhaseResult& out) {
                 }
             });
         } else {
-            cpu::parallel_chunks(n, [&](std::size_t b, std::size_t e) {
+            parallel_chunks(n, [&](std::size_t b, std::size_t e) {
                 Local& l = local_.local();
                 for (std::size_t i = b; i < e; ++i) {
                     const auto v = static_cast<std::uint32_t>(i);

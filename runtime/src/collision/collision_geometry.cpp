@@ -1,5 +1,5 @@
 // The collision index space shared by both backends (see collision_geometry.h).
-#include "collision/collision_geometry.h"
+#include "weft/backend/collision_geometry.h"
 
 #include <algorithm>
 

@@ -31,7 +31,7 @@
 
 #include "weft/types.h"
 
-#include "collision/patch_hierarchy.h"
+#include "weft/backend/patch_hierarchy.h"
 
 namespace weft::collision {
 

@@ -30,7 +30,7 @@
 #include "weft/physics/eigen_sym.h"
 #include "weft/physics/proximity.h"
 
-#include "cpu/parallel.h"
+#include "deterministic_parallel.h"
 
 namespace weft::collision {
 namespace {
@@ -111,7 +111,7 @@ void ImpactZoneSolver::detect(const ImpactZoneInput& in, ImpactZoneReport& repor
     slot_.resize(total);
     const double eta = report.eta;
     const auto im = in.inverse_mass;
-    cpu::parallel_chunks(total, [&](std::size_t b, std::size_t e) {
+    parallel_chunks(total, [&](std::size_t b, std::size_t e) {
         for (std::size_t i = b; i < e; ++i) {
             const bool vf = i < nvf;
             std::uint32_t id[4];

@@ -29,6 +29,7 @@
 #include <span>
 #include <vector>
 
+#include "weft/backend/impact_zone_report.h"
 #include "weft/stats.h"
 #include "weft/types.h"
 
@@ -62,9 +63,9 @@ struct ImpactZoneInput {
     /// Impact-zone rounds (detection + projection) before the fallbacks, ≥ 0 (0: straight to them).
     int max_iterations = 32;
     /// Rounds of rigid impact zones before the last resort (freezing), ≥ 0.
-    int max_rigid_rounds = 8;
+    int max_rigid_rounds = kImpactZoneRigidRounds;
     /// CCD separation as a fraction of the thickness, in (0, 1): eta = ratio × thickness (m).
-    double separation_ratio = 0.1;
+    double separation_ratio = kImpactZoneSeparationRatio;
     /// Cap on the sweeps of one zone's projection (dual coordinate ascent; a sweep updates each of
     /// the zone's constraints once), ≥ 1.
     int qp_max_sweeps = 1000;
@@ -87,43 +88,6 @@ struct ImpactZoneInput {
     /// bounded over the old motion could cull a pair that now collides.
     std::function<void(int detection, BroadPhaseInput& input)> refresh_broad_phase;
 };
-
-/// Outcome and work of one `resolve` call (for CollisionStats).
-struct ImpactZoneReport {
-    int iterations = 0;                ///< impact-zone rounds run (detection + projection), ≤ max_iterations
-    int zones = 0;                     ///< zones at the end (connected groups of constrained movable vertices)
-    int max_zone_vertices = 0;         ///< movable vertices of the largest zone
-    int constraints = 0;               ///< constraints collected (one per CCD hit)
-    int rigid_zones = 0;               ///< zones moving rigidly at the end (the round cap was hit)
-    int rigid_rounds = 0;              ///< fallback rounds that applied rigid motion
-    int frozen_vertices = 0;           ///< movable vertices held at x0 by the last resort
-    int carried_vertices = 0;          ///< frozen vertices carried along by kinematic geometry driving into them
-    bool resolved = false;             ///< no collision left at the final detection
-    int remaining_hits = 0;            ///< CCD hits at the final detection (0 when resolved)
-    int qp_unconverged = 0;            ///< zone projections that reached qp_max_sweeps
-    std::int64_t qp_sweeps = 0;        ///< projection sweeps, summed over zone solves
-    int detections = 0;                ///< broad phase + CCD passes over the whole mesh
-    std::int64_t candidate_pairs = 0;  ///< broad-phase pairs, summed over detections
-    std::int64_t ccd_tests = 0;        ///< CCD queries run (pairs with a movable vertex), summed
-    std::int64_t ccd_hits = 0;         ///< of those, reported as colliding, summed
-    double eta = 0.0;                  ///< CCD separation used, m
-    double broad_phase_ms = 0.0;       ///< wall time in the broad phase, ms
-    double ccd_ms = 0.0;               ///< wall time in CCD and constraint building, ms
-    double zones_ms = 0.0;             ///< wall time in zone building, projections and fallbacks, ms
-};
-
-/// What happened to each vertex in the last `resolve` call.
-enum class VertexOutcome : std::uint8_t {
-    Fixed,      ///< inverse mass 0: never moved
-    Untouched,  ///< in no zone: x1 kept bit for bit
-    Projected,  ///< in a zone solved by the inelastic projection
-    Rigid,      ///< in a zone moved rigidly (fallback)
-    Frozen,     ///< held at x0 (last resort)
-    Carried,    ///< frozen, then moved with the kinematic geometry that drove into it (last resort)
-};
-
-/// Zone label of a vertex in no zone.
-inline constexpr std::uint32_t kNoZone = 0xFFFFFFFFu;
 
 /// The impact-zone solver. Keeps its scratch (and the broad phase's) between calls, so that a
 /// substep does not allocate once sizes have settled; one object per thread of control (`resolve` is
@@ -205,8 +169,5 @@ private:
     std::vector<std::size_t> cursor_;        // counting-sort scratch
     std::vector<VertexOutcome> outcome_;
 };
-
-/// Adds a `resolve` report to the step's collision statistics and stage times (both backends).
-void add_to_stats(const ImpactZoneReport& report, StepStats& stats);
 
 }  // namespace weft::collision

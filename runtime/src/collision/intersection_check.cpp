@@ -10,7 +10,7 @@
 #include "weft/error.h"
 #include "weft/physics/triangle_intersection.h"
 
-#include "cpu/parallel.h"
+#include "deterministic_parallel.h"
 
 namespace weft::collision {
 namespace {
@@ -168,7 +168,7 @@ IntersectionReport check_intersections(std::span<const Vec3d> positions, std::sp
     offset[nt] = total;
 
     std::vector<Entry> entries(total);
-    cpu::parallel_chunks(nt, [&](std::size_t begin, std::size_t end) {
+    parallel_chunks(nt, [&](std::size_t begin, std::size_t end) {
         for (std::size_t t = begin; t < end; ++t) {
             if (state[t] != State::Hashed) continue;
             std::size_t at = offset[t];
@@ -203,10 +203,10 @@ IntersectionReport check_intersections(std::span<const Vec3d> positions, std::sp
         if (out.pairs.size() >= 2 * keep + 256) trim_pairs(out.pairs, keep);
     };
 
-    const std::size_t chunks = (runs + cpu::kChunk - 1) / cpu::kChunk;
+    const std::size_t chunks = (runs + kParallelChunk - 1) / kParallelChunk;
     std::vector<Partial> partial(chunks + 1);  // the last one is for the oversized triangles
-    cpu::parallel_chunks(runs, [&](std::size_t begin, std::size_t end) {
-        Partial& out = partial[begin / cpu::kChunk];
+    parallel_chunks(runs, [&](std::size_t begin, std::size_t end) {
+        Partial& out = partial[begin / kParallelChunk];
         for (std::size_t r = begin; r < end; ++r) {
             const std::size_t s = run_start[r], e = run_start[r + 1];
             const std::uint64_t key = entries[s].key;
@@ -231,7 +231,7 @@ IntersectionReport check_intersections(std::span<const Vec3d> positions, std::sp
     // Oversized triangles against every other checked triangle (against an oversized one only once).
     if (!oversized.empty()) {
         std::vector<Partial> over(oversized.size());
-        cpu::parallel_chunks(oversized.size(), [&](std::size_t begin, std::size_t end) {
+        parallel_chunks(oversized.size(), [&](std::size_t begin, std::size_t end) {
             for (std::size_t o = begin; o < end; ++o) {
                 const std::uint32_t i = oversized[o];
                 for (std::size_t t = 0; t < nt; ++t) {

@@ -9,7 +9,7 @@
 
 #include "weft/error.h"
 
-#include "cpu/parallel.h"
+#include "deterministic_parallel.h"
 
 namespace weft::collision {
 
@@ -41,7 +41,7 @@ void NormalConeFront::refit(std::span<const Vec3d> x0, std::span<const Vec3d> x1
     // (one kernel per level on the device); each node writes only its own cone.
     for (std::size_t level = h.levels(); level-- > 0;) {
         const std::uint32_t first = h.level_first[level], last = h.level_first[level + 1];
-        cpu::parallel_chunks(last - first, [&](std::size_t b, std::size_t e) {
+        parallel_chunks(last - first, [&](std::size_t b, std::size_t e) {
             for (std::size_t i = b; i < e; ++i) {
                 const auto node = static_cast<std::uint32_t>(first + i);
                 const std::uint32_t child = h.node_child[node];
@@ -187,13 +187,13 @@ void NormalConeFront::finish() {
                               for (std::uint32_t k = b; k < e; ++k) triangle_patch_[h.triangle_order[k]] = f;
                           }
                       });
-    cpu::parallel_chunks(h.vertex_count, [&](std::size_t b, std::size_t e) {
+    parallel_chunks(h.vertex_count, [&](std::size_t b, std::size_t e) {
         for (std::size_t v = b; v < e; ++v) {
             const std::uint32_t t = h.vertex_triangle[v];
             vertex_patch_[v] = t == kNone ? kNone : triangle_patch_[t];
         }
     });
-    cpu::parallel_chunks(h.edge_triangle.size(), [&](std::size_t b, std::size_t e) {
+    parallel_chunks(h.edge_triangle.size(), [&](std::size_t b, std::size_t e) {
         for (std::size_t i = b; i < e; ++i) {
             const std::uint32_t t = h.edge_triangle[i];
             edge_patch_[i] = t == kNone ? kNone : triangle_patch_[t];

@@ -82,7 +82,7 @@
 
 #include "collision/contour_test.h"
 #include "collision/normal_cone.h"
-#include "collision/patch_hierarchy.h"
+#include "weft/backend/patch_hierarchy.h"
 
 namespace weft::collision {
 

@@ -1,5 +1,5 @@
 // Patch hierarchy build: connected median splits and bottom-up contours (patch_hierarchy.h).
-#include "collision/patch_hierarchy.h"
+#include "weft/backend/patch_hierarchy.h"
 
 #include <algorithm>
 #include <string>

@@ -5,7 +5,7 @@
 #include <cmath>
 #include <string>
 
-#include "cpu/parallel.h"
+#include "deterministic_parallel.h"
 #include "weft/error.h"
 #include "weft/physics/proximity.h"
 
@@ -74,7 +74,7 @@ void find_proximity_contacts(const ProximityInput& in, std::vector<ProximityCont
     const std::size_t total = nvf + in.ee.size();
     out.resize(total);
     std::vector<std::uint8_t> keep(total, 0);
-    cpu::parallel_chunks(total, [&](std::size_t lo, std::size_t hi) {
+    parallel_chunks(total, [&](std::size_t lo, std::size_t hi) {
         for (std::size_t k = lo; k < hi; ++k) {
             std::uint32_t ids[4];
             double w[4];

@@ -15,20 +15,10 @@
 #include <vector>
 
 #include "collision/broad_phase.h"
+#include "weft/backend/proximity_contact.h"
 #include "weft/types.h"
 
 namespace weft::collision {
-
-/// One proximity contact: the gap vector g = Σ_i weight[i]·x[vertex[i]] held along `normal`.
-struct ProximityContact {
-    std::uint32_t vertex[4]{};  ///< collision vertex ids (cloth vertices first, then kinematic ones)
-    double weight[4]{};         ///< vertex–face (1, −(1−u−v), −u, −v); edge–edge (1−a, a, −(1−b), −b)
-    Vec3d normal{};             ///< unit, from the second primitive towards the first, at the start
-    double gap = 0.0;           ///< n·g at the start, m
-    double thickness = 0.0;     ///< gap the spring holds, m
-    double stiffness = 0.0;     ///< N/m
-    double friction = 0.0;      ///< Coulomb coefficient
-};
 
 /// Everything the narrow phase reads. Spans must stay valid for the call.
 struct ProximityInput {

@@ -7,7 +7,7 @@
 #include <vector>
 
 #include "collision/intersection_check.h"
-#include "weft/model.h"
+#include "weft/backend/model.h"
 
 namespace weft::collision {
 

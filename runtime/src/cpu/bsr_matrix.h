@@ -3,7 +3,7 @@
 
 #include <vector>
 
-#include "cpu/parallel.h"
+#include "deterministic_parallel.h"
 #include "weft/fabric.h"
 #include "weft/physics/vec.h"
 

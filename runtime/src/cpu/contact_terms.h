@@ -13,7 +13,7 @@
 
 #include "collision/proximity_contacts.h"
 #include "cpu/bsr_matrix.h"
-#include "cpu/parallel.h"
+#include "deterministic_parallel.h"
 #include "weft/physics/pair_contact.h"
 
 namespace weft::cpu {

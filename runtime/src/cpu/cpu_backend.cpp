@@ -9,7 +9,7 @@
 
 #include "cpu/cpu_solver.h"
 #include "weft/error.h"
-#include "weft/flat_model.h"
+#include "weft/backend/flat_model.h"
 
 namespace weft::cpu {
 namespace {

@@ -10,14 +10,14 @@
 #include <vector>
 
 #include "collision/broad_phase.h"
-#include "collision/collision_geometry.h"
+#include "weft/backend/collision_geometry.h"
 #include "collision/impact_zones.h"
 #include "collision/normal_cone_front.h"
-#include "collision/patch_hierarchy.h"
+#include "weft/backend/patch_hierarchy.h"
 #include "collision/proximity_contacts.h"
 #include "cpu/contact_terms.h"
-#include "weft/flat_model.h"
-#include "weft/model.h"
+#include "weft/backend/flat_model.h"
+#include "weft/backend/model.h"
 #include "weft/stats.h"
 
 namespace weft::cpu {

@@ -5,6 +5,7 @@
 #include <chrono>
 #include <cmath>
 
+#include "weft/backend/collider_shape.h"
 #include "weft/physics/aerodynamics.h"
 #include "weft/physics/swept_collider.h"
 

@@ -8,7 +8,7 @@
 #include <vector>
 
 #include "cpu/bsr_matrix.h"
-#include "cpu/parallel.h"
+#include "deterministic_parallel.h"
 
 namespace weft::cpu {
 

@@ -13,7 +13,7 @@
 #include <string>
 #include <vector>
 
-#include "weft/backend.h"
+#include "weft/backend/backend.h"
 
 // The CUDA runtime types are only named here, so users of this header need not include CUDA.
 struct CUstream_st;

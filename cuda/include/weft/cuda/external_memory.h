@@ -1,12 +1,12 @@
 #pragma once
 /// @file
-/// Renderer memory and timeline semaphores imported into CUDA (weft/interop.h): the buffer the
+/// Renderer memory and timeline semaphores imported into CUDA (weft/backend/interop.h): the buffer the
 /// solver's output kernel writes positions and normals into, and the semaphore that orders those
 /// writes against the renderer's reads without a host wait. Only the stream is named here, so this
 /// header does not need the CUDA headers.
 #include <cstdint>
 
-#include "weft/interop.h"
+#include "weft/backend/interop.h"
 
 struct CUstream_st;
 

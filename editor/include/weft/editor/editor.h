@@ -11,7 +11,7 @@
 #include <string>
 #include <vector>
 
-#include "weft/backend.h"
+#include "weft/backend_options.h"
 #include "weft/scene.h"
 #include "weft/world.h"
 

@@ -12,7 +12,7 @@
 #include <string>
 #include <vector>
 
-#include "weft/backend.h"
+#include "weft/backend_options.h"
 #include "weft/frame_loop.h"
 #include "weft/scene.h"
 #include "weft/world.h"

@@ -20,7 +20,7 @@
 #include <string>
 #include <vector>
 
-#include "weft/interop.h"
+#include "weft/backend/interop.h"
 #include "weft/render/render_scene.h"
 #include "weft/render/renderer.h"
 #include "weft/world.h"

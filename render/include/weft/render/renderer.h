@@ -12,7 +12,7 @@
 
 #include <optional>
 
-#include "weft/interop.h"
+#include "weft/backend/interop.h"
 #include "weft/render/image.h"
 #include "weft/render/render_scene.h"
 
@@ -33,7 +33,7 @@ struct TransferStats {
     std::string path;                 ///< "host upload" or "interop"
     std::uint64_t bytes_uploaded = 0;  ///< host → device bytes in the last frame
     /// The frame stamps found in the tail of the cloth slot when the last frame waited for (collect(),
-    /// or a window's next present) had drawn from it (weft/interop.h, kSlotStampBytes): both equal
+    /// or a window's next present) had drawn from it (weft/backend/interop.h, kSlotStampBytes): both equal
     /// to the frame's RenderFrame::stamp when it read one whole state (a frame that read a slot
     /// mid-write shows them differing).
     std::uint64_t stamp_first = 0, stamp_last = 0;

@@ -29,9 +29,8 @@
 #include <span>
 #include <vector>
 
+#include "weft/backend/collision_primitives.h"
 #include "weft/types.h"
-
-#include "collision/broad_phase.h"
 
 namespace weft::collision {
 

@@ -10,9 +10,9 @@
 #include <span>
 #include <vector>
 
-#include "collision/broad_phase.h"
-#include "weft/flat_model.h"
-#include "weft/model.h"
+#include "weft/backend/collision_primitives.h"
+#include "weft/backend/flat_model.h"
+#include "weft/backend/model.h"
 
 namespace weft::collision {
 

@@ -4,6 +4,8 @@
 /// frame loop"): the renderer exports memory and a timeline semaphore as POSIX file descriptors
 /// (Vulkan's opaque fd handles), the backend imports them, and neither includes the other's headers.
 #include <array>
+#include <memory>
+#include <string>
 #include <cstdint>
 #include <span>
 
@@ -28,6 +30,7 @@ struct ExternalTimelineHandle {
 /// A device's identity as both APIs report it (Vulkan's deviceUUID, CUDA's uuid): interop works only
 /// between the same physical GPU.
 using DeviceUuid = std::array<std::uint8_t, 16>;
+
 
 }  // namespace weft
 
@@ -95,5 +98,14 @@ public:
     /// unbinds it: steps outside a frame write nothing shared.
     virtual void end_frame(std::uint64_t signal_value) = 0;
 };
+
+class World;
+
+/// Zero-copy output for `world` as it is now (Backend::share_output): builds the world first, so
+/// that the writer knows how many vertices precede each slot's stamps. Adding a cloth or collider
+/// afterwards rebuilds the world; the writer then refuses to write (share again). nullptr, with the
+/// reason in `why`, where the backend cannot share.
+[[nodiscard]] std::unique_ptr<SharedOutput> share_output(World& world, std::span<const SharedSlotHandle> slots,
+                                                         const DeviceUuid& device, std::string& why);
 
 }  // namespace weft

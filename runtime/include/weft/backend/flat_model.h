@@ -10,7 +10,7 @@
 #include <vector>
 
 #include "weft/fabric.h"
-#include "weft/model.h"
+#include "weft/backend/model.h"
 
 namespace weft {
 

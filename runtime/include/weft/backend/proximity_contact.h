@@ -1,0 +1,23 @@
+#pragma once
+/// @file
+/// One proximity contact of the solve (a pair spring, weft/physics/pair_contact.h), the layout the
+/// CPU narrow phase writes and both backends' solves read (backend kit).
+
+#include <cstdint>
+
+#include "weft/types.h"
+
+namespace weft::collision {
+
+/// One proximity contact: the gap vector g = Σ_i weight[i]·x[vertex[i]] held along `normal`.
+struct ProximityContact {
+    std::uint32_t vertex[4]{};  ///< collision vertex ids (cloth vertices first, then kinematic ones)
+    double weight[4]{};         ///< vertex–face (1, −(1−u−v), −u, −v); edge–edge (1−a, a, −(1−b), −b)
+    Vec3d normal{};             ///< unit, from the second primitive towards the first, at the start
+    double gap = 0.0;           ///< n·g at the start, m
+    double thickness = 0.0;     ///< gap the spring holds, m
+    double stiffness = 0.0;     ///< N/m
+    double friction = 0.0;      ///< Coulomb coefficient
+};
+
+}  // namespace weft::collision
