@@ -9,6 +9,7 @@
 
 #include "contact_terms.cuh"
 #include "cuda_check.h"
+#include "weft/physics/implicit_terms.h"
 #include "weft/physics/pair_contact.h"
 
 namespace weft::cuda {
@@ -80,7 +81,7 @@ __global__ void contact_order_kernel(DeviceView d) {
 __device__ inline void evaluate_pair(const DeviceView& d, std::uint32_t p) {
     const ContactView& c = d.contacts;
     const float h = step_params(d).h;
-    const float h2 = h * h;  // as the CPU forms it in float (not the staged double square)
+    const physics::ImplicitStep<float> step{h, h * h};  // h² as the CPU forms it in float (not the staged square)
     const DeviceContact& pair = c.list[p];
     const uint4 ids = reinterpret_cast<const uint4*>(c.list)[4 * p];
     const float4 w4 = reinterpret_cast<const float4*>(c.list)[4 * p + 1];
@@ -103,8 +104,10 @@ __device__ inline void evaluate_pair(const DeviceView& d, std::uint32_t p) {
     const V3 normal{pair.normal[0], pair.normal[1], pair.normal[2]};
     const physics::PairContactParams<float> params{pair.stiffness, pair.thickness, pair.friction, 1e-3f};
     const physics::PairContactForce<float> f = physics::pair_contact(normal, g, u, params);
-    store3(c.rhs, p, c.capacity, h * f.force + h2 * (f.dfdx * dvw));
-    const M3 C = (-1.0f * h) * f.dfdv + (-1.0f * h2) * f.dfdx;
+    V3 rhs;
+    M3 C;
+    physics::pair_contact_terms(step, f.force, f.dfdx, f.dfdv, dvw, rhs, C);
+    store3(c.rhs, p, c.capacity, rhs);
     for (int e = 0; e < 9; ++e) c.block[e * c.capacity + p] = C.m[e / 3][e % 3];
 }
 

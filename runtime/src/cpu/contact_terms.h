@@ -14,6 +14,7 @@
 #include "collision/proximity_contacts.h"
 #include "cpu/bsr_matrix.h"
 #include "deterministic_parallel.h"
+#include "weft/physics/implicit_terms.h"
 #include "weft/physics/pair_contact.h"
 
 namespace weft::cpu {
@@ -70,7 +71,7 @@ public:
     /// cpu_solver.cpp does for the analytic colliders), and the per-vertex diagonal Σ w_i²·C.
     void evaluate(T h, const std::vector<V3>& x0, const std::vector<V3>& wk, const std::vector<V3>& vk,
                   std::span<const V3> kinematic_x1, std::span<const V3> kinematic_v) {
-        const T h2 = h * h;
+        const physics::ImplicitStep<T> step{h, h * h};
         parallel_chunks(ids_.size(), [&](std::size_t lo, std::size_t hi) {
             for (std::size_t p = lo; p < hi; ++p) {
                 V3 g{}, u{}, d{};
@@ -87,8 +88,7 @@ public:
                     }
                 }
                 const physics::PairContactForce<T> f = physics::pair_contact(normal_[p], g, u, params_[p]);
-                rhs_[p] = h * f.force + h2 * (f.dfdx * d);
-                block_[p] = T(-1) * h * f.dfdv + T(-1) * h2 * f.dfdx;
+                physics::pair_contact_terms(step, f.force, f.dfdx, f.dfdv, d, rhs_[p], block_[p]);
             }
         });
         parallel_chunks(n_, [&](std::size_t lo, std::size_t hi) {

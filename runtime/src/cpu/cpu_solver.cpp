@@ -77,21 +77,21 @@ void CpuSolver<T>::prepare_parameters(const Model& model, double t, double h) {
     const WorldDesc& w = model.settings;
     hessian_ = w.solver.hessian == HessianMode::Projected ? physics::HessianKind::Projected : physics::HessianKind::Fast;
     gravity_ = to<T>(w.gravity);
-    wind_active_ = w.wind.active();
-    wind_ = to<T>(w.wind.velocity);
-    air_density_ = static_cast<T>(w.wind.air_density);
-    turbulence_ = static_cast<T>(w.wind.turbulence);
-    turbulence_frequency_ = static_cast<T>(w.wind.turbulence_frequency);
-    turbulence_scale_ = static_cast<T>(w.wind.turbulence_scale);
+    wind_.active = w.wind.active();
+    wind_.velocity = to<T>(w.wind.velocity);
+    wind_.air_density = static_cast<T>(w.wind.air_density);
+    wind_.turbulence = static_cast<T>(w.wind.turbulence);
+    wind_.turbulence_frequency = static_cast<T>(w.wind.turbulence_frequency);
+    wind_.turbulence_scale = static_cast<T>(w.wind.turbulence_scale);
+    wind_.time = static_cast<T>(t);
     contact_stiffness_ = static_cast<T>(w.solver.contact_stiffness);
-    time_ = static_cast<T>(t);
     grab_vertex_ = n_;
     if (model.grab && model.grab->cloth < model.cloths.size()) {
         const VertexGrab& g = *model.grab;
         grab_vertex_ = flat_->cloth_vertex_offset[g.cloth] + g.vertex;
-        grab_target_ = to<T>(g.target);
-        grab_stiffness_ = static_cast<T>(g.stiffness);
-        grab_damping_ = static_cast<T>(g.damping);
+        grab_.target = to<T>(g.target);
+        grab_.stiffness = static_cast<T>(g.stiffness);
+        grab_.damping = static_cast<T>(g.damping);
     }
 
     cloth_params_.resize(model.cloths.size());
@@ -127,80 +127,52 @@ void CpuSolver<T>::evaluate_elements(const Model& model, double /*t*/, T h) {
     (void)model;
     const FlatModel& f = *flat_;
     const std::size_t nt = f.triangle_count();
-    const T h2 = h * h;
+    const physics::ImplicitStep<T> step{h, h * h};
     const physics::HessianKind kind = hessian_;
-    // Triangles: membrane, stiffness-proportional damping and aerodynamics.
+    // Each element's terms (weft/physics/implicit_terms.h) go to its own slots of the element
+    // buffers; assemble() gathers them per row in a fixed order.
     parallel_chunks(nt, [&](std::size_t lo, std::size_t hi) {
         for (std::size_t t = lo; t < hi; ++t) {
             const auto& tri = f.triangles[t].v;
-            const ClothParams& p = cloth_params_[f.triangle_cloth[t]];
-            V3 x[3], vk[3], d[3], grad[3];
-            M3 H[3][3];
+            physics::ElementIterate<T, 3> e;
             for (int a = 0; a < 3; ++a) {
-                x[a] = x0_[tri[a]] + h * wk_[tri[a]];
-                vk[a] = vk_[tri[a]];
-                d[a] = vk[a] - wk_[tri[a]];
+                e.x[a] = x0_[tri[a]] + h * wk_[tri[a]];
+                e.vk[a] = vk_[tri[a]];
+                e.d[a] = e.vk[a] - wk_[tri[a]];
             }
             const TriangleRestT& r = triangle_rest_[t];
-            physics::membrane_evaluate(r.dm_inv, r.area, p.membrane, x, grad, H, kind);
-            // Rayleigh stiffness damping f = −βHv puts (hβ + h²)H into A (Baraff–Witkin eq. 18 with
-            // ∂f/∂v = −βH); the right-hand side is h·f − h²·H·(v_k − w_k).
-            const T coef = h * p.damping_stiffness + h2;
+            physics::ElementTerms<T, 3> terms;
+            physics::triangle_terms(step, r.dm_inv, r.area, cloth_params_[f.triangle_cloth[t]], wind_, e, kind, terms);
             V3* rhs = &element_rhs_[3 * t];
             M3* blocks = &element_blocks_[9 * t];
             for (int a = 0; a < 3; ++a) {
-                V3 acc = T(-1) * h * grad[a];
-                for (int b = 0; b < 3; ++b)
-                    acc -= H[a][b] * (h * p.damping_stiffness * vk[b] + h2 * d[b]);
-                rhs[a] = acc;
-                for (int b = 0; b < 3; ++b) blocks[3 * a + b] = coef * H[a][b];
-            }
-            if (wind_active_ && (p.drag > T(0) || p.lift > T(0))) {
-                const V3 centroid = (x[0] + x[1] + x[2]) / T(3);
-                V3 wind = wind_;
-                if (turbulence_ > T(0))
-                    wind += physics::wind_gust(centroid, time_, turbulence_, turbulence_frequency_, turbulence_scale_);
-                V3 force{};
-                M3 D{};
-                physics::aerodynamic_force(x, vk, wind, physics::AeroCoefficients<T>{air_density_, p.drag, p.lift}, force,
-                                           &D);
-                // D is the PSD damping of the whole triangle against its mean velocity; each vertex
-                // carries a third of the force and sees a third of each velocity: (1/9)·D per pair.
-                const T share = h / T(9);
-                for (int a = 0; a < 3; ++a) {
-                    rhs[a] += h * force;
-                    for (int b = 0; b < 3; ++b) blocks[3 * a + b] += share * D;
-                }
+                rhs[a] = terms.rhs[a];
+                for (int b = 0; b < 3; ++b) blocks[3 * a + b] = terms.block[a][b];
             }
         }
     });
-    // Hinges: bending.
     const std::size_t nh = f.hinge_count();
     parallel_chunks(nh, [&](std::size_t lo, std::size_t hi) {
         for (std::size_t k = lo; k < hi; ++k) {
             const auto& hv = f.hinges[k].v;
-            const ClothParams& p = cloth_params_[f.hinge_cloth[k]];
+            physics::ElementIterate<T, 4> e;
+            for (int a = 0; a < 4; ++a) {
+                e.x[a] = x0_[hv[a]] + h * wk_[hv[a]];
+                e.vk[a] = vk_[hv[a]];
+                e.d[a] = e.vk[a] - wk_[hv[a]];
+            }
+            physics::ElementTerms<T, 4> terms;
             V3* rhs = &element_rhs_[3 * nt + 4 * k];
             M3* blocks = &element_blocks_[9 * nt + 16 * k];
-            if (p.bending <= T(0)) {
+            if (!physics::hinge_terms(step, hinge_rest_[k].weight, hinge_rest_[k].rest_angle,
+                                      cloth_params_[f.hinge_cloth[k]], e, kind, terms)) {
                 for (int a = 0; a < 4; ++a) rhs[a] = V3{};
                 for (int a = 0; a < 16; ++a) blocks[a] = M3{};
                 continue;
             }
-            V3 x[4], vk[4], d[4], grad[4];
-            M3 H[4][4];
             for (int a = 0; a < 4; ++a) {
-                x[a] = x0_[hv[a]] + h * wk_[hv[a]];
-                vk[a] = vk_[hv[a]];
-                d[a] = vk[a] - wk_[hv[a]];
-            }
-            physics::bending_evaluate(p.bending, hinge_rest_[k].weight, hinge_rest_[k].rest_angle, x, grad, H, kind);
-            const T coef = h * p.damping_stiffness + h2;
-            for (int a = 0; a < 4; ++a) {
-                V3 acc = T(-1) * h * grad[a];
-                for (int b = 0; b < 4; ++b) acc -= H[a][b] * (h * p.damping_stiffness * vk[b] + h2 * d[b]);
-                rhs[a] = acc;
-                for (int b = 0; b < 4; ++b) blocks[4 * a + b] = coef * H[a][b];
+                rhs[a] = terms.rhs[a];
+                for (int b = 0; b < 4; ++b) blocks[4 * a + b] = terms.block[a][b];
             }
         }
     });
@@ -210,48 +182,18 @@ template <typename T>
 int CpuSolver<T>::evaluate_vertices(const Model& model, T h) {
     (void)model;
     const FlatModel& f = *flat_;
-    const T h2 = h * h;
+    const physics::ImplicitStep<T> step{h, h * h};
     const physics::HessianKind kind = hessian_;
+    const physics::ColliderSet<T> colliders{shapes_.data(), shape_friction_.data(), static_cast<int>(shapes_.size()),
+                                            contact_stiffness_};
     const double contacts = deterministic_sum(n_, partials_, [&](std::size_t lo, std::size_t hi) {
         double count = 0.0;
         for (std::size_t i = lo; i < hi; ++i) {
-            const ClothParams& p = cloth_params_[f.vertex_cloth[i]];
-            const T m = mass_[i];
-            // Inertia, gravity and mass-proportional damping: M(v0 − v_k) + h·m·g − h·α·m·v_k.
-            V3 rhs = m * (v0_[i] - vk_[i]) + (h * m) * gravity_ - (h * p.damping_mass * m) * vk_[i];
-            M3 block = M3::diagonal(m * (T(1) + h * p.damping_mass));
-            int active = 0;
-            if (!shapes_.empty() && !fixed_[i]) {
-                const V3 x = x0_[i] + h * wk_[i];
-                const V3 d = vk_[i] - wk_[i];
-                // Penalty stiffness: from the scene, or 100·m/h². A vertex carrying its own weight
-                // then sinks g·h²/100 into the contact thickness (0.03 mm at 60 Hz), one carrying the
-                // tension of a whole draped sheet still well under the thickness; the diagonal block
-                // grows by 100·m, which block-Jacobi absorbs, so CG is not slowed.
-                const T k = contact_stiffness_ > T(0) ? contact_stiffness_ : T(100) * m / h2;
-                for (std::size_t s = 0; s < shapes_.size(); ++s) {
-                    const T mu = shape_friction_[s] >= T(0) ? shape_friction_[s] : p.friction;
-                    const physics::ContactParams<T> cp{k, p.thickness, mu, T(1e-3)};
-                    const physics::ContactResult<T> c = physics::collider_contact(shapes_[s], cp, x, vk_[i], kind);
-                    if (!c.active) continue;
-                    ++active;
-                    // f(x0 + h·v) ≈ f + K·h·(v − w): adds h·f + h²·K·(v_k − w_k) to b, −h·D − h²·K to A.
-                    rhs += h * c.force + h2 * (c.dfdx * d);
-                    block += T(-1) * h * c.dfdv + T(-1) * h2 * c.dfdx;
-                }
-            }
-            if (i == grab_vertex_ && !fixed_[i]) {
-                // The grab spring f = k(target − x) − c·v at x = x0 + h·w_k, linearised as a contact
-                // is: h·f − h²k(v_k − w_k) into b, (h·c + h²·k)·I into A (weft/grab.h).
-                const V3 x = x0_[i] + h * wk_[i];
-                const T k = grab_stiffness_, c = grab_damping_;
-                rhs += h * (k * (grab_target_ - x) - c * vk_[i]) - (h2 * k) * (vk_[i] - wk_[i]);
-                block += M3::diagonal(h * c + h2 * k);
-            }
+            const physics::VertexIterate<T> v{mass_[i], x0_[i], v0_[i], vk_[i], wk_[i], fixed_[i] != 0};
+            const int active = physics::vertex_terms(step, v, cloth_params_[f.vertex_cloth[i]], gravity_, colliders,
+                                                     i == grab_vertex_, grab_, kind, vertex_rhs_[i], vertex_blocks_[i]);
             contacts_[i] = active;
             count += active;
-            vertex_rhs_[i] = rhs;
-            vertex_blocks_[i] = block;
         }
         return count;
     });

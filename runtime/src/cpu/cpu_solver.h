@@ -13,6 +13,7 @@
 #include "weft/backend/model.h"
 #include "weft/physics/bending.h"
 #include "weft/physics/collider_contact.h"
+#include "weft/physics/implicit_terms.h"
 #include "weft/physics/membrane.h"
 #include "weft/stats.h"
 
@@ -91,15 +92,11 @@ private:
     std::vector<T> shape_friction_;
     physics::HessianKind hessian_ = physics::HessianKind::Fast;
     V3 gravity_{};
-    V3 wind_{};
-    bool wind_active_ = false;
-    T turbulence_ = T(0), turbulence_frequency_ = T(0), turbulence_scale_ = T(1), air_density_ = T(0);
+    physics::WindField<T> wind_{};
     T contact_stiffness_ = T(0);
-    T time_ = T(0);
     // Model::grab for this substep: the global vertex (n_ when there is none) and its spring.
     std::size_t grab_vertex_ = 0;
-    V3 grab_target_{};
-    T grab_stiffness_ = T(0), grab_damping_ = T(0);
+    physics::GrabSpring<T> grab_{};
     ContactTerms<T> test_contacts_;  // set_contacts_for_test
     std::vector<V3> test_kinematic_x1_, test_kinematic_v_;
     bool has_test_contacts_ = false;

@@ -3,6 +3,7 @@
 /// A cloth's `Material` converted to what the element math evaluates (backend kit).
 
 #include "weft/material.h"
+#include "weft/physics/implicit_terms.h"
 #include "weft/physics/membrane.h"
 
 namespace weft {
@@ -10,11 +11,7 @@ namespace weft {
 /// A cloth's material in the terms the solvers evaluate, in scalar T: Lamé parameters instead of
 /// stiffness and Poisson ratio, everything else as given. Backends convert once per cloth per substep.
 template <typename T>
-struct MaterialTerms {
-    physics::MembraneMaterial<T> membrane{};
-    T bending{}, damping_mass{}, damping_stiffness{};
-    T drag{}, lift{}, thickness{}, friction{};
-};
+using MaterialTerms = physics::MaterialCoefficients<T>;
 
 template <typename T>
 [[nodiscard]] MaterialTerms<T> material_terms(const Material& m) {
