@@ -30,20 +30,20 @@ using TriangleTerms = physics::ElementTerms<float, 3>;
 
 __device__ inline void triangle_terms(const DeviceView& d, const StepParams& sp, std::uint32_t t, TriangleTerms& out) {
     const float h = sp.h;
-    physics::ElementIterate<float, 3> e;
+    V3 x[3], vk[3], dvw[3];
     for (int a = 0; a < 3; ++a) {
         const std::uint32_t v = d.triangle_vertices[3 * t + a];
         const V3 w = load3(d.wk, v, d.n);
-        e.x[a] = load3(d.x0, v, d.n) + h * w;
-        e.vk[a] = load3(d.vk, v, d.n);
-        e.d[a] = e.vk[a] - w;
+        x[a] = load3(d.x0, v, d.n) + h * w;
+        vk[a] = load3(d.vk, v, d.n);
+        dvw[a] = vk[a] - w;
     }
     const float* rest = d.triangle_rest + 5 * t;
     const float dm_inv[2][2] = {{rest[0], rest[1]}, {rest[2], rest[3]}};
     const physics::WindField<float> wind{sp.wind_active != 0, sp.wind,       sp.air_density, sp.turbulence,
                                          sp.turbulence_frequency, sp.turbulence_scale, sp.time};
     physics::triangle_terms(implicit_step(sp), dm_inv, rest[4], staged<ClothParams>(d, sp.cloth_offset)[d.triangle_cloth[t]],
-                            wind, e, static_cast<physics::HessianKind>(sp.hessian), out);
+                            wind, x, vk, dvw, static_cast<physics::HessianKind>(sp.hessian), out);
 }
 
 /// Hinge k: bending (with stiffness damping). `false` when the cloth has no bending stiffness.
@@ -53,15 +53,15 @@ __device__ inline bool hinge_terms(const DeviceView& d, const StepParams& sp, st
     const ClothParams& p = staged<ClothParams>(d, sp.cloth_offset)[d.hinge_cloth[k]];
     if (p.bending <= 0.0f) return false;  // before any load: most scenes' hinges are all live or all idle
     const float h = sp.h;
-    physics::ElementIterate<float, 4> e;
+    V3 x[4], vk[4], dvw[4];
     for (int a = 0; a < 4; ++a) {
         const std::uint32_t v = d.hinge_vertices[4 * k + a];
         const V3 w = load3(d.wk, v, d.n);
-        e.x[a] = load3(d.x0, v, d.n) + h * w;
-        e.vk[a] = load3(d.vk, v, d.n);
-        e.d[a] = e.vk[a] - w;
+        x[a] = load3(d.x0, v, d.n) + h * w;
+        vk[a] = load3(d.vk, v, d.n);
+        dvw[a] = vk[a] - w;
     }
-    return physics::hinge_terms(implicit_step(sp), d.hinge_rest[2 * k], d.hinge_rest[2 * k + 1], p, e,
+    return physics::hinge_terms(implicit_step(sp), d.hinge_rest[2 * k], d.hinge_rest[2 * k + 1], p, x, vk, dvw,
                                 static_cast<physics::HessianKind>(sp.hessian), out);
 }
 

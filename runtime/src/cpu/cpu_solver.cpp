@@ -129,50 +129,38 @@ void CpuSolver<T>::evaluate_elements(const Model& model, double /*t*/, T h) {
     const std::size_t nt = f.triangle_count();
     const physics::ImplicitStep<T> step{h, h * h};
     const physics::HessianKind kind = hessian_;
-    // Each element's terms (weft/physics/implicit_terms.h) go to its own slots of the element
-    // buffers; assemble() gathers them per row in a fixed order.
+    // Each element's terms (weft/physics/implicit_terms.h) are written straight into its own slots
+    // of the element buffers; assemble() gathers them per row in a fixed order.
     parallel_chunks(nt, [&](std::size_t lo, std::size_t hi) {
         for (std::size_t t = lo; t < hi; ++t) {
             const auto& tri = f.triangles[t].v;
-            physics::ElementIterate<T, 3> e;
+            V3 x[3], vk[3], d[3];
             for (int a = 0; a < 3; ++a) {
-                e.x[a] = x0_[tri[a]] + h * wk_[tri[a]];
-                e.vk[a] = vk_[tri[a]];
-                e.d[a] = e.vk[a] - wk_[tri[a]];
+                x[a] = x0_[tri[a]] + h * wk_[tri[a]];
+                vk[a] = vk_[tri[a]];
+                d[a] = vk[a] - wk_[tri[a]];
             }
             const TriangleRestT& r = triangle_rest_[t];
-            physics::ElementTerms<T, 3> terms;
-            physics::triangle_terms(step, r.dm_inv, r.area, cloth_params_[f.triangle_cloth[t]], wind_, e, kind, terms);
-            V3* rhs = &element_rhs_[3 * t];
-            M3* blocks = &element_blocks_[9 * t];
-            for (int a = 0; a < 3; ++a) {
-                rhs[a] = terms.rhs[a];
-                for (int b = 0; b < 3; ++b) blocks[3 * a + b] = terms.block[a][b];
-            }
+            physics::ElementTermsView<T, 3> out{&element_rhs_[3 * t], &element_blocks_[9 * t]};
+            physics::triangle_terms(step, r.dm_inv, r.area, cloth_params_[f.triangle_cloth[t]], wind_, x, vk, d, kind, out);
         }
     });
     const std::size_t nh = f.hinge_count();
     parallel_chunks(nh, [&](std::size_t lo, std::size_t hi) {
         for (std::size_t k = lo; k < hi; ++k) {
             const auto& hv = f.hinges[k].v;
-            physics::ElementIterate<T, 4> e;
+            V3 x[4], vk[4], d[4];
             for (int a = 0; a < 4; ++a) {
-                e.x[a] = x0_[hv[a]] + h * wk_[hv[a]];
-                e.vk[a] = vk_[hv[a]];
-                e.d[a] = e.vk[a] - wk_[hv[a]];
+                x[a] = x0_[hv[a]] + h * wk_[hv[a]];
+                vk[a] = vk_[hv[a]];
+                d[a] = vk[a] - wk_[hv[a]];
             }
-            physics::ElementTerms<T, 4> terms;
-            V3* rhs = &element_rhs_[3 * nt + 4 * k];
-            M3* blocks = &element_blocks_[9 * nt + 16 * k];
+            physics::ElementTermsView<T, 4> out{&element_rhs_[3 * nt + 4 * k], &element_blocks_[9 * nt + 16 * k]};
             if (!physics::hinge_terms(step, hinge_rest_[k].weight, hinge_rest_[k].rest_angle,
-                                      cloth_params_[f.hinge_cloth[k]], e, kind, terms)) {
-                for (int a = 0; a < 4; ++a) rhs[a] = V3{};
-                for (int a = 0; a < 16; ++a) blocks[a] = M3{};
-                continue;
-            }
-            for (int a = 0; a < 4; ++a) {
-                rhs[a] = terms.rhs[a];
-                for (int b = 0; b < 4; ++b) blocks[4 * a + b] = terms.block[a][b];
+                                      cloth_params_[f.hinge_cloth[k]], x, vk, d, kind, out)) {
+                // No bending stiffness: the hinge adds nothing (its slots are still gathered).
+                for (int a = 0; a < 4; ++a) out.rhs[a] = V3{};
+                for (int a = 0; a < 16; ++a) out.block[a] = M3{};
             }
         }
     });

@@ -116,8 +116,10 @@ WEFT_HD inline int vertex_terms(const ImplicitStep<T>& s, const VertexIterate<T>
                                 Vec3<T> gravity, const ColliderSet<T>& colliders, bool grabbed,
                                 const GrabSpring<T>& grab, HessianKind kind, Vec3<T>& rhs, Mat3<T>& block) {
     const T h = s.h, h2 = s.h2, m = v.mass;
-    rhs = m * (v.v0 - v.vk) + (h * m) * gravity - (h * p.damping_mass * m) * v.vk;
-    block = Mat3<T>::diagonal(m * (T(1) + h * p.damping_mass));
+    // Summed in locals and stored once: `rhs` and `block` may point into a backend's arrays, which
+    // the compiler could not keep in registers across the collider calls.
+    Vec3<T> row_rhs = m * (v.v0 - v.vk) + (h * m) * gravity - (h * p.damping_mass * m) * v.vk;
+    Mat3<T> diagonal = Mat3<T>::diagonal(m * (T(1) + h * p.damping_mass));
     int active = 0;
     if (colliders.count > 0 && !v.fixed) {
         const Vec3<T> x = v.x0 + h * v.wk;
@@ -129,48 +131,62 @@ WEFT_HD inline int vertex_terms(const ImplicitStep<T>& s, const VertexIterate<T>
             const ContactResult<T> r = collider_contact(colliders.shapes[c], cp, x, v.vk, kind);
             if (!r.active) continue;
             ++active;
-            rhs += implicit_force_rhs(s, r.force, r.dfdx, d);
-            block += implicit_force_block(s, r.dfdx, r.dfdv);
+            row_rhs += implicit_force_rhs(s, r.force, r.dfdx, d);
+            diagonal += implicit_force_block(s, r.dfdx, r.dfdv);
         }
     }
     if (grabbed && !v.fixed) {
         const Vec3<T> x = v.x0 + h * v.wk;
         const T k = grab.stiffness, c = grab.damping;
-        rhs += h * (k * (grab.target - x) - c * v.vk) - (h2 * k) * (v.vk - v.wk);
-        block += Mat3<T>::diagonal(h * c + h2 * k);
+        row_rhs += h * (k * (grab.target - x) - c * v.vk) - (h2 * k) * (v.vk - v.wk);
+        diagonal += Mat3<T>::diagonal(h * c + h2 * k);
     }
+    rhs = row_rhs;
+    block = diagonal;
     return active;
 }
 
 // ---- Per element -------------------------------------------------------------------------------
 
-/// What an element of N vertices adds: N right-hand-side entries and N×N blocks (row a, column b).
+/// What an element of N vertices adds: N right-hand-side entries and N×N blocks (row a, column b),
+/// held in the element (the CUDA kernels keep them in registers). The element functions below write
+/// through `rhs_at` and `block_at`, so a backend with buffers of its own passes an ElementTermsView.
 template <typename T, int N>
 struct ElementTerms {
     Vec3<T> rhs[N];
     Mat3<T> block[N][N];
+    WEFT_HD Vec3<T>& rhs_at(int a) { return rhs[a]; }
+    WEFT_HD Mat3<T>& block_at(int a, int b) { return block[a][b]; }
 };
 
-/// An element's corners at the Newton iterate: positions at the linearisation point x0 + h·w_k (m),
-/// velocities v_k (m/s) and d = v_k − w_k (m/s).
+/// The same terms written straight into a backend's buffers: N right-hand sides from `rhs`, N×N
+/// blocks row-major from `block` (the CPU solver's per-element slots, which it gathers per row).
 template <typename T, int N>
-struct ElementIterate {
-    Vec3<T> x[N], vk[N], d[N];
+struct ElementTermsView {
+    Vec3<T>* rhs = nullptr;
+    Mat3<T>* block = nullptr;
+    WEFT_HD Vec3<T>& rhs_at(int a) const { return rhs[a]; }
+    WEFT_HD Mat3<T>& block_at(int a, int b) const { return block[N * a + b]; }
 };
+
+/// An element's corners at the Newton iterate are passed as three arrays: positions at the
+/// linearisation point x = x0 + h·w_k (m), velocities v_k (m/s) and d = v_k − w_k (m/s). Three
+/// arrays rather than one struct: the element math takes the address of x only, so a compiler keeps
+/// v_k and d in registers (one struct would count as escaped whole; measured 5% on the CPU).
 
 /// The elastic element's share, from its energy gradient `grad` and PSD Hessian `H` at the
 /// linearisation point, with Rayleigh stiffness damping f = −β·H·v (∂f/∂v = −β·H):
 ///     rhs_a = −h·grad_a − Σ_b H_ab·(h·β·v_b + h²·d_b),   block_ab = (h·β + h²)·H_ab.
-template <typename T, int N>
+template <typename T, int N, typename Out>
 WEFT_HD inline void elastic_terms(const ImplicitStep<T>& s, T beta, const Vec3<T> (&grad)[N], const Mat3<T> (&H)[N][N],
-                                  const ElementIterate<T, N>& e, ElementTerms<T, N>& out) {
+                                  const Vec3<T> (&vk)[N], const Vec3<T> (&d)[N], Out& out) {
     const T h = s.h, h2 = s.h2;
     const T coef = h * beta + h2;
     for (int a = 0; a < N; ++a) {
         Vec3<T> acc = T(-1) * h * grad[a];
-        for (int b = 0; b < N; ++b) acc -= H[a][b] * (h * beta * e.vk[b] + h2 * e.d[b]);
-        out.rhs[a] = acc;
-        for (int b = 0; b < N; ++b) out.block[a][b] = coef * H[a][b];
+        for (int b = 0; b < N; ++b) acc -= H[a][b] * (h * beta * vk[b] + h2 * d[b]);
+        out.rhs_at(a) = acc;
+        for (int b = 0; b < N; ++b) out.block_at(a, b) = coef * H[a][b];
     }
 }
 
@@ -178,40 +194,42 @@ WEFT_HD inline void elastic_terms(const ImplicitStep<T>& s, T beta, const Vec3<T
 /// and lift (weft/physics/aerodynamics.h) against the wind at its centroid. The aerodynamic force
 /// acts on the triangle's mean velocity: each corner carries a third of it, h·f per corner as the
 /// force is already per corner, and its PSD damping D couples every pair of corners by (h/9)·D.
-template <typename T>
+template <typename T, typename Out>
 WEFT_HD inline void triangle_terms(const ImplicitStep<T>& s, const T (&dm_inv)[2][2], T area,
                                    const MaterialCoefficients<T>& p, const WindField<T>& wind,
-                                   const ElementIterate<T, 3>& e, HessianKind kind, ElementTerms<T, 3>& out) {
+                                   const Vec3<T> (&x)[3], const Vec3<T> (&vk)[3], const Vec3<T> (&d)[3],
+                                   HessianKind kind, Out& out) {
     Vec3<T> grad[3];
     Mat3<T> H[3][3];
-    membrane_evaluate(dm_inv, area, p.membrane, e.x, grad, H, kind);
-    elastic_terms<T, 3>(s, p.damping_stiffness, grad, H, e, out);
+    membrane_evaluate(dm_inv, area, p.membrane, x, grad, H, kind);
+    elastic_terms<T, 3, Out>(s, p.damping_stiffness, grad, H, vk, d, out);
     if (wind.active && (p.drag > T(0) || p.lift > T(0))) {
-        const Vec3<T> centroid = (e.x[0] + e.x[1] + e.x[2]) / T(3);
+        const Vec3<T> centroid = (x[0] + x[1] + x[2]) / T(3);
         Vec3<T> air = wind.velocity;
         if (wind.turbulence > T(0))
             air += wind_gust(centroid, wind.time, wind.turbulence, wind.turbulence_frequency, wind.turbulence_scale);
         Vec3<T> force{};
         Mat3<T> D{};
-        aerodynamic_force(e.x, e.vk, air, AeroCoefficients<T>{wind.air_density, p.drag, p.lift}, force, &D);
+        aerodynamic_force(x, vk, air, AeroCoefficients<T>{wind.air_density, p.drag, p.lift}, force, &D);
         const T share = s.h / T(9);
         for (int a = 0; a < 3; ++a) {
-            out.rhs[a] += s.h * force;
-            for (int b = 0; b < 3; ++b) out.block[a][b] += share * D;
+            out.rhs_at(a) += s.h * force;
+            for (int b = 0; b < 3; ++b) out.block_at(a, b) += share * D;
         }
     }
 }
 
 /// A hinge: discrete bending (weft/physics/bending.h, rest angle and weight from the fabric) with
 /// stiffness damping. Returns false, writing nothing, when the cloth has no bending stiffness.
-template <typename T>
+template <typename T, typename Out>
 WEFT_HD inline bool hinge_terms(const ImplicitStep<T>& s, T weight, T rest_angle, const MaterialCoefficients<T>& p,
-                                const ElementIterate<T, 4>& e, HessianKind kind, ElementTerms<T, 4>& out) {
+                                const Vec3<T> (&x)[4], const Vec3<T> (&vk)[4], const Vec3<T> (&d)[4], HessianKind kind,
+                                Out& out) {
     if (p.bending <= T(0)) return false;
     Vec3<T> grad[4];
     Mat3<T> H[4][4];
-    bending_evaluate(p.bending, weight, rest_angle, e.x, grad, H, kind);
-    elastic_terms<T, 4>(s, p.damping_stiffness, grad, H, e, out);
+    bending_evaluate(p.bending, weight, rest_angle, x, grad, H, kind);
+    elastic_terms<T, 4, Out>(s, p.damping_stiffness, grad, H, vk, d, out);
     return true;
 }
 
