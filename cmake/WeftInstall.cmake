@@ -26,6 +26,11 @@ function(weft_install_component component target header_dir)
     string(SUBSTRING ${component} 1 -1 rest)
     set(export_set Weft${first}${rest}Targets)
   endif()
+  if(WEFT_SANITIZE)
+    # Instrumented archives need the sanitizer runtimes at the program's link (the build tree gets
+    # them from weft_warnings, which is not installed).
+    target_link_options(${target} INTERFACE $<INSTALL_INTERFACE:-fsanitize=${WEFT_SANITIZE}>)
+  endif()
   install(TARGETS ${target} EXPORT ${export_set}
           ARCHIVE DESTINATION ${CMAKE_INSTALL_LIBDIR}
           LIBRARY DESTINATION ${CMAKE_INSTALL_LIBDIR}
