@@ -18,6 +18,7 @@ if(WEFT_SANITIZE)
   target_link_options(weft_warnings INTERFACE -fsanitize=${WEFT_SANITIZE})
 endif()
 
+# Build-only: the installed static libraries must not ask their users for Weft's warning flags.
 function(weft_target_defaults target)
-  target_link_libraries(${target} PRIVATE weft_warnings)
+  target_link_libraries(${target} PRIVATE $<BUILD_INTERFACE:weft_warnings>)
 endfunction()

@@ -2,7 +2,9 @@
 /// @file
 /// Mesh import through assimp. `install_mesh_loader()` makes `weft::load_mesh_file()` (and so the
 /// `mesh = { file = … }` key of scene files) read every format assimp reads: OBJ, PLY, glTF 2 (.gltf
-/// and .glb), FBX, Collada, STL …
+/// and .glb), FBX, Collada, STL … Link `Weft::assets` (in the tree also `weft::assets`); it defines
+/// `WEFT_HAVE_ASSETS=1` for its users, so a game that builds with and without it makes the call under
+/// `#if WEFT_HAVE_ASSETS` (examples/README.md).
 
 #include <cstddef>
 #include <filesystem>

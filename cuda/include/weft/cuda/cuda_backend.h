@@ -1,8 +1,11 @@
 #pragma once
 /// @file
-/// The CUDA backend on one GPU (`--backend cuda`). Link `weft::cuda` and call
-/// `register_cuda_backend()` once; `weft::World(desc, "cuda")` then steps the whole substep on the
-/// device: forces, assembly, PCG, pins, colliders and wind, in float, as one CUDA graph once warm.
+/// The CUDA backend on one GPU (`--backend cuda`). Link `Weft::cuda` (in the tree also `weft::cuda`)
+/// and call `register_cuda_backend()` once; `weft::World(desc, "cuda")` then steps the whole substep
+/// on the device: forces, assembly, PCG, pins, colliders and wind, in float, as one CUDA graph once warm.
+/// The target defines `WEFT_HAVE_CUDA_BACKEND=1` for its users, so a game that builds with and without
+/// CUDA includes this header and makes the call under `#if WEFT_HAVE_CUDA_BACKEND`
+/// (examples/hello_cloth/main.cpp, examples/README.md).
 ///
 /// Beyond the generic `weft::Backend` interface it offers the stream and buffer hooks a renderer
 /// needs: the step runs on a stream the caller gives, and its last kernel writes positions and
@@ -37,7 +40,9 @@ struct DeviceInfo {
 [[nodiscard]] std::string unavailable_reason();
 
 /// Registers the "cuda" backend with the runtime's factory (idempotent). Creating it throws
-/// `weft::Error` when no device is present.
+/// `weft::Error` when no device is present: check `devices()` first to fall back to "cpu".
+/// Nothing registers the backend implicitly (a static registrar could be dropped by the linker
+/// from a static library); this one call is all a program needs.
 void register_cuda_backend();
 
 /// Layout of one vertex in the output buffer: position (m) then unit normal, both float.
