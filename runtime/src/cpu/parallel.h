@@ -1,7 +1,7 @@
 #pragma once
 // Deterministic parallel loops for the CPU backend. Work is cut into fixed-size chunks that do not
 // depend on the thread count; reductions sum one partial per chunk, then the partials in chunk order,
-// so results are bit-identical on 1 or 64 threads (DESIGN.md: determinism contract).
+// so results are bit-identical on 1 or 64 threads (docs/design.md, "Determinism").
 
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
