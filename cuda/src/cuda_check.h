@@ -1,6 +1,6 @@
 #pragma once
 // Every CUDA runtime call and kernel launch is checked; a failure throws weft::Error naming the call,
-// the file and the line (STYLE.md: errors say where).
+// the file and the line (docs/design.md, "Errors and numerical failures").
 
 #include <cuda_runtime_api.h>
 

@@ -1,6 +1,6 @@
 #pragma once
-// Owning device allocations. All of them are made in DeviceSolver::build (STYLE.md: no allocation
-// in the step); an arena of named allocations reports how the device memory is spent.
+// Owning device allocations. All of them are made in DeviceSolver::build (docs/design.md: nothing
+// allocated inside the step); an arena of named allocations reports how the device memory is spent.
 
 #include <cuda_runtime_api.h>
 

@@ -1,7 +1,7 @@
 #!/usr/bin/env python3
 """Validates the JSON that `weft run --stats` and `weft bench --json` write.
 
-    check_json.py stats FILE STEPS [MESH_DIR]   one run: DESIGN.md keys, STEPS steps, frames 0..STEPS on disk
+    check_json.py stats FILE STEPS [MESH_DIR]   one run: docs/design.md keys, STEPS steps, frames 0..STEPS on disk
     check_json.py bench FILE SCENES             an array with one object per scene
 
 Strict: NaN and Infinity (which Python's json accepts by default) are errors, since other readers reject them.

@@ -90,7 +90,7 @@ int run_command(const RunOptions& options, std::ostream& out, std::ostream& err)
     }
     const double wall_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
 
-    // Describe again: backends may grow scratch memory while stepping (reported, STYLE.md item 3).
+    // Describe again: backends may grow scratch memory while stepping (reported: docs/design.md, "Memory").
     const RunContext context = describe_run(loaded.desc, world, options.sim.threads, options.sim.host_wait);
     const RunSummary summary = summarize(stats);
     std::optional<CaptureSummary> captured;

@@ -1,7 +1,7 @@
 #pragma once
 /// @file
 /// What a run measured and how it is reported: per-frame `StepStats` reduced to medians and maxima,
-/// the stats JSON of DESIGN.md ("Stats JSON per run") and the summary table `weft run` prints.
+/// the stats JSON of docs/design.md ("Statistics") and the summary table `weft run` prints.
 /// Numerical trouble (CG hitting its cap, NaN/Inf) is counted and turned into warnings, never hidden.
 
 #include <array>

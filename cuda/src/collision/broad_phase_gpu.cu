@@ -109,7 +109,7 @@ __device__ inline std::uint32_t coord(const Grid& g, unsigned long long key, int
 }
 
 /// The cell of the minimum corner of two bounds' intersection (the per-axis max of their minimum
-/// cells) is this cell: the one cell that reports the pair (ALGORITHMS.md §4).
+/// cells) is this cell: the one cell that reports the pair (docs/methods.md §4).
 __device__ inline bool reports_here(const Grid& g, unsigned long long lo_a, unsigned long long lo_b,
                                     unsigned long long cell) {
     for (int k = 0; k < 3; ++k)

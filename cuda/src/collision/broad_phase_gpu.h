@@ -3,7 +3,7 @@
 /// The broad phase on the GPU: the device twin of weft::collision::BroadPhase
 /// (runtime/src/collision/broad_phase.h), a sorted spatial hash (Teschner, Heidelberger, Müller,
 /// Pomeranets & Gross 2003, "Optimized spatial hashing for collision detection of deformable
-/// objects"; ALGORITHMS.md §4) over the swept, thickness-inflated bounds of vertices, edges and
+/// objects"; docs/methods.md §4) over the swept, thickness-inflated bounds of vertices, edges and
 /// triangles, with the same adjacency, cloth-group and normal-cone patch filters and the same
 /// min-corner rule against duplicates. Output: the candidate vertex–face and edge–edge pairs as one
 /// sorted key list (pair_keys.h), in the CPU's order.

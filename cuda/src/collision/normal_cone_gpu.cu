@@ -1,7 +1,7 @@
 // Normal-cone culling on the GPU: refit, top-down pass tests and patch ids (see normal_cone_gpu.h for
 // the pipeline; normal_cone_float.h for the float arithmetic and its rounding allowances). The CPU
 // reference is runtime/src/collision/normal_cone_front.cpp (NormalConeFront::rebuild) over the same
-// PatchHierarchy (runtime/src/collision/patch_hierarchy.h).
+// PatchHierarchy (weft/backend/patch_hierarchy.h).
 #include "collision/normal_cone_gpu.h"
 
 #include <algorithm>

@@ -1,6 +1,6 @@
 #pragma once
 /// @file
-/// Normal-cone self-collision culling on the GPU (PSCC: Tang, Liu, Tong & Manocha 2018; ALGORITHMS.md
+/// Normal-cone self-collision culling on the GPU (PSCC: Tang, Liu, Tong & Manocha 2018; docs/methods.md
 /// §5): every call recomputes, on the device, the patch ids that the CPU's NormalConeFront
 /// (runtime/src/collision/normal_cone_front.h) keeps on the host, so that the GPU broad phase
 /// (broad_phase_gpu.h: vertex_patch / edge_patch / triangle_patch) culls without a round trip.

@@ -1,4 +1,4 @@
-// Sorted spatial hash over swept bounds (ALGORITHMS.md §4). Cells are keyed by their exact packed
+// Sorted spatial hash over swept bounds (docs/methods.md §4). Cells are keyed by their exact packed
 // coordinates rather than a hash of them, so two different cells never share a key and no pair is
 // lost or invented by a hash collision; the sort plays the part of the hash table.
 #include "collision/broad_phase.h"

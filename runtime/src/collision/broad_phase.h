@@ -1,7 +1,7 @@
 #pragma once
 /// @file
 /// CPU reference broad phase for cloth collisions: a sorted spatial hash (Teschner et al. 2003;
-/// ALGORITHMS.md §4) over the swept, thickness-inflated bounds of vertices, edges and triangles. It
+/// docs/methods.md §4) over the swept, thickness-inflated bounds of vertices, edges and triangles. It
 /// returns every vertex–face and edge–edge pair whose bounds overlap, minus topologically adjacent
 /// ones, as sorted unique lists that are bit-identical on any thread count. The narrow phase
 /// (proximity and CCD) and the GPU broad phase are checked against this.
@@ -32,13 +32,13 @@ struct BroadPhaseInput {
     /// therefore pair when they come within 2·thickness of each other along every axis.
     double thickness = 0.0;
     /// Hash cell edge, m. 0 picks the median extent (longest axis) of the edges' bounds, a robust
-    /// average edge length that includes the motion and the thickness (ALGORITHMS.md §4: cells about
+    /// average edge length that includes the motion and the thickness (docs/methods.md §4: cells about
     /// as large as the primitives keep both the entries per primitive and the occupants per cell
     /// small).
     double cell_size = 0.0;
     /// Pairs within one cloth. Always true for now; false keeps cloth–cloth pairs only.
     bool self_pairs = true;
-    /// Self-collision culling (ALGORITHMS.md §5; PSCC's cone ids), optional: either all three empty
+    /// Self-collision culling (docs/methods.md §5; PSCC's cone ids), optional: either all three empty
     /// (no culling) or sized like the vertices, edges and triangles. The patch id of each primitive,
     /// normally `NormalConeFront`'s: a pair whose two primitives carry the same id (other than
     /// kNoPatch) is never generated, because the patch is proven free of self-collision over the

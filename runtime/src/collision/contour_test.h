@@ -1,6 +1,6 @@
 #pragma once
 /// @file
-/// The contour half of the normal-cone test (Volino & Magnenat-Thalmann 1994; ALGORITHMS.md §5):
+/// The contour half of the normal-cone test (Volino & Magnenat-Thalmann 1994; docs/methods.md §5):
 /// does the contour of a patch, projected onto the plane orthogonal to its cone axis, stay a simple
 /// polygon during the whole step? Vertices move linearly from x0 to x1 and the projection is linear,
 /// so every projected contour vertex moves linearly in the plane too; the test is a continuous 2D

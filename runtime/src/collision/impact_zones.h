@@ -1,7 +1,7 @@
 #pragma once
 /// @file
 /// Impact zones, the CPU reference of the penetration-handling stage of the collision pipeline
-/// (docs/collisions.md step 4; ALGORITHMS.md §7). Given the start positions x0 of a substep (free of
+/// (docs/collisions.md step 5; docs/methods.md §7). Given the start positions x0 of a substep (free of
 /// intersections) and the solved end positions x1, it changes x1 as little as it can (mass-weighted)
 /// so that no vertex–face or edge–edge pair comes within the CCD separation eta anywhere on the
 /// straight paths from x0 to x1.
@@ -79,7 +79,7 @@ struct ImpactZoneInput {
     /// Template of every broad-phase call: the solver overwrites x0, x1, triangles, edges, self_pairs,
     /// thickness (with eta) and triangle_cloth (when the template's is empty), and forwards every
     /// other field unchanged: cell_size, and the optional per-primitive filters added later (e.g. the
-    /// normal-cone ids of ALGORITHMS.md §5). A filter must only cull pairs that cannot collide over
+    /// normal-cone ids of docs/methods.md §5). A filter must only cull pairs that cannot collide over
     /// their motion: pairs whose vertices did not move since the last detection are not tested again.
     BroadPhaseInput broad_phase{};
     /// Optional: called before each broad-phase call with the detection's index (0, 1, …) and the

@@ -1,6 +1,6 @@
 #pragma once
 /// @file
-/// Continuous normal cones (ALGORITHMS.md §5): a cone of directions that contains the normal of a
+/// Continuous normal cones (docs/methods.md §5): a cone of directions that contains the normal of a
 /// triangle, or of every triangle of a patch, at *every* instant of a step over which each vertex
 /// moves linearly from x0 (t = 0) to x1 (t = 1).
 ///

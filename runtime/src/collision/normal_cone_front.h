@@ -1,7 +1,7 @@
 #pragma once
 /// @file
 /// The normal cone test front (NCTF; Tang, Liu, Tong & Manocha 2018, "PSCC: parallel self-collision
-/// culling with spatial hashing on GPUs"; ALGORITHMS.md §5): per step, the top-most nodes of the
+/// culling with spatial hashing on GPUs"; docs/methods.md §5): per step, the top-most nodes of the
 /// `PatchHierarchy` that are provably free of self-collision over the whole step, kept from step to
 /// step and updated locally. Each triangle, vertex and edge gets the id of the front node above it
 /// (its patch, PSCC's cone id); the broad phase never pairs two primitives of one patch.
@@ -49,13 +49,13 @@
 ///
 /// Front maintenance. The front is the cut of the hierarchy made of the top-most passing nodes
 /// (a passing node none of whose ancestors passes). Per step, from the previous front:
-///   - ascend ("shrinking" in ALGORITHMS.md §5, where passing siblings give way to their parent;
+///   - ascend ("shrinking" in docs/methods.md §5, where passing siblings give way to their parent;
 ///     some texts call this step sprouting): from each front node walk up while the ancestors' cones
 ///     pass. A cone that fails fails for every ancestor above it (merged cones only widen), but the
 ///     contour result is not monotone (a child's own axis may project it worse than its parent's),
 ///     so every ancestor up to that point is looked at. The top-most passing one replaces all front
 ///     nodes below it.
-///   - descend ("sprouting" in ALGORITHMS.md §5; called shrinking elsewhere): a front node with no
+///   - descend ("sprouting" in docs/methods.md §5; called shrinking elsewhere): a front node with no
 ///     passing node on that chain is replaced by the top-most passing nodes of its subtree, found
 ///     top-down one level at a time. Leaves always pass, so this ends.
 /// Both give exactly the top-most passing nodes, the front `rebuild` finds from the roots: a leaf's

@@ -1,7 +1,7 @@
 #pragma once
 /// @file
-/// Neutral handles for zero-copy interop between a renderer and a GPU backend (DESIGN.md, "Zero-copy
-/// frame loop"): the renderer exports memory and a timeline semaphore as POSIX file descriptors
+/// Neutral handles for zero-copy interop between a renderer and a GPU backend (docs/design.md, "The
+/// zero-copy frame loop"): the renderer exports memory and a timeline semaphore as POSIX file descriptors
 /// (Vulkan's opaque fd handles), the backend imports them, and neither includes the other's headers.
 #include <array>
 #include <memory>

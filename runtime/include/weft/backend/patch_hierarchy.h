@@ -1,6 +1,6 @@
 #pragma once
 /// @file
-/// The patch hierarchy of normal-cone self-collision culling (ALGORITHMS.md §5; Tang et al. PSCC
+/// The patch hierarchy of normal-cone self-collision culling (docs/methods.md §5; Tang et al. PSCC
 /// 2018): a binary tree over the triangles of each cloth whose every node is a *connected* set of
 /// triangles, built once per mesh from its fixed topology, with each node's contour (its boundary
 /// edges) precomputed. `NormalConeFront` refits cones over it every step and picks the patches.
