@@ -150,7 +150,7 @@ constexpr Parameter kTable[] = {
     {.section = "solver", .name = "dt", .type = T::Real, .unit = "s", .range = R{1e-5, 0.1}, .doc = "frame time step",
      .label = "time step", .panel = "solver", .log_scale = true, .access = field<&WorldDesc::solver, &SolverSettings::dt>()},
     {.section = "solver", .name = "substeps", .type = T::Integer, .range = R{1, 1000},
-     .doc = "implicit steps per frame (each of dt/substeps)", .label = "substeps", .panel = "solver", .log_scale = true,
+     .doc = "implicit steps per frame (each of `dt/substeps`)", .label = "substeps", .panel = "solver", .log_scale = true,
      .access = field<&WorldDesc::solver, &SolverSettings::substeps>()},
     {.section = "solver", .name = "newton_iterations", .type = T::Integer, .range = R{1, 50},
      .doc = "linearisations per substep (1 = Baraff–Witkin)", .label = "Newton iterations", .panel = "solver",
@@ -168,15 +168,15 @@ constexpr Parameter kTable[] = {
      .label = "precision", .panel = "solver", .choices = kPrecisionNames,
      .access = choice_field<kPrecisions, &WorldDesc::solver, &SolverSettings::precision>()},
     {.section = "solver", .name = "hessian", .type = T::Choice,
-     .doc = "fast: cheap PSD approximation; projected: exact element Hessians clamped to PSD", .label = "Hessian",
+     .doc = "`fast`: cheap PSD approximation; `projected`: exact element Hessians clamped to PSD", .label = "Hessian",
      .panel = "solver", .choices = kHessianNames,
      .access = choice_field<kHessians, &WorldDesc::solver, &SolverSettings::hessian>()},
     {.section = "solver", .name = "contact_stiffness", .type = T::Real, .unit = "N/m", .range = R{0.0, 1e12},
-     .doc = "per-vertex collider contact stiffness; 0 picks one from the mass and dt", .label = "collider stiffness",
+     .doc = "per-vertex collider contact stiffness; 0 picks one from the mass and `dt`", .label = "collider stiffness",
      .panel = "solver", .log_scale = true, .access = field<&WorldDesc::solver, &SolverSettings::contact_stiffness>()},
     {.section = "solver", .name = "threads", .type = T::Integer, .range = R{0, 1024},
-     .doc = "CPU worker threads, 0 = all cores (results do not depend on it); --threads and BackendOptions::threads "
-            "take precedence when non-zero",
+     .doc = "CPU worker threads, 0 = all cores (results do not depend on it); `--threads` and "
+            "`BackendOptions::threads` take precedence when non-zero",
      .effect = E::Rebuild, .access = field<&WorldDesc::solver, &SolverSettings::threads>()},
 
     // ---- [world]
@@ -211,18 +211,19 @@ constexpr Parameter kTable[] = {
      .label = "continuous", .panel = "collision",
      .access = field<&WorldDesc::collision, &CollisionSettings::continuous>()},
     {.section = "collision", .name = "culling", .type = T::Choice,
-     .doc = "normal_cone: pairs inside one self-collision-free patch are never generated (PSCC); none: every pair "
+     .doc = "`normal_cone`: pairs inside one self-collision-free patch are never generated (PSCC); `none`: every pair "
             "whose bounds overlap is tested. A speed knob: the result is the same",
      .label = "culling", .panel = "collision", .choices = kCullingNames,
      .access = choice_field<kCullings, &WorldDesc::collision, &CollisionSettings::culling>()},
     {.section = "collision", .name = "cull_contacts", .type = T::Boolean,
      .doc = "also cull the proximity contacts' candidates (over the predicted motion), not only the CCD detections: "
             "faster, but a patch that folds during the solve then has no springs inside it and the impact zones take "
-            "every crossing (falling at 48²: 30× more CCD hits)",
+            "every crossing (`falling` at 48²: 30× more CCD hits)",
      .label = "cull contacts", .panel = "collision",
      .access = field<&WorldDesc::collision, &CollisionSettings::cull_contacts>()},
     {.section = "collision", .name = "count_culled", .type = T::Boolean,
-     .doc = "also count the pairs normal-cone culling removed (the stats' culled_pairs; a box test per culled pair, "
+     .doc = "also count the pairs normal-cone culling removed (the summary's and stats' `culled_pairs`; a box test per "
+            "culled pair, "
             "for benchmarks; cpu backend only)",
      .label = "count culled pairs", .panel = "collision",
      .access = field<&WorldDesc::collision, &CollisionSettings::count_culled>()},
@@ -233,7 +234,7 @@ constexpr Parameter kTable[] = {
      .label = "rest exclusion", .panel = "collision",
      .access = field<&WorldDesc::collision, &CollisionSettings::rest_exclusion>()},
     {.section = "collision", .name = "thickness", .type = T::Real, .unit = "m", .range = R{0.0, 0.1},
-     .doc = "gap kept between cloth surfaces; 0: the larger of the two cloths' material contact_thickness",
+     .doc = "gap kept between cloth surfaces; 0: the larger of the two cloths' material `contact_thickness`",
      .label = "thickness", .panel = "collision", .access = field<&WorldDesc::collision, &CollisionSettings::thickness>()},
     {.section = "collision", .name = "stiffness", .type = T::Real, .unit = "N/m", .range = R{0.0, 1e9},
      .doc = "stiffness of the proximity springs; 0: 100·m/h² from the pair's effective mass m and the substep h",
@@ -255,7 +256,7 @@ constexpr Parameter kTable[] = {
      .access = field<&WorldDesc::collision, &CollisionSettings::max_impact_sweeps>()},
     {.section = "collision", .name = "check", .type = T::Boolean,
      .doc = "run the exact triangle–triangle intersection check after every step and report the count in the stats "
-            "(costly: for tests; also weft run --check)",
+            "(costly: for tests; also `weft run --check`)",
      .label = "exact check", .panel = "collision", .access = field<&WorldDesc::collision, &CollisionSettings::check>()},
 
     // ---- [[motion]]: named rigid motions that pins and colliders follow
@@ -264,7 +265,7 @@ constexpr Parameter kTable[] = {
     {.section = "motion", .name = "origin", .type = T::Vector, .unit = "m", .doc = "frame origin at t = 0",
      .label = "origin", .panel = "motions", .slider = R{-1e4, 1e4}, .access = field<&Motion::origin>()},
     {.section = "motion", .name = "rotation", .type = T::Vector, .unit = "degrees",
-     .doc = "initial orientation, Euler angles (see Rotations)", .effect = E::Rebuild,
+     .doc = "initial orientation, Euler angles (see *Rotations*)", .effect = E::Rebuild,
      .access = field<&SceneMotion::rotation_degrees>()},
     {.section = "motion", .name = "linear_velocity", .type = T::Vector, .unit = "m/s", .doc = "constant drift",
      .label = "velocity", .panel = "motions", .slider = R{-1e3, 1e3}, .access = field<&Motion::linear_velocity>()},
@@ -280,7 +281,7 @@ constexpr Parameter kTable[] = {
      .access = field<&Motion::phase>()},
 
     // ---- [[cloth]]
-    {.section = "cloth", .name = "name", .type = T::String, .doc = "used by --set cloth.NAME… and in messages",
+    {.section = "cloth", .name = "name", .type = T::String, .doc = "used by `--set cloth.NAME…` and in messages",
      .effect = E::Rebuild, .constraint = "non-empty, unique", .default_text = "\"cloth0\", \"cloth1\", …"},
     {.section = "cloth", .name = "mesh", .type = T::Table, .doc = "where the rest shape comes from", .effect = E::Recook,
      .constraint = "see below", .default_text = "**required**"},
@@ -288,7 +289,7 @@ constexpr Parameter kTable[] = {
      .doc = "translation of the rest shape into the world", .effect = E::Rebuild,
      .access = field<&ClothPlacement::position>()},
     {.section = "cloth", .name = "rotation", .type = T::Vector, .unit = "degrees",
-     .doc = "orientation of the rest shape (see Rotations)", .effect = E::Rebuild,
+     .doc = "orientation of the rest shape (see *Rotations*)", .effect = E::Rebuild,
      .access = field<&ClothPlacement::rotation_degrees>()},
     {.section = "cloth", .name = "initial_velocity", .type = T::Vector, .unit = "m/s", .doc = "of every vertex at t = 0",
      .effect = E::Rebuild, .access = field<&ClothDesc::initial_velocity>()},
@@ -299,21 +300,21 @@ constexpr Parameter kTable[] = {
      .doc = "true: the rest dihedral angles are 0 (a flat sheet); false: taken from the rest mesh (a garment keeps "
             "its shape)",
      .label = "flat rest bending", .effect = E::Recook, .access = field<&FabricDesc::flat_rest_bending>()},
-    {.section = "cloth", .name = "material", .type = T::Table, .doc = "[cloth.material]: the physical constants",
+    {.section = "cloth", .name = "material", .type = T::Table, .doc = "`[cloth.material]`: the physical constants",
      .default_text = "see below"},
-    {.section = "cloth", .name = "pin", .type = T::TableArray, .doc = "[[cloth.pin]]: pinned vertices",
+    {.section = "cloth", .name = "pin", .type = T::TableArray, .doc = "`[[cloth.pin]]`: pinned vertices",
      .effect = E::Rebuild, .default_text = "none"},
     {.section = "cloth", .name = "repeat", .type = T::Table, .doc = "several copies of this cloth (stacks of sheets)",
      .effect = E::Rebuild, .constraint = "see below", .default_text = "none"},
 
     // ---- [[cloth]] repeat = { … }
     {.section = "cloth.repeat", .name = "count", .type = T::Integer, .range = R{1, 10000},
-     .doc = "number of copies (1: a single cloth named NAME0)", .effect = E::Rebuild, .default_text = "**required**",
+     .doc = "number of copies (1: a single cloth named `NAME0`)", .effect = E::Rebuild, .default_text = "**required**",
      .access = field<&ClothPlacement::repeat_count>()},
     {.section = "cloth.repeat", .name = "offset", .type = T::Vector, .unit = "m", .doc = "translation added per copy",
      .effect = E::Rebuild, .access = field<&ClothPlacement::repeat_offset>()},
     {.section = "cloth.repeat", .name = "rotation_step", .type = T::Vector, .unit = "degrees",
-     .doc = "added to rotation per copy (see Rotations)", .effect = E::Rebuild,
+     .doc = "added to `rotation` per copy (see *Rotations*)", .effect = E::Rebuild,
      .access = field<&ClothPlacement::repeat_rotation_step>()},
 
     // ---- [[cloth]] mesh = { … }: exactly one of grid and file
@@ -329,11 +330,11 @@ constexpr Parameter kTable[] = {
     {.section = "cloth.mesh.grid", .name = "width", .type = T::Real, .unit = "m", .range = R{0.0, 1000.0, true},
      .doc = "extent along x", .effect = E::Recook, .access = field<&ClothSource::width>()},
     {.section = "cloth.mesh.grid", .name = "height", .type = T::Real, .unit = "m", .range = R{0.0, 1000.0, true},
-     .doc = "extent along y (\"xy\") or z (\"xz\")", .effect = E::Recook, .access = field<&ClothSource::height>()},
+     .doc = "extent along y (`\"xy\"`) or z (`\"xz\"`)", .effect = E::Recook, .access = field<&ClothSource::height>()},
     {.section = "cloth.mesh.grid", .name = "cells", .type = T::CellCounts, .range = R{1, 4096},
      .doc = "resolution; (nx+1)·(ny+1) vertices", .label = "cells", .effect = E::Recook, .access = grid_cells()},
     {.section = "cloth.mesh.grid", .name = "plane", .type = T::Choice,
-     .doc = "xy: vertical sheet facing +z (flag, curtain); xz: horizontal sheet facing +y (table cloth)",
+     .doc = "`xy`: vertical sheet facing +z (flag, curtain); `xz`: horizontal sheet facing +y (table cloth)",
      .effect = E::Recook, .choices = kPlaneNames, .access = choice_field<kPlanes, &ClothSource::plane>()},
 
     // ---- [cloth.material]: every field of weft::Material
@@ -375,11 +376,11 @@ constexpr Parameter kTable[] = {
     {.section = "cloth.pin", .name = "corners", .type = T::Choice,
      .doc = "grids only: the two corners of that edge, or all four", .effect = E::Rebuild, .choices = kCornerNames},
     {.section = "cloth.pin", .name = "motion", .type = T::String,
-     .doc = "a [[motion]] the pins follow; without it they stay where they start", .effect = E::Rebuild,
-     .constraint = "a [[motion]] name", .default_text = "none"},
+     .doc = "a `[[motion]]` the pins follow; without it they stay where they start", .effect = E::Rebuild,
+     .constraint = "a `[[motion]]` name", .default_text = "none"},
 
     // ---- [[collider]]
-    {.section = "collider", .name = "name", .type = T::String, .doc = "used by --set collider.NAME… and in messages",
+    {.section = "collider", .name = "name", .type = T::String, .doc = "used by `--set collider.NAME…` and in messages",
      .effect = E::Rebuild, .constraint = "non-empty, unique", .default_text = "\"collider0\", …"},
     {.section = "collider", .name = "shape", .type = T::Choice, .doc = "analytic shape or triangle mesh",
      .effect = E::Rebuild, .choices = kShapeNames, .default_text = "**required**"},
@@ -405,10 +406,10 @@ constexpr Parameter kTable[] = {
      .doc = "centre (sphere, capsule, box), a point on the plane, the mesh's origin", .label = "position",
      .panel = "colliders", .slider = R{-1e4, 1e4}, .access = field<&ColliderDesc::motion, &Motion::origin>()},
     {.section = "collider", .name = "rotation", .type = T::Vector, .unit = "degrees",
-     .doc = "orientation of the local frame (see Rotations)", .effect = E::Rebuild, .default_text = "[0, 0, 0]"},
+     .doc = "orientation of the local frame (see *Rotations*)", .effect = E::Rebuild, .default_text = "[0, 0, 0]"},
     {.section = "collider", .name = "motion", .type = T::String,
-     .doc = "follow this motion instead of position and rotation", .effect = E::Rebuild,
-     .constraint = "a [[motion]] name", .default_text = "none"},
+     .doc = "follow this motion instead of `position` and `rotation`", .effect = E::Rebuild,
+     .constraint = "a `[[motion]]` name", .default_text = "none"},
 
     // ---- [camera]
     {.section = "camera", .name = "position", .type = T::Vector, .unit = "m", .doc = "eye", .effect = E::Rebuild,
