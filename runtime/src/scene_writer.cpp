@@ -73,8 +73,12 @@ std::string value_text(const Parameter& p, const Owner& owner) {
         case ParameterType::Real: return number(parameter_number(p, owner));
         case ParameterType::Integer: return std::to_string(std::llround(parameter_number(p, owner)));
         case ParameterType::Boolean: return boolean(parameter_number(p, owner) != 0.0);
-        case ParameterType::Choice:
-            return toml_string(p.choices[static_cast<std::size_t>(std::llround(parameter_number(p, owner)))]);
+        case ParameterType::Choice: {
+            const double index = parameter_number(p, owner);  // -1: a value the names do not list
+            if (!(index >= 0.0 && index < static_cast<double>(p.choices.size())))
+                throw Error("save scene: " + p.key() + " holds a value that has no name");
+            return toml_string(p.choices[static_cast<std::size_t>(index)]);
+        }
         case ParameterType::Vector: return vec3(parameter_vector(p, owner));
         case ParameterType::CellCounts: {
             const Vec3d n = parameter_vector(p, owner);
