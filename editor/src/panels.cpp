@@ -18,6 +18,7 @@
 #include <imgui.h>
 
 #include "weft/editor/presets.h"
+#include "weft/parameters.h"
 
 namespace weft::editor {
 namespace {
@@ -36,16 +37,34 @@ std::string format_with_unit(const Parameter& p, const char* number) {
     return f;
 }
 
-void tooltip(const Parameter& p) {
+// A tooltip for the item just drawn, wrapped to a readable width (the docs of the parameter table
+// run to a sentence or two).
+void wrapped_tooltip(const std::string& text) {
     if (!ImGui::IsItemHovered()) return;
-    std::string range;
+    ImGui::BeginTooltip();
+    ImGui::PushTextWrapPos(ImGui::GetFontSize() * 32.0F);
+    ImGui::TextUnformatted(text.c_str());
+    ImGui::PopTextWrapPos();
+    ImGui::EndTooltip();
+}
+
+void tooltip(const Parameter& p) {
+    std::string text = p.key;
     if (p.kind == ParameterKind::real || p.kind == ParameterKind::integer) {
-        char text[96];
-        std::snprintf(text, sizeof text, "valid range [%g, %g]%s%s", p.min, p.max, p.unit.empty() ? "" : " ",
+        char range[96];
+        std::snprintf(range, sizeof range, "\nvalid range [%g, %g]%s%s", p.min, p.max, p.unit.empty() ? "" : " ",
                       p.unit.c_str());
-        range = text;
+        text += range;
     }
-    ImGui::SetTooltip("%s\n%s%s%s", p.key.c_str(), range.c_str(), p.hint.empty() ? "" : "\n", p.hint.c_str());
+    if (!p.hint.empty()) text += "\n" + p.hint;
+    wrapped_tooltip(text);
+}
+
+// The tooltip of a re-cooked scene key: its doc, valid values and unit (weft/parameters.h).
+void key_tooltip(const weft::Parameter& p) {
+    std::string text = std::string(p.doc) + "\n" + parameter_range_text(p);
+    if (!p.unit.empty()) text.append(" ").append(p.unit);
+    wrapped_tooltip(text);
 }
 
 // The widget of one parameter; returns true with `value` set when the user changed it.
@@ -313,17 +332,23 @@ void mesh_rows(Session& session) {
         ImGui::PushID(name.c_str());
         ImGui::TextUnformatted(grid ? ("cloth " + name + " (grid)").c_str()
                                     : ("cloth " + name + " (" + cloth->source.file.filename().string() + ")").c_str());
+        // The scene keys a re-cook changes (weft/parameters.h): labels, units and ranges.
+        const weft::Parameter& cells = parameter("cloth.mesh.grid", "cells");
+        const weft::Parameter& scale = parameter("cloth.mesh", "scale");
+        const weft::Parameter& density = parameter("cloth", "density");
+        const weft::Parameter& flat = parameter("cloth", "flat_rest_bending");
         if (grid) {
-            ImGui::InputInt2("cells", v.cells.data());
-            if (ImGui::IsItemHovered()) ImGui::SetTooltip("grid resolution, [1, 4096] per side");
+            ImGui::InputInt2(std::string(cells.label).c_str(), v.cells.data());
+            key_tooltip(cells);
         } else {
-            ImGui::InputDouble("scale", &v.scale, 0.0, 0.0, "%.4g");
-            if (ImGui::IsItemHovered()) ImGui::SetTooltip("applied to the file's positions, (0, 1e6]");
+            ImGui::InputDouble(std::string(scale.label).c_str(), &v.scale, 0.0, 0.0, "%.4g");
+            key_tooltip(scale);
         }
-        ImGui::InputDouble("density", &v.density, 0.0, 0.0, "%.4g kg/m\u00b2");
-        if (ImGui::IsItemHovered()) ImGui::SetTooltip("areal density, (0, 100] kg/m\u00b2: the vertex masses");
-        ImGui::Checkbox("flat rest bending", &v.flat);
-        if (ImGui::IsItemHovered()) ImGui::SetTooltip("on: the cloth rests flat; off: it rests in the mesh's folds");
+        ImGui::InputDouble(std::string(density.label).c_str(), &v.density, 0.0, 0.0,
+                           ("%.4g " + std::string(density.unit)).c_str());
+        key_tooltip(density);
+        ImGui::Checkbox(std::string(flat.label).c_str(), &v.flat);
+        key_tooltip(flat);
         ClothRecook change;
         if (grid && v.cells != cooked.cells) change.cells = v.cells;
         if (!grid && v.scale != cooked.scale) change.scale = v.scale;

@@ -5,6 +5,8 @@
 
 #include <array>
 
+#include "weft/parameters.h"
+
 namespace weft::editor {
 namespace {
 
@@ -35,11 +37,19 @@ Preset solver(std::string name, std::string description, int substeps, int newto
                   0.0};
 }
 
+// The default of scene key `key`: "cotton" and "balanced" are the defaults, read where they are
+// declared (the structs, through the parameter table) rather than written here again.
+double default_of(std::string_view key) { return parameter_default_number(*find_parameter(key)); }
+
 }  // namespace
 
 std::span<const Preset> material_presets() {
     static const std::array<Preset, 5> presets{
-        fabric("cotton", "light woven cotton (the defaults)", 5.0e3, 0.3, 1.0e-5, 1.0e-3, 1.0, 0.3, 0.3, 0.2),
+        fabric("cotton", "light woven cotton (the defaults)", default_of("cloth.material.stretch_stiffness"),
+               default_of("cloth.material.poisson_ratio"), default_of("cloth.material.bending_stiffness"),
+               default_of("cloth.material.damping_stiffness"), default_of("cloth.material.drag_coefficient"),
+               default_of("cloth.material.lift_coefficient"), default_of("cloth.material.friction"),
+               default_of("cloth.density")),
         fabric("silk", "thin and soft: low bending, flutters", 2.0e3, 0.3, 1.0e-6, 5.0e-4, 1.2, 0.4, 0.2, 0.06),
         fabric("denim", "heavy twill: stiffer, folds in wide curves", 2.0e4, 0.25, 1.0e-4, 2.0e-3, 0.9, 0.2, 0.5, 0.4),
         fabric("leather", "stiff and heavy, barely stretches", 1.0e5, 0.4, 1.0e-3, 3.0e-3, 0.8, 0.1, 0.6, 0.9),
@@ -55,7 +65,10 @@ std::span<const Preset> solver_presets() {
         // (docs/results.md, "Solver presets").
         solver("fast", "one float Newton step, CG to 1e-3 (at most 100 iterations): for many cloths in real time", 1,
                1, 1e-3, 100, true, false),
-        solver("balanced", "the defaults: one double Newton step, CG to 1e-4", 1, 1, 1e-4, 500, false, false),
+        solver("balanced", "the defaults: one double Newton step, CG to 1e-4",
+               static_cast<int>(default_of("solver.substeps")), static_cast<int>(default_of("solver.newton_iterations")),
+               default_of("solver.cg_tolerance"), static_cast<int>(default_of("solver.cg_max_iterations")),
+               default_of("solver.precision") == 0.0, default_of("solver.hessian") == 1.0),
         solver("accurate", "4 substeps of 3 Newton steps, CG to 1e-6, projected Hessian: for reference runs", 4, 3,
                1e-6, 2000, false, true),
     };

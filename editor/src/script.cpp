@@ -7,6 +7,7 @@
 #include <sstream>
 
 #include "weft/error.h"
+#include "weft/parameters.h"
 
 namespace weft::editor {
 namespace {
@@ -40,13 +41,21 @@ bool on_off(const std::string& w, const std::string& where, const std::string& w
     throw Error(where + what + " expects on or off, got '" + w + "'");
 }
 
-// A number in [lo, hi] written alone, or an error naming the line and the word.
-double number_in(const std::string& w, double lo, double hi, const std::string& where, const char* what) {
+// A number in `range` written alone, or an error naming the line and the word.
+double number_in(const std::string& w, const ParameterRange& range, const std::string& where, const std::string& what) {
     double v = 0.0;
     const auto [ptr, ec] = std::from_chars(w.data(), w.data() + w.size(), v);
-    if (ec != std::errc{} || ptr != w.data() + w.size() || !(v >= lo && v <= hi))
-        throw Error(where + what + ", got '" + w + "'");
+    if (ec != std::errc{} || ptr != w.data() + w.size() || !range.contains(v)) throw Error(where + what + ", got '" + w + "'");
     return v;
+}
+double number_in(const std::string& w, double lo, double hi, const std::string& where, const std::string& what) {
+    return number_in(w, ParameterRange{lo, hi}, where, what);
+}
+
+// `cook FIELD VALUE`: a number in the range of the scene key it re-cooks (weft/parameters.h).
+double cook_number(const std::string& w, const weft::Parameter& p, const std::string& where) {
+    const std::string what = p.unit.empty() ? "a " + std::string(p.name) : std::string(p.unit);
+    return number_in(w, p.range, where, "cook " + std::string(p.name) + " expects " + what + " in " + p.range.text());
 }
 
 std::string command_list() {
@@ -123,8 +132,9 @@ Script parse_script(std::string_view text, const std::string& name) {
                 for (int k = 0; k < 2; ++k) {
                     const std::string& w = words[2 + static_cast<std::size_t>(k)];
                     const auto [ptr, ec] = std::from_chars(w.data(), w.data() + w.size(), *targets[k]);
-                    if (ec != std::errc{} || ptr != w.data() + w.size() || *targets[k] < 1 || *targets[k] > 4096)
-                        throw Error(where + "cells expects two cell counts in [1, 4096], got '" + w + "'");
+                    const ParameterRange& range = parameter("cloth.mesh.grid", "cells").range;
+                    if (ec != std::errc{} || ptr != w.data() + w.size() || !range.contains(*targets[k]))
+                        throw Error(where + "cells expects two cell counts in " + range.integer_text() + ", got '" + w + "'");
                 }
                 break;
             }
@@ -132,9 +142,9 @@ Script parse_script(std::string_view text, const std::string& name) {
                 c.key = words[1];
                 c.text = words[2];
                 if (c.text == "density")
-                    c.number = number_in(words[3], 1e-12, 100.0, where, "cook density expects kg/m\u00b2 in (0, 100]");
+                    c.number = cook_number(words[3], parameter("cloth", "density"), where);
                 else if (c.text == "scale")
-                    c.number = number_in(words[3], 1e-12, 1e6, where, "cook scale expects a scale in (0, 1e6]");
+                    c.number = cook_number(words[3], parameter("cloth.mesh", "scale"), where);
                 else if (c.text == "flat_rest_bending")
                     c.number = on_off(words[3], where, "cook flat_rest_bending") ? 1.0 : 0.0;
                 else

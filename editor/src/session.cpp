@@ -11,6 +11,7 @@
 
 #include "weft/error.h"
 #include "weft/editor/presets.h"
+#include "weft/parameters.h"
 
 namespace weft::editor {
 namespace {
@@ -231,16 +232,20 @@ double Session::recook(const std::string& cloth, const ClothRecook& change) {
     for (std::size_t e = 0; e < scene_.cloth_placements.size(); ++e)
         if (scene_.cloth_placements[e].name == cloth) entry = e;
     if (entry == scene_.cloth_placements.size()) throw Error("re-cook: no cloth '" + cloth + "' in the scene");
+    // The ranges of the scene keys (weft/parameters.h).
     if (change.cells) {
         const auto [x, y] = *change.cells;
-        if (x < 1 || y < 1 || x > 4096 || y > 4096)
-            throw Error("re-cook: " + std::to_string(x) + "x" + std::to_string(y) + " cells is outside [1, 4096] per side");
+        const ParameterRange& cells = parameter("cloth.mesh.grid", "cells").range;
+        if (!cells.contains(x) || !cells.contains(y))
+            throw Error("re-cook: " + std::to_string(x) + "x" + std::to_string(y) + " cells is outside " +
+                        cells.integer_text() + " per side");
     }
-    // The ranges of docs/scene-format.md.
-    if (change.density && !(*change.density > 0.0 && *change.density <= 100.0))
-        throw Error("re-cook: density " + std::to_string(*change.density) + " kg/m\u00b2 is outside (0, 100]");
-    if (change.scale && !(*change.scale > 0.0 && *change.scale <= 1e6))
-        throw Error("re-cook: scale " + std::to_string(*change.scale) + " is outside (0, 1e6]");
+    const ParameterRange& density = parameter("cloth", "density").range;
+    if (change.density && !density.contains(*change.density))
+        throw Error("re-cook: density " + std::to_string(*change.density) + " kg/m\u00b2 is outside " + density.text());
+    const ParameterRange& scale = parameter("cloth.mesh", "scale").range;
+    if (change.scale && !scale.contains(*change.scale))
+        throw Error("re-cook: scale " + std::to_string(*change.scale) + " is outside " + scale.text());
 
     // What was tuned goes into the changed scene, so that the rebuild keeps it, except pins changed
     // live on this cloth when its grid changes: they name vertices of the old mesh, so its file rules

@@ -7,6 +7,7 @@
 #include <unordered_map>
 
 #include "weft/error.h"
+#include "weft/parameters.h"
 #include "weft/physics/bending.h"
 #include "weft/physics/membrane.h"
 
@@ -39,8 +40,9 @@ void validate_input(const MeshData& mesh) {
 std::shared_ptr<const Fabric> Fabric::cook(const MeshData& mesh, const FabricDesc& desc) {
     validate_input(mesh);
     const std::string src = mesh.source.empty() ? std::string("mesh") : mesh.source;
-    if (!(desc.density > 0.0) || desc.density > 100.0)
-        throw Error(src + ": density " + std::to_string(desc.density) + " kg/m² is outside (0, 100]");
+    const ParameterRange& density = parameter("cloth", "density").range;
+    if (!density.contains(desc.density))
+        throw Error(src + ": density " + std::to_string(desc.density) + " kg/m² is outside " + density.text());
 
     std::shared_ptr<Fabric> fabric(new Fabric());
     Fabric& f = *fabric;

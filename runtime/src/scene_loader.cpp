@@ -1,6 +1,8 @@
-// Scene files: TOML text → validated SceneDesc. The format is documented key by key in
-// docs/scene-format.md; keep the two in step. Every key is read through scene_toml::Table, which
-// checks its type and range and reports unknown keys, so a typo never silently becomes a default.
+// Scene files: TOML text → validated SceneDesc. The keys, their types and ranges are those of the
+// parameter table (weft/parameters.h), which docs/scene-format.md is generated from; this file reads
+// the table's values generically and handles by hand only what has structure (names, meshes, pins,
+// references). Every key is read through scene_toml::Table, which checks its type and range and
+// reports unknown keys, so a typo never silently becomes a default.
 #include <cmath>
 #include <fstream>
 #include <map>
@@ -12,15 +14,13 @@
 #include "scene_overrides.h"
 #include "scene_reader.h"
 #include "weft/error.h"
+#include "weft/parameters.h"
 #include "weft/scene.h"
 
 namespace weft {
 namespace {
 
-using scene_toml::Range;
 using scene_toml::Table;
-
-constexpr double kHuge = 1e9;  // bound on lengths and speeds: finite, and far beyond any real scene
 
 // Rotation from Euler angles in degrees [x, y, z]: about the world X axis first, then Y, then Z
 // (R = Rz·Ry·Rx). Degrees because people type them; the angular *velocity* of a motion stays in rad/s.
@@ -34,6 +34,78 @@ Mat3d rotation_from_euler_degrees(Vec3d degrees) {
     ry.m[0][0] = cy; ry.m[0][2] = sy; ry.m[2][0] = -sy; ry.m[2][2] = cy;
     rz.m[0][0] = cz; rz.m[0][1] = -sz; rz.m[1][0] = sz; rz.m[1][1] = cz;
     return rz * (ry * rx);
+}
+
+// Reads parameter `p` from `t` into `owner` when the key is present, checking its type and range.
+template <class Owner>
+void read_value(Table& t, const Parameter& p, Owner& owner) {
+    switch (p.type) {
+        case ParameterType::Real:
+            if (auto v = t.optional_number(p.name, p.range)) set_parameter_number(p, owner, *v);
+            return;
+        case ParameterType::Integer: {
+            const auto current = static_cast<int>(std::lround(parameter_number(p, owner)));
+            set_parameter_number(p, owner,
+                                 t.integer(p.name, current, std::llround(p.range.lo), std::llround(p.range.hi)));
+            return;
+        }
+        case ParameterType::Boolean:
+            set_parameter_number(p, owner, t.boolean(p.name, parameter_number(p, owner) != 0.0) ? 1.0 : 0.0);
+            return;
+        case ParameterType::Choice:
+            if (auto i = t.choice(p.name, p.choices)) set_parameter_number(p, owner, static_cast<double>(*i));
+            return;
+        case ParameterType::Vector: {
+            const auto v = t.optional_vec3(p.name);
+            if (!v) return;
+            const std::string unit = p.unit.empty() ? std::string() : " " + std::string(p.unit);
+            if (p.vector_bound == VectorBound::Length && !p.range.contains(math::length(*v))) {
+                const std::string limit = scene_toml::format_number(p.range.hi) + unit;
+                t.fail(p.name, t.find(p.name), "magnitude is over " + limit + " (expected a vector of at most " + limit + ")");
+            }
+            if (p.vector_bound == VectorBound::Components)
+                for (int k = 0; k < 3; ++k)
+                    if (!p.range.contains((*v)[k]))
+                        t.fail(p.name, t.find(p.name),
+                               "component " + std::to_string(k) + " is " + scene_toml::format_number((*v)[k]) +
+                                   " (expected 3 numbers in " + p.range.text() + (p.unit.empty() ? "" : ", ") +
+                                   std::string(p.unit) + ")");
+            set_parameter_vector(p, owner, *v);
+            return;
+        }
+        case ParameterType::CellCounts: {
+            const toml::node* cells = t.find(p.name);
+            if (cells == nullptr) return;
+            const std::string expected = "an array of 2 integers [nx, ny], each in " + p.range.integer_text();
+            const auto* a = cells->as_array();
+            if (a == nullptr || a->size() != 2)
+                t.fail(p.name, cells,
+                       "got " + scene_toml::describe(*cells) +
+                           (a != nullptr ? " of " + std::to_string(a->size()) + " elements" : "") + " (expected " +
+                           expected + ")");
+            Vec3d n{};
+            for (std::size_t k = 0; k < 2; ++k) {
+                const toml::node& e = (*a)[k];
+                const auto* i = e.as_integer();
+                if (i == nullptr || !p.range.contains(static_cast<double>(i->get())))
+                    t.fail(p.name, &e,
+                           "element " + std::to_string(k) + " is " + scene_toml::describe(e) + " (expected " + expected + ")");
+                n[static_cast<int>(k)] = static_cast<double>(i->get());
+            }
+            set_parameter_vector(p, owner, n);
+            return;
+        }
+        default: throw Error("parameter '" + p.key() + "' has a field but no reader for its type");
+    }
+}
+
+// Reads every parameter of `section` that one of `owners` holds, in the table's order (so that the
+// keys a table knows, and the first error in it, are found in that order). Keys without a field
+// (names, meshes, pins) are left to the caller.
+template <class... Owners>
+void read_parameters(Table& t, std::string_view section, Owners&... owners) {
+    for (const Parameter& p : parameter_table())
+        if (p.section == section) (void)((holds<Owners>(p) ? (read_value(t, p, owners), true) : false) || ...);
 }
 
 // Reads `name`, requiring it to be unique among `seen` (names are how --set and pins refer to things).
@@ -63,68 +135,34 @@ std::string motion_reference(Table& t, const std::vector<SceneMotion>& motions) 
                               : " (expected one of " + expected + ")"));
 }
 
+// `shape = "sphere" or "capsule"`: the collider shapes that have key `p`.
+std::string shapes_having(const Parameter& p) {
+    const auto names = parameter("collider", "shape").choices;
+    std::vector<std::string_view> having;
+    for (std::size_t s = 0; s < names.size(); ++s)
+        if (p.applies_to(static_cast<ColliderShape>(s))) having.push_back(names[s]);
+    std::string text = "shape = ";
+    for (std::size_t k = 0; k < having.size(); ++k)
+        text.append(k == 0 ? "\"" : k + 1 == having.size() ? " or \"" : ", \"").append(having[k]).append("\"");
+    return text;
+}
+
 void read_scene_section(Table& root, SceneDesc& scene) {
     auto t = root.table("scene");
     if (!t) return;
     if (auto name = t->optional_string("name")) scene.name = *name;
-    scene.frames = t->integer("frames", scene.frames, 1, 10'000'000);
+    read_parameters(*t, "scene", scene);
     t->finish();
 }
 
-void read_solver(Table& root, SolverSettings& s) {
-    auto t = root.table("solver");
-    if (!t) return;
-    s.dt = t->number("dt", s.dt, {1e-5, 0.1});
-    s.substeps = t->integer("substeps", s.substeps, 1, 1000);
-    s.newton_iterations = t->integer("newton_iterations", s.newton_iterations, 1, 50);
-    s.cg_tolerance = t->number("cg_tolerance", s.cg_tolerance, {1e-12, 1.0});
-    s.cg_max_iterations = t->integer("cg_max_iterations", s.cg_max_iterations, 1, 100000);
-    s.cg_warm_start = t->boolean("cg_warm_start", s.cg_warm_start);
-    if (auto p = t->choice("precision", {"float", "double"})) s.precision = *p == 0 ? Precision::Float : Precision::Double;
-    if (auto h = t->choice("hessian", {"fast", "projected"}))
-        s.hessian = *h == 0 ? HessianMode::Fast : HessianMode::Projected;
-    s.contact_stiffness = t->number("contact_stiffness", s.contact_stiffness, {0.0, 1e12});
-    s.threads = t->integer("threads", s.threads, 0, 1024);
-    t->finish();
-}
-
+// [solver], [world], [wind] and [collision]: every key is a field of WorldDesc.
 void read_world(Table& root, WorldDesc& w) {
-    if (auto t = root.table("world")) {
-        w.gravity = t->vec3("gravity", w.gravity);
-        if (math::length(w.gravity) > 1000.0)
-            t->fail("gravity", t->find("gravity"), "magnitude is over 1000 m/s² (expected a vector of at most 1000 m/s²)");
-        t->finish();
+    for (const std::string_view section : {"solver", "world", "wind", "collision"}) {
+        if (auto t = root.table(section)) {
+            read_parameters(*t, section, w);
+            t->finish();
+        }
     }
-    if (auto t = root.table("wind")) {
-        WindDesc& wind = w.wind;
-        wind.velocity = t->vec3("velocity", wind.velocity);
-        if (math::length(wind.velocity) > 1000.0)
-            t->fail("velocity", t->find("velocity"), "speed is over 1000 m/s (expected a vector of at most 1000 m/s)");
-        wind.air_density = t->number("air_density", wind.air_density, {0.0, 100.0});
-        wind.turbulence = t->number("turbulence", wind.turbulence, {0.0, 1000.0});
-        wind.turbulence_frequency = t->number("turbulence_frequency", wind.turbulence_frequency, {0.0, 1000.0});
-        wind.turbulence_scale = t->number("turbulence_scale", wind.turbulence_scale, {1e-3, 1e6});
-        t->finish();
-    }
-}
-
-void read_collision(Table& root, CollisionSettings& c) {
-    auto t = root.table("collision");
-    if (!t) return;
-    c.self_collision = t->boolean("self", c.self_collision);
-    c.continuous = t->boolean("continuous", c.continuous);
-    if (auto k = t->choice("culling", {"normal_cone", "none"}))
-        c.culling = *k == 0 ? CollisionCulling::NormalCone : CollisionCulling::None;
-    c.cull_contacts = t->boolean("cull_contacts", c.cull_contacts);
-    c.count_culled = t->boolean("count_culled", c.count_culled);
-    c.rest_exclusion = t->number("rest_exclusion", c.rest_exclusion, {0.0, 10.0});
-    c.thickness = t->number("thickness", c.thickness, {0.0, 0.1});
-    c.stiffness = t->number("stiffness", c.stiffness, {0.0, 1e9});
-    c.max_impact_iterations = t->integer("max_impact_iterations", c.max_impact_iterations, 1, 1000);
-    c.impact_tolerance = t->number("impact_tolerance", c.impact_tolerance, {0.0, 0.5});
-    c.max_impact_sweeps = t->integer("max_impact_sweeps", c.max_impact_sweeps, 0, 100000);
-    c.check = t->boolean("check", c.check);
-    t->finish();
 }
 
 void read_motions(Table& root, SceneDesc& scene) {
@@ -135,14 +173,8 @@ void read_motions(Table& root, SceneDesc& scene) {
         m.name = t.required_string("name", "a name that pins and colliders refer to");
         if (!names.insert(m.name).second)
             t.fail("name", name_node, "duplicate motion name '" + m.name + "' (expected a unique name)");
-        m.motion.origin = t.vec3("origin", {});
-        m.rotation_degrees = t.vec3("rotation", {});
+        read_parameters(t, "motion", m.motion, m);
         m.motion.initial_rotation = rotation_from_euler_degrees(m.rotation_degrees);
-        m.motion.linear_velocity = t.vec3("linear_velocity", {});
-        m.motion.angular_velocity = t.vec3("angular_velocity", {});
-        m.motion.amplitude = t.vec3("amplitude", {});
-        m.motion.frequency = t.number("frequency", 0.0, {0.0, 1000.0});
-        m.motion.phase = t.number("phase", 0.0, {-kHuge, kHuge});
         t.finish();
         scene.motions.push_back(std::move(m));
     }
@@ -151,15 +183,7 @@ void read_motions(Table& root, SceneDesc& scene) {
 void read_material(Table& cloth, Material& m) {
     auto t = cloth.table("material");
     if (!t) return;
-    m.stretch_stiffness = t->number("stretch_stiffness", m.stretch_stiffness, {1.0, 1e8});
-    m.poisson_ratio = t->number("poisson_ratio", m.poisson_ratio, {0.0, 0.49});
-    m.bending_stiffness = t->number("bending_stiffness", m.bending_stiffness, {0.0, 1.0});
-    m.damping_mass = t->number("damping_mass", m.damping_mass, {0.0, 100.0});
-    m.damping_stiffness = t->number("damping_stiffness", m.damping_stiffness, {0.0, 1.0});
-    m.drag_coefficient = t->number("drag_coefficient", m.drag_coefficient, {0.0, 10.0});
-    m.lift_coefficient = t->number("lift_coefficient", m.lift_coefficient, {0.0, 10.0});
-    m.contact_thickness = t->number("contact_thickness", m.contact_thickness, {1e-5, 0.1});
-    m.friction = t->number("friction", m.friction, {0.0, 10.0});
+    read_parameters(*t, "cloth.material", m);
     t->finish();
 }
 
@@ -192,35 +216,12 @@ void read_mesh(Table& cloth, ClothSource& src, const std::filesystem::path& scen
         src.kind = ClothSource::Kind::Grid;
         mesh->reject("scale", "only applies to mesh files (expected no scale with grid)");
         auto grid = mesh->table("grid");
-        src.width = grid->number("width", src.width, {0.0, 1000.0, true});
-        src.height = grid->number("height", src.height, {0.0, 1000.0, true});
-        if (const toml::node* cells = grid->find("cells")) {
-            constexpr std::string_view cells_expected = "an array of 2 integers [nx, ny], each in [1, 4096]";
-            const auto* a = cells->as_array();
-            if (a == nullptr || a->size() != 2)
-                grid->fail("cells", cells,
-                           "got " + scene_toml::describe(*cells) +
-                               (a != nullptr ? " of " + std::to_string(a->size()) + " elements" : "") + " (expected " +
-                               std::string(cells_expected) + ")");
-            int n[2] = {};
-            for (std::size_t k = 0; k < 2; ++k) {
-                const toml::node& e = (*a)[k];
-                const auto* i = e.as_integer();
-                if (i == nullptr || i->get() < 1 || i->get() > 4096)
-                    grid->fail("cells", &e,
-                               "element " + std::to_string(k) + " is " + scene_toml::describe(e) + " (expected " +
-                                   std::string(cells_expected) + ")");
-                n[k] = static_cast<int>(i->get());
-            }
-            src.cells_x = n[0];
-            src.cells_y = n[1];
-        }
-        if (auto plane = grid->choice("plane", {"xy", "xz"})) src.plane = *plane == 0 ? GridPlane::XY : GridPlane::XZ;
+        read_parameters(*grid, "cloth.mesh.grid", src);
         grid->finish();
     } else {
         src.kind = ClothSource::Kind::File;
         src.file = mesh_file(*mesh, "file", scene_path);
-        src.scale = mesh->number("scale", src.scale, {0.0, 1e6, true});
+        read_parameters(*mesh, "cloth.mesh", src);
     }
     mesh->finish();
 }
@@ -274,8 +275,7 @@ PinSelection read_pin(Table& t, const ClothSource& src, const std::vector<SceneM
         const bool corners = std::string_view(key) == "corners";
         const toml::node* n = t.find(key);
         if (n == nullptr) continue;
-        const auto which = corners ? t.choice(key, {"top", "bottom", "left", "right", "all"})
-                                   : t.choice(key, {"top", "bottom", "left", "right"});
+        const auto which = t.choice(key, parameter("cloth.pin", key).choices);
         if (!grid)
             t.fail(key, n, std::string(key) + " pins need a grid mesh (expected vertices or box for a mesh file)");
         pin.kind = corners ? PinSelection::Kind::Corners : PinSelection::Kind::Edge;
@@ -287,30 +287,22 @@ PinSelection read_pin(Table& t, const ClothSource& src, const std::vector<SceneM
     return pin;
 }
 
-// `repeat = { count, offset, rotation_step }`: copies of one cloth for stacks of sheets at any count.
-struct Repeat {
-    int count = 1;
-    Vec3d offset{};         // m, added once per copy
-    Vec3d rotation_step{};  // degrees, added to the Euler angles once per copy
-};
-
-std::optional<Repeat> read_repeat(Table& cloth) {
+// `repeat = { count, offset, rotation_step }`: copies of one cloth for stacks of sheets at any count,
+// read into the cloth table's placement (repeat_count stays 0 without a repeat table).
+void read_repeat(Table& cloth, ClothPlacement& r) {
     auto t = cloth.table("repeat");
-    if (!t) return std::nullopt;
-    Repeat r;
+    if (!t) return;
     if (!t->has("count"))
-        t->fail_here("count", "missing required key (expected an integer in [1, 10000], the number of copies)");
-    r.count = t->integer("count", r.count, 1, 10000);
-    r.offset = t->vec3("offset", r.offset);
-    r.rotation_step = t->vec3("rotation_step", r.rotation_step);
+        t->fail_here("count", "missing required key (expected an integer in " +
+                                  parameter("cloth.repeat", "count").range.integer_text() + ", the number of copies)");
+    read_parameters(*t, "cloth.repeat", r);
     t->finish();  // a misspelt offset is reported as such, not as a missing one
-    if (r.count > 1 && r.offset == Vec3d{} && r.rotation_step == Vec3d{})
+    if (r.repeat_count > 1 && r.repeat_offset == Vec3d{} && r.repeat_rotation_step == Vec3d{})
         t->fail("offset", t->find("offset"),
                 "the copies would all lie on the first (expected a non-zero offset or rotation_step)");
-    const Vec3d last = static_cast<double>(r.count - 1) * r.offset;
+    const Vec3d last = static_cast<double>(r.repeat_count - 1) * r.repeat_offset;
     if (!math::is_finite(last))
         t->fail("offset", t->find("offset"), "the last copy's offset is not finite (expected a smaller offset)");
-    return r;
 }
 
 void read_cloths(Table& root, SceneDesc& scene) {
@@ -323,36 +315,27 @@ void read_cloths(Table& root, SceneDesc& scene) {
         Table& t = tables[i];
         SceneCloth c;
         c.entry = i;
-        const std::string name = unique_name(t, "cloth" + std::to_string(i), entry_names);
+        ClothPlacement placement;
+        placement.name = unique_name(t, "cloth" + std::to_string(i), entry_names);
+        const std::string& name = placement.name;
         read_mesh(t, c.source, scene.path);
-        const Vec3d position = t.vec3("position", {});
-        const Vec3d rotation = t.vec3("rotation", {});
-        c.desc.initial_velocity = t.vec3("initial_velocity", {});
-        c.fabric.density = t.number("density", c.fabric.density, {0.0, 100.0, true});
-        c.fabric.flat_rest_bending = t.boolean("flat_rest_bending", c.fabric.flat_rest_bending);
+        read_parameters(t, "cloth", placement, c.desc, c.fabric);  // position … flat_rest_bending
         read_material(t, c.desc.material);
         for (Table& p : t.array_of_tables("pin")) c.pins.push_back(read_pin(p, c.source, scene.motions));
-        const std::optional<Repeat> repeat = read_repeat(t);
-        ClothPlacement placement;
-        placement.name = name;
-        placement.position = position;
-        placement.rotation_degrees = rotation;
-        if (repeat) {
-            placement.repeat_count = repeat->count;
-            placement.repeat_offset = repeat->offset;
-            placement.repeat_rotation_step = repeat->rotation_step;
-        }
+        read_repeat(t, placement);
         scene.cloth_placements.push_back(placement);
         // Copy k is named NAME<k> and placed at position + k·offset, turned by rotation + k·rotation_step;
         // a cloth without repeat is the single copy 0 under its own name.
-        const int copies = repeat ? repeat->count : 1;
+        const bool repeat = placement.repeat_count > 0;
+        const int copies = repeat ? placement.repeat_count : 1;
         for (int k = 0; k < copies; ++k) {
             SceneCloth copy = c;
             copy.desc.name = repeat ? name + std::to_string(k) : name;
             const double steps = static_cast<double>(k);
-            copy.desc.transform.translation = repeat ? position + steps * repeat->offset : position;
-            copy.desc.transform.rotation =
-                rotation_from_euler_degrees(repeat ? rotation + steps * repeat->rotation_step : rotation);
+            copy.desc.transform.translation =
+                repeat ? placement.position + steps * placement.repeat_offset : placement.position;
+            copy.desc.transform.rotation = rotation_from_euler_degrees(
+                repeat ? placement.rotation_degrees + steps * placement.repeat_rotation_step : placement.rotation_degrees);
             if (!cloth_names.insert(copy.desc.name).second)
                 t.fail("name", t.find("name"),
                        "duplicate name '" + copy.desc.name +
@@ -371,38 +354,29 @@ void read_colliders(Table& root, SceneDesc& scene) {
         ColliderDesc c;
         ColliderMeshSource mesh;
         c.name = unique_name(t, "collider" + std::to_string(i), names);
-        const auto shape = t.choice("shape", {"plane", "sphere", "capsule", "box", "mesh"});
-        if (!shape)
-            t.fail_here("shape",
-                        "missing required key (expected one of \"plane\", \"sphere\", \"capsule\", \"box\", \"mesh\")");
-        constexpr ColliderShape shapes[] = {ColliderShape::Plane, ColliderShape::Sphere, ColliderShape::Capsule,
-                                            ColliderShape::Box, ColliderShape::Mesh};
-        c.shape = shapes[*shape];
-        const std::string shape_name = std::string(t.raw().get("shape")->as_string()->get());
-        const bool round = c.shape == ColliderShape::Sphere || c.shape == ColliderShape::Capsule;
-        if (round) c.radius = t.number("radius", c.radius, {1e-6, 1e6});
-        else t.reject("radius", "a " + shape_name + " collider has no radius (expected radius only for sphere and capsule)");
-        if (c.shape == ColliderShape::Capsule) c.half_height = t.number("half_height", c.half_height, {0.0, 1e6});
-        else t.reject("half_height", "a " + shape_name + " collider has no half_height (expected half_height only for capsule)");
-        if (c.shape == ColliderShape::Box) {
-            c.half_extents = t.vec3("half_extents", c.half_extents);
-            for (int k = 0; k < 3; ++k)
-                if (!(c.half_extents[k] >= 1e-6 && c.half_extents[k] <= 1e6))
-                    t.fail("half_extents", t.find("half_extents"),
-                           "component " + std::to_string(k) + " is " + scene_toml::format_number(c.half_extents[k]) +
-                               " (expected 3 numbers in [1e-6, 1e6], m)");
-        } else {
-            t.reject("half_extents", "a " + shape_name + " collider has no half_extents (expected half_extents only for box)");
+        const Parameter& shape_key = parameter("collider", "shape");
+        const auto shape = t.choice("shape", shape_key.choices);
+        if (!shape) t.fail_here("shape", "missing required key (expected one of " + parameter_range_text(shape_key) + ")");
+        c.shape = static_cast<ColliderShape>(*shape);  // the choices are listed in the order of ColliderShape
+        const std::string shape_name(shape_key.choices[*shape]);
+        // The keys of the shape: its sizes, a mesh's file and scale, and friction. A key of another
+        // shape is an error (a radius on a box) rather than ignored.
+        for (const Parameter& p : parameter_table()) {
+            if (p.section != "collider" || p.name == "name" || p.name == "shape" || p.name == "position" ||
+                p.name == "rotation" || p.name == "motion")
+                continue;
+            if (!p.applies_to(c.shape)) {
+                t.reject(p.name, "a " + shape_name + " collider has no " + std::string(p.name) + " (expected " +
+                                     std::string(p.name) + " only for " + shapes_having(p) + ")");
+            } else if (p.name == "file") {
+                // The triangles are read by build_world(), as a cloth's mesh file is; the file must exist now.
+                mesh.file = mesh_file(t, "file", scene.path);
+            } else if (holds<ColliderDesc>(p)) {
+                read_value(t, p, c);
+            } else if (holds<ColliderMeshSource>(p)) {
+                read_value(t, p, mesh);
+            }
         }
-        if (c.shape == ColliderShape::Mesh) {
-            // The triangles are read by build_world(), as a cloth's mesh file is; the file must exist now.
-            mesh.file = mesh_file(t, "file", scene.path);
-            mesh.scale = t.number("scale", mesh.scale, {0.0, 1e6, true});
-        } else {
-            t.reject("file", "a " + shape_name + " collider has no file (expected file only for shape = \"mesh\")");
-            t.reject("scale", "a " + shape_name + " collider has no scale (expected scale only for shape = \"mesh\")");
-        }
-        if (auto f = t.optional_number("friction", {0.0, 10.0})) c.friction = *f;
         const std::string motion = motion_reference(t, scene.motions);
         Vec3d rotation_degrees{};
         if (!motion.empty()) {
@@ -413,7 +387,7 @@ void read_colliders(Table& root, SceneDesc& scene) {
             for (const SceneMotion& m : scene.motions)
                 if (m.name == motion) c.motion = m.motion;
         } else {
-            c.motion.origin = t.vec3("position", {});
+            read_value(t, parameter("collider", "position"), c);
             rotation_degrees = t.vec3("rotation", {});
             c.motion.initial_rotation = rotation_from_euler_degrees(rotation_degrees);
         }
@@ -428,9 +402,7 @@ void read_colliders(Table& root, SceneDesc& scene) {
 void read_camera(Table& root, CameraDesc& camera) {
     auto t = root.table("camera");
     if (!t) return;
-    camera.position = t->vec3("position", camera.position);
-    camera.target = t->vec3("target", camera.target);
-    camera.fov_degrees = t->number("fov", camera.fov_degrees, {0.0, 180.0, true, true});
+    read_parameters(*t, "camera", camera);
     if (camera.position == camera.target)
         t->fail("target", t->find("target"), "target equals position (expected a point the camera looks at)");
     t->finish();
@@ -454,9 +426,7 @@ SceneDesc parse_scene(std::string_view toml_text, const std::filesystem::path& n
     scene.name = name.stem().string();
     Table root(document, "", file);
     read_scene_section(root, scene);
-    read_solver(root, scene.world.solver);
     read_world(root, scene.world);
-    read_collision(root, scene.world.collision);
     read_motions(root, scene);  // before cloths and colliders, which refer to motions by name
     read_cloths(root, scene);
     read_colliders(root, scene);

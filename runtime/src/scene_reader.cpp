@@ -102,10 +102,6 @@ std::string describe(const toml::node& node) {
     return "nothing";
 }
 
-std::string Range::text() const {
-    return std::string(lo_open ? "(" : "[") + format_number(lo) + ", " + format_number(hi) + (hi_open ? ")" : "]");
-}
-
 Table::Table(const toml::table& table, std::string path, std::string file)
     : table_(&table), path_(std::move(path)), file_(std::move(file)) {}
 
@@ -184,7 +180,7 @@ std::string Table::required_string(std::string_view key, std::string_view expect
     return *s;
 }
 
-std::optional<std::size_t> Table::choice(std::string_view key, std::initializer_list<std::string_view> choices) {
+std::optional<std::size_t> Table::choice(std::string_view key, std::span<const std::string_view> choices) {
     const toml::node* n = find(key);
     if (n == nullptr) return std::nullopt;
     std::vector<std::string> names(choices.begin(), choices.end());

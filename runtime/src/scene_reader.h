@@ -10,7 +10,6 @@
 #include <toml++/toml.h>
 
 #include <cstdint>
-#include <initializer_list>
 #include <optional>
 #include <span>
 #include <string>
@@ -18,6 +17,7 @@
 #include <utility>
 #include <vector>
 
+#include "weft/parameters.h"
 #include "weft/types.h"
 
 namespace weft::scene_toml {
@@ -39,17 +39,8 @@ inline constexpr std::string_view kOverridePrefix = "--set '";
 /// Short description of a node for "got …" in messages: `the string "four"`, `4.5`, `an array`.
 [[nodiscard]] std::string describe(const toml::node& node);
 
-/// A closed, open or half-open interval of valid values.
-struct Range {
-    double lo;
-    double hi;
-    bool lo_open = false;
-    bool hi_open = false;
-    [[nodiscard]] bool contains(double v) const {
-        return (lo_open ? v > lo : v >= lo) && (hi_open ? v < hi : v <= hi);
-    }
-    [[nodiscard]] std::string text() const;
-};
+/// A closed, open or half-open interval of valid values (the parameter table's).
+using Range = ParameterRange;
 
 /// One TOML table being validated. `path` is the table's key path as shown in messages
 /// ("cloth[0].material"); `file` is the scene's display name.
@@ -74,7 +65,7 @@ public:
     [[nodiscard]] std::optional<std::string> optional_string(std::string_view key);
     [[nodiscard]] std::string required_string(std::string_view key, std::string_view expected);
     /// A string that must be one of `choices`; returns its index.
-    [[nodiscard]] std::optional<std::size_t> choice(std::string_view key, std::initializer_list<std::string_view> choices);
+    [[nodiscard]] std::optional<std::size_t> choice(std::string_view key, std::span<const std::string_view> choices);
     /// An array of three finite numbers.
     [[nodiscard]] Vec3d vec3(std::string_view key, Vec3d fallback);
     [[nodiscard]] std::optional<Vec3d> optional_vec3(std::string_view key);

@@ -1,7 +1,7 @@
-// Scene → TOML text, the inverse of scene_loader.cpp (see scene.h). Every key is written, including
-// those at their defaults, so that a saved scene says everything it means and does not change if a
-// default does. Numbers use the shortest text that reads back to the same double (std::to_chars), so
-// load → save → load is exact.
+// Scene → TOML text, the inverse of scene_loader.cpp (see scene.h). Every key of the parameter table
+// (weft/parameters.h) is written, including those at their defaults, so that a saved scene says
+// everything it means and does not change if a default does. Numbers use the shortest text that reads
+// back to the same double (std::to_chars), so load → save → load is exact.
 #include <algorithm>
 #include <charconv>
 #include <fstream>
@@ -11,6 +11,7 @@
 
 #include "weft/backend/model.h"
 #include "weft/error.h"
+#include "weft/parameters.h"
 #include "weft/scene.h"
 
 namespace weft {
@@ -66,12 +67,56 @@ std::string mesh_path(const std::filesystem::path& file, const std::filesystem::
     return relative.generic_string();
 }
 
+// The value of parameter `p` in `owner` as the loader reads it back.
+template <class Owner>
+std::string value_text(const Parameter& p, const Owner& owner) {
+    switch (p.type) {
+        case ParameterType::Real: return number(parameter_number(p, owner));
+        case ParameterType::Integer: return std::to_string(std::llround(parameter_number(p, owner)));
+        case ParameterType::Boolean: return boolean(parameter_number(p, owner) != 0.0);
+        case ParameterType::Choice: {
+            const double index = parameter_number(p, owner);  // -1: a value the names do not list
+            if (!(index >= 0.0 && index < static_cast<double>(p.choices.size())))
+                throw Error("save scene: " + p.key() + " holds a value that has no name");
+            return toml_string(p.choices[static_cast<std::size_t>(index)]);
+        }
+        case ParameterType::Vector: return vec3(parameter_vector(p, owner));
+        case ParameterType::CellCounts: {
+            const Vec3d n = parameter_vector(p, owner);
+            std::string s("[");
+            s.append(std::to_string(std::llround(n.x))).append(", ").append(std::to_string(std::llround(n.y))).append("]");
+            return s;
+        }
+        default: throw Error("save scene: parameter '" + p.key() + "' has a field but no writer for its type");
+    }
+}
+
+// `key = value` for every parameter of `section` that one of `owners` holds, in the table's order
+// (the loader's), joined by `separator`. Keys without a field (names, meshes, pins) are the caller's.
+template <class... Owners>
+std::string fields(std::string_view section, std::string_view separator, const Owners&... owners) {
+    std::string out;
+    const auto write = [&](const Parameter& p, const auto& owner) {
+        if (p.unset_when_negative && parameter_number(p, owner) < 0.0) return;
+        if (!out.empty()) out.append(separator);
+        out.append(p.name).append(" = ").append(value_text(p, owner));
+    };
+    for (const Parameter& p : parameter_table())
+        if (p.section == section) (void)((holds<Owners>(p) ? (write(p, owners), true) : false) || ...);
+    return out;
+}
+
+// A `[section]` table's keys, one a line.
+template <class... Owners>
+std::string lines(std::string_view section, const Owners&... owners) {
+    std::string text = fields(section, "\n", owners...);
+    return text.empty() ? text : text + "\n";
+}
+
 bool same_material(const Material& a, const Material& b) {
-    return a.stretch_stiffness == b.stretch_stiffness && a.poisson_ratio == b.poisson_ratio &&
-           a.bending_stiffness == b.bending_stiffness && a.damping_mass == b.damping_mass &&
-           a.damping_stiffness == b.damping_stiffness && a.drag_coefficient == b.drag_coefficient &&
-           a.lift_coefficient == b.lift_coefficient && a.contact_thickness == b.contact_thickness &&
-           a.friction == b.friction;
+    for (const Parameter& p : parameter_table())
+        if (holds<Material>(p) && parameter_number(p, a) != parameter_number(p, b)) return false;
+    return true;
 }
 
 void write_pin(std::ostream& out, const PinSelection& pin) {
@@ -109,53 +154,39 @@ void write_cloth(std::ostream& out, const SceneDesc& scene, std::size_t entry, c
     const ClothSource& src = first->source;
     out << "\n[[cloth]]\nname = " << toml_string(p.name) << "\n";
     if (src.kind == ClothSource::Kind::Grid) {
-        out << "mesh = { grid = { width = " << number(src.width) << ", height = " << number(src.height) << ", cells = ["
-            << src.cells_x << ", " << src.cells_y << "], plane = " << (src.plane == GridPlane::XY ? "\"xy\"" : "\"xz\"")
-            << " } }\n";
+        out << "mesh = { grid = { " << fields("cloth.mesh.grid", ", ", src) << " } }\n";
     } else {
-        out << "mesh = { file = " << toml_string(mesh_path(src.file, directory)) << ", scale = " << number(src.scale) << " }\n";
+        out << "mesh = { file = " << toml_string(mesh_path(src.file, directory)) << ", " << fields("cloth.mesh", ", ", src)
+            << " }\n";
     }
-    out << "position = " << vec3(p.position) << "\n";
-    out << "rotation = " << vec3(p.rotation_degrees) << "\n";
-    out << "initial_velocity = " << vec3(first->desc.initial_velocity) << "\n";
-    out << "density = " << number(first->fabric.density) << "\n";
-    out << "flat_rest_bending = " << boolean(first->fabric.flat_rest_bending) << "\n";
-    if (p.repeat_count > 0)
-        out << "repeat = { count = " << p.repeat_count << ", offset = " << vec3(p.repeat_offset)
-            << ", rotation_step = " << vec3(p.repeat_rotation_step) << " }\n";
-    const Material& m = first->desc.material;
-    out << "\n[cloth.material]\n";
-    out << "stretch_stiffness = " << number(m.stretch_stiffness) << "\n";
-    out << "poisson_ratio = " << number(m.poisson_ratio) << "\n";
-    out << "bending_stiffness = " << number(m.bending_stiffness) << "\n";
-    out << "damping_mass = " << number(m.damping_mass) << "\n";
-    out << "damping_stiffness = " << number(m.damping_stiffness) << "\n";
-    out << "drag_coefficient = " << number(m.drag_coefficient) << "\n";
-    out << "lift_coefficient = " << number(m.lift_coefficient) << "\n";
-    out << "contact_thickness = " << number(m.contact_thickness) << "\n";
-    out << "friction = " << number(m.friction) << "\n";
+    out << lines("cloth", p, first->desc, first->fabric);  // position … flat_rest_bending
+    if (p.repeat_count > 0) out << "repeat = { " << fields("cloth.repeat", ", ", p) << " }\n";
+    out << "\n[cloth.material]\n" << lines("cloth.material", first->desc.material);
     for (const PinSelection& pin : first->pins) write_pin(out, pin);
 }
 
-constexpr const char* kShapeNames[] = {"plane", "sphere", "capsule", "box", "mesh"};
-
 void write_collider(std::ostream& out, const SceneDesc& scene, std::size_t k, const std::filesystem::path& directory) {
     const ColliderDesc& c = scene.colliders[k];
-    out << "\n[[collider]]\nname = " << toml_string(c.name) << "\nshape = \"" << kShapeNames[static_cast<int>(c.shape)]
-        << "\"\n";
-    if (c.shape == ColliderShape::Sphere || c.shape == ColliderShape::Capsule) out << "radius = " << number(c.radius) << "\n";
-    if (c.shape == ColliderShape::Capsule) out << "half_height = " << number(c.half_height) << "\n";
-    if (c.shape == ColliderShape::Box) out << "half_extents = " << vec3(c.half_extents) << "\n";
-    if (c.shape == ColliderShape::Mesh) {
-        const ColliderMeshSource& mesh = scene.collider_meshes[k];
-        out << "file = " << toml_string(mesh_path(mesh.file, directory)) << "\nscale = " << number(mesh.scale) << "\n";
+    const ColliderMeshSource& mesh = scene.collider_meshes[k];
+    const Parameter& shape = parameter("collider", "shape");
+    out << "\n[[collider]]\nname = " << toml_string(c.name)
+        << "\nshape = " << toml_string(shape.choices[static_cast<std::size_t>(c.shape)]) << "\n";
+    // The keys of its shape in the table's order; where it is, below, depends on whether it follows a motion.
+    for (const Parameter& p : parameter_table()) {
+        if (p.section != "collider" || !p.applies_to(c.shape) || p.name == "position") continue;
+        if (p.name == "file") {
+            out << "file = " << toml_string(mesh_path(mesh.file, directory)) << "\n";
+        } else if (holds<ColliderDesc>(p)) {
+            if (!(p.unset_when_negative && parameter_number(p, c) < 0.0)) out << p.name << " = " << value_text(p, c) << "\n";
+        } else if (holds<ColliderMeshSource>(p)) {
+            out << p.name << " = " << value_text(p, mesh) << "\n";
+        }
     }
-    if (c.friction >= 0.0) out << "friction = " << number(c.friction) << "\n";
     const std::string& motion = scene.collider_motions[k];
     if (!motion.empty()) {
         out << "motion = " << toml_string(motion) << "\n";
     } else {
-        out << "position = " << vec3(c.motion.origin) << "\n";
+        out << "position = " << value_text(parameter("collider", "position"), c) << "\n";
         out << "rotation = " << vec3(scene.collider_rotation_degrees[k]) << "\n";
     }
 }
@@ -171,42 +202,14 @@ std::string scene_to_toml(const SceneDesc& scene, const std::filesystem::path& d
             throw Error("save scene: cloth '" + c.desc.name + "' has no [[cloth]] placement (a SceneDesc not made by load_scene)");
     std::ostringstream out;
     out << "# Saved by weft (scene format: docs/scene-format.md).\n";
-    out << "\n[scene]\nname = " << toml_string(scene.name) << "\nframes = " << scene.frames << "\n";
-
-    const SolverSettings& s = scene.world.solver;
-    out << "\n[solver]\n";
-    out << "dt = " << number(s.dt) << "\nsubsteps = " << s.substeps << "\nnewton_iterations = " << s.newton_iterations
-        << "\ncg_tolerance = " << number(s.cg_tolerance) << "\ncg_max_iterations = " << s.cg_max_iterations
-        << "\ncg_warm_start = " << boolean(s.cg_warm_start)
-        << "\nprecision = " << (s.precision == Precision::Float ? "\"float\"" : "\"double\"")
-        << "\nhessian = " << (s.hessian == HessianMode::Fast ? "\"fast\"" : "\"projected\"")
-        << "\ncontact_stiffness = " << number(s.contact_stiffness) << "\nthreads = " << s.threads << "\n";
-
-    out << "\n[world]\ngravity = " << vec3(scene.world.gravity) << "\n";
-    const WindDesc& w = scene.world.wind;
-    out << "\n[wind]\nvelocity = " << vec3(w.velocity) << "\nair_density = " << number(w.air_density)
-        << "\nturbulence = " << number(w.turbulence) << "\nturbulence_frequency = " << number(w.turbulence_frequency)
-        << "\nturbulence_scale = " << number(w.turbulence_scale) << "\n";
-
-    const CollisionSettings& c = scene.world.collision;
-    out << "\n[collision]\nself = " << boolean(c.self_collision) << "\ncontinuous = " << boolean(c.continuous)
-        << "\nculling = " << (c.culling == CollisionCulling::NormalCone ? "\"normal_cone\"" : "\"none\"")
-        << "\ncull_contacts = " << boolean(c.cull_contacts) << "\ncount_culled = " << boolean(c.count_culled)
-        << "\nrest_exclusion = " << number(c.rest_exclusion) << "\nthickness = " << number(c.thickness)
-        << "\nstiffness = " << number(c.stiffness) << "\nmax_impact_iterations = " << c.max_impact_iterations
-        << "\nimpact_tolerance = " << number(c.impact_tolerance) << "\nmax_impact_sweeps = " << c.max_impact_sweeps
-        << "\ncheck = " << boolean(c.check) << "\n";
-
-    for (const SceneMotion& m : scene.motions) {
-        out << "\n[[motion]]\nname = " << toml_string(m.name) << "\norigin = " << vec3(m.motion.origin)
-            << "\nrotation = " << vec3(m.rotation_degrees) << "\nlinear_velocity = " << vec3(m.motion.linear_velocity)
-            << "\nangular_velocity = " << vec3(m.motion.angular_velocity) << "\namplitude = " << vec3(m.motion.amplitude)
-            << "\nfrequency = " << number(m.motion.frequency) << "\nphase = " << number(m.motion.phase) << "\n";
-    }
+    out << "\n[scene]\nname = " << toml_string(scene.name) << "\n" << lines("scene", scene);
+    for (const std::string_view section : {"solver", "world", "wind", "collision"})
+        out << "\n[" << section << "]\n" << lines(section, scene.world);
+    for (const SceneMotion& m : scene.motions)
+        out << "\n[[motion]]\nname = " << toml_string(m.name) << "\n" << lines("motion", m.motion, m);
     for (std::size_t entry = 0; entry < scene.cloth_placements.size(); ++entry) write_cloth(out, scene, entry, directory);
     for (std::size_t k = 0; k < scene.colliders.size(); ++k) write_collider(out, scene, k, directory);
-    out << "\n[camera]\nposition = " << vec3(scene.camera.position) << "\ntarget = " << vec3(scene.camera.target)
-        << "\nfov = " << number(scene.camera.fov_degrees) << "\n";
+    out << "\n[camera]\n" << lines("camera", scene.camera);
     return out.str();
 }
 
@@ -249,11 +252,13 @@ void update_scene_from_world(SceneDesc& scene, const World& world) {
         if (live.shape != saved.shape || live.name != saved.name)
             throw Error("update scene: collider " + std::to_string(k) + " is '" + live.name + "' in the world and '" +
                         saved.name + "' in the scene");
-        saved.radius = live.radius;
-        saved.half_height = live.half_height;
-        saved.half_extents = live.half_extents;
-        saved.friction = live.friction;
-        if (k >= scene.collider_motions.size() || scene.collider_motions[k].empty()) saved.motion.origin = live.motion.origin;
+        const bool follows = k < scene.collider_motions.size() && !scene.collider_motions[k].empty();
+        for (const Parameter& p : parameter_table()) {
+            if (!holds<ColliderDesc>(p) || p.effect != ParameterEffect::Live) continue;
+            if (p.name == "position" && follows) continue;  // the motion's frame, copied above
+            if (p.access.number != nullptr) set_parameter_number(p, saved, parameter_number(p, live));
+            if (p.access.vector != nullptr) set_parameter_vector(p, saved, parameter_vector(p, live));
+        }
     }
 
     // Pins: the scene's rules while they still say what the world pins, vertex lists once pins were

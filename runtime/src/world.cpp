@@ -12,6 +12,7 @@
 
 #include "cpu/energy.h"
 #include "weft/error.h"
+#include "weft/parameters.h"
 
 namespace weft {
 namespace {
@@ -22,44 +23,13 @@ void check_range(const std::string& where, const char* key, double value, double
                     std::to_string(hi) + "]");
 }
 
-void validate(const Material& m, const std::string& where) {
-    check_range(where, "stretch_stiffness", m.stretch_stiffness, 1.0, 1e8);
-    check_range(where, "poisson_ratio", m.poisson_ratio, 0.0, 0.49);
-    check_range(where, "bending_stiffness", m.bending_stiffness, 0.0, 1.0);
-    check_range(where, "damping_mass", m.damping_mass, 0.0, 100.0);
-    check_range(where, "damping_stiffness", m.damping_stiffness, 0.0, 1.0);
-    check_range(where, "drag_coefficient", m.drag_coefficient, 0.0, 10.0);
-    check_range(where, "lift_coefficient", m.lift_coefficient, 0.0, 10.0);
-    check_range(where, "contact_thickness", m.contact_thickness, 1e-5, 0.1);
-    check_range(where, "friction", m.friction, 0.0, 10.0);
-}
-
-void validate(const SolverSettings& s) {
-    check_range("solver", "dt", s.dt, 1e-5, 0.1);
-    check_range("solver", "substeps", s.substeps, 1, 1000);
-    check_range("solver", "newton_iterations", s.newton_iterations, 1, 50);
-    check_range("solver", "cg_tolerance", s.cg_tolerance, 1e-12, 1.0);
-    check_range("solver", "cg_max_iterations", s.cg_max_iterations, 1, 100000);
-    check_range("solver", "contact_stiffness", s.contact_stiffness, 0.0, 1e12);
-    check_range("solver", "threads", s.threads, 0, 1024);
-}
-
-// The ranges of settings.h, for worlds built through the API (the scene loader checks them by key).
-void validate(const CollisionSettings& c) {
-    check_range("collision", "thickness", c.thickness, 0.0, 0.1);
-    check_range("collision", "stiffness", c.stiffness, 0.0, 1e9);
-    check_range("collision", "rest_exclusion", c.rest_exclusion, 0.0, 10.0);
-    check_range("collision", "max_impact_iterations", c.max_impact_iterations, 1, 1000);
-    check_range("collision", "impact_tolerance", c.impact_tolerance, 0.0, 0.5);
-    check_range("collision", "max_impact_sweeps", c.max_impact_sweeps, 0, 100000);
-}
-
 }  // namespace
 
+// The ranges are the parameter table's (weft/parameters.h), the same the scene loader checks by key:
+// a world built through the API is held to what a scene file may say.
 World::World(const WorldDesc& desc, std::string_view backend, const BackendOptions& options)
     : model_(std::make_unique<Model>()) {
-    validate(desc.solver);
-    validate(desc.collision);
+    check_parameter_ranges(desc);
     model_->settings = desc;
     BackendOptions o = options;
     if (o.threads == 0) o.threads = desc.solver.threads;
@@ -69,6 +39,7 @@ World::World(const WorldDesc& desc, std::string_view backend, const BackendOptio
 World::~World() = default;
 
 int World::add_motion(const Motion& motion) {
+    check_parameter_ranges(motion, "motion " + std::to_string(model_->motions.size()));
     model_->motions.push_back(motion);
     ++model_->topology_version;
     return static_cast<int>(model_->motions.size()) - 1;
@@ -77,7 +48,7 @@ int World::add_motion(const Motion& motion) {
 std::size_t World::add_cloth(const ClothDesc& cloth) {
     const std::string where = "cloth '" + cloth.name + "'";
     if (!cloth.fabric) throw Error(where + ": no fabric");
-    validate(cloth.material, where + " material");
+    check_parameter_ranges(cloth.material, where + " material");
     for (const PinDesc& pin : cloth.pins) {
         if (pin.vertex >= cloth.fabric->vertex_count())
             throw Error(where + ": pinned vertex " + std::to_string(pin.vertex) + " is out of range (the fabric has " +
@@ -91,13 +62,7 @@ std::size_t World::add_cloth(const ClothDesc& cloth) {
 }
 
 std::size_t World::add_collider(const ColliderDesc& collider) {
-    const std::string where = "collider '" + collider.name + "'";
-    if (collider.shape == ColliderShape::Sphere || collider.shape == ColliderShape::Capsule)
-        check_range(where, "radius", collider.radius, 1e-6, 1e6);
-    if (collider.shape == ColliderShape::Capsule) check_range(where, "half_height", collider.half_height, 0.0, 1e6);
-    if (collider.shape == ColliderShape::Box)
-        for (int k = 0; k < 3; ++k) check_range(where, "half_extents", collider.half_extents[k], 1e-6, 1e6);
-    if (collider.friction > 10.0) check_range(where, "friction", collider.friction, 0.0, 10.0);
+    check_parameter_ranges(collider, "collider '" + collider.name + "'");
     model_->colliders.push_back(collider);
     ++model_->topology_version;
     return model_->colliders.size() - 1;
@@ -185,8 +150,7 @@ void World::release_grab() { model_->grab.reset(); }
 const std::optional<VertexGrab>& World::grab() const { return model_->grab; }
 
 const StepStats& World::step() {
-    validate(model_->settings.solver);
-    validate(model_->settings.collision);
+    check_parameter_ranges(model_->settings);
     ensure_built();
     const auto start = std::chrono::steady_clock::now();
     stats_ = StepStats{};

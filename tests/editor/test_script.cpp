@@ -14,6 +14,7 @@
 #include "weft/error.h"
 #include "weft/fabric.h"
 #include "weft/mesh.h"
+#include "weft/parameters.h"
 #include "weft/world.h"
 
 namespace weft::editor {
@@ -253,6 +254,37 @@ TEST(Parameters, EveryCollisionKnobIsEditable) {
     EXPECT_EQ(world.settings().collision.max_impact_sweeps, 64);
     ParameterTable::apply(*table.find("collision.check"), world, 1.0);
     EXPECT_TRUE(world.settings().collision.check);
+}
+
+// The editor's rows are the runtime's parameter table (weft/parameters.h): every live scene key of the
+// world's settings and of a material has a widget with the table's label, unit and range, and a
+// key that needs a rebuild (threads) has none.
+TEST(Parameters, TheRowsComeFromTheRuntimeTable) {
+    const std::unique_ptr<World> owned = small_world();
+    const ParameterTable table(*owned);
+    int live = 0;
+    for (const weft::Parameter& row : parameter_table()) {
+        if (!holds<WorldDesc>(row) && !holds<Material>(row)) continue;
+        const std::string key = holds<Material>(row) ? "cloth.sheet.material." + std::string(row.name) : row.key();
+        const bool vector = row.type == ParameterType::Vector;
+        const Parameter* p = table.find(vector ? key + ".x" : key);
+        if (row.effect != ParameterEffect::Live) {
+            EXPECT_EQ(p, nullptr) << key << " needs a rebuild: no live widget";
+            continue;
+        }
+        ++live;
+        ASSERT_NE(p, nullptr) << key;
+        EXPECT_EQ(p->panel, row.panel) << key;
+        EXPECT_EQ(p->unit, row.unit) << key;
+        EXPECT_EQ(p->hint, row.doc) << key;
+        EXPECT_EQ(p->label, vector ? std::string(row.label) + " x" : std::string(row.label)) << key;
+        if (row.type == ParameterType::Real || row.type == ParameterType::Integer) {
+            EXPECT_EQ(p->min, row.range.lo) << key;
+            EXPECT_EQ(p->max, row.range.hi) << key;
+        }
+    }
+    EXPECT_GT(live, 30);
+    EXPECT_EQ(table.find("solver.threads"), nullptr);
 }
 
 TEST(Script, SaveNeedsAPath) {

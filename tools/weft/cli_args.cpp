@@ -11,6 +11,8 @@
 
 #include "weft/error.h"
 
+#include "scene_keys_help.h"
+
 namespace weft::cli {
 
 std::string_view extension(MeshFormat format) { return format == MeshFormat::Obj ? ".obj" : ".ply"; }
@@ -18,6 +20,8 @@ std::string_view extension(MeshFormat format) { return format == MeshFormat::Obj
 namespace {
 
 constexpr std::string_view kCommands[] = {"run", "bench", "view", "edit", "info", "help"};
+/// What `weft help TOPIC` takes: a command, or the list of scene keys.
+constexpr std::string_view kHelpTopics[] = {"run", "bench", "view", "edit", "info", "help", kSceneKeysTopic};
 
 struct FlagSpec {
     std::string_view name;  ///< with the leading dashes
@@ -389,11 +393,16 @@ Invocation parse_command_line(std::span<const std::string_view> args) {
     if (first == "help") {
         if (rest.empty()) return help_for("");
         const std::string_view topic = rest.front();
-        if (std::find(std::begin(kCommands), std::end(kCommands), topic) == std::end(kCommands)) {
-            throw UsageError("", "no help for unknown command " + quoted(topic) + closest(topic, kCommands));
+        if (std::find(std::begin(kHelpTopics), std::end(kHelpTopics), topic) == std::end(kHelpTopics)) {
+            throw UsageError("", "no help for unknown command " + quoted(topic) + closest(topic, kHelpTopics));
         }
-        if (rest.size() > 1) throw UsageError("", "unexpected argument " + quoted(rest[1]) + " after 'help'");
-        return help_for(topic);
+        // `weft help scene-keys --markdown`: the tables of docs/scene-format.md.
+        const bool markdown = topic == kSceneKeysTopic && rest.size() == 2 && rest[1] == "--markdown";
+        if (rest.size() > 1 && !markdown)
+            throw UsageError("", "unexpected argument " + quoted(rest[1]) + " after 'help " + std::string(topic) + "'");
+        Invocation inv = help_for(topic);
+        inv.help_markdown = markdown;
+        return inv;
     }
     if (first == "run") return parse_run(rest);
     if (first == "bench") return parse_bench(rest);

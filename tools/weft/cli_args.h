@@ -99,7 +99,8 @@ struct EditOptions {
 struct Invocation {
     enum class Command : std::uint8_t { Help, Version, Run, Bench, Info, View, Edit };
     Command command = Command::Help;
-    std::string help_topic;  ///< Help: "" for the overview, or a subcommand name
+    std::string help_topic;  ///< Help: "" for the overview, a subcommand name, or "scene-keys"
+    bool help_markdown = false;  ///< Help on scene-keys: the Markdown tables of docs/scene-format.md
     RunOptions run;
     BenchOptions bench;
     ViewOptions view;

@@ -9,6 +9,7 @@
 #include "build_info.h"
 #include "cli_args.h"
 #include "commands.h"
+#include "scene_keys_help.h"
 #include "usage.h"
 
 #if WEFT_HAVE_ASSETS
@@ -24,7 +25,10 @@ int dispatch(const weft::cli::Invocation& inv) {
     using Command = weft::cli::Invocation::Command;
     switch (inv.command) {
         case Command::Help:
-            std::cout << weft::cli::usage_text(inv.help_topic);
+            if (inv.help_topic == weft::cli::kSceneKeysTopic)
+                std::cout << (inv.help_markdown ? weft::cli::scene_keys_markdown() : weft::cli::scene_keys_text());
+            else
+                std::cout << weft::cli::usage_text(inv.help_topic);
             return weft::cli::kExitOk;
         case Command::Version:
             std::cout << "weft " << weft::cli::build_info().version << '\n';

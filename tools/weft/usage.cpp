@@ -13,6 +13,7 @@ Usage:
   weft edit [SCENE] [options]     the ImGui editor: play a scene and tune it live (builds with the editor)
   weft info                       version, backends, devices and build options
   weft help [COMMAND]             this text, or a command's options
+  weft help scene-keys            every scene key with its unit, valid range, default and doc
   weft --version
 
 SCENE is a scene file (assets/scenes/*.toml) or the bare name of one, e.g. 'flag'.
@@ -151,8 +152,12 @@ options (CUDA, renderer, editor, mesh import).
 )";
 
 constexpr std::string_view kHelp = R"(Usage: weft help [COMMAND]
+       weft help scene-keys [--markdown]
 
 Prints the overview, or the options of COMMAND (run, bench, view, edit, info).
+'scene-keys' lists every key a scene file may hold (the keys --set and the editor's scripts
+take) with its type, unit, default, valid range, what a change takes and a line of doc;
+--markdown prints them as the tables of docs/scene-format.md.
 )";
 
 }  // namespace

@@ -25,9 +25,9 @@ struct MeshData {
     std::size_t welded_vertices = 0;
 };
 
-/// How cooking treats the rest shape.
+/// How cooking treats the rest shape (valid ranges: the parameter table, weft/parameters.h).
 struct FabricDesc {
-    double density = 0.2;            ///< areal density, kg/m². Valid range (0, 100].
+    double density = 0.2;            ///< areal density, kg/m².
     bool flat_rest_bending = false;  ///< true: rest dihedral angles are 0 (a flat sheet); false: from the rest mesh
 };
 

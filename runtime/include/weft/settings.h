@@ -1,6 +1,8 @@
 #pragma once
 /// @file
-/// World-wide settings: gravity, wind and the solver's speed/accuracy knobs.
+/// World-wide settings: gravity, wind and the solver's speed/accuracy knobs. The valid range of each
+/// field, its scene key and its editor label are in the parameter table (weft/parameters.h; `weft
+/// help scene-keys`); `World` refuses values outside it.
 
 #include <cstdint>
 
@@ -31,11 +33,11 @@ enum class HessianMode : std::uint8_t {
 
 /// Solver knobs. Every one trades speed against accuracy; docs/tuning.md measures them.
 struct SolverSettings {
-    double dt = 1.0 / 60.0;        ///< frame time step, s. Valid range [1e-5, 0.1].
-    int substeps = 1;              ///< implicit steps per frame. Valid range [1, 1000].
-    int newton_iterations = 1;     ///< linearisations per substep (1 = Baraff–Witkin). Valid range [1, 50].
-    double cg_tolerance = 1e-4;    ///< relative residual: stop when rᵀP⁻¹r ≤ ε²·δ₀. Valid range [1e-12, 1].
-    int cg_max_iterations = 500;   ///< CG cap per solve. Valid range [1, 100000].
+    double dt = 1.0 / 60.0;        ///< frame time step, s.
+    int substeps = 1;              ///< implicit steps per frame.
+    int newton_iterations = 1;     ///< linearisations per substep (1 = Baraff–Witkin).
+    double cg_tolerance = 1e-4;    ///< relative residual: stop when rᵀP⁻¹r ≤ ε²·δ₀.
+    int cg_max_iterations = 500;   ///< CG cap per solve.
     /// Start each substep's first CG solve from the previous substep's velocity change instead of
     /// zero. Accelerations change smoothly from one substep to the next, so CG starts closer to the
     /// answer and stops sooner at the same tolerance (docs/results.md measures by how much).
@@ -74,29 +76,27 @@ struct CollisionSettings {
     /// in the cloth's rest shape (its initial placement) get no spring: they are neighbours in the
     /// fabric, not surfaces touching, and a spring would push them apart against the membrane (on
     /// a sheet whose edges are shorter than the thickness, every vertex would have several). CCD and
-    /// the impact zones still test them. 0 keeps every pair. Valid range [0, 10].
+    /// the impact zones still test them. 0 keeps every pair.
     double rest_exclusion = 1.0;
     /// Also count the pairs culling removed (`CollisionStats::culled_pairs`), which costs a box test
     /// per culled pair (about 4× the culled broad phase on a twisted sheet): for benchmarks.
     bool count_culled = false;
     /// Gap kept between cloth surfaces, m. 0: the larger of the two cloths' material contact_thickness.
-    /// Valid range [0, 0.1].
     double thickness = 0.0;
     /// Stiffness of the proximity springs, N/m. 0: 100·m/h² from the pair's effective mass m and the
-    /// substep h (the rule the analytic colliders use). Valid range [0, 1e9].
+    /// substep h (the rule the analytic colliders use).
     double stiffness = 0.0;
-    /// Impact-zone rounds per substep before the rigid-zone fallback takes over. Valid range [1, 1000].
+    /// Impact-zone rounds per substep before the rigid-zone fallback takes over.
     int max_impact_iterations = 32;
     /// Convergence tolerance of one impact zone's projection, as a fraction of the thickness: the
     /// zone's constraints end violated by at most this (the gap restored is ≥ (1 − it)·thickness,
     /// far above the CCD separation of 0.1·thickness either way). Larger is faster. 0: the backend's
     /// default (cpu 0.01, the reference; cuda 0.1, measured on the 200K twist in docs/results.md).
-    /// Valid range [0, 0.5].
     double impact_tolerance = 0.0;
     /// Cap on the iterations of one zone's projection in one round (cpu: Gauss–Seidel sweeps; cuda:
     /// parallel projected-gradient steps); an unconverged zone is detected again next round. Smaller
     /// is faster per round but may need more rounds or the fallbacks. 0: the backend's default (cpu
-    /// 1000, cuda 200). Valid range [0, 100000].
+    /// 1000, cuda 200).
     int max_impact_sweeps = 0;
     /// Run the exact triangle–triangle intersection check after every step and report the count in
     /// `StepStats::collision.remaining_intersections` (also `weft run --check`). Costly: for tests.

@@ -1,7 +1,8 @@
 #pragma once
 /// @file
 /// The editor's live parameters: every knob a panel shows, with its key, unit and valid range
-/// (docs/scene-format.md), and how it is read from and written to a `World`. The panels draw their
+/// (one row per live key of the runtime's parameter table, weft/parameters.h, a vector's by
+/// component), and how it is read from and written to a `World`. The panels draw their
 /// widgets from this table, and a script's `set KEY VALUE` goes through the same table: it leaves a
 /// pending value that the panel code picks up on its next frame and applies with the same setter a
 /// widget uses (`ParameterTable::take_pending`), so the script exercises the UI's code path.
@@ -32,9 +33,9 @@ struct Parameter {
     std::string group;  ///< a heading inside the panel ("" for none): "cloth flag", "motion spin", "collider pole (capsule)"
     std::string label;  ///< the widget's label
     std::string unit;   ///< SI unit, "" when dimensionless
-    std::string hint;   ///< shown in the tooltip: what a special value means ("0: automatic")
+    std::string hint;   ///< shown in the tooltip: the parameter's doc (what a special value means, "0: automatic")
     ParameterKind kind = ParameterKind::real;
-    double min = 0.0, max = 1.0;  ///< valid range, inclusive (docs/scene-format.md)
+    double min = 0.0, max = 1.0;  ///< valid range, inclusive (the slider's, where the table gives one)
     bool log_scale = false;       ///< slider in log space (ranges over many decades)
     std::vector<std::string> choices;
     std::function<double(const World&)> get;

@@ -1,0 +1,583 @@
+// The parameter table (weft/parameters.h): every scene key, once. A row names the key, its type,
+// unit, valid range and doc, the editor's label, what a change takes, and the field that holds it;
+// the default is that field's value in the default-constructed struct (settings.h, material.h,
+// fabric.h, collider.h, motion.h, scene.h), so it is written nowhere here.
+#include "weft/parameters.h"
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <type_traits>
+#include <utility>
+
+#include "scene_reader.h"
+#include "weft/collider.h"
+#include "weft/mesh.h"
+#include "weft/scene.h"
+#include "weft/settings.h"
+
+namespace weft {
+namespace {
+
+// ---- field access: member pointers turned into the table's plain function pointers
+
+template <auto M>
+struct MemberOf;
+template <class C, class T, T C::*M>
+struct MemberOf<M> {
+    using Owner = C;
+    using Type = T;
+};
+
+// owner.*First.*Rest…: a field, possibly inside a nested struct (WorldDesc::solver then SolverSettings::dt).
+template <auto First, auto... Rest>
+auto& reach(typename MemberOf<First>::Owner& owner) {
+    if constexpr (sizeof...(Rest) == 0)
+        return owner.*First;
+    else
+        return reach<Rest...>(owner.*First);
+}
+template <auto First, auto... Rest>
+const auto& reach(const typename MemberOf<First>::Owner& owner) {
+    if constexpr (sizeof...(Rest) == 0)
+        return owner.*First;
+    else
+        return reach<Rest...>(owner.*First);
+}
+
+// A double, int, bool or Vec3d field.
+template <auto First, auto... Rest>
+constexpr ParameterAccess field() {
+    using Owner = typename MemberOf<First>::Owner;
+    using Field = std::remove_cvref_t<decltype(reach<First, Rest...>(std::declval<Owner&>()))>;
+    ParameterAccess a;
+    a.owner = owner_of<Owner>;
+    if constexpr (std::is_same_v<Field, Vec3d>) {
+        a.vector = [](const void* o) -> Vec3d { return reach<First, Rest...>(*static_cast<const Owner*>(o)); };
+        a.set_vector = [](void* o, const Vec3d& v) { reach<First, Rest...>(*static_cast<Owner*>(o)) = v; };
+    } else {
+        static_assert(std::is_arithmetic_v<Field>, "a parameter field is a number, a boolean or a Vec3d");
+        a.integral = !std::is_floating_point_v<Field>;
+        a.number = [](const void* o) -> double {
+            return static_cast<double>(reach<First, Rest...>(*static_cast<const Owner*>(o)));
+        };
+        a.set_number = [](void* o, double v) {
+            Field& f = reach<First, Rest...>(*static_cast<Owner*>(o));
+            if constexpr (std::is_same_v<Field, bool>)
+                f = v != 0.0;
+            else if constexpr (std::is_integral_v<Field>)
+                f = static_cast<Field>(std::lround(v));
+            else
+                f = static_cast<Field>(v);
+        };
+    }
+    return a;
+}
+
+// An enumeration field whose names are listed in the order of `Values` (the row's `choices`).
+template <auto Values, auto First, auto... Rest>
+constexpr ParameterAccess choice_field() {
+    using Owner = typename MemberOf<First>::Owner;
+    ParameterAccess a;
+    a.owner = owner_of<Owner>;
+    a.integral = true;
+    a.number = [](const void* o) -> double {
+        const auto current = reach<First, Rest...>(*static_cast<const Owner*>(o));
+        for (std::size_t i = 0; i < Values.size(); ++i)
+            if (Values[i] == current) return static_cast<double>(i);
+        return -1.0;
+    };
+    a.set_number = [](void* o, double v) {
+        const auto i = static_cast<std::size_t>(std::clamp<long>(std::lround(v), 0, static_cast<long>(Values.size()) - 1));
+        reach<First, Rest...>(*static_cast<Owner*>(o)) = Values[i];
+    };
+    return a;
+}
+
+// A grid's cells_x and cells_y as one [nx, ny] key.
+constexpr ParameterAccess grid_cells() {
+    ParameterAccess a;
+    a.owner = ParameterOwner::ClothSource;
+    a.integral = true;
+    a.vector = [](const void* o) -> Vec3d {
+        const auto& s = *static_cast<const ClothSource*>(o);
+        return {static_cast<double>(s.cells_x), static_cast<double>(s.cells_y), 0.0};
+    };
+    a.set_vector = [](void* o, const Vec3d& v) {
+        auto& s = *static_cast<ClothSource*>(o);
+        s.cells_x = static_cast<int>(std::lround(v.x));
+        s.cells_y = static_cast<int>(std::lround(v.y));
+    };
+    return a;
+}
+
+// ---- the names of choices, in the order of the values they stand for
+
+constexpr std::string_view kPrecisionNames[] = {"float", "double"};
+constexpr std::array kPrecisions{Precision::Float, Precision::Double};
+constexpr std::string_view kHessianNames[] = {"fast", "projected"};
+constexpr std::array kHessians{HessianMode::Fast, HessianMode::Projected};
+constexpr std::string_view kCullingNames[] = {"normal_cone", "none"};
+constexpr std::array kCullings{CollisionCulling::NormalCone, CollisionCulling::None};
+constexpr std::string_view kPlaneNames[] = {"xy", "xz"};
+constexpr std::array kPlanes{GridPlane::XY, GridPlane::XZ};
+constexpr std::string_view kEdgeNames[] = {"top", "bottom", "left", "right"};
+constexpr std::string_view kCornerNames[] = {"top", "bottom", "left", "right", "all"};
+// In the order of ColliderShape's values.
+constexpr std::string_view kShapeNames[] = {"plane", "sphere", "capsule", "box", "mesh"};
+
+constexpr std::uint8_t kRound = shape_bit(ColliderShape::Sphere) | shape_bit(ColliderShape::Capsule);
+constexpr std::uint8_t kCapsule = shape_bit(ColliderShape::Capsule);
+constexpr std::uint8_t kBox = shape_bit(ColliderShape::Box);
+constexpr std::uint8_t kMesh = shape_bit(ColliderShape::Mesh);
+
+constexpr double kHuge = 1e9;  // bound on a phase: finite, and far beyond any real scene
+
+using T = ParameterType;
+using E = ParameterEffect;
+using R = ParameterRange;
+
+// clang-format off
+constexpr Parameter kTable[] = {
+    // ---- [scene]
+    {.section = "scene", .name = "name", .type = T::String, .doc = "shown in stats and the editor", .effect = E::Rebuild,
+     .constraint = "non-empty", .default_text = "file name without extension"},
+    {.section = "scene", .name = "frames", .type = T::Integer, .unit = "frames", .range = R{1, 10'000'000},
+     .doc = "frames `weft run` simulates unless `--frames` says otherwise", .effect = E::Rebuild,
+     .access = field<&SceneDesc::frames>()},
+
+    // ---- [solver]: the knobs that trade speed for accuracy
+    {.section = "solver", .name = "dt", .type = T::Real, .unit = "s", .range = R{1e-5, 0.1}, .doc = "frame time step",
+     .label = "time step", .panel = "solver", .log_scale = true, .access = field<&WorldDesc::solver, &SolverSettings::dt>()},
+    {.section = "solver", .name = "substeps", .type = T::Integer, .range = R{1, 1000},
+     .doc = "implicit steps per frame (each of `dt/substeps`)", .label = "substeps", .panel = "solver", .log_scale = true,
+     .access = field<&WorldDesc::solver, &SolverSettings::substeps>()},
+    {.section = "solver", .name = "newton_iterations", .type = T::Integer, .range = R{1, 50},
+     .doc = "linearisations per substep (1 = Baraff–Witkin)", .label = "Newton iterations", .panel = "solver",
+     .access = field<&WorldDesc::solver, &SolverSettings::newton_iterations>()},
+    {.section = "solver", .name = "cg_tolerance", .type = T::Real, .range = R{1e-12, 1.0},
+     .doc = "relative residual at which CG stops", .label = "CG tolerance", .panel = "solver", .log_scale = true,
+     .access = field<&WorldDesc::solver, &SolverSettings::cg_tolerance>()},
+    {.section = "solver", .name = "cg_max_iterations", .type = T::Integer, .range = R{1, 100000},
+     .doc = "CG iteration cap per solve", .label = "CG iteration cap", .panel = "solver", .log_scale = true,
+     .access = field<&WorldDesc::solver, &SolverSettings::cg_max_iterations>()},
+    {.section = "solver", .name = "cg_warm_start", .type = T::Boolean,
+     .doc = "start CG from the previous substep's velocity change (fewer iterations at the same tolerance) instead of zero",
+     .label = "CG warm start", .panel = "solver", .access = field<&WorldDesc::solver, &SolverSettings::cg_warm_start>()},
+    {.section = "solver", .name = "precision", .type = T::Choice, .doc = "CPU backend scalar; double is the reference",
+     .label = "precision", .panel = "solver", .choices = kPrecisionNames,
+     .access = choice_field<kPrecisions, &WorldDesc::solver, &SolverSettings::precision>()},
+    {.section = "solver", .name = "hessian", .type = T::Choice,
+     .doc = "`fast`: cheap PSD approximation; `projected`: exact element Hessians clamped to PSD", .label = "Hessian",
+     .panel = "solver", .choices = kHessianNames,
+     .access = choice_field<kHessians, &WorldDesc::solver, &SolverSettings::hessian>()},
+    {.section = "solver", .name = "contact_stiffness", .type = T::Real, .unit = "N/m", .range = R{0.0, 1e12},
+     .doc = "per-vertex collider contact stiffness; 0 picks one from the mass and `dt`", .label = "collider stiffness",
+     .panel = "solver", .log_scale = true, .access = field<&WorldDesc::solver, &SolverSettings::contact_stiffness>()},
+    {.section = "solver", .name = "threads", .type = T::Integer, .range = R{0, 1024},
+     .doc = "CPU worker threads, 0 = all cores (results do not depend on it); `--threads` and "
+            "`BackendOptions::threads` take precedence when non-zero",
+     .effect = E::Rebuild, .access = field<&WorldDesc::solver, &SolverSettings::threads>()},
+
+    // ---- [world]
+    {.section = "world", .name = "gravity", .type = T::Vector, .unit = "m/s²", .range = R{0.0, 1000.0},
+     .doc = "gravitational acceleration", .label = "gravity", .panel = "world", .vector_bound = VectorBound::Length,
+     .access = field<&WorldDesc::gravity>()},
+
+    // ---- [wind]
+    {.section = "wind", .name = "velocity", .type = T::Vector, .unit = "m/s", .range = R{0.0, 1000.0},
+     .doc = "mean wind", .label = "wind", .panel = "world", .vector_bound = VectorBound::Length,
+     .access = field<&WorldDesc::wind, &WindDesc::velocity>()},
+    {.section = "wind", .name = "air_density", .type = T::Real, .unit = "kg/m³", .range = R{0.0, 100.0},
+     .doc = "density of the air the drag and lift act through", .label = "air density", .panel = "world",
+     .access = field<&WorldDesc::wind, &WindDesc::air_density>()},
+    {.section = "wind", .name = "turbulence", .type = T::Real, .unit = "m/s", .range = R{0.0, 1000.0},
+     .doc = "amplitude of the gust field added to the mean", .label = "turbulence", .panel = "world",
+     .access = field<&WorldDesc::wind, &WindDesc::turbulence>()},
+    {.section = "wind", .name = "turbulence_frequency", .type = T::Real, .unit = "Hz", .range = R{0.0, 1000.0},
+     .doc = "how fast gusts change", .label = "gust frequency", .panel = "world",
+     .access = field<&WorldDesc::wind, &WindDesc::turbulence_frequency>()},
+    {.section = "wind", .name = "turbulence_scale", .type = T::Real, .unit = "m", .range = R{1e-3, 1e6},
+     .doc = "spatial size of a gust", .label = "gust size", .panel = "world", .log_scale = true,
+     .access = field<&WorldDesc::wind, &WindDesc::turbulence_scale>()},
+
+    // ---- [collision]: the collision pipeline beyond the analytic colliders (docs/collisions.md)
+    {.section = "collision", .name = "self", .type = T::Boolean,
+     .doc = "self-contact: each cloth against itself and against the other cloths", .label = "self-collision",
+     .panel = "collision", .access = field<&WorldDesc::collision, &CollisionSettings::self_collision>()},
+    {.section = "collision", .name = "continuous", .type = T::Boolean,
+     .doc = "after the solve, continuous collision detection and impact zones leave every substep free of "
+            "intersections; false: proximity forces only (faster; fast or thin motion may pass through)",
+     .label = "continuous", .panel = "collision",
+     .access = field<&WorldDesc::collision, &CollisionSettings::continuous>()},
+    {.section = "collision", .name = "culling", .type = T::Choice,
+     .doc = "`normal_cone`: pairs inside one self-collision-free patch are never generated (PSCC); `none`: every pair "
+            "whose bounds overlap is tested. A speed knob: the result is the same",
+     .label = "culling", .panel = "collision", .choices = kCullingNames,
+     .access = choice_field<kCullings, &WorldDesc::collision, &CollisionSettings::culling>()},
+    {.section = "collision", .name = "cull_contacts", .type = T::Boolean,
+     .doc = "also cull the proximity contacts' candidates (over the predicted motion), not only the CCD detections: "
+            "faster, but a patch that folds during the solve then has no springs inside it and the impact zones take "
+            "every crossing (`falling` at 48²: 30× more CCD hits)",
+     .label = "cull contacts", .panel = "collision",
+     .access = field<&WorldDesc::collision, &CollisionSettings::cull_contacts>()},
+    {.section = "collision", .name = "count_culled", .type = T::Boolean,
+     .doc = "also count the pairs normal-cone culling removed (the summary's and stats' `culled_pairs`; a box test per "
+            "culled pair, "
+            "for benchmarks; cpu backend only)",
+     .label = "count culled pairs", .panel = "collision",
+     .access = field<&WorldDesc::collision, &CollisionSettings::count_culled>()},
+    {.section = "collision", .name = "rest_exclusion", .type = T::Real, .unit = "thicknesses", .range = R{0.0, 10.0},
+     .doc = "pairs of primitives of one cloth closer than this many contact thicknesses in the rest shape get no "
+            "proximity spring (fabric neighbours, not surfaces touching); CCD and the impact zones still test them. "
+            "0 keeps every pair",
+     .label = "rest exclusion", .panel = "collision",
+     .access = field<&WorldDesc::collision, &CollisionSettings::rest_exclusion>()},
+    {.section = "collision", .name = "thickness", .type = T::Real, .unit = "m", .range = R{0.0, 0.1},
+     .doc = "gap kept between cloth surfaces; 0: the larger of the two cloths' material `contact_thickness`",
+     .label = "thickness", .panel = "collision", .access = field<&WorldDesc::collision, &CollisionSettings::thickness>()},
+    {.section = "collision", .name = "stiffness", .type = T::Real, .unit = "N/m", .range = R{0.0, 1e9},
+     .doc = "stiffness of the proximity springs; 0: 100·m/h² from the pair's effective mass m and the substep h",
+     .label = "stiffness", .panel = "collision", .log_scale = true,
+     .access = field<&WorldDesc::collision, &CollisionSettings::stiffness>()},
+    {.section = "collision", .name = "max_impact_iterations", .type = T::Integer, .range = R{1, 1000},
+     .doc = "impact-zone rounds per substep before the rigid-zone fallback", .label = "impact-zone rounds",
+     .panel = "collision", .log_scale = true,
+     .access = field<&WorldDesc::collision, &CollisionSettings::max_impact_iterations>()},
+    {.section = "collision", .name = "impact_tolerance", .type = T::Real, .unit = "thicknesses", .range = R{0.0, 0.5},
+     .doc = "convergence tolerance of a zone's projection as a fraction of the thickness (larger: faster, gaps "
+            "restored to ≥ (1 − it)·thickness); 0: the backend's default (cpu 0.01, cuda 0.1)",
+     .label = "impact tolerance", .panel = "collision",
+     .access = field<&WorldDesc::collision, &CollisionSettings::impact_tolerance>()},
+    {.section = "collision", .name = "max_impact_sweeps", .type = T::Integer, .range = R{0, 100000},
+     .doc = "cap on one zone's projection iterations per round (smaller: faster rounds, maybe more rounds or "
+            "fallbacks); 0: the backend's default (cpu 1000, cuda 200)",
+     .label = "impact sweeps", .panel = "collision", .log_scale = true,
+     .access = field<&WorldDesc::collision, &CollisionSettings::max_impact_sweeps>()},
+    {.section = "collision", .name = "check", .type = T::Boolean,
+     .doc = "run the exact triangle–triangle intersection check after every step and report the count in the stats "
+            "(costly: for tests; also `weft run --check`)",
+     .label = "exact check", .panel = "collision", .access = field<&WorldDesc::collision, &CollisionSettings::check>()},
+
+    // ---- [[motion]]: named rigid motions that pins and colliders follow
+    {.section = "motion", .name = "name", .type = T::String, .doc = "how pins and colliders refer to it",
+     .effect = E::Rebuild, .constraint = "non-empty, unique", .default_text = "**required**"},
+    {.section = "motion", .name = "origin", .type = T::Vector, .unit = "m", .doc = "frame origin at t = 0",
+     .label = "origin", .panel = "motions", .slider = R{-1e4, 1e4}, .access = field<&Motion::origin>()},
+    {.section = "motion", .name = "rotation", .type = T::Vector, .unit = "degrees",
+     .doc = "initial orientation, Euler angles (see *Rotations*)", .effect = E::Rebuild,
+     .access = field<&SceneMotion::rotation_degrees>()},
+    {.section = "motion", .name = "linear_velocity", .type = T::Vector, .unit = "m/s", .doc = "constant drift",
+     .label = "velocity", .panel = "motions", .slider = R{-1e3, 1e3}, .access = field<&Motion::linear_velocity>()},
+    {.section = "motion", .name = "angular_velocity", .type = T::Vector, .unit = "rad/s",
+     .doc = "axis × rate, world frame, about the moving origin", .label = "angular velocity", .panel = "motions",
+     .slider = R{-1e3, 1e3}, .access = field<&Motion::angular_velocity>()},
+    {.section = "motion", .name = "amplitude", .type = T::Vector, .unit = "m", .doc = "sinusoidal oscillation per axis",
+     .label = "amplitude", .panel = "motions", .slider = R{-1e3, 1e3}, .access = field<&Motion::amplitude>()},
+    {.section = "motion", .name = "frequency", .type = T::Real, .unit = "Hz", .range = R{0.0, 1000.0},
+     .doc = "oscillation frequency", .label = "frequency", .panel = "motions", .access = field<&Motion::frequency>()},
+    {.section = "motion", .name = "phase", .type = T::Real, .unit = "rad", .range = R{-kHuge, kHuge},
+     .doc = "oscillation phase", .label = "phase", .panel = "motions", .slider = R{-1e3, 1e3},
+     .access = field<&Motion::phase>()},
+
+    // ---- [[cloth]]
+    {.section = "cloth", .name = "name", .type = T::String, .doc = "used by `--set cloth.NAME…` and in messages",
+     .effect = E::Rebuild, .constraint = "non-empty, unique", .default_text = "\"cloth0\", \"cloth1\", …"},
+    {.section = "cloth", .name = "mesh", .type = T::Table, .doc = "where the rest shape comes from", .effect = E::Recook,
+     .constraint = "see below", .default_text = "**required**"},
+    {.section = "cloth", .name = "position", .type = T::Vector, .unit = "m",
+     .doc = "translation of the rest shape into the world", .effect = E::Rebuild,
+     .access = field<&ClothPlacement::position>()},
+    {.section = "cloth", .name = "rotation", .type = T::Vector, .unit = "degrees",
+     .doc = "orientation of the rest shape (see *Rotations*)", .effect = E::Rebuild,
+     .access = field<&ClothPlacement::rotation_degrees>()},
+    {.section = "cloth", .name = "initial_velocity", .type = T::Vector, .unit = "m/s", .doc = "of every vertex at t = 0",
+     .effect = E::Rebuild, .access = field<&ClothDesc::initial_velocity>()},
+    {.section = "cloth", .name = "density", .type = T::Real, .unit = "kg/m²", .range = R{0.0, 100.0, true},
+     .doc = "areal density: the vertex masses", .label = "density", .effect = E::Recook,
+     .access = field<&FabricDesc::density>()},
+    {.section = "cloth", .name = "flat_rest_bending", .type = T::Boolean,
+     .doc = "true: the rest dihedral angles are 0 (a flat sheet); false: taken from the rest mesh (a garment keeps "
+            "its shape)",
+     .label = "flat rest bending", .effect = E::Recook, .access = field<&FabricDesc::flat_rest_bending>()},
+    {.section = "cloth", .name = "material", .type = T::Table, .doc = "`[cloth.material]`: the physical constants",
+     .default_text = "see below"},
+    {.section = "cloth", .name = "pin", .type = T::TableArray, .doc = "`[[cloth.pin]]`: pinned vertices",
+     .effect = E::Rebuild, .default_text = "none"},
+    {.section = "cloth", .name = "repeat", .type = T::Table, .doc = "several copies of this cloth (stacks of sheets)",
+     .effect = E::Rebuild, .constraint = "see below", .default_text = "none"},
+
+    // ---- [[cloth]] repeat = { … }
+    {.section = "cloth.repeat", .name = "count", .type = T::Integer, .range = R{1, 10000},
+     .doc = "number of copies (1: a single cloth named `NAME0`)", .effect = E::Rebuild, .default_text = "**required**",
+     .access = field<&ClothPlacement::repeat_count>()},
+    {.section = "cloth.repeat", .name = "offset", .type = T::Vector, .unit = "m", .doc = "translation added per copy",
+     .effect = E::Rebuild, .access = field<&ClothPlacement::repeat_offset>()},
+    {.section = "cloth.repeat", .name = "rotation_step", .type = T::Vector, .unit = "degrees",
+     .doc = "added to `rotation` per copy (see *Rotations*)", .effect = E::Rebuild,
+     .access = field<&ClothPlacement::repeat_rotation_step>()},
+
+    // ---- [[cloth]] mesh = { … }: exactly one of grid and file
+    {.section = "cloth.mesh", .name = "grid", .type = T::Table, .doc = "a procedural rectangle (below)",
+     .effect = E::Recook, .constraint = "see below", .default_text = "none"},
+    {.section = "cloth.mesh", .name = "file", .type = T::String, .doc = "a mesh file, path relative to the scene file",
+     .effect = E::Recook, .constraint = "an existing file", .default_text = "none"},
+    {.section = "cloth.mesh", .name = "scale", .type = T::Real, .range = R{0.0, 1e6, true},
+     .doc = "multiplies the file's coordinates (e.g. 0.01 for centimetres); mesh files only", .label = "scale",
+     .effect = E::Recook, .access = field<&ClothSource::scale>()},
+
+    // ---- [[cloth]] mesh = { grid = { … } }
+    {.section = "cloth.mesh.grid", .name = "width", .type = T::Real, .unit = "m", .range = R{0.0, 1000.0, true},
+     .doc = "extent along x", .effect = E::Recook, .access = field<&ClothSource::width>()},
+    {.section = "cloth.mesh.grid", .name = "height", .type = T::Real, .unit = "m", .range = R{0.0, 1000.0, true},
+     .doc = "extent along y (`\"xy\"`) or z (`\"xz\"`)", .effect = E::Recook, .access = field<&ClothSource::height>()},
+    {.section = "cloth.mesh.grid", .name = "cells", .type = T::CellCounts, .range = R{1, 4096},
+     .doc = "resolution; (nx+1)·(ny+1) vertices", .label = "cells", .effect = E::Recook, .access = grid_cells()},
+    {.section = "cloth.mesh.grid", .name = "plane", .type = T::Choice,
+     .doc = "`xy`: vertical sheet facing +z (flag, curtain); `xz`: horizontal sheet facing +y (table cloth)",
+     .effect = E::Recook, .choices = kPlaneNames, .access = choice_field<kPlanes, &ClothSource::plane>()},
+
+    // ---- [cloth.material]: every field of weft::Material
+    {.section = "cloth.material", .name = "stretch_stiffness", .type = T::Real, .unit = "N/m", .range = R{1.0, 1e8},
+     .doc = "Young's modulus × thickness", .label = "stretch stiffness", .panel = "materials", .log_scale = true,
+     .access = field<&Material::stretch_stiffness>()},
+    {.section = "cloth.material", .name = "poisson_ratio", .type = T::Real, .range = R{0.0, 0.49},
+     .doc = "lateral contraction under stretch", .label = "Poisson ratio", .panel = "materials",
+     .access = field<&Material::poisson_ratio>()},
+    {.section = "cloth.material", .name = "bending_stiffness", .type = T::Real, .unit = "N·m", .range = R{0.0, 1.0},
+     .doc = "of the dihedral hinges", .label = "bending stiffness", .panel = "materials", .log_scale = true,
+     .access = field<&Material::bending_stiffness>()},
+    {.section = "cloth.material", .name = "damping_mass", .type = T::Real, .unit = "1/s", .range = R{0.0, 100.0},
+     .doc = "Rayleigh α: f = −α·M·v", .label = "damping (mass)", .panel = "materials",
+     .access = field<&Material::damping_mass>()},
+    {.section = "cloth.material", .name = "damping_stiffness", .type = T::Real, .unit = "s", .range = R{0.0, 1.0},
+     .doc = "Rayleigh β: f = −β·K·v", .label = "damping (stiffness)", .panel = "materials", .log_scale = true,
+     .access = field<&Material::damping_stiffness>()},
+    {.section = "cloth.material", .name = "drag_coefficient", .type = T::Real, .range = R{0.0, 10.0},
+     .doc = "aerodynamic drag normal to the surface", .label = "drag coefficient", .panel = "materials",
+     .access = field<&Material::drag_coefficient>()},
+    {.section = "cloth.material", .name = "lift_coefficient", .type = T::Real, .range = R{0.0, 10.0},
+     .doc = "aerodynamic lift", .label = "lift coefficient", .panel = "materials",
+     .access = field<&Material::lift_coefficient>()},
+    {.section = "cloth.material", .name = "contact_thickness", .type = T::Real, .unit = "m", .range = R{1e-5, 0.1},
+     .doc = "distance kept from colliders", .label = "contact thickness", .panel = "materials", .log_scale = true,
+     .access = field<&Material::contact_thickness>()},
+    {.section = "cloth.material", .name = "friction", .type = T::Real, .range = R{0.0, 10.0},
+     .doc = "Coulomb coefficient against colliders", .label = "friction", .panel = "materials",
+     .access = field<&Material::friction>()},
+
+    // ---- [[cloth.pin]]: exactly one selection per entry
+    {.section = "cloth.pin", .name = "vertices", .type = T::IndexList,
+     .doc = "vertex indices of the rest mesh (for grids: j·(nx+1)+i)", .effect = E::Rebuild, .constraint = "non-empty"},
+    {.section = "cloth.pin", .name = "box", .type = T::Box,
+     .doc = "every vertex inside the box (m), bounds included", .effect = E::Rebuild, .constraint = "min ≤ max"},
+    {.section = "cloth.pin", .name = "edge", .type = T::Choice, .doc = "grids only: a whole edge", .effect = E::Rebuild,
+     .choices = kEdgeNames},
+    {.section = "cloth.pin", .name = "corners", .type = T::Choice,
+     .doc = "grids only: the two corners of that edge, or all four", .effect = E::Rebuild, .choices = kCornerNames},
+    {.section = "cloth.pin", .name = "motion", .type = T::String,
+     .doc = "a `[[motion]]` the pins follow; without it they stay where they start", .effect = E::Rebuild,
+     .constraint = "a `[[motion]]` name", .default_text = "none"},
+
+    // ---- [[collider]]
+    {.section = "collider", .name = "name", .type = T::String, .doc = "used by `--set collider.NAME…` and in messages",
+     .effect = E::Rebuild, .constraint = "non-empty, unique", .default_text = "\"collider0\", …"},
+    {.section = "collider", .name = "shape", .type = T::Choice, .doc = "analytic shape or triangle mesh",
+     .effect = E::Rebuild, .choices = kShapeNames, .default_text = "**required**"},
+    {.section = "collider", .name = "radius", .type = T::Real, .unit = "m", .range = R{1e-6, 1e6},
+     .doc = "of the sphere, or of the capsule around its axis", .label = "radius", .panel = "colliders",
+     .log_scale = true, .shapes = kRound, .access = field<&ColliderDesc::radius>()},
+    {.section = "collider", .name = "half_height", .type = T::Real, .unit = "m", .range = R{0.0, 1e6},
+     .doc = "half the length of the axis segment (local y)", .label = "half height", .panel = "colliders",
+     .log_scale = true, .shapes = kCapsule, .access = field<&ColliderDesc::half_height>()},
+    {.section = "collider", .name = "half_extents", .type = T::Vector, .unit = "m", .range = R{1e-6, 1e6},
+     .doc = "half sizes along local x, y, z", .label = "half extent", .panel = "colliders", .log_scale = true,
+     .vector_bound = VectorBound::Components, .shapes = kBox, .access = field<&ColliderDesc::half_extents>()},
+    {.section = "collider", .name = "file", .type = T::String, .doc = "triangle mesh, path relative to the scene file",
+     .effect = E::Rebuild, .constraint = "an existing file", .default_text = "**required**", .shapes = kMesh},
+    {.section = "collider", .name = "scale", .type = T::Real, .range = R{0.0, 1e6, true},
+     .doc = "multiplies the file's coordinates", .effect = E::Rebuild, .shapes = kMesh,
+     .access = field<&ColliderMeshSource::scale>()},
+    {.section = "collider", .name = "friction", .type = T::Real, .range = R{0.0, 10.0},
+     .doc = "Coulomb coefficient; omitted: each cloth's material friction", .label = "friction", .panel = "colliders",
+     .slider = R{-1.0, 10.0}, .default_text = "the cloth's", .unset_when_negative = true,
+     .access = field<&ColliderDesc::friction>()},
+    {.section = "collider", .name = "position", .type = T::Vector, .unit = "m",
+     .doc = "centre (sphere, capsule, box), a point on the plane, the mesh's origin", .label = "position",
+     .panel = "colliders", .slider = R{-1e4, 1e4}, .access = field<&ColliderDesc::motion, &Motion::origin>()},
+    {.section = "collider", .name = "rotation", .type = T::Vector, .unit = "degrees",
+     .doc = "orientation of the local frame (see *Rotations*)", .effect = E::Rebuild, .default_text = "[0, 0, 0]"},
+    {.section = "collider", .name = "motion", .type = T::String,
+     .doc = "follow this motion instead of `position` and `rotation`", .effect = E::Rebuild,
+     .constraint = "a `[[motion]]` name", .default_text = "none"},
+
+    // ---- [camera]
+    {.section = "camera", .name = "position", .type = T::Vector, .unit = "m", .doc = "eye", .effect = E::Rebuild,
+     .access = field<&CameraDesc::position>()},
+    {.section = "camera", .name = "target", .type = T::Vector, .unit = "m", .doc = "point looked at",
+     .effect = E::Rebuild, .constraint = "≠ position", .access = field<&CameraDesc::target>()},
+    {.section = "camera", .name = "fov", .type = T::Real, .unit = "degrees", .range = R{0.0, 180.0, true, true},
+     .doc = "vertical field of view", .effect = E::Rebuild, .access = field<&CameraDesc::fov_degrees>()},
+};
+// clang-format on
+
+// A default-constructed owner of `p`, handed to `f`.
+template <class F>
+auto with_default_owner(const Parameter& p, F&& f) {
+    switch (p.access.owner) {
+        case ParameterOwner::World: return f(WorldDesc{});
+        case ParameterOwner::Material: return f(Material{});
+        case ParameterOwner::Fabric: return f(FabricDesc{});
+        case ParameterOwner::Cloth: return f(ClothDesc{});
+        case ParameterOwner::ClothSource: return f(ClothSource{});
+        case ParameterOwner::ClothPlacement: return f(ClothPlacement{});
+        case ParameterOwner::Motion: return f(Motion{});
+        case ParameterOwner::SceneMotion: return f(SceneMotion{});
+        case ParameterOwner::Collider: return f(ColliderDesc{});
+        case ParameterOwner::ColliderMesh: return f(ColliderMeshSource{});
+        case ParameterOwner::Camera: return f(CameraDesc{});
+        case ParameterOwner::Scene: return f(SceneDesc{});
+        case ParameterOwner::None: break;
+    }
+    throw Error("parameter '" + p.key() + "' has no field, hence no default value");
+}
+
+std::string vector_text(const Vec3d& v, int components) {
+    std::string s = "[";
+    for (int k = 0; k < components; ++k) {
+        if (k > 0) s += ", ";
+        s += scene_toml::format_number(v[k]);
+    }
+    return s + "]";
+}
+
+std::string quoted_list(std::span<const std::string_view> names) {
+    std::string s;
+    for (const std::string_view n : names) s.append(s.empty() ? "\"" : ", \"").append(n).append("\"");
+    return s;
+}
+
+template <class Owner>
+void check_ranges(const Owner& owner, std::string_view where, std::optional<ColliderShape> shape = std::nullopt) {
+    for (const Parameter& p : kTable) {
+        if (!holds<Owner>(p) || (shape && !p.applies_to(*shape))) continue;
+        const std::string place = where.empty() ? std::string(p.section) : std::string(where);
+        if (p.type == ParameterType::Real || p.type == ParameterType::Integer) {
+            const double v = parameter_number(p, owner);
+            if (p.unset_when_negative && v < 0.0) continue;
+            check_parameter_range(p, v, place);
+        } else if (p.type == ParameterType::Vector) {
+            const Vec3d v = parameter_vector(p, owner);
+            const std::string shown = place + ": " + std::string(p.name) + " = " + vector_text(v, 3);
+            if (!math::is_finite(v)) throw Error(shown + " is not finite");
+            if (p.vector_bound == VectorBound::Length && !p.range.contains(math::length(v)))
+                throw Error(shown + " has a magnitude outside " + p.range.text());
+            if (p.vector_bound == VectorBound::Components)
+                for (int k = 0; k < 3; ++k)
+                    if (!p.range.contains(v[k])) throw Error(shown + " has a component outside " + p.range.text());
+        }
+    }
+}
+
+}  // namespace
+
+std::string ParameterRange::text() const {
+    return std::string(lo_open ? "(" : "[") + scene_toml::format_number(lo) + ", " + scene_toml::format_number(hi) +
+           (hi_open ? ")" : "]");
+}
+
+std::string ParameterRange::integer_text() const {
+    return std::string(lo_open ? "(" : "[") + std::to_string(std::llround(lo)) + ", " + std::to_string(std::llround(hi)) +
+           (hi_open ? ")" : "]");
+}
+
+std::string Parameter::key() const { return std::string(section) + "." + std::string(name); }
+
+bool Parameter::applies_to(ColliderShape shape) const { return shapes == 0 || (shapes & shape_bit(shape)) != 0; }
+
+std::span<const Parameter> parameter_table() { return kTable; }
+
+const Parameter* find_parameter(std::string_view key) {
+    for (const Parameter& p : kTable)
+        if (key.size() == p.section.size() + 1 + p.name.size() && key.starts_with(p.section) &&
+            key[p.section.size()] == '.' && key.ends_with(p.name))
+            return &p;
+    return nullptr;
+}
+
+const Parameter& parameter(std::string_view section, std::string_view name) {
+    for (const Parameter& p : kTable)
+        if (p.section == section && p.name == name) return p;
+    throw Error("no parameter '" + std::string(name) + "' in section '" + std::string(section) + "' of the parameter table");
+}
+
+namespace detail {
+void wrong_owner(const Parameter& p, std::string_view wanted) {
+    throw Error("parameter '" + p.key() + "' is not " + std::string(wanted) + " of this struct");
+}
+}  // namespace detail
+
+double parameter_default_number(const Parameter& p) {
+    return with_default_owner(p, [&](const auto& owner) { return p.access.number(&owner); });
+}
+
+Vec3d parameter_default_vector(const Parameter& p) {
+    return with_default_owner(p, [&](const auto& owner) { return p.access.vector(&owner); });
+}
+
+std::string parameter_default_text(const Parameter& p) {
+    if (!p.default_text.empty()) return std::string(p.default_text);
+    if (p.access.owner == ParameterOwner::None) return {};
+    switch (p.type) {
+        case ParameterType::Real: return scene_toml::format_number(parameter_default_number(p));
+        case ParameterType::Integer: return std::to_string(std::llround(parameter_default_number(p)));
+        case ParameterType::Boolean: return parameter_default_number(p) != 0.0 ? "true" : "false";
+        case ParameterType::Choice: {
+            const auto i = static_cast<std::size_t>(std::llround(parameter_default_number(p)));
+            if (i >= p.choices.size()) return {};
+            // Appended piecewise: GCC 12 warns (-Wrestrict, a false positive) on "literal" + string chains.
+            std::string quoted(1, '"');
+            quoted.append(p.choices[i]).push_back('"');
+            return quoted;
+        }
+        case ParameterType::Vector: return vector_text(parameter_default_vector(p), 3);
+        case ParameterType::CellCounts: return vector_text(parameter_default_vector(p), 2);
+        default: return {};
+    }
+}
+
+std::string parameter_range_text(const Parameter& p) {
+    if (!p.constraint.empty()) return std::string(p.constraint);
+    switch (p.type) {
+        case ParameterType::Real: return p.range.text();
+        case ParameterType::Integer: return p.range.integer_text();
+        case ParameterType::Choice: return quoted_list(p.choices);
+        case ParameterType::Vector:
+            switch (p.vector_bound) {
+                case VectorBound::Finite: return "finite";
+                case VectorBound::Length: return "magnitude ≤ " + scene_toml::format_number(p.range.hi);
+                case VectorBound::Components: return "each in " + p.range.text();
+            }
+            return {};
+        case ParameterType::CellCounts: return "integers in " + p.range.integer_text();
+        default: return {};
+    }
+}
+
+void check_parameter_range(const Parameter& p, double value, std::string_view where) {
+    if (p.range.contains(value)) return;
+    const bool integer = p.type == ParameterType::Integer;
+    const std::string shown = integer && std::isfinite(value) ? std::to_string(std::llround(value))
+                                                               : scene_toml::format_number(value);
+    throw Error(std::string(where) + ": " + std::string(p.name) + " = " + shown + " is outside " +
+                (integer ? p.range.integer_text() : p.range.text()));
+}
+
+void check_parameter_ranges(const WorldDesc& owner, std::string_view where) { check_ranges(owner, where); }
+void check_parameter_ranges(const Material& owner, std::string_view where) { check_ranges(owner, where); }
+void check_parameter_ranges(const Motion& owner, std::string_view where) { check_ranges(owner, where); }
+void check_parameter_ranges(const ColliderDesc& owner, std::string_view where) {
+    check_ranges(owner, where, owner.shape);
+}
+
+}  // namespace weft
