@@ -45,6 +45,7 @@
 #include "json_writer.h"
 #include "random_geometry.h"
 #include "text_table.h"
+#include "weft/backend/timing.h"
 #include "weft/cuda/cuda_backend.h"
 #include "weft/error.h"
 
@@ -299,7 +300,7 @@ Result measure(const Options& opt, const Scene& s, bool cull, cudaStream_t strea
         for (int k = 0; k < 3; ++k) {
             const auto t0 = Clock::now();
             front.rebuild(s.x0, s.x1);
-            ms.push_back(std::chrono::duration<double, std::milli>(Clock::now() - t0).count());
+            ms.push_back(ms_since(t0));
         }
         r.cpu_front_ms = distribution(ms).median;
         vp.assign(front.vertex_patch().begin(), front.vertex_patch().end());
@@ -322,7 +323,7 @@ Result measure(const Options& opt, const Scene& s, bool cull, cudaStream_t strea
         for (int k = 0; k < 3; ++k) {
             const auto t0 = Clock::now();
             cpu.find(in, out);
-            if (k > 0) ms.push_back(std::chrono::duration<double, std::milli>(Clock::now() - t0).count());
+            if (k > 0) ms.push_back(ms_since(t0));
         }
         r.cpu_ms = distribution(ms).median;
         r.cpu_pairs = out.vf.size() + out.ee.size();
@@ -416,7 +417,7 @@ Result measure(const Options& opt, const Scene& s, bool cull, cudaStream_t strea
         const gpu::GpuBroadPhaseCounters& c = bp.read_back(stream);
         prox.read_back(stream);
         ccd.read_back(stream);
-        wall.push_back(std::chrono::duration<double, std::milli>(Clock::now() - t0).count());
+        wall.push_back(ms_since(t0));
         if (c.overflow != 0 || prox.counters().overflow != 0 || ccd.counters().overflow != 0)
             throw Error("a buffer overflowed after warm-up (the state does not change between runs)");
         const auto ms = bp.stage_ms();

@@ -34,6 +34,7 @@
 #include "kernels.h"
 #include "scene_lookup.h"
 #include "text_table.h"
+#include "weft/backend/timing.h"
 #include "weft/cuda/cuda_backend.h"
 #include "weft/error.h"
 #include "weft/scene.h"
@@ -387,7 +388,7 @@ void measure(const Options& opt, const std::filesystem::path& scene_path, int l2
     for (int f = 0; f < opt.frames; ++f) {
         const auto t0 = Clock::now();
         const StepStats& s = world->step();
-        wall.push_back(std::chrono::duration<double, std::milli>(Clock::now() - t0).count());
+        wall.push_back(ms_since(t0));
         step.push_back(s.step_ms);
         cg.push_back(static_cast<double>(s.cg_iterations));
         for (std::size_t k = 0; k < stages.size(); ++k) stages[k].push_back(s.stage_ms[k]);

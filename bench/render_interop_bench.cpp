@@ -30,6 +30,7 @@
 #include <vector>
 
 #include "weft/backend.h"
+#include "weft/backend/timing.h"
 #include "weft/cuda/cuda_backend.h"
 #include "weft/error.h"
 #include "weft/render/cloth_feed.h"
@@ -255,7 +256,7 @@ Result run(const Options& o, const std::string& renderer_name, const Size& size,
             (void)feed.check(next, renderer->transfer());
         }
         if (f >= o.warmup) {
-            frame_ms.push_back(std::chrono::duration<double, std::milli>(Clock::now() - t0).count());
+            frame_ms.push_back(ms_since(t0));
             step_ms.push_back(step);
             cpu_total += cpu_seconds() - c0;
         }

@@ -14,6 +14,7 @@
 #include <cstring>
 
 #include "kernels.h"
+#include "weft/backend/timing.h"
 #include "weft/error.h"
 #include "weft/physics/swept_collider.h"
 
@@ -80,7 +81,7 @@ void DeviceSolver::substep(const Model& model, double t, double h, StepStats& st
     cudaStream_t stream = active_stream();
     fill_staging(model, t, h);
     WEFT_CUDA_CHECK(cudaMemcpyAsync(staging_.get(), host_staging_.get(), host_staging_.size(), cudaMemcpyHostToDevice, stream));
-    const double host_ms = std::chrono::duration<double, std::milli>(Clock::now() - host_start).count();
+    const double host_ms = ms_since(host_start);
 
     // Collision detection before the solve, outside the graph on the same stream (it reads overflow
     // counters back): the contacts go straight into the solve's device list.
@@ -173,7 +174,7 @@ void DeviceSolver::sweep_colliders(float largest_move, cudaStream_t stream, Step
     WEFT_CUDA_CHECK(cudaStreamSynchronize(stream));
     ++sweep_launches_;
     stats.collision.swept_collider_hits += host_stats_[0].swept_hits;
-    stats.ms(Stage::Update) += std::chrono::duration<double, std::milli>(Clock::now() - start).count();
+    stats.ms(Stage::Update) += ms_since(start);
 }
 
 void DeviceSolver::set_stream(cudaStream_t stream) {

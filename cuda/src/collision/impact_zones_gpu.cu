@@ -13,6 +13,7 @@
 #include <string>
 
 #include "cuda_check.h"
+#include "weft/backend/timing.h"
 #include "weft/error.h"
 #include "weft/physics/eigen_sym.h"
 
@@ -47,9 +48,6 @@ constexpr std::uint8_t kNone = 0, kProject = 1, kPending = 2, kRigid = 3, kFreez
 constexpr double kInertiaCutoff = 1e-12;
 
 using Clock = std::chrono::steady_clock;
-double ms_since(Clock::time_point start) {
-    return std::chrono::duration<double, std::milli>(Clock::now() - start).count();
-}
 
 unsigned blocks_for(std::uint64_t count, unsigned threads = kThreads) {
     return static_cast<unsigned>(std::max<std::uint64_t>(1, (count + threads - 1) / threads));

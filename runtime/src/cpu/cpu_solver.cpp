@@ -5,6 +5,7 @@
 #include <chrono>
 #include <cmath>
 
+#include "weft/backend/timing.h"
 #include "weft/physics/aerodynamics.h"
 #include "weft/physics/swept_collider.h"
 
@@ -12,10 +13,6 @@ namespace weft::cpu {
 namespace {
 
 using Clock = std::chrono::steady_clock;
-
-double ms_since(Clock::time_point start) {
-    return std::chrono::duration<double, std::milli>(Clock::now() - start).count();
-}
 
 template <typename T>
 physics::Vec3<T> to(Vec3d a) {
