@@ -10,6 +10,7 @@
 #include "collision/broad_phase_gpu.h"
 #include "collision/pair_geometry.cuh"
 #include "cuda_check.h"
+#include "grid_size.h"
 
 namespace weft::cuda::collision {
 namespace {
@@ -18,10 +19,6 @@ constexpr unsigned kThreads = 128;  // the search keeps its box queue in local m
 /// Below this fraction of eta the gap's direction is not trusted for the normal (as the CPU's
 /// kNormalFromGapRatio in impact_zones.cpp).
 constexpr float kNormalFromGapRatio = 1e-3F;
-
-[[nodiscard]] unsigned blocks_for(std::uint64_t count) {
-    return static_cast<unsigned>((count + kThreads - 1) / kThreads);
-}
 
 /// Pass 1: the search. Per candidate: hit flag (the element at `capacity` is the scan's total) and
 /// (toi, distance bound, eta, status).
@@ -174,8 +171,8 @@ void GpuCcd::enqueue(const GpuCcdInput& in, const GpuPairList& pairs, cudaStream
     const std::uint32_t stride = in.stride != 0 ? in.stride : in.vertex_count;
     counters_.zero(stream);
     ranked_ = false;
-    ccd_kernel<<<blocks_for(slots), kThreads, 0, stream>>>(in, stride, pairs, position_.get(), result_.get(),
-                                                          counters_.get());
+    ccd_kernel<<<blocks_for(slots, kThreads), kThreads, 0, stream>>>(in, stride, pairs, position_.get(), result_.get(),
+                                                                     counters_.get());
     WEFT_CUDA_CHECK_LAUNCH("ccd_kernel");
     enqueue_compaction(in, pairs, stream);
 }
@@ -192,8 +189,8 @@ void GpuCcd::enqueue_compaction(const GpuCcdInput& in, const GpuPairList& pairs,
         ranked_ = true;
     }
     if (pairs.capacity > 0) {
-        hit_write_kernel<<<blocks_for(pairs.capacity), kThreads, 0, stream>>>(in, stride, pairs, position_.get(),
-                                                                              result_.get(), hits_.get(), capacity);
+        hit_write_kernel<<<blocks_for(pairs.capacity, kThreads), kThreads, 0, stream>>>(
+            in, stride, pairs, position_.get(), result_.get(), hits_.get(), capacity);
         WEFT_CUDA_CHECK_LAUNCH("hit_write_kernel");
     }
     ccd_finish_kernel<<<1, 1, 0, stream>>>(pairs, position_.get(), capacity, counters_.get());
