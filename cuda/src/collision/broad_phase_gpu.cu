@@ -1002,12 +1002,8 @@ bool GpuBroadPhase::needs_rerun() {
 const GpuBroadPhaseCounters& GpuBroadPhase::find(const GpuBroadPhaseInput& in, cudaStream_t stream) {
     // Each rerun grows at least one size to what was measured (plus headroom); the entries must fit
     // before the pairs can be counted, so a cold start may take two reruns.
-    for (int attempt = 0; attempt < 8; ++attempt) {
-        enqueue(in, stream);
-        read_back(stream);
-        if (!needs_rerun()) return counters();
-    }
-    throw Error("GPU broad phase: buffers still too small after 8 attempts");
+    rerun_until_fits(*this, stream, "GPU broad phase: buffers", 8, [&](int) { enqueue(in, stream); });
+    return counters();
 }
 
 GpuPairList GpuBroadPhase::pairs() const {

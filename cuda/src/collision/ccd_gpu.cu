@@ -7,7 +7,7 @@
 #include <cmath>
 #include <string>
 
-#include "collision/broad_phase_gpu.h"
+#include "collision/grow_and_rerun.h"
 #include "collision/pair_geometry.cuh"
 #include "cuda_check.h"
 #include "grid_size.h"
@@ -206,20 +206,17 @@ const GpuCcdCounters& GpuCcd::read_back(cudaStream_t stream) {
 }
 
 bool GpuCcd::needs_rerun() {
-    if (counters().overflow == 0) return false;
-    capacity_ = grown_capacity(counters().hits);
-    ++reruns_;
-    return true;
+    return grow_after_overflow(counters().overflow != 0, counters().hits, capacity_, reruns_);
 }
 
 const GpuCcdCounters& GpuCcd::find(const GpuCcdInput& in, const GpuPairList& pairs, cudaStream_t stream) {
-    enqueue(in, pairs, stream);
-    for (int attempt = 0; attempt < 4; ++attempt) {
-        read_back(stream);
-        if (!needs_rerun()) return counters();
-        enqueue_compaction(in, pairs, stream);  // the search results are kept: only the scatter again
-    }
-    throw Error("GPU CCD: buffer still too small after 4 attempts");
+    rerun_until_fits(*this, stream, "GPU CCD: buffer", 4, [&](int attempt) {
+        if (attempt == 0)
+            enqueue(in, pairs, stream);
+        else
+            enqueue_compaction(in, pairs, stream);  // the search results are kept: only the scatter again
+    });
+    return counters();
 }
 
 void GpuCcd::download(std::vector<GpuCcdHit>& out, cudaStream_t stream) const {

@@ -6,7 +6,7 @@
 #include <algorithm>
 #include <string>
 
-#include "collision/broad_phase_gpu.h"
+#include "collision/grow_and_rerun.h"
 #include "collision/pair_geometry.cuh"
 #include "cuda_check.h"
 #include "grid_size.h"
@@ -170,20 +170,13 @@ const GpuProximityCounters& GpuProximityContacts::read_back(cudaStream_t stream)
 }
 
 bool GpuProximityContacts::needs_rerun() {
-    if (counters().overflow == 0) return false;
-    capacity_ = grown_capacity(counters().contacts);
-    ++reruns_;
-    return true;
+    return grow_after_overflow(counters().overflow != 0, counters().contacts, capacity_, reruns_);
 }
 
 const GpuProximityCounters& GpuProximityContacts::find(const GpuProximityInput& in, const GpuPairList& pairs,
                                                        cudaStream_t stream) {
-    for (int attempt = 0; attempt < 4; ++attempt) {
-        enqueue(in, pairs, stream);
-        read_back(stream);
-        if (!needs_rerun()) return counters();
-    }
-    throw Error("GPU proximity contacts: buffer still too small after 4 attempts");
+    rerun_until_fits(*this, stream, "GPU proximity contacts: buffer", 4, [&](int) { enqueue(in, pairs, stream); });
+    return counters();
 }
 
 void GpuProximityContacts::download(std::vector<GpuProximityContact>& out, cudaStream_t stream) const {
