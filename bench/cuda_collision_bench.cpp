@@ -42,6 +42,8 @@
 #include "collision/proximity_gpu.h"
 #include "cuda_check.h"
 #include "device_array.h"
+#include "distribution.h"
+#include "json_file.h"
 #include "json_writer.h"
 #include "random_geometry.h"
 #include "text_table.h"
@@ -54,8 +56,8 @@ namespace {
 using namespace weft;
 namespace gpu = weft::cuda::collision;
 using cli::format_fixed;
-using cli::JsonWriter;
 using cli::TextTable;
+using json::JsonWriter;
 using Clock = std::chrono::steady_clock;
 constexpr double kPi = std::numbers::pi;
 
@@ -229,19 +231,11 @@ Scene stack_scene() {
 
 // ---- statistics -----------------------------------------------------------------------------------
 
-struct Dist {
-    double median = 0, min = 0, max = 0;
-};
-Dist distribution(std::vector<double> v) {
-    Dist d;
-    if (v.empty()) return d;
-    std::sort(v.begin(), v.end());
-    const std::size_t m = v.size() / 2;
-    d.median = v.size() % 2 == 1 ? v[m] : 0.5 * (v[m - 1] + v[m]);
-    d.min = v.front();
-    d.max = v.back();
-    return d;
-}
+using bench::Dist;
+using bench::distribution;
+using bench::write_dist;
+// The file's layout: no mean (the medians are what the tables compare).
+constexpr auto kDistFields = bench::DistFields::median_min_max;
 
 // ---- measurement ----------------------------------------------------------------------------------
 
@@ -558,10 +552,6 @@ void print(std::ostream& out, const std::vector<Result>& results) {
     }
 }
 
-void write_dist(JsonWriter& json, const Dist& d) {
-    json.begin_object().field("median", d.median).field("min", d.min).field("max", d.max).end_object();
-}
-
 void write_json(std::ostream& stream, const Options& opt, const cuda::DeviceInfo* device, const std::string& reason,
                 const std::vector<Result>& results) {
     JsonWriter json(stream);
@@ -594,7 +584,7 @@ void write_json(std::ostream& stream, const Options& opt, const cuda::DeviceInfo
         if (r.culling != "none") {
             json.key("normal_cones").begin_object();
             json.key("gpu_ms");
-            write_dist(json, r.cones);
+            write_dist(json, r.cones, kDistFields);
             json.field("gpu_patches", r.cone_counters.front_size).field("contour_tests", r.cone_counters.contour_tests);
             json.field("contour_refused", r.cone_counters.contour_failed);
             json.field("contour_tile_pairs", r.cone_counters.contour_items);
@@ -604,17 +594,17 @@ void write_json(std::ostream& stream, const Options& opt, const cuda::DeviceInfo
         json.key("stage_ms").begin_object();
         for (int s = 0; s < gpu::GpuBroadPhase::kStageCount; ++s) {
             json.key(gpu::GpuBroadPhase::kStageNames[static_cast<std::size_t>(s)]);
-            write_dist(json, r.stage[static_cast<std::size_t>(s)]);
+            write_dist(json, r.stage[static_cast<std::size_t>(s)], kDistFields);
         }
         json.end_object();
         json.key("broad_phase_ms");
-        write_dist(json, r.broad);
+        write_dist(json, r.broad, kDistFields);
         json.key("proximity_ms");
-        write_dist(json, r.proximity);
+        write_dist(json, r.proximity, kDistFields);
         json.key("ccd_ms");
-        write_dist(json, r.ccd);
+        write_dist(json, r.ccd, kDistFields);
         json.key("wall_ms");
-        write_dist(json, r.wall);
+        write_dist(json, r.wall, kDistFields);
         json.field("cpu_broad_phase_ms", r.cpu_ms).field("cpu_pairs", r.cpu_pairs).field("cpu_culled_pairs", r.cpu_culled);
         json.key("counters").begin_object();
         json.field("cell_size_m", static_cast<double>(c.cell_size)).field("entries", c.entries);
@@ -631,23 +621,6 @@ void write_json(std::ostream& stream, const Options& opt, const cuda::DeviceInfo
     json.end_object();
 }
 
-bool write_json_file(const std::filesystem::path& file, const std::function<void(std::ostream&)>& write) {
-    if (file.has_parent_path()) {
-        std::error_code ec;
-        std::filesystem::create_directories(file.parent_path(), ec);
-    }
-    std::ofstream stream(file);
-    if (!stream) {
-        std::cerr << "weft_cuda_collision_bench: cannot write " << file.string() << '\n';
-        return false;
-    }
-    write(stream);
-    stream << '\n';
-    if (!stream) return false;
-    std::cout << "\nresults: " << file.string() << '\n';
-    return true;
-}
-
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -658,7 +631,8 @@ int main(int argc, char** argv) {
             const std::string reason = cuda::unavailable_reason();
             std::cout << "no CUDA device: " << reason << " (nothing measured)\n";
             if (!opt.json_file.empty())
-                write_json_file(opt.json_file, [&](std::ostream& s) { write_json(s, opt, nullptr, reason, {}); });
+                bench::write_json_file(opt.json_file, "weft_cuda_collision_bench",
+                                       [&](std::ostream& s) { write_json(s, opt, nullptr, reason, {}); });
             return 0;
         }
         const cuda::DeviceInfo& device = gpus[0];
@@ -679,7 +653,8 @@ int main(int argc, char** argv) {
         cudaStreamDestroy(stream);
         print(std::cout, results);
         if (!opt.json_file.empty() &&
-            !write_json_file(opt.json_file, [&](std::ostream& s) { write_json(s, opt, &device, "", results); }))
+            !bench::write_json_file(opt.json_file, "weft_cuda_collision_bench",
+                                    [&](std::ostream& s) { write_json(s, opt, &device, "", results); }))
             return 1;
         return 0;
     } catch (const std::exception& e) {
