@@ -43,6 +43,7 @@
 #include "cuda_check.h"
 #include "device_array.h"
 #include "distribution.h"
+#include "float_positions.h"
 #include "json_file.h"
 #include "json_writer.h"
 #include "random_geometry.h"
@@ -184,11 +185,7 @@ test::SmoothField field(std::mt19937& rng, double amplitude, double wavelength) 
     return {rng, amplitude, 0.7 * wavelength, 1.3 * wavelength};
 }
 
-void snap(Scene& s) {
-    for (auto* xs : {&s.x0, &s.x1})
-        for (Vec3d& p : *xs)
-            for (int k = 0; k < 3; ++k) p[k] = static_cast<double>(static_cast<float>(p[k]));
-}
+using test::snap_to_float;
 
 Scene twist_scene(int n) {
     Scene s;
@@ -203,7 +200,7 @@ Scene twist_scene(int n) {
         return Vec3d{x + d.x, yy * std::cos(phi) - zz * std::sin(phi), yy * std::sin(phi) + zz * std::cos(phi)};
     });
     s.edges = collision::build_edges(s.triangles);
-    snap(s);
+    snap_to_float(s);
     return s;
 }
 
@@ -225,7 +222,7 @@ Scene stack_scene() {
         });
     }
     s.edges = collision::build_edges(s.triangles);
-    snap(s);
+    snap_to_float(s);
     return s;
 }
 
@@ -266,13 +263,7 @@ struct Result {
     gpu::GpuNormalConeCounters cone_counters{};
 };
 
-std::vector<float> soa(const std::vector<Vec3d>& x) {
-    const std::size_t n = x.size();
-    std::vector<float> out(3 * n);
-    for (std::size_t i = 0; i < n; ++i)
-        for (int k = 0; k < 3; ++k) out[k * n + i] = static_cast<float>(x[i][k]);
-    return out;
-}
+using test::soa_floats;
 
 Result measure(const Options& opt, const Scene& s, bool cull, cudaStream_t stream) {
     Result r;
@@ -328,8 +319,8 @@ Result measure(const Options& opt, const Scene& s, bool cull, cudaStream_t strea
     cuda::MemoryLedger ledger;
     cuda::DeviceArray<float> x0, x1, inverse_mass, thickness, friction;
     cuda::DeviceArray<std::uint32_t> tri, edge;
-    x0.upload(soa(s.x0), ledger, "x0");
-    x1.upload(soa(s.x1), ledger, "x1");
+    x0.upload(soa_floats(s.x0), ledger, "x0");
+    x1.upload(soa_floats(s.x1), ledger, "x1");
     inverse_mass.upload(std::vector<float>(n, 1.0F), ledger, "inverse mass");
     thickness.upload(std::vector<float>(n, static_cast<float>(opt.thickness)), ledger, "thickness");
     friction.upload(std::vector<float>(n, 0.3F), ledger, "friction");
