@@ -42,9 +42,13 @@
 #include "collision/proximity_gpu.h"
 #include "cuda_check.h"
 #include "device_array.h"
+#include "distribution.h"
+#include "float_positions.h"
+#include "json_file.h"
 #include "json_writer.h"
 #include "random_geometry.h"
 #include "text_table.h"
+#include "weft/backend/timing.h"
 #include "weft/cuda/cuda_backend.h"
 #include "weft/error.h"
 
@@ -53,8 +57,8 @@ namespace {
 using namespace weft;
 namespace gpu = weft::cuda::collision;
 using cli::format_fixed;
-using cli::JsonWriter;
 using cli::TextTable;
+using json::JsonWriter;
 using Clock = std::chrono::steady_clock;
 constexpr double kPi = std::numbers::pi;
 
@@ -181,11 +185,7 @@ test::SmoothField field(std::mt19937& rng, double amplitude, double wavelength) 
     return {rng, amplitude, 0.7 * wavelength, 1.3 * wavelength};
 }
 
-void snap(Scene& s) {
-    for (auto* xs : {&s.x0, &s.x1})
-        for (Vec3d& p : *xs)
-            for (int k = 0; k < 3; ++k) p[k] = static_cast<double>(static_cast<float>(p[k]));
-}
+using test::snap_to_float;
 
 Scene twist_scene(int n) {
     Scene s;
@@ -200,7 +200,7 @@ Scene twist_scene(int n) {
         return Vec3d{x + d.x, yy * std::cos(phi) - zz * std::sin(phi), yy * std::sin(phi) + zz * std::cos(phi)};
     });
     s.edges = collision::build_edges(s.triangles);
-    snap(s);
+    snap_to_float(s);
     return s;
 }
 
@@ -222,25 +222,17 @@ Scene stack_scene() {
         });
     }
     s.edges = collision::build_edges(s.triangles);
-    snap(s);
+    snap_to_float(s);
     return s;
 }
 
 // ---- statistics -----------------------------------------------------------------------------------
 
-struct Dist {
-    double median = 0, min = 0, max = 0;
-};
-Dist distribution(std::vector<double> v) {
-    Dist d;
-    if (v.empty()) return d;
-    std::sort(v.begin(), v.end());
-    const std::size_t m = v.size() / 2;
-    d.median = v.size() % 2 == 1 ? v[m] : 0.5 * (v[m - 1] + v[m]);
-    d.min = v.front();
-    d.max = v.back();
-    return d;
-}
+using bench::Dist;
+using bench::distribution;
+using bench::write_dist;
+// The file's layout: no mean (the medians are what the tables compare).
+constexpr auto kDistFields = bench::DistFields::median_min_max;
 
 // ---- measurement ----------------------------------------------------------------------------------
 
@@ -271,13 +263,7 @@ struct Result {
     gpu::GpuNormalConeCounters cone_counters{};
 };
 
-std::vector<float> soa(const std::vector<Vec3d>& x) {
-    const std::size_t n = x.size();
-    std::vector<float> out(3 * n);
-    for (std::size_t i = 0; i < n; ++i)
-        for (int k = 0; k < 3; ++k) out[k * n + i] = static_cast<float>(x[i][k]);
-    return out;
-}
+using test::soa_floats;
 
 Result measure(const Options& opt, const Scene& s, bool cull, cudaStream_t stream) {
     Result r;
@@ -299,7 +285,7 @@ Result measure(const Options& opt, const Scene& s, bool cull, cudaStream_t strea
         for (int k = 0; k < 3; ++k) {
             const auto t0 = Clock::now();
             front.rebuild(s.x0, s.x1);
-            ms.push_back(std::chrono::duration<double, std::milli>(Clock::now() - t0).count());
+            ms.push_back(ms_since(t0));
         }
         r.cpu_front_ms = distribution(ms).median;
         vp.assign(front.vertex_patch().begin(), front.vertex_patch().end());
@@ -322,7 +308,7 @@ Result measure(const Options& opt, const Scene& s, bool cull, cudaStream_t strea
         for (int k = 0; k < 3; ++k) {
             const auto t0 = Clock::now();
             cpu.find(in, out);
-            if (k > 0) ms.push_back(std::chrono::duration<double, std::milli>(Clock::now() - t0).count());
+            if (k > 0) ms.push_back(ms_since(t0));
         }
         r.cpu_ms = distribution(ms).median;
         r.cpu_pairs = out.vf.size() + out.ee.size();
@@ -333,8 +319,8 @@ Result measure(const Options& opt, const Scene& s, bool cull, cudaStream_t strea
     cuda::MemoryLedger ledger;
     cuda::DeviceArray<float> x0, x1, inverse_mass, thickness, friction;
     cuda::DeviceArray<std::uint32_t> tri, edge;
-    x0.upload(soa(s.x0), ledger, "x0");
-    x1.upload(soa(s.x1), ledger, "x1");
+    x0.upload(soa_floats(s.x0), ledger, "x0");
+    x1.upload(soa_floats(s.x1), ledger, "x1");
     inverse_mass.upload(std::vector<float>(n, 1.0F), ledger, "inverse mass");
     thickness.upload(std::vector<float>(n, static_cast<float>(opt.thickness)), ledger, "thickness");
     friction.upload(std::vector<float>(n, 0.3F), ledger, "friction");
@@ -416,7 +402,7 @@ Result measure(const Options& opt, const Scene& s, bool cull, cudaStream_t strea
         const gpu::GpuBroadPhaseCounters& c = bp.read_back(stream);
         prox.read_back(stream);
         ccd.read_back(stream);
-        wall.push_back(std::chrono::duration<double, std::milli>(Clock::now() - t0).count());
+        wall.push_back(ms_since(t0));
         if (c.overflow != 0 || prox.counters().overflow != 0 || ccd.counters().overflow != 0)
             throw Error("a buffer overflowed after warm-up (the state does not change between runs)");
         const auto ms = bp.stage_ms();
@@ -557,10 +543,6 @@ void print(std::ostream& out, const std::vector<Result>& results) {
     }
 }
 
-void write_dist(JsonWriter& json, const Dist& d) {
-    json.begin_object().field("median", d.median).field("min", d.min).field("max", d.max).end_object();
-}
-
 void write_json(std::ostream& stream, const Options& opt, const cuda::DeviceInfo* device, const std::string& reason,
                 const std::vector<Result>& results) {
     JsonWriter json(stream);
@@ -593,7 +575,7 @@ void write_json(std::ostream& stream, const Options& opt, const cuda::DeviceInfo
         if (r.culling != "none") {
             json.key("normal_cones").begin_object();
             json.key("gpu_ms");
-            write_dist(json, r.cones);
+            write_dist(json, r.cones, kDistFields);
             json.field("gpu_patches", r.cone_counters.front_size).field("contour_tests", r.cone_counters.contour_tests);
             json.field("contour_refused", r.cone_counters.contour_failed);
             json.field("contour_tile_pairs", r.cone_counters.contour_items);
@@ -603,17 +585,17 @@ void write_json(std::ostream& stream, const Options& opt, const cuda::DeviceInfo
         json.key("stage_ms").begin_object();
         for (int s = 0; s < gpu::GpuBroadPhase::kStageCount; ++s) {
             json.key(gpu::GpuBroadPhase::kStageNames[static_cast<std::size_t>(s)]);
-            write_dist(json, r.stage[static_cast<std::size_t>(s)]);
+            write_dist(json, r.stage[static_cast<std::size_t>(s)], kDistFields);
         }
         json.end_object();
         json.key("broad_phase_ms");
-        write_dist(json, r.broad);
+        write_dist(json, r.broad, kDistFields);
         json.key("proximity_ms");
-        write_dist(json, r.proximity);
+        write_dist(json, r.proximity, kDistFields);
         json.key("ccd_ms");
-        write_dist(json, r.ccd);
+        write_dist(json, r.ccd, kDistFields);
         json.key("wall_ms");
-        write_dist(json, r.wall);
+        write_dist(json, r.wall, kDistFields);
         json.field("cpu_broad_phase_ms", r.cpu_ms).field("cpu_pairs", r.cpu_pairs).field("cpu_culled_pairs", r.cpu_culled);
         json.key("counters").begin_object();
         json.field("cell_size_m", static_cast<double>(c.cell_size)).field("entries", c.entries);
@@ -630,23 +612,6 @@ void write_json(std::ostream& stream, const Options& opt, const cuda::DeviceInfo
     json.end_object();
 }
 
-bool write_json_file(const std::filesystem::path& file, const std::function<void(std::ostream&)>& write) {
-    if (file.has_parent_path()) {
-        std::error_code ec;
-        std::filesystem::create_directories(file.parent_path(), ec);
-    }
-    std::ofstream stream(file);
-    if (!stream) {
-        std::cerr << "weft_cuda_collision_bench: cannot write " << file.string() << '\n';
-        return false;
-    }
-    write(stream);
-    stream << '\n';
-    if (!stream) return false;
-    std::cout << "\nresults: " << file.string() << '\n';
-    return true;
-}
-
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -657,7 +622,8 @@ int main(int argc, char** argv) {
             const std::string reason = cuda::unavailable_reason();
             std::cout << "no CUDA device: " << reason << " (nothing measured)\n";
             if (!opt.json_file.empty())
-                write_json_file(opt.json_file, [&](std::ostream& s) { write_json(s, opt, nullptr, reason, {}); });
+                bench::write_json_file(opt.json_file, "weft_cuda_collision_bench",
+                                       [&](std::ostream& s) { write_json(s, opt, nullptr, reason, {}); });
             return 0;
         }
         const cuda::DeviceInfo& device = gpus[0];
@@ -678,7 +644,8 @@ int main(int argc, char** argv) {
         cudaStreamDestroy(stream);
         print(std::cout, results);
         if (!opt.json_file.empty() &&
-            !write_json_file(opt.json_file, [&](std::ostream& s) { write_json(s, opt, &device, "", results); }))
+            !bench::write_json_file(opt.json_file, "weft_cuda_collision_bench",
+                                    [&](std::ostream& s) { write_json(s, opt, &device, "", results); }))
             return 1;
         return 0;
     } catch (const std::exception& e) {

@@ -30,10 +30,13 @@
 #include "build_info.h"
 #include "cuda_check.h"
 #include "device_solver.h"
+#include "distribution.h"
+#include "json_file.h"
 #include "json_writer.h"
 #include "kernels.h"
 #include "scene_lookup.h"
 #include "text_table.h"
+#include "weft/backend/timing.h"
 #include "weft/cuda/cuda_backend.h"
 #include "weft/error.h"
 #include "weft/scene.h"
@@ -44,8 +47,8 @@ namespace {
 
 using namespace weft;
 using cli::format_fixed;
-using cli::JsonWriter;
 using cli::TextTable;
+using json::JsonWriter;
 using Clock = std::chrono::steady_clock;
 
 constexpr double kFlagAspect = 2.0 / 1.2;  // the flag scene's 2.0 m x 1.2 m grid
@@ -225,26 +228,10 @@ Options parse_options(int argc, char** argv) {
 
 // ---- statistics -----------------------------------------------------------------------------------
 
-struct Dist {
-    double median = 0, min = 0, max = 0, mean = 0;
-};
-
-Dist distribution(std::vector<double> v) {
-    Dist d;
-    if (v.empty()) return d;
-    std::sort(v.begin(), v.end());
-    const std::size_t m = v.size() / 2;
-    d.median = v.size() % 2 == 1 ? v[m] : 0.5 * (v[m - 1] + v[m]);
-    d.min = v.front();
-    d.max = v.back();
-    for (double x : v) d.mean += x;
-    d.mean /= static_cast<double>(v.size());
-    return d;
-}
-
-void write_dist(JsonWriter& json, const Dist& d) {
-    json.begin_object().field("median", d.median).field("min", d.min).field("max", d.max).field("mean", d.mean).end_object();
-}
+using bench::Dist;
+using bench::distribution;
+using bench::write_dist;
+constexpr auto kDistFields = bench::DistFields::median_min_max_mean;
 
 double gb_per_s(double bytes, double ms) { return ms > 0.0 ? bytes / (ms * 1e-3) / 1e9 : 0.0; }
 
@@ -387,7 +374,7 @@ void measure(const Options& opt, const std::filesystem::path& scene_path, int l2
     for (int f = 0; f < opt.frames; ++f) {
         const auto t0 = Clock::now();
         const StepStats& s = world->step();
-        wall.push_back(std::chrono::duration<double, std::milli>(Clock::now() - t0).count());
+        wall.push_back(ms_since(t0));
         step.push_back(s.step_ms);
         cg.push_back(static_cast<double>(s.cg_iterations));
         for (std::size_t k = 0; k < stages.size(); ++k) stages[k].push_back(s.stage_ms[k]);
@@ -629,7 +616,7 @@ void write_rate(JsonWriter& json, const char* name, const Rate& rate, double byt
     json.key(name).begin_object();
     json.field("bytes", bytes);
     json.key(ms_key);
-    write_dist(json, rate.ms);
+    write_dist(json, rate.ms, kDistFields);
     json.field("gb_per_s", rate.gbps).field("ratio_to_copy", rate.ratio);
     json.end_object();
 }
@@ -704,7 +691,7 @@ void write_json(std::ostream& stream, const Options& opt, const std::filesystem:
         json.key("copy").begin_object();
         json.field("buffer_bytes", r.copy_buffer_bytes).field("bytes", 2.0 * static_cast<double>(r.copy_buffer_bytes));
         json.key("ms");
-        write_dist(json, r.copy.ms);
+        write_dist(json, r.copy.ms, kDistFields);
         json.field("gb_per_s", r.copy.gbps);
         json.end_object();
 
@@ -730,18 +717,18 @@ void write_json(std::ostream& stream, const Options& opt, const std::filesystem:
         json.key("step").begin_object();
         json.field("frames", opt.frames);
         json.key("wall_ms");
-        write_dist(json, r.wall_ms);
+        write_dist(json, r.wall_ms, kDistFields);
         json.key("step_ms");
-        write_dist(json, r.step_ms);
+        write_dist(json, r.step_ms, kDistFields);
         json.field("fps", r.wall_ms.median > 0 ? 1000.0 / r.wall_ms.median : 0.0);
         json.key("stage_ms").begin_object();
         for (std::size_t k = 0; k < r.stage_ms.size(); ++k) {
             json.key(kStageNames[k]);
-            write_dist(json, r.stage_ms[k]);
+            write_dist(json, r.stage_ms[k], kDistFields);
         }
         json.end_object();
         json.key("cg_iterations_per_step");
-        write_dist(json, r.cg_iterations);
+        write_dist(json, r.cg_iterations, kDistFields);
         json.field("cg_not_converged", r.cg_not_converged).field("non_finite_frames", r.non_finite_frames);
         json.end_object();
 
@@ -758,27 +745,6 @@ void write_json(std::ostream& stream, const Options& opt, const std::filesystem:
     }
     json.end_array();
     json.end_object();
-}
-
-bool write_json_file(const std::filesystem::path& file, auto&& write) {
-    if (file.has_parent_path()) {
-        std::error_code ec;
-        std::filesystem::create_directories(file.parent_path(), ec);
-    }
-    std::ofstream stream(file);
-    if (!stream) {
-        std::cerr << "weft_cuda_bench: cannot write " << file.string() << '\n';
-        return false;
-    }
-    write(stream);
-    stream << '\n';
-    stream.close();
-    if (!stream) {
-        std::cerr << "weft_cuda_bench: error writing " << file.string() << '\n';
-        return false;
-    }
-    std::cout << "\nresults: " << file.string() << '\n';
-    return true;
 }
 
 }  // namespace
@@ -801,7 +767,8 @@ int main(int argc, char** argv) {
             const std::string reason = cuda::unavailable_reason();
             std::cout << "no CUDA device: " << reason << " (nothing measured)\n";
             if (!opt.json_file.empty())
-                write_json_file(opt.json_file, [&](std::ostream& s) { write_json(s, opt, {}, nullptr, 0, reason, {}); });
+                bench::write_json_file(opt.json_file, "weft_cuda_bench",
+                                       [&](std::ostream& s) { write_json(s, opt, {}, nullptr, 0, reason, {}); });
             return 0;
         }
         cuda::register_cuda_backend();
@@ -829,8 +796,9 @@ int main(int argc, char** argv) {
         print_table(std::cout, results);
         bool ok = true;
         if (!opt.json_file.empty())
-            ok = write_json_file(opt.json_file,
-                                 [&](std::ostream& s) { write_json(s, opt, scene_path, &gpu, l2_bytes, "", results); });
+            ok = bench::write_json_file(opt.json_file, "weft_cuda_bench", [&](std::ostream& s) {
+                write_json(s, opt, scene_path, &gpu, l2_bytes, "", results);
+            });
         for (const SizeResult& r : results) ok = ok && r.error.empty();
         return ok ? 0 : 1;
     } catch (const std::exception& e) {

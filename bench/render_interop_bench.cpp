@@ -29,6 +29,7 @@
 #include <string>
 #include <vector>
 
+#include "weft/backend/timing.h"
 #include "weft/backend_options.h"
 #include "weft/cuda/cuda_backend.h"
 #include "weft/error.h"
@@ -36,6 +37,7 @@
 #include "weft/render/renderer.h"
 #include "weft/scene.h"
 
+#include "json_file.h"
 #include "json_writer.h"
 #include "text_table.h"
 
@@ -255,7 +257,7 @@ Result run(const Options& o, const std::string& renderer_name, const Size& size,
             (void)feed.check(next, renderer->transfer());
         }
         if (f >= o.warmup) {
-            frame_ms.push_back(std::chrono::duration<double, std::milli>(Clock::now() - t0).count());
+            frame_ms.push_back(ms_since(t0));
             step_ms.push_back(step);
             cpu_total += cpu_seconds() - c0;
         }
@@ -341,9 +343,8 @@ int main(int argc, char** argv) {
             if (k == 0 || results[k].renderer != results[k - 1].renderer)
                 std::printf("  %s: %s\n", results[k].renderer.c_str(), results[k].device.c_str());
         table.print(std::cout);
-        if (!o.json_file.empty()) {
-            std::ofstream out(o.json_file);
-            cli::JsonWriter json(out);
+        const auto write_results = [&](std::ostream& out) {
+            json::JsonWriter json(out);
             json.begin_array();
             for (const Result& r : results) {
                 json.begin_object();
@@ -364,8 +365,9 @@ int main(int argc, char** argv) {
                 json.end_object();
             }
             json.end_array();
-            out << '\n';
-        }
+        };
+        if (!o.json_file.empty() && !bench::write_json_file(o.json_file, "weft_render_interop_bench", write_results))
+            return 1;
     } catch (const std::exception& e) {
         std::cerr << "weft_render_interop_bench: " << e.what() << '\n';
         return 1;

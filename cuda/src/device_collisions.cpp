@@ -13,16 +13,13 @@
 #include "weft/backend/patch_hierarchy.h"
 #include "cuda_check.h"
 #include "kernels.h"
+#include "weft/backend/timing.h"
 #include "weft/error.h"
 
 namespace weft::cuda {
 namespace {
 
 using Clock = std::chrono::steady_clock;
-
-double ms_since(Clock::time_point start) {
-    return std::chrono::duration<double, std::milli>(Clock::now() - start).count();
-}
 
 // The GPU narrow phase writes the solver's contact list as is: same layout, field for field.
 using collision::GpuProximityContact;

@@ -91,6 +91,13 @@ private:
     /// conditional while node; otherwise it is driven from the host with a check every few iterations.
     void record(cudaStream_t stream, bool capturing);
     void record_pcg_loop(cudaStream_t stream, bool capturing, int newton);
+    /// Enqueues the substep's kernels on `stream` with `newton_iterations` Newton iterations: through
+    /// the captured graph (captured again when the iteration count changed) once warm and where graphs
+    /// work, else recorded directly with the host-driven CG loop.
+    void launch_substep(cudaStream_t stream, int newton_iterations);
+    /// Lays out the per-substep parameter block for `model` and allocates it (host and device).
+    void layout_staging(const Model& model);
+    /// Writes the parameters of the substep from `t` to `t + h` into the host block.
     void fill_staging(const Model& model, double t, double h);
     void build_collisions(const Model& model);
     void capture_graph();

@@ -8,12 +8,13 @@
 #include <cstdint>
 
 #include "device_layout.h"
+#include "grid_size.h"
 #include "device_view.h"
 
 namespace weft::cuda {
 
 inline constexpr int kBlockSize = 256;
-[[nodiscard]] inline unsigned grid_for(std::uint32_t count) { return (count + kBlockSize - 1) / kBlockSize; }
+[[nodiscard]] inline unsigned grid_for(std::uint32_t count) { return blocks_for(count, kBlockSize); }
 
 // ---- state (state_kernels.cu) --------------------------------------------------------------------
 /// x0 = x, v0 = v, v_k = v, w_k = 0; resets the substep's stats.

@@ -9,6 +9,7 @@
 #include <utility>
 #include <vector>
 
+#include "weft/backend/timing.h"
 #include "weft/error.h"
 #include "weft/editor/presets.h"
 #include "weft/parameters.h"
@@ -219,7 +220,7 @@ bool Session::toggle_pin(std::size_t cloth, std::uint32_t vertex) {
     // The rebuild happens at the next read or step; timed here so that the panel can say what it cost.
     const auto start = std::chrono::steady_clock::now();
     (void)world_->positions(cloth);
-    const double ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
+    const double ms = ms_since(start);
     char text[200];
     std::snprintf(text, sizeof text, "%s vertex %u of cloth '%s' (solver rebuilt in %.1f ms, state kept)",
                   pinned ? "pinned" : "unpinned", vertex, world_->model().cloths[cloth].name.c_str(), ms);
@@ -289,7 +290,7 @@ double Session::recook(const std::string& cloth, const ClothRecook& change) {
         rebuild();
         throw;
     }
-    const double ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
+    const double ms = ms_since(start);
     std::size_t triangles_after = 0;
     for (std::size_t i = 0; i < world_->model().cloths.size(); ++i)
         if (scene_.cloths[i].entry == entry) triangles_after += world_->model().cloths[i].fabric->triangles().size();

@@ -11,6 +11,7 @@
 #include <string>
 
 #include "cpu/energy.h"
+#include "weft/backend/timing.h"
 #include "weft/error.h"
 #include "weft/parameters.h"
 
@@ -168,10 +169,9 @@ const StepStats& World::step() {
         for (std::size_t c = 0; c < x.size(); ++c) x[c] = positions(c);
         stats_.collision.remaining_intersections =
             static_cast<std::int64_t>(collision::check_world_intersections(*model_, x, time_).intersecting_pairs);
-        stats_.ms(Stage::Check) +=
-            std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - check_start).count();
+        stats_.ms(Stage::Check) += ms_since(check_start);
     }
-    stats_.step_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
+    stats_.step_ms = ms_since(start);
     return stats_;
 }
 

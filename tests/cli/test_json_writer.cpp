@@ -8,7 +8,7 @@
 
 #include "json_writer.h"
 
-namespace weft::cli {
+namespace weft::json {
 namespace {
 
 TEST(JsonWriter, EscapesStrings) {
@@ -89,4 +89,4 @@ TEST(JsonWriter, MisuseThrows) {
 }
 
 }  // namespace
-}  // namespace weft::cli
+}  // namespace weft::json

@@ -7,12 +7,14 @@
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 
+#include <algorithm>
 #include <atomic>
 #include <chrono>
 #include <cstdio>
 #include <cstring>
 #include <cmath>
 #include <cstdint>
+#include <map>
 #include <numbers>
 #include <random>
 #include <vector>
@@ -152,6 +154,69 @@ inline Scene crumpled_sheet(int cells, unsigned seed) {
     return s;
 }
 
+/// A triangle in the plane y = 0 with its centroid at the origin, and the tip of a vertical dart
+/// (a second triangle above it) driven from 1 cm above the centroid to 1 cm below it; all masses
+/// 1 kg. `dart` is the tip's vertex.
+struct DartScene {
+    Scene scene;
+    std::uint32_t dart = 0;
+};
+inline DartScene dart_through_triangle() {
+    DartScene d;
+    Scene& s = d.scene;
+    s.add({{-0.05, 0.0, -0.05}, {0.1, 0.0, -0.05}, {-0.05, 0.0, 0.1}}, {{{0, 1, 2}}}, 1.0);
+    d.dart = s.add({{0.0, 0.01, 0.0}, {0.01, 0.06, 0.0}, {-0.01, 0.06, 0.0}}, {{{0, 1, 2}}}, 1.0);
+    s.x1[d.dart] = {0.0, -0.01, 0.0};
+    return d;
+}
+
+/// A cloth falling onto or through a fixed mesh (inverse mass 0): the cloth's vertices are
+/// [cloth, fixed), the mesh's from `fixed` on.
+struct ClothOnFixedMesh {
+    Scene scene;
+    std::uint32_t cloth = 0, fixed = 0;
+};
+
+/// A 24×24 cloth 30 cm wide (1 g per vertex) falls 1.4 cm into a fixed bumpy patch 10 cm wide, to the
+/// middle of its bumps. The cloth's rim, far from the patch, falls freely.
+inline ClothOnFixedMesh sheet_into_bumpy_patch() {
+    ClothOnFixedMesh c;
+    Scene& s = c.scene;
+    c.cloth = s.add(grid(0.3, 24, {0.0, 0.01, 0.0}), 1000.0);
+    MeshData patch = grid(0.1, 5, {0.003, 0.0, -0.002});
+    for (Vec3d& p : patch.positions) p.y = 0.004 * std::sin(60.0 * p.x) * std::cos(50.0 * p.z) - 0.004;
+    c.fixed = s.add(patch, 0.0);
+    for (std::uint32_t v = c.cloth; v < c.fixed; ++v) s.x1[v].y -= 0.014;
+    return c;
+}
+
+/// A 16×16 cloth 20 cm wide (1 g per vertex) falls 3 cm, through a fixed flat 4×4 patch 10 cm wide
+/// 1 cm below it: it ends below the patch.
+inline ClothOnFixedMesh sheet_through_fixed_patch() {
+    ClothOnFixedMesh c;
+    Scene& s = c.scene;
+    c.cloth = s.add(grid(0.2, 16, {0.0, 0.01, 0.0}), 1000.0);
+    c.fixed = s.add(grid(0.1, 4, {0.002, 0.0, 0.003}), 0.0);
+    for (std::uint32_t v = c.cloth; v < c.fixed; ++v) s.x1[v].y -= 0.03;
+    return c;
+}
+
+/// A collider plate 30 cm wide (inverse mass 0) rises by `lift` (3 cm up) through an 8×8 cloth 10 cm
+/// wide at rest (1 g per vertex): the cloth's vertices are [cloth, plate), the plate's from `plate`.
+struct PlateScene {
+    Scene scene;
+    std::uint32_t cloth = 0, plate = 0;
+    Vec3d lift{0.001, 0.03, 0.0};
+};
+inline PlateScene plate_through_cloth() {
+    PlateScene c;
+    Scene& s = c.scene;
+    c.cloth = s.add(grid(0.1, 8, {0.0, 0.0, 0.0}), 1000.0);
+    c.plate = s.add(grid(0.3, 3, {0.004, -0.01, 0.002}), 0.0);
+    for (std::uint32_t v = c.plate; v < s.x0.size(); ++v) s.x1[v] += c.lift;
+    return c;
+}
+
 // ---- Checks shared by the CPU and GPU tests ------------------------------------------------------
 
 struct Resolved {
@@ -228,6 +293,41 @@ inline Vec3d momentum(const Scene& s, const std::vector<Vec3d>& x1, const std::v
     Vec3d p{};
     for (std::uint32_t v : vertices) p += (1.0 / s.inverse_mass[v]) * (x1[v] - s.x0[v]);
     return p;
+}
+
+/// The cloth vertices of `c` far from the fixed mesh (more than 12 cm from the axis in x or z), and
+/// how many of those the resolution left untouched, their x1 the prediction's to the bit.
+struct FarRim {
+    std::size_t far = 0, untouched = 0;
+};
+inline FarRim far_rim(const ClothOnFixedMesh& c, const Resolved& r) {
+    const Scene& s = c.scene;
+    FarRim rim;
+    for (std::uint32_t v = c.cloth; v < c.fixed; ++v) {
+        if (std::max(std::fabs(s.x0[v].x), std::fabs(s.x0[v].z)) < 0.12) continue;
+        ++rim.far;
+        rim.untouched += r.outcome[v] == VertexOutcome::Untouched && same_bits(r.x1[v], s.x1[v]) ? 1 : 0;
+    }
+    return rim;
+}
+
+/// The vertices of each rigid zone of `r`, by zone label.
+inline std::map<std::uint32_t, std::vector<std::uint32_t>> rigid_zones(const Scene& s, const Resolved& r) {
+    std::map<std::uint32_t, std::vector<std::uint32_t>> rigid;
+    for (std::uint32_t v = 0; v < s.x0.size(); ++v)
+        if (r.outcome[v] == VertexOutcome::Rigid) rigid[r.zone[v]].push_back(v);
+    return rigid;
+}
+
+/// The largest change of a distance between two of `vertices` from x0 to the resolved x1, m.
+inline double largest_distance_change(const Scene& s, const Resolved& r, const std::vector<std::uint32_t>& vertices) {
+    double worst = 0.0;
+    for (std::size_t i = 0; i < vertices.size(); ++i)
+        for (std::size_t j = i + 1; j < vertices.size(); ++j) {
+            const std::uint32_t a = vertices[i], b = vertices[j];
+            worst = std::max(worst, std::fabs(physics::length(r.x1[a] - r.x1[b]) - physics::length(s.x0[a] - s.x0[b])));
+        }
+    return worst;
 }
 
 inline void print(const char* what, const Resolved& r) {

@@ -3,9 +3,17 @@
 // most CI machines have no GPU: there each test must show as SKIPPED with the reason, not pass
 // silently and not fail.
 
+#include <cuda_runtime_api.h>
 #include <gtest/gtest.h>
 
+#include <filesystem>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "cuda_check.h"
 #include "weft/cuda/cuda_backend.h"
+#include "weft/scene.h"
 
 /// Registers the "cuda" backend, then skips the current test (with the CUDA runtime's reason) when
 /// no device is present. Use it first thing in every test that touches the GPU.
@@ -14,3 +22,27 @@
         ::weft::cuda::register_cuda_backend();                                                                         \
         if (::weft::cuda::devices().empty()) GTEST_SKIP() << "no CUDA device: " << ::weft::cuda::unavailable_reason(); \
     } while (false)
+
+namespace weft::test {
+
+/// A non-blocking CUDA stream, destroyed with the holder.
+struct Stream {
+    cudaStream_t s = nullptr;
+    Stream() { WEFT_CUDA_CHECK(cudaStreamCreateWithFlags(&s, cudaStreamNonBlocking)); }
+    ~Stream() { cudaStreamDestroy(s); }
+    Stream(const Stream&) = delete;
+    Stream& operator=(const Stream&) = delete;
+};
+
+/// assets/scenes/NAME.toml of the source tree.
+inline std::filesystem::path scene_file(const std::string& name) {
+    return std::filesystem::path(WEFT_SOURCE_DIR) / "assets" / "scenes" / (name + ".toml");
+}
+
+/// The world of shipped scene `scene` with `overrides` (KEY=VALUE), on `backend`.
+inline std::unique_ptr<World> make_world(const std::string& scene, const std::string& backend,
+                                         const std::vector<std::string>& overrides = {}) {
+    return build_world(load_scene(scene_file(scene), overrides), backend);
+}
+
+}  // namespace weft::test

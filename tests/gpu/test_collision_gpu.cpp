@@ -30,6 +30,7 @@
 #include <utility>
 #include <vector>
 
+#include "broad_phase_soups.h"
 #include "collision/broad_phase.h"
 #include "collision/broad_phase_gpu.h"
 #include "collision/ccd_gpu.h"
@@ -37,6 +38,7 @@
 #include "collision/proximity_gpu.h"
 #include "cuda_check.h"
 #include "device_array.h"
+#include "float_positions.h"
 #include "gpu_test_util.h"
 #include "random_geometry.h"
 #include "weft/physics/ccd.h"
@@ -79,11 +81,7 @@ struct Scene {
         return in;
     }
     /// Rounds every coordinate to float: the GPU and the CPU then see the very same positions.
-    void snap() {
-        for (auto* xs : {&x0, &x1})
-            for (Vec3d& p : *xs)
-                for (int k = 0; k < 3; ++k) p[k] = static_cast<double>(static_cast<float>(p[k]));
-    }
+    void snap() { test::snap_to_float(*this); }
 };
 
 /// A random triangle soup (random_geometry.h: a jittered lattice, some vertices jumping far: the
@@ -209,26 +207,14 @@ void block_patches(Scene& s, int n, int block) {
 
 // ---- device side ---------------------------------------------------------------------------------
 
-struct Stream {
-    cudaStream_t s = nullptr;
-    Stream() { WEFT_CUDA_CHECK(cudaStreamCreateWithFlags(&s, cudaStreamNonBlocking)); }
-    ~Stream() { cudaStreamDestroy(s); }
-    Stream(const Stream&) = delete;
-    Stream& operator=(const Stream&) = delete;
-};
+using test::Stream;
 
 template <typename T>
 const T* ptr(const DeviceArray<T>& a) {
     return a.size() > 0 ? a.get() : nullptr;
 }
 
-std::vector<float> soa(const std::vector<Vec3d>& x) {
-    const std::size_t n = x.size();
-    std::vector<float> out(3 * n);
-    for (std::size_t i = 0; i < n; ++i)
-        for (int k = 0; k < 3; ++k) out[k * n + i] = static_cast<float>(x[i][k]);
-    return out;
-}
+using test::soa_floats;
 
 /// A scene on the device.
 struct DeviceScene {
@@ -238,8 +224,8 @@ struct DeviceScene {
     const Scene* scene = nullptr;
 
     explicit DeviceScene(const Scene& s) : scene(&s) {
-        x0.upload(soa(s.x0), ledger, "x0");
-        x1.upload(soa(s.x1), ledger, "x1");
+        x0.upload(soa_floats(s.x0), ledger, "x0");
+        x1.upload(soa_floats(s.x1), ledger, "x1");
         std::vector<std::uint32_t> t, e;
         for (const Triangle& tri : s.triangles) t.insert(t.end(), tri.v, tri.v + 3);
         for (const Edge& edge : s.edges) e.insert(e.end(), edge.v, edge.v + 2);
@@ -418,17 +404,7 @@ Comparison check_scene(const Scene& s, const char* what, double cell = 0.0) {
 
 TEST(CollisionGpu, RandomSoupsContainTheCpuPairs) {
     WEFT_REQUIRE_GPU();
-    struct Case {
-        unsigned seed;
-        int lattice;
-        std::size_t triangles;
-        double motion, outliers;
-    };
-    const Case cases[] = {
-        {1, 6, 200, 0.0, 0.0},    {2, 8, 800, 0.1, 0.0},     {3, 10, 1500, 0.3, 0.01},
-        {4, 12, 3000, 0.05, 0.0}, {5, 12, 3000, 0.5, 0.005}, {6, 14, 2500, 0.2, 0.02},
-    };
-    for (const Case& c : cases) {
+    for (const test::SoupCase& c : test::kSoupCases) {
         SCOPED_TRACE("seed " + std::to_string(c.seed));
         const Scene s = random_soup(c.seed, c.lattice, c.triangles, c.motion, c.outliers);
         const std::string what = "soup " + std::to_string(c.seed);
@@ -468,20 +444,14 @@ TEST(CollisionGpu, NonFinitePositionsAndFarClusters) {
     {
         Scene s = random_soup(8, 8, 800, 0.1, 0.0);
         s.thickness = 0.1;
-        const double nan = std::numeric_limits<double>::quiet_NaN(), inf = std::numeric_limits<double>::infinity();
-        s.x1[3] = {nan, 0.0, 0.0};
-        s.x0[40] = {0.0, inf, 0.0};
-        s.x1[41] = {0.0, 0.0, -inf};
+        test::make_non_finite(s);
         (void)check_scene(s, "soup with NaN and Inf");
     }
     {
         // 10⁷ m apart: float positions there are a metre apart, and the outward rounding is a metre too.
         Scene s = random_soup(9, 8, 800, 0.1, 0.0);
         s.thickness = 0.05;
-        for (std::size_t i = 0; i < s.x0.size(); i += 2) {
-            s.x0[i] += Vec3d{1.0e7, -3.0e6, 0.0};
-            s.x1[i] += Vec3d{1.0e7, -3.0e6, 0.0};
-        }
+        test::split_far_apart(s);
         s.snap();
         (void)check_scene(s, "soup split 1e7 m apart");
     }

@@ -27,14 +27,7 @@ namespace {
 
 using cuda::as_cuda;
 
-std::filesystem::path scene_file(const std::string& name) {
-    return std::filesystem::path(WEFT_SOURCE_DIR) / "assets" / "scenes" / (name + ".toml");
-}
-
-std::unique_ptr<World> make_world(const std::string& scene, const std::string& backend,
-                                  const std::vector<std::string>& overrides = {}) {
-    return build_world(load_scene(scene_file(scene), overrides), backend);
-}
+using test::make_world;
 
 double bbox_diagonal(const std::vector<Vec3d>& x) {
     Vec3d lo = x.front(), hi = x.front();

@@ -33,11 +33,7 @@
 namespace weft {
 namespace {
 
-std::unique_ptr<World> make_world(const std::string& scene, const std::string& backend,
-                                  const std::vector<std::string>& overrides = {}) {
-    const auto file = std::filesystem::path(WEFT_SOURCE_DIR) / "assets" / "scenes" / (scene + ".toml");
-    return build_world(load_scene(file, overrides), backend);
-}
+using test::make_world;
 
 cuda::DeviceSolver& device_solver_of(World& world) {
     cuda::DeviceSolver* solver = cuda::device_solver(world.backend());

@@ -19,13 +19,12 @@
 #include "weft/scene.h"
 
 #include "device_layout.h"
+#include "gpu_test_util.h"
 
 namespace weft::cuda {
 namespace {
 
-std::filesystem::path scene_file(const std::string& name) {
-    return std::filesystem::path(WEFT_SOURCE_DIR) / "assets" / "scenes" / (name + ".toml");
-}
+using test::scene_file;
 
 /// The flag scene flattened. 40×24 cells = 1025 vertices: 32 full slices and a last slice of one row,
 /// so the padding past the last row is exercised too.

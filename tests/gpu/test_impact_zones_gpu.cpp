@@ -12,7 +12,6 @@
 #include <cmath>
 #include <cstdio>
 #include <cstring>
-#include <map>
 #include <vector>
 
 #include "collision/impact_zones.h"
@@ -20,6 +19,7 @@
 #include "collision/intersection_check.h"
 #include "cuda_check.h"
 #include "device_array.h"
+#include "float_positions.h"
 #include "gpu_test_util.h"
 #include "impact_zone_scenes.h"
 
@@ -31,7 +31,6 @@ using cuda::MemoryLedger;
 using cuda::collision::GpuImpactZoneInput;
 using cuda::collision::GpuImpactZones;
 using test::brute_force_ccd;
-using test::grid;
 using test::expect_clean;
 using test::momentum;
 using test::print;
@@ -43,22 +42,15 @@ using test::Scene;
 /// The scene with every position rounded to float (what the GPU sees), so that the double judges
 /// look at exactly the GPU's input.
 Scene rounded(Scene s) {
-    for (auto* xs : {&s.x0, &s.x1})
-        for (Vec3d& p : *xs)
-            for (int c = 0; c < 3; ++c) p[c] = static_cast<double>(static_cast<float>(p[c]));
+    weft::test::snap_to_float(s);
     return s;
 }
 
 Resolved resolve_gpu(const Scene& s, int max_iterations, GpuImpactZones& zones, std::uint32_t giant = GpuImpactZoneInput{}.giant_zone_constraints) {
     const std::size_t n = s.x0.size();
-    std::vector<float> x0(3 * n), x1(3 * n), im(n);
-    for (std::size_t v = 0; v < n; ++v) {
-        for (int c = 0; c < 3; ++c) {
-            x0[static_cast<std::size_t>(c) * n + v] = static_cast<float>(s.x0[v][c]);
-            x1[static_cast<std::size_t>(c) * n + v] = static_cast<float>(s.x1[v][c]);
-        }
-        im[v] = static_cast<float>(s.inverse_mass[v]);
-    }
+    const std::vector<float> x0 = weft::test::soa_floats(s.x0);
+    std::vector<float> x1 = weft::test::soa_floats(s.x1), im(n);
+    for (std::size_t v = 0; v < n; ++v) im[v] = static_cast<float>(s.inverse_mass[v]);
     std::vector<std::uint32_t> tris, edges;
     for (const Triangle& t : s.triangles) tris.insert(tris.end(), {t.v[0], t.v[1], t.v[2]});
     for (const Edge& e : s.edges) edges.insert(edges.end(), {e.v[0], e.v[1]});
@@ -111,11 +103,9 @@ TEST(GpuImpactZones, VertexDrivenHeadOnThroughTriangle) {
     WEFT_REQUIRE_GPU();
     // As the CPU test: the dart's tip p through the centroid of a triangle, all masses 1 kg. The
     // closest feasible point moves p up by ¾ of the violation and each corner down by ¼.
-    Scene s;
-    s.add({{-0.05, 0.0, -0.05}, {0.1, 0.0, -0.05}, {-0.05, 0.0, 0.1}}, {{{0, 1, 2}}}, 1.0);
-    const std::uint32_t dart = s.add({{0.0, 0.01, 0.0}, {0.01, 0.06, 0.0}, {-0.01, 0.06, 0.0}}, {{{0, 1, 2}}}, 1.0);
-    s.x1[dart] = {0.0, -0.01, 0.0};
-    s = rounded(s);
+    const test::DartScene scene = test::dart_through_triangle();
+    const Scene s = rounded(scene.scene);
+    const std::uint32_t dart = scene.dart;
     const Resolved r = resolve_gpu(s);
     print("vertex through triangle", r);
     expect_clean(s, r);
@@ -152,25 +142,16 @@ TEST(GpuImpactZones, TwoSheetsDrivenThroughEachOther) {
 
 TEST(GpuImpactZones, SheetPushedThroughFixedMesh) {
     WEFT_REQUIRE_GPU();
-    Scene s;
-    const std::uint32_t cloth = s.add(grid(0.3, 24, {0.0, 0.01, 0.0}), 1000.0);
-    MeshData patch = grid(0.1, 5, {0.003, 0.0, -0.002});
-    for (Vec3d& p : patch.positions) p.y = 0.004 * std::sin(60.0 * p.x) * std::cos(50.0 * p.z) - 0.004;
-    const std::uint32_t fixed = s.add(patch, 0.0);
-    for (std::uint32_t v = cloth; v < fixed; ++v) s.x1[v].y -= 0.014;
-    s = rounded(s);
+    test::ClothOnFixedMesh scene = test::sheet_into_bumpy_patch();
+    scene.scene = rounded(scene.scene);
+    const Scene& s = scene.scene;
     const Resolved r = resolve_gpu(s);
     print("sheet through fixed mesh (GPU)", r);
     expect_clean(s, r);
     EXPECT_EQ(r.report.frozen_vertices, 0);
-    std::size_t far = 0, far_untouched = 0;
-    for (std::uint32_t v = cloth; v < fixed; ++v) {
-        if (std::max(std::fabs(s.x0[v].x), std::fabs(s.x0[v].z)) < 0.12) continue;
-        ++far;
-        far_untouched += r.outcome[v] == VertexOutcome::Untouched && same_bits(r.x1[v], s.x1[v]) ? 1 : 0;
-    }
-    EXPECT_GT(far, 100U);
-    EXPECT_EQ(far_untouched, far);
+    const test::FarRim rim = test::far_rim(scene, r);
+    EXPECT_GT(rim.far, 100U);
+    EXPECT_EQ(rim.untouched, rim.far);
 }
 
 TEST(GpuImpactZones, CrumplingSheet) {
@@ -222,9 +203,7 @@ TEST(GpuImpactZones, RigidFallbackKeepsMomentumAndShape) {
     EXPECT_EQ(r.report.iterations, 1);
     EXPECT_GT(r.report.rigid_zones, 0);
     EXPECT_GT(r.report.rigid_rounds, 0);
-    std::map<std::uint32_t, std::vector<std::uint32_t>> rigid;
-    for (std::uint32_t v = 0; v < s.x0.size(); ++v)
-        if (r.outcome[v] == VertexOutcome::Rigid) rigid[r.zone[v]].push_back(v);
+    const auto rigid = test::rigid_zones(s, r);
     EXPECT_EQ(static_cast<int>(rigid.size()), r.report.rigid_zones);
     for (const auto& [label, vertices] : rigid) {
         // Float positions: the momentum and the distances hold to the rounding of the end positions.
@@ -232,24 +211,13 @@ TEST(GpuImpactZones, RigidFallbackKeepsMomentumAndShape) {
         for (std::uint32_t v : vertices) mass += 1.0 / s.inverse_mass[v];
         const Vec3d p_hat = momentum(s, s.x1, vertices), p = momentum(s, r.x1, vertices);
         EXPECT_LE(physics::length(p - p_hat), 1e-6 * mass) << "zone " << label << ", " << vertices.size() << " vertices";
-        double worst = 0.0;
-        for (std::size_t i = 0; i < vertices.size(); ++i)
-            for (std::size_t j = i + 1; j < vertices.size(); ++j) {
-                const std::uint32_t a = vertices[i], b = vertices[j];
-                worst =
-                    std::max(worst, std::fabs(physics::length(r.x1[a] - r.x1[b]) - physics::length(s.x0[a] - s.x0[b])));
-            }
-        EXPECT_LE(worst, 1e-6) << "zone " << label << " is not rigid";
+        EXPECT_LE(test::largest_distance_change(s, r, vertices), 1e-6) << "zone " << label << " is not rigid";
     }
 }
 
 TEST(GpuImpactZones, FreezingZonesThatTouchFixedVertices) {
     WEFT_REQUIRE_GPU();
-    Scene s;
-    const std::uint32_t cloth = s.add(grid(0.2, 16, {0.0, 0.01, 0.0}), 1000.0);
-    const std::uint32_t fixed = s.add(grid(0.1, 4, {0.002, 0.0, 0.003}), 0.0);
-    for (std::uint32_t v = cloth; v < fixed; ++v) s.x1[v].y -= 0.03;
-    s = rounded(s);
+    const Scene s = rounded(test::sheet_through_fixed_patch().scene);
     const Resolved r = resolve_gpu(s, 0);
     print("sheet through fixed mesh, 0 rounds (GPU)", r);
     expect_clean(s, r);
@@ -260,12 +228,10 @@ TEST(GpuImpactZones, FreezingZonesThatTouchFixedVertices) {
 
 TEST(GpuImpactZones, KinematicMeshCarriesFrozenCloth) {
     WEFT_REQUIRE_GPU();
-    Scene s;
-    const std::uint32_t cloth = s.add(grid(0.1, 8, {0.0, 0.0, 0.0}), 1000.0);
-    const std::uint32_t plate = s.add(grid(0.3, 3, {0.004, -0.01, 0.002}), 0.0);
-    const Vec3d lift{0.001, 0.03, 0.0};
-    for (std::uint32_t v = plate; v < s.x0.size(); ++v) s.x1[v] += lift;
-    s = rounded(s);
+    const test::PlateScene scene = test::plate_through_cloth();
+    const Scene s = rounded(scene.scene);
+    const std::uint32_t cloth = scene.cloth, plate = scene.plate;
+    const Vec3d lift = scene.lift;
     const Resolved r = resolve_gpu(s, 0);
     print("plate through frozen cloth (GPU)", r);
     expect_clean(s, r);

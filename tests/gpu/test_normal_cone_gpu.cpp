@@ -39,7 +39,9 @@
 #include "weft/backend/patch_hierarchy.h"
 #include "cuda_check.h"
 #include "device_array.h"
+#include "float_positions.h"
 #include "gpu_test_util.h"
+#include "normal_cone_scenes.h"
 #include "random_geometry.h"
 #include "sheet_deformations.h"
 
@@ -50,38 +52,14 @@ namespace gpu = weft::cuda::collision;
 using gpu::FloatCone;
 
 constexpr double kPi = std::numbers::pi;
-constexpr double kSpacing = 0.01;  // 1 cm grids throughout
+constexpr double kSpacing = test::kGridSpacing;
 constexpr double kThickness = 0.005;
 
 // ---- Scenes ---------------------------------------------------------------------------------------
 
-/// Cloths (and optionally a mesh collider after them) in one collision index space, moving x0 → x1.
-struct Scene {
-    std::vector<Vec3d> rest, x0, x1;
-    std::vector<Triangle> triangles;
-    std::vector<std::uint32_t> triangle_cloth;
-    std::vector<Edge> edges;
-    /// The cloth's share of the index space (the rest is a kinematic mesh collider).
-    std::uint32_t cloth_vertices = 0, cloth_triangles = 0;
-
-    /// Appends a cx × cy grid (1 cm cells) in the XY plane centred at the origin, as a new cloth;
-    /// returns its first vertex. Call before `add_collider`.
-    std::uint32_t add_grid(int cx, int cy) {
-        const MeshData m = make_grid(cx * kSpacing, cy * kSpacing, cx, cy, GridPlane::XY);
-        const auto base = static_cast<std::uint32_t>(rest.size());
-        const auto cloth = triangle_cloth.empty() ? 0U : triangle_cloth.back() + 1;
-        rest.insert(rest.end(), m.positions.begin(), m.positions.end());
-        for (Triangle t : m.triangles) {
-            for (std::uint32_t& v : t.v) v += base;
-            triangles.push_back(t);
-            triangle_cloth.push_back(cloth);
-        }
-        edges = build_edges(triangles);
-        x0 = x1 = rest;
-        cloth_vertices = static_cast<std::uint32_t>(rest.size());
-        cloth_triangles = static_cast<std::uint32_t>(triangles.size());
-        return base;
-    }
+/// Cloths (grids: test::GridScene::add_grid, before `add_collider`) and optionally a mesh collider
+/// after them in one collision index space, moving x0 → x1.
+struct Scene : test::GridScene {
     /// A vertex no triangle uses, in the cloth's range (kNoPatch on both sides).
     void add_loose_vertex(const Vec3d& p) {
         rest.push_back(p);
@@ -113,11 +91,7 @@ struct Scene {
         return e;
     }
     /// Rounds every coordinate to float: the device and the CPU then see the very same positions.
-    void snap() {
-        for (auto* xs : {&x0, &x1})
-            for (Vec3d& p : *xs)
-                for (int k = 0; k < 3; ++k) p[k] = static_cast<double>(static_cast<float>(p[k]));
-    }
+    void snap() { test::snap_to_float(*this); }
     [[nodiscard]] PatchHierarchy hierarchy() const {
         // Over every triangle, mesh colliders included, as CpuCollisions builds it.
         return build_patch_hierarchy(rest, triangles, edges, triangle_cloth);
@@ -134,11 +108,7 @@ struct Scene {
     }
 };
 
-Scene grid_scene(int cx, int cy) {
-    Scene s;
-    (void)s.add_grid(cx, cy);
-    return s;
-}
+Scene grid_scene(int cx, int cy) { return test::grid_scene<Scene>(cx, cy); }
 
 using Field = test::SmoothField;
 
@@ -259,13 +229,7 @@ Patches emulated_patches(const PatchHierarchy& h, const Scene& s) {
     return out;
 }
 
-struct Stream {
-    cudaStream_t s = nullptr;
-    Stream() { WEFT_CUDA_CHECK(cudaStreamCreateWithFlags(&s, cudaStreamNonBlocking)); }
-    ~Stream() { cudaStreamDestroy(s); }
-    Stream(const Stream&) = delete;
-    Stream& operator=(const Stream&) = delete;
-};
+using test::Stream;
 
 /// x0 and x1 on the device as the CUDA backend lays them out: structure of arrays, component stride
 /// `stride` (≥ the vertex count; the padding is NaN, which must never be read).
@@ -274,16 +238,9 @@ struct DevicePositions {
     cuda::DeviceArray<float> x0, x1;
     std::uint32_t stride = 0;
     DevicePositions(const Scene& s, std::uint32_t pad) {
-        const std::size_t n = s.x0.size();
-        stride = static_cast<std::uint32_t>(n) + pad;
-        const auto soa = [&](const std::vector<Vec3d>& x) {
-            std::vector<float> out(3 * std::size_t{stride}, std::numeric_limits<float>::quiet_NaN());
-            for (std::size_t i = 0; i < n; ++i)
-                for (int k = 0; k < 3; ++k) out[static_cast<std::size_t>(k) * stride + i] = static_cast<float>(x[i][k]);
-            return out;
-        };
-        x0.upload(soa(s.x0), ledger, "x0");
-        x1.upload(soa(s.x1), ledger, "x1");
+        stride = static_cast<std::uint32_t>(s.x0.size()) + pad;
+        x0.upload(test::soa_floats(s.x0, stride), ledger, "x0");
+        x1.upload(test::soa_floats(s.x1, stride), ledger, "x1");
     }
 };
 
@@ -345,58 +302,10 @@ std::size_t expect_cut(const PatchHierarchy& h, const Scene& s, const Patches& p
     return patches.size();
 }
 
-struct Box {
-    Vec3d lo, hi;
-};
-Box sweep(const Scene& s, std::initializer_list<std::uint32_t> vs, double pad) {
-    Box b{{1e300, 1e300, 1e300}, {-1e300, -1e300, -1e300}};
-    for (std::uint32_t v : vs)
-        for (const Vec3d& q : {s.x0[v], s.x1[v]})
-            for (int k = 0; k < 3; ++k) {
-                b.lo[k] = std::min(b.lo[k], q[k] - pad);
-                b.hi[k] = std::max(b.hi[k], q[k] + pad);
-            }
-    return b;
-}
-bool touch(const Box& a, const Box& b) {
-    for (int k = 0; k < 3; ++k)
-        if (a.lo[k] > b.hi[k] || b.lo[k] > a.hi[k]) return false;
-    return true;
-}
-
 /// Every non-adjacent vertex–face and edge–edge pair that CCD (double, separation 0) finds
-/// colliding during the step; only pairs whose swept bounds touch can.
-struct Colliding {
-    std::vector<VertexFacePair> vf;
-    std::vector<EdgeEdgePair> ee;
-};
-Colliding brute_force_ccd(const Scene& s) {
-    std::vector<Box> vb, eb, tb;
-    for (std::uint32_t v = 0; v < s.x0.size(); ++v) vb.push_back(sweep(s, {v}, 0.0));
-    for (const Edge& e : s.edges) eb.push_back(sweep(s, {e.v[0], e.v[1]}, 0.0));
-    for (const Triangle& t : s.triangles) tb.push_back(sweep(s, {t.v[0], t.v[1], t.v[2]}, 0.0));
-    Colliding c;
-    for (std::uint32_t v = 0; v < vb.size(); ++v)
-        for (std::uint32_t t = 0; t < tb.size(); ++t) {
-            const Triangle& tri = s.triangles[t];
-            if (v == tri.v[0] || v == tri.v[1] || v == tri.v[2] || !touch(vb[v], tb[t])) continue;
-            if (physics::vertex_face_ccd<double>(s.x0[v], s.x0[tri.v[0]], s.x0[tri.v[1]], s.x0[tri.v[2]], s.x1[v],
-                                                 s.x1[tri.v[0]], s.x1[tri.v[1]], s.x1[tri.v[2]], 0.0)
-                    .hit)
-                c.vf.push_back({v, t});
-        }
-    for (std::uint32_t a = 0; a < eb.size(); ++a)
-        for (std::uint32_t b = a + 1; b < eb.size(); ++b) {
-            const Edge &p = s.edges[a], &q = s.edges[b];
-            if (p.v[0] == q.v[0] || p.v[0] == q.v[1] || p.v[1] == q.v[0] || p.v[1] == q.v[1] || !touch(eb[a], eb[b]))
-                continue;
-            if (physics::edge_edge_ccd<double>(s.x0[p.v[0]], s.x0[p.v[1]], s.x0[q.v[0]], s.x0[q.v[1]], s.x1[p.v[0]],
-                                               s.x1[p.v[1]], s.x1[q.v[0]], s.x1[q.v[1]], 0.0)
-                    .hit)
-                c.ee.push_back({a, b});
-        }
-    return c;
-}
+/// colliding during the step (normal_cone_scenes.h).
+using Colliding = test::CollidingPairs;
+Colliding brute_force_ccd(const Scene& s) { return test::brute_force_ccd(s, 0.0); }
 
 /// Colliding pairs whose two primitives share a patch: what culling would wrongly skip.
 std::size_t culled_colliding(const Colliding& c, const Patches& p, const char* what) {
@@ -442,77 +351,13 @@ Culled broad_phase_culling(const Scene& s, const Patches& p, double thickness) {
 /// mid-step) and random soups (random_geometry.h), float-snapped.
 std::vector<std::pair<std::string, Scene>> adversarial_scenes() {
     std::vector<std::pair<std::string, Scene>> out;
-    std::mt19937 rng(3);
-    std::uniform_real_distribution<double> unit(0.0, 1.0);
-    std::normal_distribution<double> g(0.0, 1.0);
-    const auto noise = [&](Scene& s, double amp) {
-        for (std::size_t v = 0; v < s.x0.size(); ++v) {
-            s.x0[v] += amp * Vec3d{g(rng), g(rng), g(rng)};
-            s.x1[v] += amp * Vec3d{g(rng), g(rng), g(rng)};
-        }
-    };
     const auto add = [&](std::string name, Scene s) {
         s.snap();
         out.emplace_back(std::move(name), std::move(s));
     };
-    for (int i = 0; i < 4; ++i) {
-        Scene s = grid_scene(16, 14);
-        const double alpha = 2.0 * kPi * unit(rng), u_fold = 0.02 * (unit(rng) - 0.5);
-        const double th0 = kPi * (0.7 + 0.25 * unit(rng)), th1 = kPi * (1.02 + 0.1 * unit(rng));
-        for (std::size_t v = 0; v < s.rest.size(); ++v) {
-            s.x0[v] = fold(s.rest[v], alpha, u_fold, th0);
-            s.x1[v] = fold(s.rest[v], alpha, u_fold, th1);
-        }
-        noise(s, i % 2 == 0 ? 0.0 : 2e-4);
-        add("fold " + std::to_string(i), std::move(s));
-    }
-    for (int i = 0; i < 3; ++i) {
-        Scene s = grid_scene(40, 6);
-        const double x_min = -0.2, r0 = 0.025 + 0.01 * unit(rng);
-        const double gap0 = 0.004 + 0.004 * unit(rng), gap1 = -0.002 - 0.004 * unit(rng);
-        for (std::size_t v = 0; v < s.rest.size(); ++v) {
-            s.x0[v] = roll(s.rest[v], x_min, r0, gap0);
-            s.x1[v] = roll(s.rest[v], x_min, r0 * (1.0 - 0.05 * unit(rng)), gap1);
-        }
-        noise(s, i % 2 == 0 ? 0.0 : 1e-4);
-        add("spiral " + std::to_string(i), std::move(s));
-    }
-    for (int i = 0; i < 3; ++i) {
-        Scene s = grid_scene(24, 12);
-        const Field f0(rng, 0.01, 0.04, 0.15), f1(rng, 0.01, 0.04, 0.15);
-        const double t0 = 2.0 + 3.0 * unit(rng);
-        for (std::size_t v = 0; v < s.rest.size(); ++v) {
-            const Vec3d p{s.rest[v].x, 0.5 * s.rest[v].y, 0.0};
-            s.x0[v] = twist(p, 0.24, t0) + f0.at(s.rest[v]);
-            s.x1[v] = twist(p, 0.24, t0 + 0.1) + f1.at(s.rest[v]);
-        }
-        add("twist " + std::to_string(i), std::move(s));
-    }
-    for (int i = 0; i < 4; ++i) {
-        Scene s = grid_scene(14, 14);
-        const double amp = 0.01 + 0.03 * unit(rng);
-        const Field f0(rng, amp, 0.04, 0.2), f1(rng, amp, 0.04, 0.2);
-        for (std::size_t v = 0; v < s.rest.size(); ++v) {
-            s.x0[v] = s.rest[v] + f0.at(s.rest[v]);
-            s.x1[v] = s.rest[v] + f1.at(s.rest[v]);
-        }
-        noise(s, i % 3 == 0 ? 1e-3 : 0.0);
-        add("crumple " + std::to_string(i), std::move(s));
-    }
-    {
-        Scene s = grid_scene(6, 6);
-        for (std::size_t v = 0; v < s.rest.size(); ++v) s.x1[v] = {-s.rest[v].x, -s.rest[v].y, s.rest[v].z};
-        add("turn by pi in-plane", std::move(s));
-        Scene f = grid_scene(6, 6);
-        for (std::size_t v = 0; v < f.rest.size(); ++v) f.x1[v] = {f.rest[v].x, -f.rest[v].y, 0.001};
-        add("flip over", std::move(f));
-        Scene h = grid_scene(10, 5);
-        for (std::size_t v = 0; v < h.rest.size(); ++v) {
-            const Vec3d p = h.rest[v];
-            h.x1[v] = p.x > 0.0 ? Vec3d{-p.x, -p.y, 0.0005} : p;
-        }
-        add("half turned mid-step", std::move(h));
-    }
+    test::MotionRandom random(3);
+    test::adversarial_motions<Scene>(random, {.folds = 4, .spirals = 3, .twists = 3, .crumples = 4},
+                                     [&](Scene&& s, std::string name) { add(std::move(name), std::move(s)); });
     for (unsigned seed = 1; seed <= 2; ++seed) {
         // Soups: mostly non-manifold, hence few disks, but every triangle is its own leaf patch and
         // any disk found among the lattice's sheets is tested like any other.

@@ -20,6 +20,7 @@
 #include "weft/world.h"
 
 #include "collision/broad_phase.h"
+#include "broad_phase_soups.h"
 #include "random_geometry.h"
 
 namespace weft::collision {
@@ -188,17 +189,7 @@ TEST(BroadPhase, BuildEdgesIsSortedUniqueAndComplete) {
 }
 
 TEST(BroadPhase, RandomSoupsMatchBruteForce) {
-    struct Case {
-        unsigned seed;
-        int lattice;
-        std::size_t triangles;
-        double motion, outliers;
-    };
-    const Case cases[] = {
-        {1, 6, 200, 0.0, 0.0},    {2, 8, 800, 0.1, 0.0},     {3, 10, 1500, 0.3, 0.01},
-        {4, 12, 3000, 0.05, 0.0}, {5, 12, 3000, 0.5, 0.005}, {6, 14, 2500, 0.2, 0.02},
-    };
-    for (const Case& c : cases) {
+    for (const test::SoupCase& c : test::kSoupCases) {
         SCOPED_TRACE("seed " + std::to_string(c.seed));
         Soup s = random_soup(c.seed, c.lattice, c.triangles, c.motion, c.outliers);
         std::mt19937 rng(c.seed + 100);
@@ -227,23 +218,18 @@ TEST(BroadPhase, AnyCellSizeGivesTheSameResult) {
 TEST(BroadPhase, NonFinitePositionsAreSkipped) {
     Soup s = random_soup(8, 8, 800, 0.1, 0.0);
     s.thickness = 0.1;
-    const double nan = std::numeric_limits<double>::quiet_NaN(), inf = std::numeric_limits<double>::infinity();
-    s.x1[3] = {nan, 0.0, 0.0};
-    s.x0[40] = {0.0, inf, 0.0};
-    s.x1[41] = {0.0, 0.0, -inf};
+    test::make_non_finite(s);
     const auto out = check_against_brute_force(s.input());
     EXPECT_GE(out.counters.nonfinite, 3U);
-    for (const VertexFacePair& p : out.vf) EXPECT_TRUE(p.vertex != 3 && p.vertex != 40 && p.vertex != 41);
+    for (const VertexFacePair& p : out.vf)
+        for (const std::uint32_t v : test::kNonFiniteVertices) EXPECT_NE(p.vertex, v);
 }
 
 TEST(BroadPhase, FarApartClustersBeyondTheCellRange) {
     // 10⁷ m apart with ~1 m cells: more than 2²¹ cells, so coordinates are clamped at the border.
     Soup s = random_soup(9, 8, 800, 0.1, 0.0);
     s.thickness = 0.05;
-    for (std::size_t i = 0; i < s.x0.size(); i += 2) {
-        s.x0[i] += Vec3d{1.0e7, -3.0e6, 0.0};
-        s.x1[i] += Vec3d{1.0e7, -3.0e6, 0.0};
-    }
+    test::split_far_apart(s);
     (void)check_against_brute_force(s.input());
 }
 

@@ -17,7 +17,6 @@
 #include <cmath>
 #include <cstdio>
 #include <cstring>
-#include <map>
 #include <numbers>
 #include <random>
 #include <vector>
@@ -37,7 +36,6 @@ namespace {
 using test::brute_force_ccd;
 using test::Collisions;
 using test::crumpled_sheet;
-using test::grid;
 using test::Scene;
 using test::two_sheets;
 using test::expect_clean;
@@ -92,10 +90,7 @@ TEST(ImpactZones, VertexDrivenHeadOnThroughTriangle) {
     // p_y − (a_y + b_y + c_y)/3 ≥ δ, violated by δ + 1 cm at the prediction; with weights
     // (1, −⅓, −⅓, −⅓) and equal masses the closest feasible point moves p up by ¾ of that and each
     // corner down by ¼ (x = x̂ + M⁻¹Jᵀλ with λ·(1 + 3·⅑) = violation).
-    Scene s;
-    s.add({{-0.05, 0.0, -0.05}, {0.1, 0.0, -0.05}, {-0.05, 0.0, 0.1}}, {{{0, 1, 2}}}, 1.0);
-    const std::uint32_t dart = s.add({{0.0, 0.01, 0.0}, {0.01, 0.06, 0.0}, {-0.01, 0.06, 0.0}}, {{{0, 1, 2}}}, 1.0);
-    s.x1[dart] = {0.0, -0.01, 0.0};
+    const auto [s, dart] = test::dart_through_triangle();
     expect_meaningful(s);
     const Resolved r = resolve(s);
     print("vertex through triangle", r);
@@ -164,25 +159,16 @@ TEST(ImpactZones, SheetPushedThroughFixedMesh) {
     // A 24×24 cloth 30 cm wide falls 1.4 cm into a fixed bumpy patch 10 cm wide (inverse mass 0), to
     // the middle of its bumps. The cloth's rim, far from the patch, falls freely and must keep its x1
     // exactly.
-    Scene s;
-    const std::uint32_t cloth = s.add(grid(0.3, 24, {0.0, 0.01, 0.0}), 1000.0);
-    MeshData patch = grid(0.1, 5, {0.003, 0.0, -0.002});
-    for (Vec3d& p : patch.positions) p.y = 0.004 * std::sin(60.0 * p.x) * std::cos(50.0 * p.z) - 0.004;
-    const std::uint32_t fixed = s.add(patch, 0.0);
-    for (std::uint32_t v = cloth; v < fixed; ++v) s.x1[v].y -= 0.014;
+    const test::ClothOnFixedMesh scene = test::sheet_into_bumpy_patch();
+    const auto& [s, cloth, fixed] = scene;
     expect_meaningful(s);
     const Resolved r = resolve(s);
     print("sheet through fixed mesh", r);
     expect_clean(s, r);
     EXPECT_EQ(r.report.frozen_vertices, 0);
-    std::size_t far = 0, far_untouched = 0;
-    for (std::uint32_t v = cloth; v < fixed; ++v) {
-        if (std::max(std::fabs(s.x0[v].x), std::fabs(s.x0[v].z)) < 0.12) continue;
-        ++far;
-        far_untouched += r.outcome[v] == VertexOutcome::Untouched && same_bits(r.x1[v], s.x1[v]) ? 1 : 0;
-    }
-    EXPECT_GT(far, 100U);
-    EXPECT_EQ(far_untouched, far);
+    const test::FarRim rim = test::far_rim(scene, r);
+    EXPECT_GT(rim.far, 100U);
+    EXPECT_EQ(rim.untouched, rim.far);
     // The cloth ends above the patch wherever it is over it.
     std::vector<std::uint32_t> cloth_vertices;
     for (std::uint32_t v = cloth; v < fixed; ++v) cloth_vertices.push_back(v);
@@ -215,9 +201,7 @@ TEST(ImpactZones, RigidFallbackKeepsMomentumAndShape) {
     EXPECT_GT(r.report.rigid_rounds, 0);
     // Each rigid zone: the momentum of its motion is the prediction's (the projection's impulses
     // were internal, the rigid motion keeps it), and its vertices keep their distances.
-    std::map<std::uint32_t, std::vector<std::uint32_t>> rigid;
-    for (std::uint32_t v = 0; v < s.x0.size(); ++v)
-        if (r.outcome[v] == VertexOutcome::Rigid) rigid[r.zone[v]].push_back(v);
+    const auto rigid = test::rigid_zones(s, r);
     EXPECT_EQ(static_cast<int>(rigid.size()), r.report.rigid_zones);
     for (const auto& [label, vertices] : rigid) {
         double scale = 0.0;
@@ -225,24 +209,14 @@ TEST(ImpactZones, RigidFallbackKeepsMomentumAndShape) {
         const Vec3d p_hat = momentum(s, s.x1, vertices), p = momentum(s, r.x1, vertices);
         EXPECT_LE(physics::length(p - p_hat), 1e-13 * scale)
             << "zone " << label << ", " << vertices.size() << " vertices";
-        double worst = 0.0;
-        for (std::size_t i = 0; i < vertices.size(); ++i)
-            for (std::size_t j = i + 1; j < vertices.size(); ++j) {
-                const std::uint32_t a = vertices[i], b = vertices[j];
-                worst =
-                    std::max(worst, std::fabs(physics::length(r.x1[a] - r.x1[b]) - physics::length(s.x0[a] - s.x0[b])));
-            }
-        EXPECT_LE(worst, 1e-12) << "zone " << label << " is not rigid";
+        EXPECT_LE(test::largest_distance_change(s, r, vertices), 1e-12) << "zone " << label << " is not rigid";
     }
 }
 
 TEST(ImpactZones, FreezingZonesThatTouchFixedVertices) {
     // No projection round: the zones touch the fixed patch, so they cannot move rigidly and are held
     // at x0 instead.
-    Scene s;
-    const std::uint32_t cloth = s.add(grid(0.2, 16, {0.0, 0.01, 0.0}), 1000.0);
-    const std::uint32_t fixed = s.add(grid(0.1, 4, {0.002, 0.0, 0.003}), 0.0);
-    for (std::uint32_t v = cloth; v < fixed; ++v) s.x1[v].y -= 0.03;
+    const Scene s = test::sheet_through_fixed_patch().scene;
     expect_meaningful(s, false);  // the cloth ends below the patch
     const Resolved r = resolve(s, 0);
     print("sheet through fixed mesh, 0 rounds", r);
@@ -255,11 +229,7 @@ TEST(ImpactZones, FreezingZonesThatTouchFixedVertices) {
 TEST(ImpactZones, KinematicMeshCarriesFrozenCloth) {
     // A collider plate (inverse mass 0) rises 3 cm through a cloth at rest, with no projection round:
     // the cloth is frozen at x0, the plate still drives into it, so the cloth it meets moves with it.
-    Scene s;
-    const std::uint32_t cloth = s.add(grid(0.1, 8, {0.0, 0.0, 0.0}), 1000.0);
-    const std::uint32_t plate = s.add(grid(0.3, 3, {0.004, -0.01, 0.002}), 0.0);
-    const Vec3d lift{0.001, 0.03, 0.0};
-    for (std::uint32_t v = plate; v < s.x0.size(); ++v) s.x1[v] += lift;
+    const auto [s, cloth, plate, lift] = test::plate_through_cloth();
     expect_meaningful(s, false);  // the plate ends above the cloth
     const Resolved r = resolve(s, 0);
     print("plate through frozen cloth", r);

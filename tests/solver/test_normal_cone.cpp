@@ -26,6 +26,7 @@
 #include "collision/normal_cone.h"
 #include "collision/normal_cone_front.h"
 #include "weft/backend/patch_hierarchy.h"
+#include "normal_cone_scenes.h"
 #include "random_geometry.h"
 #include "sheet_deformations.h"
 
@@ -33,40 +34,8 @@ namespace weft::collision {
 namespace {
 
 constexpr double kPi = std::numbers::pi;
-constexpr double kSpacing = 0.01;  // 1 cm grids throughout
-
-// ---- Meshes and motions ----------------------------------------------------------------------------
-
-/// Cloths in one global vertex/triangle list, with a motion x0 → x1.
-struct Scene {
-    std::vector<Vec3d> rest, x0, x1;
-    std::vector<Triangle> triangles;
-    std::vector<std::uint32_t> triangle_cloth;
-    std::vector<Edge> edges;
-
-    /// Appends a cx × cy grid (1 cm cells) in the XY plane centred at the origin; returns its first
-    /// vertex.
-    std::uint32_t add_grid(int cx, int cy) {
-        const MeshData m = make_grid(cx * kSpacing, cy * kSpacing, cx, cy, GridPlane::XY);
-        const auto base = static_cast<std::uint32_t>(rest.size());
-        const auto cloth = triangle_cloth.empty() ? 0U : triangle_cloth.back() + 1;
-        rest.insert(rest.end(), m.positions.begin(), m.positions.end());
-        for (Triangle t : m.triangles) {
-            for (std::uint32_t& v : t.v) v += base;
-            triangles.push_back(t);
-            triangle_cloth.push_back(cloth);
-        }
-        edges = build_edges(triangles);
-        x0 = x1 = rest;
-        return base;
-    }
-};
-
-Scene grid_scene(int cx, int cy) {
-    Scene s;
-    (void)s.add_grid(cx, cy);
-    return s;
-}
+using Scene = test::GridScene;
+using test::grid_scene;
 
 using Field = test::SmoothField;
 
@@ -74,61 +43,10 @@ using test::fold;
 using test::roll;
 using test::twist;
 
-// ---- Brute force -------------------------------------------------------------------------------------
+// ---- Brute force (normal_cone_scenes.h) -----------------------------------------------------------
 
-struct Box {
-    Vec3d lo, hi;
-};
-Box sweep(const Scene& s, std::initializer_list<std::uint32_t> vs, double pad) {
-    Box b{{1e300, 1e300, 1e300}, {-1e300, -1e300, -1e300}};
-    for (std::uint32_t v : vs)
-        for (const Vec3d& p : {s.x0[v], s.x1[v]})
-            for (int k = 0; k < 3; ++k) {
-                b.lo[k] = std::min(b.lo[k], p[k] - pad);
-                b.hi[k] = std::max(b.hi[k], p[k] + pad);
-            }
-    return b;
-}
-bool touch(const Box& a, const Box& b) {
-    for (int k = 0; k < 3; ++k)
-        if (a.lo[k] > b.hi[k] || b.lo[k] > a.hi[k]) return false;
-    return true;
-}
-
-struct Colliding {
-    std::vector<VertexFacePair> vf;
-    std::vector<EdgeEdgePair> ee;
-};
-
-/// Every non-adjacent vertex–face and edge–edge pair that CCD finds within eta during the step. A
-/// pair whose swept bounds (grown by eta) do not touch cannot come within eta, so only those are
-/// given to CCD.
-Colliding brute_force_ccd(const Scene& s, double eta) {
-    std::vector<Box> vb, eb, tb;
-    for (std::uint32_t v = 0; v < s.x0.size(); ++v) vb.push_back(sweep(s, {v}, eta));
-    for (const Edge& e : s.edges) eb.push_back(sweep(s, {e.v[0], e.v[1]}, eta));
-    for (const Triangle& t : s.triangles) tb.push_back(sweep(s, {t.v[0], t.v[1], t.v[2]}, 0.0));
-    Colliding c;
-    for (std::uint32_t v = 0; v < vb.size(); ++v)
-        for (std::uint32_t t = 0; t < tb.size(); ++t) {
-            const Triangle& tri = s.triangles[t];
-            if (v == tri.v[0] || v == tri.v[1] || v == tri.v[2] || !touch(vb[v], tb[t])) continue;
-            const auto r =
-                physics::vertex_face_ccd<double>(s.x0[v], s.x0[tri.v[0]], s.x0[tri.v[1]], s.x0[tri.v[2]], s.x1[v],
-                                                 s.x1[tri.v[0]], s.x1[tri.v[1]], s.x1[tri.v[2]], eta);
-            if (r.hit) c.vf.push_back({v, t});
-        }
-    for (std::uint32_t a = 0; a < eb.size(); ++a)
-        for (std::uint32_t b = a + 1; b < eb.size(); ++b) {
-            const Edge &p = s.edges[a], &q = s.edges[b];
-            if (p.v[0] == q.v[0] || p.v[0] == q.v[1] || p.v[1] == q.v[0] || p.v[1] == q.v[1]) continue;
-            if (!touch(eb[a], eb[b])) continue;
-            const auto r = physics::edge_edge_ccd<double>(s.x0[p.v[0]], s.x0[p.v[1]], s.x0[q.v[0]], s.x0[q.v[1]],
-                                                          s.x1[p.v[0]], s.x1[p.v[1]], s.x1[q.v[0]], s.x1[q.v[1]], eta);
-            if (r.hit) c.ee.push_back({a, b});
-        }
-    return c;
-}
+using Colliding = test::CollidingPairs;
+using test::brute_force_ccd;
 
 BroadPhaseInput culled_input(const Scene& s, const NormalConeFront& front, double thickness) {
     BroadPhaseInput in{.x0 = s.x0,
@@ -561,80 +479,14 @@ TEST(NormalCone, CulledBroadPhaseKeepsEveryPairThatCcdFindsColliding) {
             name.c_str(), o.patches, o.largest_patch, o.colliding, o.candidates, o.culled, thickness * 1e3,
             o.colliding_thick, o.missed_thick);
     };
-    std::mt19937 rng(4);
-    std::uniform_real_distribution<double> unit(0.0, 1.0);
-    std::normal_distribution<double> g(0.0, 1.0);
-    const auto noise = [&](Scene& s, double amp) {
-        for (std::size_t v = 0; v < s.x0.size(); ++v) {
-            s.x0[v] += amp * Vec3d{g(rng), g(rng), g(rng)};
-            s.x1[v] += amp * Vec3d{g(rng), g(rng), g(rng)};
-        }
-    };
-    // Folding onto itself and through: the flap turns from θ0 to θ1 > π about a random line.
-    for (int i = 0; i < 6; ++i) {
-        Scene s = grid_scene(16, 14);
-        const double alpha = 2.0 * kPi * unit(rng), u_fold = 0.02 * (unit(rng) - 0.5);
-        const double th0 = kPi * (0.7 + 0.25 * unit(rng)), th1 = kPi * (1.02 + 0.1 * unit(rng));
-        for (std::size_t v = 0; v < s.rest.size(); ++v) {
-            s.x0[v] = fold(s.rest[v], alpha, u_fold, th0);
-            s.x1[v] = fold(s.rest[v], alpha, u_fold, th1);
-        }
-        noise(s, i % 2 == 0 ? 0.0 : 2e-4);
-        run(s, "fold " + std::to_string(i));
-    }
-    // A strip rolled into a spiral whose turns pass through each other (gap from + to −).
-    for (int i = 0; i < 4; ++i) {
-        Scene s = grid_scene(40, 6);
-        const double x_min = -0.2, r0 = 0.025 + 0.01 * unit(rng);
-        const double gap0 = 0.004 + 0.004 * unit(rng), gap1 = -0.002 - 0.004 * unit(rng);
-        for (std::size_t v = 0; v < s.rest.size(); ++v) {
-            s.x0[v] = roll(s.rest[v], x_min, r0, gap0);
-            s.x1[v] = roll(s.rest[v], x_min, r0 * (1.0 - 0.05 * unit(rng)), gap1);
-        }
-        noise(s, i % 2 == 0 ? 0.0 : 1e-4);
-        run(s, "spiral " + std::to_string(i));
-    }
-    // Twisted far (several half turns) with crumpling noise that makes it cross itself.
-    for (int i = 0; i < 3; ++i) {
-        Scene s = grid_scene(24, 12);
-        const Field f0(rng, 0.01, 0.04, 0.15), f1(rng, 0.01, 0.04, 0.15);
-        const double t0 = 2.0 + 3.0 * unit(rng);
-        for (std::size_t v = 0; v < s.rest.size(); ++v) {
-            const Vec3d p{s.rest[v].x, 0.5 * s.rest[v].y, 0.0};
-            s.x0[v] = twist(p, 0.24, t0) + f0.at(s.rest[v]);
-            s.x1[v] = twist(p, 0.24, t0 + 0.1) + f1.at(s.rest[v]);
-        }
-        run(s, "twist " + std::to_string(i));
-    }
-    // Crumpled: large smooth random displacements, different at both ends.
-    for (int i = 0; i < 6; ++i) {
-        Scene s = grid_scene(14, 14);
-        const double amp = 0.01 + 0.03 * unit(rng);
-        const Field f0(rng, amp, 0.04, 0.2), f1(rng, amp, 0.04, 0.2);
-        for (std::size_t v = 0; v < s.rest.size(); ++v) {
-            s.x0[v] = s.rest[v] + f0.at(s.rest[v]);
-            s.x1[v] = s.rest[v] + f1.at(s.rest[v]);
-        }
-        noise(s, i % 3 == 0 ? 1e-3 : 0.0);
-        run(s, "crumple " + std::to_string(i));
-    }
-    // Folds that happen only mid-step: flat at both ends (normals +z), collapsing in between.
-    {
-        Scene s = grid_scene(6, 6);
-        for (std::size_t v = 0; v < s.rest.size(); ++v) s.x1[v] = {-s.rest[v].x, -s.rest[v].y, s.rest[v].z};
-        run(s, "turn by pi in-plane");
-        Scene f = grid_scene(6, 6);
-        for (std::size_t v = 0; v < f.rest.size(); ++v) f.x1[v] = {f.rest[v].x, -f.rest[v].y, 0.001};
-        run(f, "flip over");
-        // A half of the sheet turned by π in-plane about the middle of the fold line while the other
-        // half stays: it sweeps through the fixed half mid-step.
-        Scene h = grid_scene(10, 5);
-        for (std::size_t v = 0; v < h.rest.size(); ++v) {
-            const Vec3d p = h.rest[v];
-            h.x1[v] = p.x > 0.0 ? Vec3d{-p.x, -p.y, 0.0005} : p;
-        }
-        run(h, "half turned mid-step");
-    }
+    // Folds, spirals, twists, crumples and mid-step folds (normal_cone_scenes.h), then several cloths
+    // from the same random sequence.
+    test::MotionRandom random(4);
+    test::adversarial_motions<Scene>(random, {.folds = 6, .spirals = 4, .twists = 3, .crumples = 6},
+                                     [&](Scene&& s, const std::string& name) { run(s, name); });
+    std::mt19937& rng = random.rng;
+    std::uniform_real_distribution<double>& unit = random.unit;
+    std::normal_distribution<double>& g = random.g;
     // Several cloths: three stacked sheets passing through one another, two of them folding.
     for (int i = 0; i < 3; ++i) {
         Scene s;

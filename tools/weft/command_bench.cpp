@@ -18,6 +18,8 @@ namespace weft::cli {
 
 namespace {
 
+using json::JsonWriter;
+
 struct BenchResult {
     RunContext context;
     RunSummary summary;

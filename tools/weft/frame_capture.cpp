@@ -9,6 +9,7 @@
 #include <cstdio>
 #include <optional>
 
+#include "weft/backend/timing.h"
 #include "weft/render/cloth_feed.h"
 #include "weft/render/frame_sequence.h"
 #include "weft/render/renderer.h"
@@ -22,10 +23,6 @@ namespace {
 
 constexpr int kSheetFrames = 12;
 constexpr int kSheetColumns = 4;
-
-double ms_since(std::chrono::steady_clock::time_point start) {
-    return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
-}
 
 }  // namespace
 

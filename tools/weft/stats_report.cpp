@@ -13,6 +13,9 @@
 
 namespace weft::cli {
 
+using json::json_number;
+using json::JsonWriter;
+
 Distribution distribution(std::vector<double> values) {
     // A NaN has no place in an order (and would break std::sort): drop it, it is not a time.
     std::erase_if(values, [](double v) { return std::isnan(v); });

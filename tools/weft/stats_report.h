@@ -112,7 +112,7 @@ struct RunContext {
 [[nodiscard]] std::vector<std::string> run_warnings(const RunContext& context, const RunSummary& summary);
 
 /// Writes the summary keys into an object the caller has opened (shared by run and bench JSON).
-void write_summary_fields(JsonWriter& json, const RunContext& context, const RunSummary& summary);
+void write_summary_fields(json::JsonWriter& json, const RunContext& context, const RunSummary& summary);
 /// The stats JSON of one run: summary keys plus the per-frame series (step_ms, cg_iterations, contacts).
 /// With `capture`, a "capture" object: renderer, device, path, bytes per frame, frames, median ms.
 void write_run_json(std::ostream& out, const RunContext& context, const RunSummary& summary,

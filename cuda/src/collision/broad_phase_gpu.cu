@@ -11,6 +11,7 @@
 #include <string>
 
 #include "cuda_check.h"
+#include "grid_size.h"
 
 namespace weft::cuda::collision {
 namespace {
@@ -74,10 +75,6 @@ struct Params {
     std::uint32_t key_sort_bits;
     PairEncoding enc;
 };
-
-[[nodiscard]] unsigned blocks_for(std::uint64_t count) {
-    return static_cast<unsigned>((count + kThreads - 1) / kThreads);
-}
 
 // ---- small device helpers ------------------------------------------------------------------------
 
@@ -868,19 +865,19 @@ void GpuBroadPhase::enqueue(const GpuBroadPhaseInput& in, cudaStream_t stream) {
     reset_kernel<<<1, 1, 0, stream>>>(block);
     WEFT_CUDA_CHECK_LAUNCH("reset_kernel");
     if (p.filter_cloth && p.n > 0) {
-        cloth_reset_kernel<<<blocks_for(p.n), kThreads, 0, stream>>>(p);
+        cloth_reset_kernel<<<blocks_for(p.n, kThreads), kThreads, 0, stream>>>(p);
         WEFT_CUDA_CHECK_LAUNCH("cloth_reset_kernel");
         if (in.triangle_cloth != nullptr) {
             if (p.nt > 0) {
-                cloth_first_triangle_kernel<<<blocks_for(p.nt), kThreads, 0, stream>>>(p);
+                cloth_first_triangle_kernel<<<blocks_for(p.nt, kThreads), kThreads, 0, stream>>>(p);
                 WEFT_CUDA_CHECK_LAUNCH("cloth_first_triangle_kernel");
             }
-            cloth_lookup_kernel<<<blocks_for(p.n), kThreads, 0, stream>>>(p);
+            cloth_lookup_kernel<<<blocks_for(p.n, kThreads), kThreads, 0, stream>>>(p);
             WEFT_CUDA_CHECK_LAUNCH("cloth_lookup_kernel");
         }
     }
     if (prims > 0) {
-        bounds_kernel<<<blocks_for(prims), kThreads, 0, stream>>>(p);
+        bounds_kernel<<<blocks_for(prims, kThreads), kThreads, 0, stream>>>(p);
         WEFT_CUDA_CHECK_LAUNCH("bounds_kernel");
     }
     mark(Bounds, stream);
@@ -898,7 +895,8 @@ void GpuBroadPhase::enqueue(const GpuBroadPhaseInput& in, cudaStream_t stream) {
 
     // ---- primitives in (kind, patch, index) order ----
     if (cull && prims > 0) {
-        patch_order_kernel<<<blocks_for(prims), kThreads, 0, stream>>>(p, order_keys_[0].get(), order_[0].get());
+        patch_order_kernel<<<blocks_for(prims, kThreads), kThreads, 0, stream>>>(p, order_keys_[0].get(),
+                                                                                 order_[0].get());
         WEFT_CUDA_CHECK_LAUNCH("patch_order_kernel");
         cub::DoubleBuffer<unsigned long long> k(order_keys_[0].get(), order_keys_[1].get());
         cub::DoubleBuffer<std::uint32_t> v(order_[0].get(), order_[1].get());
@@ -908,18 +906,19 @@ void GpuBroadPhase::enqueue(const GpuBroadPhaseInput& in, cudaStream_t stream) {
     mark(PatchOrder, stream);
 
     // ---- count ----
-    count_kernel<<<blocks_for(std::uint64_t{prims} + 1), kThreads, 0, stream>>>(p);
+    count_kernel<<<blocks_for(std::uint64_t{prims} + 1, kThreads), kThreads, 0, stream>>>(p);
     WEFT_CUDA_CHECK_LAUNCH("count_kernel");
     mark(Count, stream);
 
     // ---- scan and entries ----
     WEFT_CUB_CHECK(cub::DeviceScan::ExclusiveSum(temp, scratch(), counts_.get(), prims + 1U, stream));
     if (prims > 0) {
-        fill_kernel<<<blocks_for(prims), kThreads, 0, stream>>>(p, entry_keys_[0].get(), entry_prims_[0].get());
+        fill_kernel<<<blocks_for(prims, kThreads), kThreads, 0, stream>>>(p, entry_keys_[0].get(),
+                                                                          entry_prims_[0].get());
         WEFT_CUDA_CHECK_LAUNCH("fill_kernel");
     }
-    pad_entries_kernel<<<blocks_for(p.entry_capacity), kThreads, 0, stream>>>(p, entry_keys_[0].get(),
-                                                                               entry_prims_[0].get());
+    pad_entries_kernel<<<blocks_for(p.entry_capacity, kThreads), kThreads, 0, stream>>>(p, entry_keys_[0].get(),
+                                                                                        entry_prims_[0].get());
     WEFT_CUDA_CHECK_LAUNCH("pad_entries_kernel");
     mark(Scan, stream);
 
@@ -932,15 +931,16 @@ void GpuBroadPhase::enqueue(const GpuBroadPhaseInput& in, cudaStream_t stream) {
     mark(Sort, stream);
 
     // ---- cell ranges ----
-    cell_flags_kernel<<<blocks_for(p.entry_capacity), kThreads, 0, stream>>>(p, keys, cell_id_.get());
+    cell_flags_kernel<<<blocks_for(p.entry_capacity, kThreads), kThreads, 0, stream>>>(p, keys, cell_id_.get());
     WEFT_CUDA_CHECK_LAUNCH("cell_flags_kernel");
     WEFT_CUB_CHECK(cub::DeviceScan::InclusiveSum(temp, scratch(), cell_id_.get(), p.entry_capacity, stream));
-    cell_begin_kernel<<<blocks_for(p.entry_capacity), kThreads, 0, stream>>>(p, cell_id_.get(), cell_begin_.get());
+    cell_begin_kernel<<<blocks_for(p.entry_capacity, kThreads), kThreads, 0, stream>>>(p, cell_id_.get(),
+                                                                                       cell_begin_.get());
     WEFT_CUDA_CHECK_LAUNCH("cell_begin_kernel");
     mark(Ranges, stream);
 
     // ---- workload table ----
-    rows_kernel<<<blocks_for(std::uint64_t{p.entry_capacity} + 1), kThreads, 0, stream>>>(
+    rows_kernel<<<blocks_for(std::uint64_t{p.entry_capacity} + 1, kThreads), kThreads, 0, stream>>>(
         p, entry_prims, cell_id_.get(), cell_begin_.get(), row_offset_.get(), row_info_.get());
     WEFT_CUDA_CHECK_LAUNCH("rows_kernel");
     WEFT_CUB_CHECK(cub::DeviceScan::ExclusiveSum(temp, scratch(), row_offset_.get(), p.entry_capacity + 1U, stream));
@@ -956,7 +956,7 @@ void GpuBroadPhase::enqueue(const GpuBroadPhaseInput& in, cudaStream_t stream) {
     mark(Pairs, stream);
 
     // ---- canonical order ----
-    pad_pairs_kernel<<<blocks_for(p.pair_capacity), kThreads, 0, stream>>>(p, pair_keys_[0].get());
+    pad_pairs_kernel<<<blocks_for(p.pair_capacity, kThreads), kThreads, 0, stream>>>(p, pair_keys_[0].get());
     WEFT_CUDA_CHECK_LAUNCH("pad_pairs_kernel");
     cub::DoubleBuffer<unsigned long long> pk(pair_keys_[0].get(), pair_keys_[1].get());
     WEFT_CUB_CHECK(cub::DeviceRadixSort::SortKeys(temp, scratch(), pk, p.pair_capacity, 0,
@@ -1002,12 +1002,8 @@ bool GpuBroadPhase::needs_rerun() {
 const GpuBroadPhaseCounters& GpuBroadPhase::find(const GpuBroadPhaseInput& in, cudaStream_t stream) {
     // Each rerun grows at least one size to what was measured (plus headroom); the entries must fit
     // before the pairs can be counted, so a cold start may take two reruns.
-    for (int attempt = 0; attempt < 8; ++attempt) {
-        enqueue(in, stream);
-        read_back(stream);
-        if (!needs_rerun()) return counters();
-    }
-    throw Error("GPU broad phase: buffers still too small after 8 attempts");
+    rerun_until_fits(*this, stream, "GPU broad phase: buffers", 8, [&](int) { enqueue(in, stream); });
+    return counters();
 }
 
 GpuPairList GpuBroadPhase::pairs() const {

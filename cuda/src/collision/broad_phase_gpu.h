@@ -39,7 +39,8 @@
 /// Sizes and growth. Entry and pair buffers have capacities (host-side numbers that every launch is
 /// sized by); the device counts what it needs and writes only what fits. `read_back` reports the
 /// counts, and `needs_rerun()` says whether a capacity (or the radix-sort key width) was too small;
-/// `find()` grows and reruns by itself. Nothing is allocated once sizes have settled.
+/// `find()` grows and reruns by itself (collision/grow_and_rerun.h). Nothing is allocated once sizes
+/// have settled.
 ///
 /// CUDA graphs. `enqueue` launches a fixed sequence whose launch sizes depend only on host state
 /// (capacities, key width, primitive counts), so it can be captured into a graph and replayed; the
@@ -56,6 +57,7 @@
 #include <string_view>
 #include <vector>
 
+#include "collision/grow_and_rerun.h"
 #include "collision/pair_keys.h"
 #include "device_array.h"
 
@@ -121,13 +123,6 @@ inline constexpr std::uint32_t kOverflowKeyBits = 4;  ///< cell keys wider than 
     auto f = static_cast<float>(value);
     if (static_cast<double>(f) < value) f = std::nextafter(f, std::numeric_limits<float>::infinity());
     return f;
-}
-
-/// Capacity after an overflow that needed `needed` slots: 25 % headroom, so that a growing count
-/// (cloth settling into folds) does not rerun every step; at least 1024.
-[[nodiscard]] constexpr std::size_t grown_capacity(std::size_t needed) {
-    const std::size_t c = needed + needed / 4 + 1024;
-    return (c + 1023) / 1024 * 1024;
 }
 
 /// Bits the entry sort runs over for keys of `needed` bits: rounded up to whole radix-sort digits (8

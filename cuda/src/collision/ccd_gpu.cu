@@ -7,9 +7,10 @@
 #include <cmath>
 #include <string>
 
-#include "collision/broad_phase_gpu.h"
+#include "collision/grow_and_rerun.h"
 #include "collision/pair_geometry.cuh"
 #include "cuda_check.h"
+#include "grid_size.h"
 
 namespace weft::cuda::collision {
 namespace {
@@ -18,10 +19,6 @@ constexpr unsigned kThreads = 128;  // the search keeps its box queue in local m
 /// Below this fraction of eta the gap's direction is not trusted for the normal (as the CPU's
 /// kNormalFromGapRatio in impact_zones.cpp).
 constexpr float kNormalFromGapRatio = 1e-3F;
-
-[[nodiscard]] unsigned blocks_for(std::uint64_t count) {
-    return static_cast<unsigned>((count + kThreads - 1) / kThreads);
-}
 
 /// Pass 1: the search. Per candidate: hit flag (the element at `capacity` is the scan's total) and
 /// (toi, distance bound, eta, status).
@@ -174,8 +171,8 @@ void GpuCcd::enqueue(const GpuCcdInput& in, const GpuPairList& pairs, cudaStream
     const std::uint32_t stride = in.stride != 0 ? in.stride : in.vertex_count;
     counters_.zero(stream);
     ranked_ = false;
-    ccd_kernel<<<blocks_for(slots), kThreads, 0, stream>>>(in, stride, pairs, position_.get(), result_.get(),
-                                                          counters_.get());
+    ccd_kernel<<<blocks_for(slots, kThreads), kThreads, 0, stream>>>(in, stride, pairs, position_.get(), result_.get(),
+                                                                     counters_.get());
     WEFT_CUDA_CHECK_LAUNCH("ccd_kernel");
     enqueue_compaction(in, pairs, stream);
 }
@@ -192,8 +189,8 @@ void GpuCcd::enqueue_compaction(const GpuCcdInput& in, const GpuPairList& pairs,
         ranked_ = true;
     }
     if (pairs.capacity > 0) {
-        hit_write_kernel<<<blocks_for(pairs.capacity), kThreads, 0, stream>>>(in, stride, pairs, position_.get(),
-                                                                              result_.get(), hits_.get(), capacity);
+        hit_write_kernel<<<blocks_for(pairs.capacity, kThreads), kThreads, 0, stream>>>(
+            in, stride, pairs, position_.get(), result_.get(), hits_.get(), capacity);
         WEFT_CUDA_CHECK_LAUNCH("hit_write_kernel");
     }
     ccd_finish_kernel<<<1, 1, 0, stream>>>(pairs, position_.get(), capacity, counters_.get());
@@ -209,20 +206,17 @@ const GpuCcdCounters& GpuCcd::read_back(cudaStream_t stream) {
 }
 
 bool GpuCcd::needs_rerun() {
-    if (counters().overflow == 0) return false;
-    capacity_ = grown_capacity(counters().hits);
-    ++reruns_;
-    return true;
+    return grow_after_overflow(counters().overflow != 0, counters().hits, capacity_, reruns_);
 }
 
 const GpuCcdCounters& GpuCcd::find(const GpuCcdInput& in, const GpuPairList& pairs, cudaStream_t stream) {
-    enqueue(in, pairs, stream);
-    for (int attempt = 0; attempt < 4; ++attempt) {
-        read_back(stream);
-        if (!needs_rerun()) return counters();
-        enqueue_compaction(in, pairs, stream);  // the search results are kept: only the scatter again
-    }
-    throw Error("GPU CCD: buffer still too small after 4 attempts");
+    rerun_until_fits(*this, stream, "GPU CCD: buffer", 4, [&](int attempt) {
+        if (attempt == 0)
+            enqueue(in, pairs, stream);
+        else
+            enqueue_compaction(in, pairs, stream);  // the search results are kept: only the scatter again
+    });
+    return counters();
 }
 
 void GpuCcd::download(std::vector<GpuCcdHit>& out, cudaStream_t stream) const {

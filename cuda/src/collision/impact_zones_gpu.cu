@@ -13,6 +13,8 @@
 #include <string>
 
 #include "cuda_check.h"
+#include "grid_size.h"
+#include "weft/backend/timing.h"
 #include "weft/error.h"
 #include "weft/physics/eigen_sym.h"
 
@@ -47,13 +49,6 @@ constexpr std::uint8_t kNone = 0, kProject = 1, kPending = 2, kRigid = 3, kFreez
 constexpr double kInertiaCutoff = 1e-12;
 
 using Clock = std::chrono::steady_clock;
-double ms_since(Clock::time_point start) {
-    return std::chrono::duration<double, std::milli>(Clock::now() - start).count();
-}
-
-unsigned blocks_for(std::uint64_t count, unsigned threads = kThreads) {
-    return static_cast<unsigned>(std::max<std::uint64_t>(1, (count + threads - 1) / threads));
-}
 
 template <typename T>
 void grow(DeviceArray<T>& a, std::size_t n) {
@@ -821,17 +816,17 @@ void GpuImpactZones::add_hits(const GpuImpactZoneInput& in, std::uint32_t hits, 
     reserve_constraints(total, stream);
     const std::uint32_t n = in.vertex_count;
     WEFT_CUDA_CHECK(cudaMemsetAsync(counters_.get(), 0, sizeof(Counters), stream));
-    append_kernel<<<blocks_for(hits), kThreads, 0, stream>>>(ccd_.hits(), hits, first, in.inverse_mass,
-                                                             c_vertex_.get(), c_weight_.get(), c_normal_.get(),
-                                                             lambda_.get(), momentum_.get(), parent_.get(), member_.get());
+    append_kernel<<<blocks_for(hits, kThreads), kThreads, 0, stream>>>(
+        ccd_.hits(), hits, first, in.inverse_mass, c_vertex_.get(), c_weight_.get(), c_normal_.get(), lambda_.get(),
+        momentum_.get(), parent_.get(), member_.get());
     WEFT_CUDA_CHECK_LAUNCH("impact zones: append");
-    label_kernel<<<blocks_for(n), kThreads, 0, stream>>>(n, member_.get(), parent_.get(), label_.get());
+    label_kernel<<<blocks_for(n, kThreads), kThreads, 0, stream>>>(n, member_.get(), parent_.get(), label_.get());
     WEFT_CUDA_CHECK_LAUNCH("impact zones: label");
     constraints_ = total;
     const std::uint32_t slots = 4 * total;
-    slot_kernel<<<blocks_for(slots), kThreads, 0, stream>>>(total, c_vertex_.get(), in.inverse_mass, label_.get(),
-                                                            slot_key_[0].get(), slot_value_[0].get(), ckey_[0].get(),
-                                                            cvalue_[0].get(), counters_.get());
+    slot_kernel<<<blocks_for(slots, kThreads), kThreads, 0, stream>>>(
+        total, c_vertex_.get(), in.inverse_mass, label_.get(), slot_key_[0].get(), slot_value_[0].get(), ckey_[0].get(),
+        cvalue_[0].get(), counters_.get());
     WEFT_CUDA_CHECK_LAUNCH("impact zones: slots");
 
     // Scratch for CUB: the largest of the calls below.
@@ -876,10 +871,9 @@ void GpuImpactZones::add_hits(const GpuImpactZoneInput& in, std::uint32_t hits, 
     WEFT_CUDA_CHECK(cudaMemsetAsync(zone_coffset_.get(), 0, sizeof(std::uint32_t), stream));
     WEFT_CUDA_CHECK(cub::DeviceScan::InclusiveSum(temp, temp_bytes, zone_ccount_.get(), zone_coffset_.get() + 1,
                                                   zones_, stream));
-    incidence_count_kernel<<<blocks_for(unique_), kThreads, 0, stream>>>(unique_, unique_vertex_.get(),
-                                                                         unique_count_.get(), label_.get(),
-                                                                         incidence_count_.get(), vkey_[0].get(),
-                                                                         vvalue_[0].get());
+    incidence_count_kernel<<<blocks_for(unique_, kThreads), kThreads, 0, stream>>>(
+        unique_, unique_vertex_.get(), unique_count_.get(), label_.get(), incidence_count_.get(), vkey_[0].get(),
+        vvalue_[0].get());
     WEFT_CUDA_CHECK_LAUNCH("impact zones: incidence");
     cub::DoubleBuffer<std::uint32_t> vk(vkey_[0].get(), vkey_[1].get());
     cub::DoubleBuffer<std::uint32_t> vv(vvalue_[0].get(), vvalue_[1].get());
@@ -891,8 +885,8 @@ void GpuImpactZones::add_hits(const GpuImpactZoneInput& in, std::uint32_t hits, 
     WEFT_CUDA_CHECK(cub::DeviceScan::InclusiveSum(temp, temp_bytes, zone_vcount_.get(), zone_voffset_.get() + 1,
                                                   zones_, stream));
     vvalue_sorted_ = vv.Current();
-    scale_kernel<<<blocks_for(total), kThreads, 0, stream>>>(total, c_vertex_.get(), c_weight_.get(), in.inverse_mass,
-                                                             incidence_count_.get(), c_scale_.get());
+    scale_kernel<<<blocks_for(total, kThreads), kThreads, 0, stream>>>(
+        total, c_vertex_.get(), c_weight_.get(), in.inverse_mass, incidence_count_.get(), c_scale_.get());
     WEFT_CUDA_CHECK_LAUNCH("impact zones: scale");
 }
 
@@ -990,34 +984,35 @@ void GpuImpactZones::fallbacks(const GpuImpactZoneInput& in, std::uint32_t hits,
         grow(hit_free_, hits);
         grow(carry_, 3 * static_cast<std::size_t>(hits));
         // Before the hits join: which of them still have a vertex the zones can move.
-        hit_free_kernel<<<blocks_for(hits), kThreads, 0, stream>>>(ccd_.hits(), hits, in.inverse_mass, outcome_.get(),
-                                                                   hit_free_.get());
+        hit_free_kernel<<<blocks_for(hits, kThreads), kThreads, 0, stream>>>(ccd_.hits(), hits, in.inverse_mass,
+                                                                             outcome_.get(), hit_free_.get());
         WEFT_CUDA_CHECK_LAUNCH("impact zones: hit_free");
         const std::uint32_t first_new = constraints_;
         add_hits(in, hits, stream);  // colliding zones merge
         const ZoneLists z = zone_lists(zone_label_, zone_coffset_, cvalue_sorted_, zone_voffset_, vvalue_sorted_,
                                        unique_vertex_, unique_offset_, unique_count_, slot_sorted_);
         WEFT_CUDA_CHECK(cudaMemsetAsync(flags_.get(), 0, n * sizeof(std::uint32_t), stream));
-        flags_from_constraints_kernel<<<blocks_for(constraints_), kThreads, 0, stream>>>(
+        flags_from_constraints_kernel<<<blocks_for(constraints_, kThreads), kThreads, 0, stream>>>(
             constraints_, c_vertex_.get(), in.inverse_mass, label_.get(), flags_.get());
-        flags_from_vertices_kernel<<<blocks_for(unique_), kThreads, 0, stream>>>(unique_, unique_vertex_.get(),
-                                                                                 label_.get(), outcome_.get(), flags_.get());
-        mark_kernel<<<blocks_for(hits), kThreads, 0, stream>>>(first_new, constraints_, c_vertex_.get(), in.inverse_mass,
-                                                               label_.get(), hit_free_.get(), action_.get(), kPending);
-        decide_kernel<<<blocks_for(zones_), kThreads, 0, stream>>>(zones_, zone_label_.get(), zone_voffset_.get(),
-                                                                   flags_.get(), rigid_size_.get(), action_.get(),
-                                                                   round < in.max_rigid_rounds, counters_.get());
+        flags_from_vertices_kernel<<<blocks_for(unique_, kThreads), kThreads, 0, stream>>>(
+            unique_, unique_vertex_.get(), label_.get(), outcome_.get(), flags_.get());
+        mark_kernel<<<blocks_for(hits, kThreads), kThreads, 0, stream>>>(first_new, constraints_, c_vertex_.get(),
+                                                                         in.inverse_mass, label_.get(), hit_free_.get(),
+                                                                         action_.get(), kPending);
+        decide_kernel<<<blocks_for(zones_, kThreads), kThreads, 0, stream>>>(
+            zones_, zone_label_.get(), zone_voffset_.get(), flags_.get(), rigid_size_.get(), action_.get(),
+            round < in.max_rigid_rounds, counters_.get());
         WEFT_CUDA_CHECK_LAUNCH("impact zones: decide");
         rigid_freeze_kernel<<<zones_, kZoneThreads, 0, stream>>>(z, in.x0, in.x1, in.inverse_mass, n, action_.get(),
                                                                  outcome_.get());
         WEFT_CUDA_CHECK_LAUNCH("impact zones: rigid/freeze");
-        carry_claim_kernel<<<blocks_for(hits), kThreads, 0, stream>>>(ccd_.hits(), hits, hit_free_.get(), in.x0, in.x1,
-                                                                      in.inverse_mass, n, outcome_.get(), claim_.get(),
-                                                                      carry_.get());
-        carry_apply_kernel<<<blocks_for(hits), kThreads, 0, stream>>>(ccd_.hits(), hits, hit_free_.get(), in.x0, in.x1,
-                                                                      n, claim_.get(), carry_.get(), outcome_.get(),
-                                                                      counters_.get());
-        claim_reset_kernel<<<blocks_for(hits), kThreads, 0, stream>>>(ccd_.hits(), hits, claim_.get());
+        carry_claim_kernel<<<blocks_for(hits, kThreads), kThreads, 0, stream>>>(
+            ccd_.hits(), hits, hit_free_.get(), in.x0, in.x1, in.inverse_mass, n, outcome_.get(), claim_.get(),
+            carry_.get());
+        carry_apply_kernel<<<blocks_for(hits, kThreads), kThreads, 0, stream>>>(
+            ccd_.hits(), hits, hit_free_.get(), in.x0, in.x1, n, claim_.get(), carry_.get(), outcome_.get(),
+            counters_.get());
+        claim_reset_kernel<<<blocks_for(hits, kThreads), kThreads, 0, stream>>>(ccd_.hits(), hits, claim_.get());
         WEFT_CUDA_CHECK_LAUNCH("impact zones: carry");
         // The actions of this round are spent (the next round marks afresh).
         WEFT_CUDA_CHECK(cudaMemsetAsync(action_.get(), kNone, n, stream));
@@ -1057,9 +1052,9 @@ weft::collision::ImpactZoneReport GpuImpactZones::resolve(const GpuImpactZoneInp
     constraints_ = 0;
     zones_ = unique_ = 0;
     remaining_ = 0;
-    init_kernel<<<blocks_for(n), kThreads, 0, stream>>>(n, in.inverse_mass, in.x1, x_hat_.get(), parent_.get(),
-                                                        label_.get(), member_.get(), outcome_.get(), action_.get(),
-                                                        rigid_size_.get(), claim_.get());
+    init_kernel<<<blocks_for(n, kThreads), kThreads, 0, stream>>>(
+        n, in.inverse_mass, in.x1, x_hat_.get(), parent_.get(), label_.get(), member_.get(), outcome_.get(),
+        action_.get(), rigid_size_.get(), claim_.get());
     WEFT_CUDA_CHECK_LAUNCH("impact zones: init");
 
     std::uint32_t hits = detect(in, report, stream);
@@ -1073,9 +1068,8 @@ weft::collision::ImpactZoneReport GpuImpactZones::resolve(const GpuImpactZoneInp
         const ZoneLists z = zone_lists(zone_label_, zone_coffset_, cvalue_sorted_, zone_voffset_, vvalue_sorted_,
                                        unique_vertex_, unique_offset_, unique_count_, slot_sorted_);
         // Only zones that gained a constraint change; the others keep their converged projection.
-        mark_kernel<<<blocks_for(hits), kThreads, 0, stream>>>(first_new, constraints_, c_vertex_.get(),
-                                                               in.inverse_mass, label_.get(), nullptr, action_.get(),
-                                                               kProject);
+        mark_kernel<<<blocks_for(hits, kThreads), kThreads, 0, stream>>>(
+            first_new, constraints_, c_vertex_.get(), in.inverse_mass, label_.get(), nullptr, action_.get(), kProject);
         WEFT_CUDA_CHECK_LAUNCH("impact zones: mark");
         const Constraints c{c_vertex_.get(), c_weight_.get(), c_normal_.get(), c_scale_.get(),
                             lambda_.get(),   momentum_.get(), previous_.get()};
@@ -1110,11 +1104,11 @@ weft::collision::ImpactZoneReport GpuImpactZones::resolve(const GpuImpactZoneInp
     if (constraints_ > 0) {
         WEFT_CUDA_CHECK(cudaMemsetAsync(counters_.get(), 0, sizeof(Counters), stream));
         WEFT_CUDA_CHECK(cudaMemsetAsync(flags_.get(), 0, n * sizeof(std::uint32_t), stream));
-        flags_from_vertices_kernel<<<blocks_for(unique_), kThreads, 0, stream>>>(unique_, unique_vertex_.get(),
-                                                                                 label_.get(), outcome_.get(), flags_.get());
-        final_vertices_kernel<<<blocks_for(n), kThreads, 0, stream>>>(n, outcome_.get(), counters_.get());
-        final_zones_kernel<<<blocks_for(zones_), kThreads, 0, stream>>>(zones_, zone_label_.get(), zone_voffset_.get(),
-                                                                        flags_.get(), counters_.get());
+        flags_from_vertices_kernel<<<blocks_for(unique_, kThreads), kThreads, 0, stream>>>(
+            unique_, unique_vertex_.get(), label_.get(), outcome_.get(), flags_.get());
+        final_vertices_kernel<<<blocks_for(n, kThreads), kThreads, 0, stream>>>(n, outcome_.get(), counters_.get());
+        final_zones_kernel<<<blocks_for(zones_, kThreads), kThreads, 0, stream>>>(
+            zones_, zone_label_.get(), zone_voffset_.get(), flags_.get(), counters_.get());
         WEFT_CUDA_CHECK_LAUNCH("impact zones: figures");
         const Counters& c = read_counters(stream);
         report.max_zone_vertices = static_cast<int>(c.max_zone_vertices);

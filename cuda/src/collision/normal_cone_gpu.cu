@@ -11,6 +11,7 @@
 #include "collision/pair_keys.h"
 #include "weft/backend/patch_hierarchy.h"
 #include "cuda_check.h"
+#include "grid_size.h"
 #include "weft/error.h"
 
 namespace weft::cuda::collision {
@@ -41,10 +42,6 @@ constexpr unsigned kFullMask = 0xFFFFFFFFU;
 
 static_assert(sizeof(GpuNormalConeCounters) == 2 * sizeof(unsigned long long));
 static_assert(sizeof(GpuCone) == sizeof(float4));
-
-[[nodiscard]] unsigned blocks_for(std::uint64_t count, unsigned threads) {
-    return static_cast<unsigned>((count + threads - 1) / threads);
-}
 
 /// Contour tile pairs of a contour of m edges: every unordered pair of 32-edge tiles, and each tile
 /// with itself.

@@ -6,18 +6,15 @@
 #include <algorithm>
 #include <string>
 
-#include "collision/broad_phase_gpu.h"
+#include "collision/grow_and_rerun.h"
 #include "collision/pair_geometry.cuh"
 #include "cuda_check.h"
+#include "grid_size.h"
 
 namespace weft::cuda::collision {
 namespace {
 
 constexpr unsigned kThreads = 256;
-
-[[nodiscard]] unsigned blocks_for(std::uint64_t count) {
-    return static_cast<unsigned>((count + kThreads - 1) / kThreads);
-}
 
 /// True for a pair of rest neighbours (rest_neighbours in runtime/src/collision/proximity_contacts.cpp).
 __device__ bool rest_neighbours(const GpuProximityInput& in, const PairVertices& pv, float thickness) {
@@ -150,14 +147,14 @@ void GpuProximityContacts::enqueue(const GpuProximityInput& in, const GpuPairLis
 
     const std::uint32_t stride = in.stride != 0 ? in.stride : in.vertex_count;
     const auto capacity = static_cast<std::uint32_t>(capacity_);
-    contact_flags_kernel<<<blocks_for(std::uint64_t{pairs.capacity} + 1), kThreads, 0, stream>>>(in, stride, pairs,
-                                                                                              position_.get());
+    contact_flags_kernel<<<blocks_for(std::uint64_t{pairs.capacity} + 1, kThreads), kThreads, 0, stream>>>(
+        in, stride, pairs, position_.get());
     WEFT_CUDA_CHECK_LAUNCH("contact_flags_kernel");
     std::size_t temp_bytes = temp_.bytes();
     WEFT_CUDA_CHECK(cub::DeviceScan::ExclusiveSum(temp_.get(), temp_bytes, position_.get(), pairs.capacity + 1U, stream));
     if (pairs.capacity > 0) {
-        contact_write_kernel<<<blocks_for(pairs.capacity), kThreads, 0, stream>>>(in, stride, pairs, position_.get(),
-                                                                                  contacts_.get(), capacity);
+        contact_write_kernel<<<blocks_for(pairs.capacity, kThreads), kThreads, 0, stream>>>(
+            in, stride, pairs, position_.get(), contacts_.get(), capacity);
         WEFT_CUDA_CHECK_LAUNCH("contact_write_kernel");
     }
     contact_finish_kernel<<<1, 1, 0, stream>>>(pairs, position_.get(), capacity, counters_.get());
@@ -173,20 +170,13 @@ const GpuProximityCounters& GpuProximityContacts::read_back(cudaStream_t stream)
 }
 
 bool GpuProximityContacts::needs_rerun() {
-    if (counters().overflow == 0) return false;
-    capacity_ = grown_capacity(counters().contacts);
-    ++reruns_;
-    return true;
+    return grow_after_overflow(counters().overflow != 0, counters().contacts, capacity_, reruns_);
 }
 
 const GpuProximityCounters& GpuProximityContacts::find(const GpuProximityInput& in, const GpuPairList& pairs,
                                                        cudaStream_t stream) {
-    for (int attempt = 0; attempt < 4; ++attempt) {
-        enqueue(in, pairs, stream);
-        read_back(stream);
-        if (!needs_rerun()) return counters();
-    }
-    throw Error("GPU proximity contacts: buffer still too small after 4 attempts");
+    rerun_until_fits(*this, stream, "GPU proximity contacts: buffer", 4, [&](int) { enqueue(in, pairs, stream); });
+    return counters();
 }
 
 void GpuProximityContacts::download(std::vector<GpuProximityContact>& out, cudaStream_t stream) const {

@@ -1,10 +1,14 @@
-// The Vulkan renderer, offscreen: a shadow map pass, a multisampled surface pass resolved to one
-// sample, and a copy of the picture to the host, recorded into one command buffer per frame and
-// waited for with a fence (capture, not presentation: the frame is needed on the host at once).
+// The Vulkan renderer: a shadow map pass, a multisampled surface pass resolved to one sample, and
+// the frame's ending (a copy of the picture to the host, or a blit into a window's swapchain image),
+// recorded into one command buffer per frame whose submission signals a fence.
 //
-// The window (vulkan_window.cpp) draws with the same passes and blits the resolved picture into a
-// swapchain image instead of copying it to the host; it does not wait for the frame, the next one
-// waits for its fence first (draw_to_swapchain).
+// This file holds what every frame shares: targets, pipelines, the scene's buffers (load), the
+// recording of the passes and the submission. How a frame ends lives beside it:
+//   - vulkan_renderer_capture.cpp: the copy of the picture to the host (submit, collect, read_back);
+//   - vulkan_renderer_present.cpp: the blit into a window's swapchain image (draw_to_swapchain), not
+//     waited for: the next frame waits for its fence first;
+//   - vulkan_renderer_export.cpp: the cloth slots handed to CUDA (export_cloth, read_cloth, the
+//     queue-family ownership transfers, skip_frame).
 //
 // Geometry: the cloth vertex buffer (device-local, RenderScene::cloth_vertices × 24 bytes) is filled
 // each frame from a persistently mapped staging buffer, or left as it is when the frame brings no
@@ -26,16 +30,11 @@
 #include "shaders.h"
 #include "vulkan/vulkan_check.h"
 #include "vulkan/vulkan_context.h"
-#include "vulkan/vulkan_interop.h"
 #include "vulkan/vulkan_pipelines.h"
 #include "vulkan/vulkan_resources.h"
 
 namespace weft::render::detail {
 namespace {
-
-constexpr VkFormat kColourFormat = VK_FORMAT_R8G8B8A8_UNORM;  // holds sRGB-encoded values (the shader encodes)
-// The stages that read a cloth slot: the draws' vertex input and the copy of its frame stamps.
-constexpr VkPipelineStageFlags kSlotReadStages = VK_PIPELINE_STAGE_VERTEX_INPUT_BIT | VK_PIPELINE_STAGE_TRANSFER_BIT;
 
 VkDeviceSize align_up(VkDeviceSize n, VkDeviceSize alignment) { return (n + alignment - 1) / alignment * alignment; }
 
@@ -56,21 +55,6 @@ VkSampleCountFlagBits sample_count(const VkPhysicalDeviceLimits& limits, int req
     for (int s = requested; s > 1; s /= 2)
         if ((supported & static_cast<VkSampleCountFlags>(s)) != 0) return static_cast<VkSampleCountFlagBits>(s);
     return VK_SAMPLE_COUNT_1_BIT;
-}
-
-// A transfer's writes into `buffer` made visible to the host once the submission's fence signals.
-void to_host_barrier(VkCommandBuffer commands, VkBuffer buffer) {
-    VkBufferMemoryBarrier to_host{};
-    to_host.sType = VK_STRUCTURE_TYPE_BUFFER_MEMORY_BARRIER;
-    to_host.srcAccessMask = VK_ACCESS_TRANSFER_WRITE_BIT;
-    to_host.dstAccessMask = VK_ACCESS_HOST_READ_BIT;
-    to_host.srcQueueFamilyIndex = VK_QUEUE_FAMILY_IGNORED;
-    to_host.dstQueueFamilyIndex = VK_QUEUE_FAMILY_IGNORED;
-    to_host.buffer = buffer;
-    to_host.offset = 0;
-    to_host.size = VK_WHOLE_SIZE;
-    vkCmdPipelineBarrier(commands, VK_PIPELINE_STAGE_TRANSFER_BIT, VK_PIPELINE_STAGE_HOST_BIT, 0, 0, nullptr, 1,
-                         &to_host, 0, nullptr);
 }
 
 // The clear colour goes to the UNORM target as it is, so it is encoded like the shader's output.
@@ -193,26 +177,6 @@ void VulkanRenderer::create_size_targets() {
     readback_ = create_buffer(context_, VkDeviceSize{extent_.width} * extent_.height * 4,
                               VK_BUFFER_USAGE_TRANSFER_DST_BIT, MemoryUse::readback);
     if (overlay_pass_ != VK_NULL_HANDLE) create_overlay_framebuffer();
-}
-
-void VulkanRenderer::create_overlay_framebuffer() {
-    VkFramebufferCreateInfo fb{};
-    fb.sType = VK_STRUCTURE_TYPE_FRAMEBUFFER_CREATE_INFO;
-    fb.layers = 1;
-    fb.renderPass = overlay_pass_;
-    fb.attachmentCount = 1;
-    fb.pAttachments = &resolved_.view;
-    fb.width = extent_.width;
-    fb.height = extent_.height;
-    WEFT_VK_CHECK(vkCreateFramebuffer(context_.device(), &fb, nullptr, &overlay_framebuffer_));
-}
-
-VkRenderPass VulkanRenderer::overlay_pass() {
-    if (overlay_pass_ == VK_NULL_HANDLE) {
-        overlay_pass_ = create_overlay_pass(context_.device(), kColourFormat);
-        create_overlay_framebuffer();
-    }
-    return overlay_pass_;
 }
 
 void VulkanRenderer::destroy_size_targets() noexcept {
@@ -447,8 +411,8 @@ void VulkanRenderer::load(const RenderScene& scene) {
     loaded_ = true;
 }
 
-template <typename Finish>
-bool VulkanRenderer::record_frame(const RenderFrame& frame, bool& external, Finish&& finish) {
+bool VulkanRenderer::record_frame(const RenderFrame& frame, bool& external,
+                                  const std::function<void(VkCommandBuffer)>& finish) {
     if (!loaded_) throw Error("vulkan renderer: draw() before load()");
     const bool upload = !frame.cloth.empty();
     if (upload && frame.cloth.size() != scene_.cloth_vertices)
@@ -545,233 +509,6 @@ void VulkanRenderer::submit_frame(const RenderFrame& frame, VkSemaphore wait_bin
     if (frame.signal_value != 0) slot->last_signal = frame.signal_value;
 }
 
-void VulkanRenderer::submit(const RenderFrame& frame) {
-    bool external = false;
-    const bool upload = record_frame(frame, external, [&](VkCommandBuffer commands) { record_readback(commands); });
-    submit_frame(frame, VK_NULL_HANDLE, VK_NULL_HANDLE);
-    have_picture_ = true;
-    submitted_ = true;
-    // The stamps stay those of the last frame waited for until this one is (wait_frame).
-    transfer_.path = external ? "interop" : "host upload";
-    transfer_.bytes_uploaded = upload ? static_cast<std::uint64_t>(frame.cloth.size_bytes()) : 0;
-}
-
-void VulkanRenderer::skip_frame(const RenderFrame& frame) {
-    if (frame.wait_value == 0 && frame.signal_value == 0) return;
-    if (!exported_ || frame.cloth_slot < 0 || frame.cloth_slot >= static_cast<int>(slots_.size()))
-        throw Error("vulkan renderer: skip_frame() of a frame that names no exported slot");
-    wait_frame();
-    frame_reads_stamps_ = false;  // nothing read: transfer() keeps the last drawn frame's stamps
-    submit_frame(frame, VK_NULL_HANDLE, VK_NULL_HANDLE, false);
-}
-
-Image VulkanRenderer::collect() {
-    if (!submitted_) throw Error("vulkan renderer: collect() without a submitted frame");
-    wait_frame();
-    submitted_ = false;
-    invalidate(context_, readback_);
-    Image image(options_.width, options_.height);
-    std::memcpy(image.rgba.data(), readback_.mapped, image.rgba.size());
-    return image;
-}
-
-void VulkanRenderer::draw_to_swapchain(const RenderFrame& frame, const SwapchainTarget& target) {
-    if (target.image == VK_NULL_HANDLE || target.extent.width == 0 || target.extent.height == 0)
-        throw Error("vulkan renderer: draw_to_swapchain without a swapchain image");
-    // Scaling only happens for a frame drawn while the window changes size; linear where allowed.
-    VkFormatProperties props{};
-    vkGetPhysicalDeviceFormatProperties(context_.physical_device(), kColourFormat, &props);
-    const bool same_size = target.extent.width == extent_.width && target.extent.height == extent_.height;
-    const VkFilter filter =
-        !same_size && (props.optimalTilingFeatures & VK_FORMAT_FEATURE_SAMPLED_IMAGE_FILTER_LINEAR_BIT) != 0
-            ? VK_FILTER_LINEAR
-            : VK_FILTER_NEAREST;
-    bool external = false;
-    if (target.overlay && overlay_pass_ == VK_NULL_HANDLE)
-        throw Error("vulkan renderer: an overlay without overlay_pass()");
-    const bool upload = record_frame(frame, external, [&](VkCommandBuffer commands) {
-        if (target.overlay) {
-            // Drawn into the resolved picture, so that the read-back (screenshots) shows it too.
-            VkRenderPassBeginInfo pass{};
-            pass.sType = VK_STRUCTURE_TYPE_RENDER_PASS_BEGIN_INFO;
-            pass.renderPass = overlay_pass_;
-            pass.framebuffer = overlay_framebuffer_;
-            pass.renderArea.extent = extent_;
-            vkCmdBeginRenderPass(commands, &pass, VK_SUBPASS_CONTENTS_INLINE);
-            target.overlay(commands, extent_);
-            vkCmdEndRenderPass(commands);
-        }
-        // The swapchain image's old contents are not needed: UNDEFINED → TRANSFER_DST. The stage
-        // is the one the acquire semaphore is waited at, so the transition comes after the acquire.
-        VkImageMemoryBarrier barrier{};
-        barrier.sType = VK_STRUCTURE_TYPE_IMAGE_MEMORY_BARRIER;
-        barrier.srcAccessMask = 0;
-        barrier.dstAccessMask = VK_ACCESS_TRANSFER_WRITE_BIT;
-        barrier.oldLayout = VK_IMAGE_LAYOUT_UNDEFINED;
-        barrier.newLayout = VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL;
-        barrier.srcQueueFamilyIndex = VK_QUEUE_FAMILY_IGNORED;
-        barrier.dstQueueFamilyIndex = VK_QUEUE_FAMILY_IGNORED;
-        barrier.image = target.image;
-        barrier.subresourceRange = {VK_IMAGE_ASPECT_COLOR_BIT, 0, 1, 0, 1};
-        vkCmdPipelineBarrier(commands, VK_PIPELINE_STAGE_TRANSFER_BIT, VK_PIPELINE_STAGE_TRANSFER_BIT, 0, 0, nullptr,
-                             0, nullptr, 1, &barrier);
-        // The surface pass left the resolved picture in TRANSFER_SRC_OPTIMAL, its writes visible to
-        // transfers; rows run top to bottom in both images.
-        VkImageBlit blit{};
-        blit.srcSubresource = {VK_IMAGE_ASPECT_COLOR_BIT, 0, 0, 1};
-        blit.srcOffsets[1] = {static_cast<std::int32_t>(extent_.width), static_cast<std::int32_t>(extent_.height), 1};
-        blit.dstSubresource = {VK_IMAGE_ASPECT_COLOR_BIT, 0, 0, 1};
-        blit.dstOffsets[1] = {static_cast<std::int32_t>(target.extent.width),
-                              static_cast<std::int32_t>(target.extent.height), 1};
-        vkCmdBlitImage(commands, resolved_.image, VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL, target.image,
-                       VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL, 1, &blit, filter);
-        barrier.srcAccessMask = VK_ACCESS_TRANSFER_WRITE_BIT;
-        barrier.dstAccessMask = 0;  // the present waits on the semaphore signalled after this submission
-        barrier.oldLayout = VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL;
-        barrier.newLayout = VK_IMAGE_LAYOUT_PRESENT_SRC_KHR;
-        vkCmdPipelineBarrier(commands, VK_PIPELINE_STAGE_TRANSFER_BIT, VK_PIPELINE_STAGE_BOTTOM_OF_PIPE_BIT, 0, 0,
-                             nullptr, 0, nullptr, 1, &barrier);
-    });
-    submit_frame(frame, target.acquired, target.rendered);
-    have_picture_ = true;
-    submitted_ = false;  // the picture went to the window, not to collect()
-    // The stamps stay those of the last frame waited for until this one is (wait_frame).
-    transfer_.path = external ? "interop" : "host upload";
-    transfer_.bytes_uploaded = upload ? static_cast<std::uint64_t>(frame.cloth.size_bytes()) : 0;
-}
-
-Image VulkanRenderer::read_back() {
-    if (!have_picture_) throw Error("vulkan renderer: read_back() before a frame was drawn");
-    wait_frame();
-    context_.submit_and_wait([&](VkCommandBuffer commands) { record_readback(commands); });
-    invalidate(context_, readback_);
-    Image image(options_.width, options_.height);
-    std::memcpy(image.rgba.data(), readback_.mapped, image.rgba.size());
-    return image;
-}
-
-std::optional<ClothInterop> VulkanRenderer::export_cloth(std::string& why) {
-    if (!loaded_) throw Error("vulkan renderer: export_cloth() before load()");
-    if (!context_.interop_available()) {
-        why = context_.interop_unavailable_reason();  // the device is in device_description()
-        return std::nullopt;
-    }
-    if (slots_.empty()) {
-        why = "the scene has no cloth";
-        return std::nullopt;
-    }
-    const VkDevice device = context_.device();
-    wait_frame();  // a window's frame may still read the buffer replaced below
-    if (!exported_) {
-        // Replace the cloth buffer by kSharedSlots exportable ones (zeros, as load() leaves it), each
-        // with its timeline.
-        std::vector<ClothSlot> shared(kSharedSlots);
-        try {
-            for (ClothSlot& slot : shared) {
-                slot.buffer = create_exportable_buffer(context_, slots_[0].buffer.size,
-                                                       VK_BUFFER_USAGE_VERTEX_BUFFER_BIT | VK_BUFFER_USAGE_TRANSFER_DST_BIT |
-                                                           VK_BUFFER_USAGE_TRANSFER_SRC_BIT,
-                                                       slot.dedicated);
-                slot.timeline = create_exportable_timeline(context_);
-            }
-            // No fill here: the writer zeroes a slot when it imports it, on its own stream, so the
-            // zeros are ordered before its first frame. Only the ownership goes to the writer, so
-            // that every frame's acquire matches a release.
-            context_.submit_and_wait([&](VkCommandBuffer commands) {
-                for (const ClothSlot& slot : shared) {
-                    VkBufferMemoryBarrier release{};
-                    release.sType = VK_STRUCTURE_TYPE_BUFFER_MEMORY_BARRIER;
-                    release.srcQueueFamilyIndex = context_.queue_family();
-                    release.dstQueueFamilyIndex = VK_QUEUE_FAMILY_EXTERNAL;
-                    release.buffer = slot.buffer.buffer;
-                    release.size = VK_WHOLE_SIZE;
-                    vkCmdPipelineBarrier(commands, VK_PIPELINE_STAGE_TOP_OF_PIPE_BIT, VK_PIPELINE_STAGE_BOTTOM_OF_PIPE_BIT,
-                                         0, 0, nullptr, 1, &release, 0, nullptr);
-                }
-            });
-        } catch (...) {
-            for (ClothSlot& slot : shared) {
-                destroy_buffer(device, slot.buffer);
-                if (slot.timeline != VK_NULL_HANDLE) vkDestroySemaphore(device, slot.timeline, nullptr);
-            }
-            throw;
-        }
-        destroy_buffer(device, slots_[0].buffer);
-        slots_ = std::move(shared);
-        exported_ = true;
-    }
-    ClothInterop link;
-    try {
-        for (const ClothSlot& slot : slots_) {
-            SharedSlotHandle handle;
-            handle.memory = export_memory(context_, slot.buffer, slot.dedicated);
-            link.slots.push_back(handle);
-            link.slots.back().timeline = export_timeline(context_, slot.timeline);
-            // The last value this renderer signalled is the highest any access asked for (a draw
-            // or skip_frame ends every access), and wait_frame() above saw it reached.
-            link.timeline_values.push_back(slot.last_signal);
-        }
-    } catch (...) {
-        close_slot_handles(link.slots);
-        throw;
-    }
-    std::copy(context_.device_uuid().begin(), context_.device_uuid().end(), link.device_uuid.begin());
-    return link;
-}
-
-std::vector<RenderVertex> VulkanRenderer::read_cloth(int slot) {
-    if (!loaded_) throw Error("vulkan renderer: read_cloth() before load()");
-    std::vector<RenderVertex> out(scene_.cloth_vertices);
-    if (out.empty()) return out;
-    if (slot < 0 || slot >= static_cast<int>(slots_.size()))
-        throw Error("vulkan renderer: read_cloth(" + std::to_string(slot) + ") of " + std::to_string(slots_.size()) +
-                    " slots");
-    wait_frame();
-    const DeviceBuffer& source = slots_[static_cast<std::size_t>(slot)].buffer;
-    DeviceBuffer host = create_buffer(context_, source.size, VK_BUFFER_USAGE_TRANSFER_DST_BIT, MemoryUse::readback);
-    try {
-        context_.submit_and_wait([&](VkCommandBuffer commands) {
-            if (exported_) external_barrier(commands, slot, true);
-            const VkBufferCopy copy{0, 0, source.size};
-            vkCmdCopyBuffer(commands, source.buffer, host.buffer, 1, &copy);
-            VkMemoryBarrier to_host{};
-            to_host.sType = VK_STRUCTURE_TYPE_MEMORY_BARRIER;
-            to_host.srcAccessMask = VK_ACCESS_TRANSFER_WRITE_BIT;
-            to_host.dstAccessMask = VK_ACCESS_HOST_READ_BIT;
-            vkCmdPipelineBarrier(commands, VK_PIPELINE_STAGE_TRANSFER_BIT, VK_PIPELINE_STAGE_HOST_BIT, 0, 1, &to_host, 0,
-                                 nullptr, 0, nullptr);
-            if (exported_) external_barrier(commands, slot, false);
-        });
-        invalidate(context_, host);
-        std::memcpy(out.data(), host.mapped, out.size() * sizeof(RenderVertex));
-    } catch (...) {
-        destroy_buffer(context_.device(), host);
-        throw;
-    }
-    destroy_buffer(context_.device(), host);
-    return out;
-}
-
-void VulkanRenderer::external_barrier(VkCommandBuffer commands, int slot, bool acquire) const {
-    VkBufferMemoryBarrier barrier{};
-    barrier.sType = VK_STRUCTURE_TYPE_BUFFER_MEMORY_BARRIER;
-    // Transfer writes too: an upload frame on an exported renderer copies into the slot.
-    const VkAccessFlags access =
-        VK_ACCESS_VERTEX_ATTRIBUTE_READ_BIT | VK_ACCESS_TRANSFER_READ_BIT | VK_ACCESS_TRANSFER_WRITE_BIT;
-    barrier.srcAccessMask = acquire ? 0 : access;
-    barrier.dstAccessMask = acquire ? access : 0;
-    barrier.srcQueueFamilyIndex = acquire ? VK_QUEUE_FAMILY_EXTERNAL : context_.queue_family();
-    barrier.dstQueueFamilyIndex = acquire ? context_.queue_family() : VK_QUEUE_FAMILY_EXTERNAL;
-    barrier.buffer = slots_[static_cast<std::size_t>(slot)].buffer.buffer;
-    barrier.offset = 0;
-    barrier.size = VK_WHOLE_SIZE;
-    // The acquire's first scope is the stages the timeline wait blocks (submit_frame), so that it
-    // comes after the writer's signal; the release follows every read of the frame.
-    const VkPipelineStageFlags all = VK_PIPELINE_STAGE_ALL_COMMANDS_BIT, bottom = VK_PIPELINE_STAGE_BOTTOM_OF_PIPE_BIT;
-    vkCmdPipelineBarrier(commands, acquire ? kSlotReadStages : all, acquire ? kSlotReadStages : bottom,
-                         0, 0, nullptr, 1, &barrier, 0, nullptr);
-}
-
 void VulkanRenderer::record(VkCommandBuffer commands, const std::vector<DrawUniforms>& draws, bool upload) const {
     const VkBuffer cloth = slots_.empty() ? VK_NULL_HANDLE : slots_[static_cast<std::size_t>(frame_slot_)].buffer.buffer;
     if (exported_) external_barrier(commands, frame_slot_, true);
@@ -830,16 +567,6 @@ void VulkanRenderer::record_stamp_copy(VkCommandBuffer commands) const {
     const VkBufferCopy copy{slot.size - kSlotStampBytes, 0, kSlotStampBytes};
     vkCmdCopyBuffer(commands, slot.buffer, stamp_readback_.buffer, 1, &copy);
     to_host_barrier(commands, stamp_readback_.buffer);
-}
-
-void VulkanRenderer::record_readback(VkCommandBuffer commands) const {
-    // The render pass left the picture in TRANSFER_SRC_OPTIMAL; rows come out top to bottom because
-    // the viewport is flipped.
-    VkBufferImageCopy copy{};
-    copy.imageSubresource = {VK_IMAGE_ASPECT_COLOR_BIT, 0, 0, 1};
-    copy.imageExtent = {extent_.width, extent_.height, 1};
-    vkCmdCopyImageToBuffer(commands, resolved_.image, VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL, readback_.buffer, 1, &copy);
-    to_host_barrier(commands, readback_.buffer);
 }
 
 void VulkanRenderer::draw_all(VkCommandBuffer commands, const std::vector<DrawUniforms>& draws,

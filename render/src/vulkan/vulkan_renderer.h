@@ -1,7 +1,8 @@
 #pragma once
 // The Vulkan renderer: see vulkan_renderer.cpp. Offscreen (Renderer::draw, the picture read back at
-// once) and, for the window (vulkan_window.cpp), the same passes with the resolved picture blitted
-// into a swapchain image instead (draw_to_swapchain, not waited for).
+// once: vulkan_renderer_capture.cpp) and, for the window (vulkan_window.cpp), the same passes with
+// the resolved picture blitted into a swapchain image instead (draw_to_swapchain, not waited for:
+// vulkan_renderer_present.cpp); the cloth slots exported to CUDA in vulkan_renderer_export.cpp.
 #include <vulkan/vulkan.h>
 
 #include <cstdint>
@@ -86,8 +87,7 @@ private:
     /// shadow and surface passes, then `finish` (the copy to the host, or the blit to a swapchain
     /// image), then the copy of the slot's frame stamps. Returns whether the cloth was uploaded;
     /// sets `external`.
-    template <typename Finish>
-    bool record_frame(const RenderFrame& frame, bool& external, Finish&& finish);
+    bool record_frame(const RenderFrame& frame, bool& external, const std::function<void(VkCommandBuffer)>& finish);
     /// Submits the recorded frame with its timeline values and the window's semaphores (may be null).
     /// `with_commands` false: no command buffer, only the semaphore operations (skip_frame).
     void submit_frame(const RenderFrame& frame, VkSemaphore wait_binary, VkSemaphore signal_binary,
@@ -101,6 +101,12 @@ private:
     void draw_all(VkCommandBuffer commands, const std::vector<DrawUniforms>& draws, bool casters_only) const;
     void destroy_scene() noexcept;
     void destroy() noexcept;
+
+    /// The resolved picture's format: it holds sRGB-encoded values (the shader encodes).
+    static constexpr VkFormat kColourFormat = VK_FORMAT_R8G8B8A8_UNORM;
+    /// The stages that read a cloth slot: the draws' vertex input and the copy of its frame stamps.
+    static constexpr VkPipelineStageFlags kSlotReadStages =
+        VK_PIPELINE_STAGE_VERTEX_INPUT_BIT | VK_PIPELINE_STAGE_TRANSFER_BIT;
 
     RendererOptions options_;
     VulkanContext context_;

@@ -66,6 +66,20 @@ void destroy_buffer(VkDevice device, DeviceBuffer& buffer) noexcept {
     buffer = DeviceBuffer{};
 }
 
+void to_host_barrier(VkCommandBuffer commands, VkBuffer buffer) {
+    VkBufferMemoryBarrier to_host{};
+    to_host.sType = VK_STRUCTURE_TYPE_BUFFER_MEMORY_BARRIER;
+    to_host.srcAccessMask = VK_ACCESS_TRANSFER_WRITE_BIT;
+    to_host.dstAccessMask = VK_ACCESS_HOST_READ_BIT;
+    to_host.srcQueueFamilyIndex = VK_QUEUE_FAMILY_IGNORED;
+    to_host.dstQueueFamilyIndex = VK_QUEUE_FAMILY_IGNORED;
+    to_host.buffer = buffer;
+    to_host.offset = 0;
+    to_host.size = VK_WHOLE_SIZE;
+    vkCmdPipelineBarrier(commands, VK_PIPELINE_STAGE_TRANSFER_BIT, VK_PIPELINE_STAGE_HOST_BIT, 0, 0, nullptr, 1,
+                         &to_host, 0, nullptr);
+}
+
 DeviceImage create_image(const VulkanContext& context, VkExtent2D extent, VkFormat format,
                          VkSampleCountFlagBits samples, VkImageUsageFlags usage, VkImageAspectFlags aspect) {
     const VkDevice device = context.device();

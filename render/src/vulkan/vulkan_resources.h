@@ -31,6 +31,9 @@ struct DeviceBuffer {
 void invalidate(const VulkanContext& context, const DeviceBuffer& buffer);
 /// Destroys `buffer` and frees its memory; leaves it empty. A no-op on an empty buffer.
 void destroy_buffer(VkDevice device, DeviceBuffer& buffer) noexcept;
+/// Records a barrier that makes a transfer's writes into `buffer` visible to the host once the
+/// submission's fence signals.
+void to_host_barrier(VkCommandBuffer commands, VkBuffer buffer);
 
 struct DeviceImage {
     VkImage image = VK_NULL_HANDLE;

@@ -29,12 +29,7 @@ public:
     void build(const Model& model) override {
         flat_ = flatten(model);
         precision_ = model.settings.solver.precision;
-        arena_.execute([&] {
-            if (precision_ == Precision::Double)
-                solver_.emplace<CpuSolver<double>>().build(flat_, model);
-            else
-                solver_.emplace<CpuSolver<float>>().build(flat_, model);
-        });
+        build_solver(model);
     }
 
     void substep(const Model& model, double t, double h, StepStats& stats) override {
@@ -57,17 +52,22 @@ public:
     }
 
 private:
-    // Changing precision live keeps the state (converted) and rebuilds the solver.
-    void switch_precision(const Model& model) {
-        std::vector<Vec3d> x(flat_.vertex_count), v(flat_.vertex_count);
-        std::visit([&](const auto& s) { s.read_state(0, flat_.vertex_count, x.data(), v.data()); }, solver_);
-        precision_ = model.settings.solver.precision;
+    /// A solver of precision_ for the flattened model, built inside the backend's task arena.
+    void build_solver(const Model& model) {
         arena_.execute([&] {
             if (precision_ == Precision::Double)
                 solver_.emplace<CpuSolver<double>>().build(flat_, model);
             else
                 solver_.emplace<CpuSolver<float>>().build(flat_, model);
         });
+    }
+
+    // Changing precision live keeps the state (converted) and rebuilds the solver.
+    void switch_precision(const Model& model) {
+        std::vector<Vec3d> x(flat_.vertex_count), v(flat_.vertex_count);
+        std::visit([&](const auto& s) { s.read_state(0, flat_.vertex_count, x.data(), v.data()); }, solver_);
+        precision_ = model.settings.solver.precision;
+        build_solver(model);
         std::visit([&](auto& s) { s.write_state(0, flat_.vertex_count, x.data(), v.data()); }, solver_);
     }
 

@@ -4,15 +4,12 @@
 #include <algorithm>
 #include <chrono>
 
+#include "weft/backend/timing.h"
 
 namespace weft::cpu {
 namespace {
 
 using Clock = std::chrono::steady_clock;
-
-double ms_since(Clock::time_point start) {
-    return std::chrono::duration<double, std::milli>(Clock::now() - start).count();
-}
 
 }  // namespace
 

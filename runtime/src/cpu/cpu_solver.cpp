@@ -6,6 +6,7 @@
 #include <cmath>
 
 #include "weft/backend/collider_shape.h"
+#include "weft/backend/timing.h"
 #include "weft/physics/aerodynamics.h"
 #include "weft/physics/swept_collider.h"
 
@@ -13,10 +14,6 @@ namespace weft::cpu {
 namespace {
 
 using Clock = std::chrono::steady_clock;
-
-double ms_since(Clock::time_point start) {
-    return std::chrono::duration<double, std::milli>(Clock::now() - start).count();
-}
 
 template <typename T>
 physics::Vec3<T> to(Vec3d a) {

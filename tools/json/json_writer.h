@@ -1,7 +1,8 @@
 #pragma once
 /// @file
-/// A small streaming JSON writer for the stats and bench files: correct string escaping,
-/// shortest round-trip numbers, and `null` for NaN and infinities (JSON has no spelling for them).
+/// A small streaming JSON writer for the files the `weft` tool and the benchmarks (bench/) write
+/// (stats, bench results): correct string escaping, shortest round-trip numbers, and `null` for NaN
+/// and infinities (JSON has no spelling for them).
 
 #include <concepts>
 #include <cstdint>
@@ -11,7 +12,7 @@
 #include <type_traits>
 #include <vector>
 
-namespace weft::cli {
+namespace weft::json {
 
 /// `text` as a JSON string literal, quotes included. Control characters become escapes; other bytes
 /// (UTF-8) pass through unchanged.
@@ -75,4 +76,4 @@ private:
     bool wrote_root_ = false;
 };
 
-}  // namespace weft::cli
+}  // namespace weft::json

@@ -5,7 +5,7 @@
 #include <stdexcept>
 #include <system_error>
 
-namespace weft::cli {
+namespace weft::json {
 
 std::string json_string(std::string_view text) {
     std::string out;
@@ -156,4 +156,4 @@ JsonWriter& JsonWriter::null() {
     return *this;
 }
 
-}  // namespace weft::cli
+}  // namespace weft::json

@@ -1,0 +1,177 @@
+// The CUDA solver's recording (see device_solver.cpp): the substep's kernels enqueued in order,
+// either directly (the CG loop driven from the host) or captured once into a CUDA graph whose CG
+// loop is a conditional while node, launched each substep and captured again only when what it was
+// recorded with changes.
+#include "device_solver.h"
+
+#include <vector>
+
+#include "kernels.h"
+#include "weft/error.h"
+
+namespace weft::cuda {
+namespace {
+
+/// Host-driven CG (before the graph exists, or when graphs are off): iterations launched in batches of
+/// this many, then one small copy of the `running` flag. Kernels after convergence do nothing.
+constexpr int kHostCheckInterval = 8;
+/// CG iterations in the body of the graph's while node.
+constexpr int kIterationsPerGraphLoop = 2;
+
+}  // namespace
+
+void DeviceSolver::destroy_graph() {
+    if (graph_exec_ != nullptr) cudaGraphExecDestroy(graph_exec_);
+    graph_exec_ = nullptr;
+    graph_active_ = false;
+}
+
+void DeviceSolver::record_pcg_loop(cudaStream_t stream, bool capturing, int newton) {
+    (void)newton;
+    if (persistent_grid_ > 0) {
+        // The whole loop is one cooperative kernel, in a graph or not.
+        launch_pcg_residual(view_, 0, stream);
+        launch_pcg_persistent(view_, persistent_grid_, stream);
+        return;
+    }
+    if (!capturing) {
+        launch_pcg_residual(view_, 0, stream);
+        // Host-driven loop: batches of iterations, then the `running` flag back.
+        for (;;) {
+            for (int k = 0; k < kHostCheckInterval; ++k) launch_pcg_iteration(view_, 0, stream);
+            WEFT_CUDA_CHECK(cudaMemcpyAsync(host_running_.get(), &view_.control->running, sizeof(int),
+                                            cudaMemcpyDeviceToHost, stream));
+            WEFT_CUDA_CHECK(cudaStreamSynchronize(stream));
+            if (host_running_[0] == 0) break;
+        }
+        return;
+    }
+    // Graph: the residual kernel sets the condition; a while node runs the iteration body until the
+    // update kernel clears it (converged, capped or broken down).
+    cudaStreamCaptureStatus status{};
+    cudaGraph_t graph = nullptr;
+    WEFT_CUDA_CHECK(cudaStreamGetCaptureInfo(stream, &status, nullptr, &graph, nullptr, nullptr, nullptr));
+    cudaGraphConditionalHandle handle{};
+    WEFT_CUDA_CHECK(cudaGraphConditionalHandleCreate(&handle, graph, 0, 0));
+    launch_pcg_residual(view_, handle, stream);
+    const cudaGraphNode_t* deps = nullptr;
+    std::size_t dep_count = 0;
+    WEFT_CUDA_CHECK(cudaStreamGetCaptureInfo(stream, &status, nullptr, &graph, &deps, nullptr, &dep_count));
+    cudaGraphNodeParams params{};
+    params.type = cudaGraphNodeTypeConditional;
+    params.conditional.handle = handle;
+    params.conditional.type = cudaGraphCondTypeWhile;
+    params.conditional.size = 1;
+    cudaGraphNode_t node = nullptr;
+    WEFT_CUDA_CHECK(cudaGraphAddNode(&node, graph, deps, nullptr, dep_count, &params));
+    WEFT_CUDA_CHECK(cudaStreamUpdateCaptureDependencies(stream, &node, nullptr, 1, cudaStreamSetCaptureDependencies));
+    cudaGraph_t body = params.conditional.phGraph_out[0];
+    WEFT_CUDA_CHECK(cudaStreamBeginCaptureToGraph(body_stream_, body, nullptr, nullptr, 0, cudaStreamCaptureModeThreadLocal));
+    try {
+        // Two iterations per trip round the while node halve its per-iteration overhead; the second
+        // does nothing if the first finished the solve.
+        for (int k = 0; k < kIterationsPerGraphLoop; ++k) launch_pcg_iteration(view_, handle, body_stream_);
+    } catch (...) {
+        cudaGraph_t discarded = nullptr;
+        cudaStreamEndCapture(body_stream_, &discarded);
+        throw;
+    }
+    cudaGraph_t captured = nullptr;
+    WEFT_CUDA_CHECK(cudaStreamEndCapture(body_stream_, &captured));
+}
+
+void DeviceSolver::record(cudaStream_t stream, bool capturing) {
+    const int newton = recorded_newton_;
+    int e = 0;
+    // Under capture a plain record only orders streams; an external record makes an event node that
+    // the graph records at run time, so the stage times below work in both modes.
+    const unsigned flags = capturing ? cudaEventRecordExternal : cudaEventRecordDefault;
+    auto mark = [&] { WEFT_CUDA_CHECK(cudaEventRecordWithFlags(events_[static_cast<std::size_t>(e++)], stream, flags)); };
+    mark();
+    launch_begin_substep(view_, stream);
+    launch_pin_velocities(view_, stream);
+    const bool contacts = view_.contacts.capacity > 0;
+    // The incidence of this substep's contacts (timed with the substep's start, as "kinematics").
+    if (contacts) launch_contact_incidence(view_, contacts_.scan_storage(), contacts_.scan_storage_bytes(), stream);
+    mark();
+    for (int it = 0; it < newton; ++it) {
+        launch_begin_newton(view_, stream);
+        if (row_gather_)
+            launch_assemble_rows(view_, stream);
+        else
+            launch_assemble_colors(view_, layout_.triangle_colors, layout_.hinge_colors, stream);
+        if (contacts) launch_contact_evaluate(view_, stream);  // gathered by the PCG setup
+        mark();
+        launch_pcg_setup(view_, it == 0, stream);
+        record_pcg_loop(stream, capturing, it);
+        launch_pcg_finish(view_, stream);
+        mark();
+        launch_newton_update(view_, stream);
+        mark();
+    }
+    launch_commit(view_, stream);
+    mark();
+}
+
+void DeviceSolver::capture_graph() {
+    destroy_graph();
+    cudaStream_t stream = active_stream();
+    cudaGraph_t graph = nullptr;
+    WEFT_CUDA_CHECK(cudaStreamBeginCapture(stream, cudaStreamCaptureModeThreadLocal));
+    try {
+        record(stream, true);
+    } catch (...) {
+        cudaStreamEndCapture(stream, &graph);
+        if (graph != nullptr) cudaGraphDestroy(graph);
+        throw;
+    }
+    WEFT_CUDA_CHECK(cudaStreamEndCapture(stream, &graph));
+    const cudaError_t err = cudaGraphInstantiate(&graph_exec_, graph, 0);
+    cudaGraphDestroy(graph);
+    if (err != cudaSuccess) {
+        graph_exec_ = nullptr;
+        throw_cuda_error(err, "cudaGraphInstantiate", __FILE__, __LINE__);
+    }
+    ++graph_captures_;
+    graph_newton_ = recorded_newton_;
+}
+
+void DeviceSolver::launch_substep(cudaStream_t stream, int newton_iterations) {
+    recorded_newton_ = newton_iterations;
+    const std::size_t event_count = 3 + 3 * static_cast<std::size_t>(recorded_newton_);
+    if (events_.size() < event_count) {
+        // Grows only when the Newton iteration count rises past what was seen (reported in memory).
+        for (std::size_t k = events_.size(); k < event_count; ++k) {
+            cudaEvent_t ev = nullptr;
+            WEFT_CUDA_CHECK(cudaEventCreate(&ev));
+            events_.push_back(ev);
+        }
+    }
+
+    const bool want_graph = use_graph_ && !graph_unsupported_ && warm_;
+    if (want_graph && (graph_exec_ == nullptr || graph_newton_ != recorded_newton_)) {
+        try {
+            capture_graph();
+        } catch (const Error&) {
+            // Conditional nodes need CUDA 12.4 and a recent driver; without them the host-driven loop
+            // (same kernels, same results) is used and graph_active() says so.
+            graph_unsupported_ = true;
+            destroy_graph();
+            cudaGetLastError();
+        }
+    }
+    if (want_graph && graph_exec_ != nullptr) {
+        WEFT_CUDA_CHECK(cudaGraphLaunch(graph_exec_, stream));
+        graph_active_ = true;
+    } else {
+        record(stream, false);
+        graph_active_ = false;
+    }
+}
+
+void DeviceSolver::set_use_graph(bool enabled) {
+    use_graph_ = enabled;
+    if (!enabled) destroy_graph();
+}
+
+}  // namespace weft::cuda
