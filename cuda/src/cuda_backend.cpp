@@ -98,7 +98,14 @@ public:
     }
 
     // Fast analytic colliders are swept per vertex after the solve, in the device solver as on the CPU.
-    void substep(const Model& model, double t, double h, StepStats& stats) override { solver_->substep(model, t, h, stats); }
+    void substep(const Model& model, double t, double h, StepStats& stats) override {
+        // The Schwarz preconditioner runs on the CPU backend only so far: say so rather than solve
+        // with another preconditioner than the one asked for.
+        if (model.settings.solver.preconditioner != Preconditioner::Jacobi)
+            throw Error("solver.preconditioner = \"mas\" is not available on the cuda backend yet (use \"jacobi\", "
+                        "or --backend cpu)");
+        solver_->substep(model, t, h, stats);
+    }
 
     void read_state(std::size_t cloth, std::span<Vec3d> x, std::span<Vec3d> v) const override {
         const auto [first, count] = flat_.cloth_vertices(cloth, x.size(), v.size());

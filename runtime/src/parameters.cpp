@@ -117,6 +117,8 @@ constexpr std::string_view kPrecisionNames[] = {"float", "double"};
 constexpr std::array kPrecisions{Precision::Float, Precision::Double};
 constexpr std::string_view kHessianNames[] = {"fast", "projected"};
 constexpr std::array kHessians{HessianMode::Fast, HessianMode::Projected};
+constexpr std::string_view kPreconditionerNames[] = {"jacobi", "mas"};
+constexpr std::array kPreconditioners{Preconditioner::Jacobi, Preconditioner::Schwarz};
 constexpr std::string_view kCullingNames[] = {"normal_cone", "none"};
 constexpr std::array kCullings{CollisionCulling::NormalCone, CollisionCulling::None};
 constexpr std::string_view kPlaneNames[] = {"xy", "xz"};
@@ -171,6 +173,11 @@ constexpr Parameter kTable[] = {
      .doc = "`fast`: cheap PSD approximation; `projected`: exact element Hessians clamped to PSD", .label = "Hessian",
      .panel = "solver", .choices = kHessianNames,
      .access = choice_field<kHessians, &WorldDesc::solver, &SolverSettings::hessian>()},
+    {.section = "solver", .name = "preconditioner", .type = T::Choice,
+     .doc = "`jacobi`: 3×3 block-Jacobi; `mas`: multilevel additive Schwarz, fewer CG iterations on fine or stiff "
+            "cloth (CPU backend; the CUDA backend uses jacobi)",
+     .label = "preconditioner", .panel = "solver", .choices = kPreconditionerNames,
+     .access = choice_field<kPreconditioners, &WorldDesc::solver, &SolverSettings::preconditioner>()},
     {.section = "solver", .name = "contact_stiffness", .type = T::Real, .unit = "N/m", .range = R{0.0, 1e12},
      .doc = "per-vertex collider contact stiffness; 0 picks one from the mass and `dt`", .label = "collider stiffness",
      .panel = "solver", .log_scale = true, .access = field<&WorldDesc::solver, &SolverSettings::contact_stiffness>()},

@@ -31,6 +31,17 @@ enum class HessianMode : std::uint8_t {
     Projected,
 };
 
+/// The preconditioner of the CG solve (a speed knob: both reach the same answer at the tolerance).
+enum class Preconditioner : std::uint8_t {
+    /// Block-Jacobi: the inverse of each vertex's 3×3 diagonal block. Cheapest per iteration; the
+    /// iteration count grows with resolution and stiffness.
+    Jacobi,
+    /// Multilevel additive Schwarz (Wu, Wang & Wang 2022; docs/methods.md §2b): dense solves on
+    /// domains of 32 vertices at several levels of aggregation. Costlier per iteration, far fewer
+    /// iterations on fine or stiff cloth. CPU backend only for now.
+    Schwarz,
+};
+
 /// Solver knobs. Every one trades speed against accuracy; docs/tuning.md measures them.
 struct SolverSettings {
     double dt = 1.0 / 60.0;        ///< frame time step, s.
@@ -44,6 +55,7 @@ struct SolverSettings {
     bool cg_warm_start = true;
     Precision precision = Precision::Double;  ///< CPU backend scalar; double is the reference
     HessianMode hessian = HessianMode::Fast;
+    Preconditioner preconditioner = Preconditioner::Jacobi;
     double contact_stiffness = 0.0;  ///< N/m per vertex against colliders; 0 picks a stiffness from mass and dt
     int threads = 0;               ///< CPU worker threads; 0 = all cores. Results do not depend on it.
 };

@@ -66,6 +66,7 @@ void CpuSolver<T>::build(const FlatModel& flat, const Model& model) {
     contacts_.assign(n_, 0);
     A_.resize(flat.pattern);
     pcg_.resize(n_);
+    schwarz_ = SchwarzPreconditioner<T>{};  // levels rebuilt on first use, for this topology
     collisions_.build(flat, model);
 }
 
@@ -267,8 +268,18 @@ void CpuSolver<T>::substep(const Model& model, double t, double h_double, StepSt
         stats.ms(Stage::Assembly) += ms_since(clock);
 
         clock = Clock::now();
+        SchwarzPreconditioner<T>* schwarz = nullptr;
+        if (solver.preconditioner == Preconditioner::Schwarz) {
+            if (!schwarz_.built()) {  // once per build: the levels depend on the topology only
+                schwarz_levels_ = build_schwarz_hierarchy(flat_->initial_positions);
+                schwarz_.build(schwarz_levels_);
+            }
+            const bool with_contacts = contacts != nullptr && contacts->size() > 0;
+            schwarz_.factor(A_, fixed_, [&](std::size_t i) { return with_contacts ? contacts->diagonal(i) : M3{}; });
+            schwarz = &schwarz_;
+        }
         const PcgResult r = pcg_.solve(SystemOperator<T>{A_, contacts}, b_, fixed_, dv_, solver.cg_tolerance,
-                                       solver.cg_max_iterations);
+                                       solver.cg_max_iterations, schwarz);
         stats.cg_iterations += r.iterations;
         stats.cg_iterations_max = std::max(stats.cg_iterations_max, r.iterations);
         stats.cg_residual = std::max(stats.cg_residual, r.relative_residual);
@@ -342,7 +353,7 @@ std::size_t CpuSolver<T>::memory_bytes() const {
     return vec3 * sizeof(V3) + (element_blocks_.capacity() + vertex_blocks_.capacity() + A_.blocks.capacity()) * sizeof(M3) +
            mass_.capacity() * sizeof(T) + triangle_rest_.capacity() * sizeof(TriangleRestT) +
            hinge_rest_.capacity() * sizeof(HingeRestT) + fixed_.capacity() + contacts_.capacity() * sizeof(int) +
-           pcg_.memory_bytes() + collisions_.memory_bytes();
+           pcg_.memory_bytes() + schwarz_.memory_bytes() + collisions_.memory_bytes();
 }
 
 template class CpuSolver<float>;

@@ -8,6 +8,8 @@
 #include "cpu/bsr_matrix.h"
 #include "cpu/cpu_collisions.h"
 #include "cpu/pcg.h"
+#include "cpu/schwarz_preconditioner.h"
+#include "weft/backend/schwarz_hierarchy.h"
 #include "weft/backend/flat_model.h"
 #include "weft/backend/material_terms.h"
 #include "weft/backend/model.h"
@@ -85,6 +87,10 @@ private:
     std::vector<double> partials_;
     BsrMatrix<T> A_;
     Pcg<T> pcg_;
+    // Multilevel additive Schwarz (SolverSettings::preconditioner): levels built from the initial
+    // positions on first use, factored once per Newton iteration.
+    SchwarzHierarchy schwarz_levels_;
+    SchwarzPreconditioner<T> schwarz_;
     CpuCollisions<T> collisions_;
     std::vector<ClothParams> cloth_params_;
     std::vector<physics::Shape<T>> shapes_;        // analytic colliders at the end of the substep

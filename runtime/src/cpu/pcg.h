@@ -1,13 +1,18 @@
 #pragma once
 // Modified preconditioned conjugate gradient with filtered constraints (Baraff & Witkin 1998 §5.3;
 // the P-Cloth slide "Recalling CG Solver"). Pinned vertices have S = 0: their Δv is the prescribed
-// z and never changes. Block-Jacobi preconditioner: P⁻¹ = inverse of each 3×3 diagonal block.
+// z and never changes. Preconditioner: block-Jacobi (P⁻¹ = inverse of each 3×3 diagonal block), or
+// the multilevel additive Schwarz one (cpu/schwarz_preconditioner.h) when the caller hands one over.
+// Both stop on the preconditioned norm rᵀP⁻¹r relative to filter(b)ᵀP⁻¹filter(b) (docs/architecture.md,
+// step 4): the norm the iteration minimises, so the test costs nothing extra; it differs between
+// the two preconditioners, which is why docs/results.md also reports the plain residual.
 
 #include <cmath>
 #include <cstdint>
 #include <vector>
 
 #include "cpu/bsr_matrix.h"
+#include "cpu/schwarz_preconditioner.h"
 #include "deterministic_parallel.h"
 
 namespace weft::cpu {
@@ -36,9 +41,12 @@ public:
     /// elsewhere); `fixed[i]` != 0 filters vertex i out completely. `A` is any symmetric operator
     /// with `multiply(x, y)` (y = A·x) and `diagonal_block(i)`: the fabric's BSR matrix alone, or the
     /// fabric plus the substep's contact springs (cpu_solver.cpp).
+    /// With `schwarz` (factored for this A), the solve uses it instead of block-Jacobi.
     template <typename Operator>
     PcgResult solve(const Operator& A, const std::vector<V3>& b, const std::vector<std::uint8_t>& fixed,
-                    std::vector<V3>& dv, double tolerance, int max_iterations) {
+                    std::vector<V3>& dv, double tolerance, int max_iterations,
+                    SchwarzPreconditioner<T>* schwarz = nullptr) {
+        if (schwarz != nullptr) return solve_schwarz(A, b, fixed, dv, tolerance, max_iterations, *schwarz);
         const std::size_t n = b.size();
         // Block-Jacobi preconditioner. Diagonal blocks are SPD (mass + PSD stiffness), so invertible.
         parallel_chunks(n, [&](std::size_t lo, std::size_t hi) {
@@ -82,6 +90,65 @@ public:
                 s_[i] = precond_[i] * r_[i];
                 return static_cast<double>(physics::dot(r_[i], s_[i]));
             });
+            const T beta = static_cast<T>(delta_new / delta);
+            delta = delta_new;
+            parallel_chunks(n, [&](std::size_t lo, std::size_t hi) {
+                for (std::size_t i = lo; i < hi; ++i) c_[i] = fixed[i] ? V3{} : s_[i] + beta * c_[i];
+            });
+            ++result.iterations;
+        }
+        result.relative_residual = std::sqrt(std::max(delta, 0.0) / delta0);
+        result.converged = delta <= eps2 * delta0;
+        return result;
+    }
+
+    /// The same iteration with z = filter(M⁻¹ filter(r)) from the Schwarz preconditioner: the
+    /// preconditioner is a whole-vector operation, so the fused per-row passes are split around it.
+    template <typename Operator>
+    PcgResult solve_schwarz(const Operator& A, const std::vector<V3>& b, const std::vector<std::uint8_t>& fixed,
+                            std::vector<V3>& dv, double tolerance, int max_iterations, SchwarzPreconditioner<T>& M) {
+        const std::size_t n = b.size();
+        const auto precondition = [&](const std::vector<V3>& in, std::vector<V3>& out) {
+            M.apply(in, out);
+            parallel_chunks(n, [&](std::size_t lo, std::size_t hi) {
+                for (std::size_t i = lo; i < hi; ++i)
+                    if (fixed[i]) out[i] = V3{};
+            });
+        };
+        parallel_chunks(n, [&](std::size_t lo, std::size_t hi) {
+            for (std::size_t i = lo; i < hi; ++i) r_[i] = fixed[i] ? V3{} : b[i];
+        });
+        precondition(r_, s_);
+        const double delta0_b = sum(n, [&](std::size_t i) { return static_cast<double>(physics::dot(r_[i], s_[i])); });
+        A.multiply(dv, q_);
+        parallel_chunks(n, [&](std::size_t lo, std::size_t hi) {
+            for (std::size_t i = lo; i < hi; ++i) r_[i] = fixed[i] ? V3{} : b[i] - q_[i];
+        });
+        precondition(r_, c_);
+        double delta = sum(n, [&](std::size_t i) { return static_cast<double>(physics::dot(r_[i], c_[i])); });
+        const double delta0 = std::max(delta0_b, delta);
+        PcgResult result;
+        const double eps2 = tolerance * tolerance;
+        if (!(delta0 > 0.0)) {
+            result.converged = delta0 == 0.0;
+            return result;
+        }
+        while (delta > eps2 * delta0 && result.iterations < max_iterations) {
+            A.multiply(c_, q_);
+            const double cq = sum(n, [&](std::size_t i) {
+                if (fixed[i]) q_[i] = V3{};
+                return static_cast<double>(physics::dot(c_[i], q_[i]));
+            });
+            if (!(cq > 0.0)) break;
+            const T alpha = static_cast<T>(delta / cq);
+            parallel_chunks(n, [&](std::size_t lo, std::size_t hi) {
+                for (std::size_t i = lo; i < hi; ++i) {
+                    dv[i] += alpha * c_[i];
+                    r_[i] -= alpha * q_[i];
+                }
+            });
+            precondition(r_, s_);
+            const double delta_new = sum(n, [&](std::size_t i) { return static_cast<double>(physics::dot(r_[i], s_[i])); });
             const T beta = static_cast<T>(delta_new / delta);
             delta = delta_new;
             parallel_chunks(n, [&](std::size_t lo, std::size_t hi) {

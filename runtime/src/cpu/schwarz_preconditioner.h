@@ -1,0 +1,204 @@
+#pragma once
+// The multilevel additive Schwarz preconditioner on the CPU (Wu, Wang & Wang 2022; docs/methods.md
+// §2b; the levels are weft/backend/schwarz_hierarchy.h): M⁻¹ = Σ_l R_lᵀ D_l⁻¹ R_l. Every substep
+// it aggregates the assembled 3×3 blocks into each level's domain matrices (dense, 96×96 for domains
+// of 32 nodes), factors them (Cholesky), and applies all levels to a residual. Work is split by
+// domain, each domain written by one task in a fixed order: the result does not depend on the
+// thread count.
+//
+// Filtered (pinned) vertices: the solve acts on the free vertices only (S·A·S), so their blocks are
+// left out of every level and a vertex or node with nothing left gets the identity (it is decoupled,
+// and its value is filtered out anyway). Contact springs add their diagonal blocks (Σ w_i²·C) to
+// their vertex's node; their couplings between vertices are not aggregated yet.
+
+#include <algorithm>
+#include <cmath>
+#include <cstdint>
+#include <vector>
+
+#include "cpu/bsr_matrix.h"
+#include "deterministic_parallel.h"
+#include "weft/backend/schwarz_hierarchy.h"
+#include "weft/physics/vec.h"
+
+namespace weft::cpu {
+
+template <typename T>
+class SchwarzPreconditioner {
+public:
+    using V3 = physics::Vec3<T>;
+    using M3 = physics::Mat3<T>;
+    static constexpr std::uint32_t kNodes = SchwarzHierarchy::kDomainSize;
+    static constexpr std::uint32_t kDim = 3 * kNodes;  // rows of a dense domain matrix
+
+    void build(const SchwarzHierarchy& h) {
+        h_ = &h;
+        const int levels = h.levels();
+        dense_.resize(static_cast<std::size_t>(levels));
+        values_.resize(static_cast<std::size_t>(levels));
+        solved_.resize(static_cast<std::size_t>(levels));
+        for (int l = 0; l < levels; ++l) {
+            const std::size_t domains = h.domains(l);
+            dense_[l].assign(domains * kDim * kDim, T(0));
+            values_[l].assign(domains * kNodes, V3{});
+            solved_[l].assign(domains * kNodes, V3{});
+        }
+    }
+
+    [[nodiscard]] bool built() const { return h_ != nullptr; }
+    [[nodiscard]] int levels() const { return h_ ? h_->levels() : 0; }
+    /// Domain factorisations that met a non-positive pivot in the last `factor` (a matrix that is not
+    /// SPD in this precision); their pivot was replaced by the diagonal's magnitude.
+    [[nodiscard]] int pivot_failures() const { return pivot_failures_; }
+
+    /// Aggregates `A` (plus `extra_diagonal(i)`, the contact springs' share of row i's diagonal block)
+    /// into every level's domain matrices and factors them.
+    template <typename ExtraDiagonal>
+    void factor(const BsrMatrix<T>& A, const std::vector<std::uint8_t>& fixed, ExtraDiagonal&& extra_diagonal) {
+        const SchwarzHierarchy& h = *h_;
+        const auto& rs = A.pattern->row_start;
+        const auto& col = A.pattern->column;
+        int failures = 0;
+        for (int l = 0; l < h.levels(); ++l) {
+            const std::uint32_t shift = SchwarzHierarchy::kDomainBits * static_cast<std::uint32_t>(l);
+            const std::uint32_t domains = h.domains(l);
+            std::vector<T>& dense = dense_[static_cast<std::size_t>(l)];
+            failures += static_cast<int>(deterministic_sum(domains, partials_, [&](std::size_t lo, std::size_t hi) {
+                double failed = 0.0;
+                for (std::size_t d = lo; d < hi; ++d) {
+                    T* D = &dense[d * kDim * kDim];
+                    std::fill(D, D + kDim * kDim, T(0));
+                    // The vertices of this domain are the ranks [first, last).
+                    const std::uint64_t first = std::uint64_t(d) << (shift + SchwarzHierarchy::kDomainBits);
+                    const std::uint64_t last = std::min<std::uint64_t>(
+                        h.vertex_count, std::uint64_t(d + 1) << (shift + SchwarzHierarchy::kDomainBits));
+                    for (std::uint64_t p = first; p < last; ++p) {
+                        const std::uint32_t i = h.order[p];
+                        if (fixed[i]) continue;
+                        const std::uint32_t a = (static_cast<std::uint32_t>(p) >> shift) & (kNodes - 1);
+                        for (std::uint32_t s = rs[i]; s < rs[i + 1]; ++s) {
+                            const std::uint32_t j = col[s];
+                            if (fixed[j]) continue;
+                            const std::uint32_t q = h.rank[j];
+                            if ((q >> (shift + SchwarzHierarchy::kDomainBits)) != d) continue;
+                            add_block(D, a, (q >> shift) & (kNodes - 1), A.blocks[s]);
+                        }
+                        add_block(D, a, a, extra_diagonal(i));
+                    }
+                    // Nodes with nothing (all pinned, or past the end of the last domain) are decoupled.
+                    for (std::uint32_t k = 0; k < kDim; ++k)
+                        if (D[k * kDim + k] == T(0)) D[k * kDim + k] = T(1);
+                    failed += cholesky(D);
+                }
+                return failed;
+            }));
+        }
+        pivot_failures_ = failures;
+    }
+
+    /// z = M⁻¹ r over all vertices (the caller filters r before and z after).
+    void apply(const std::vector<V3>& r, std::vector<V3>& z) {
+        const SchwarzHierarchy& h = *h_;
+        const int levels = h.levels();
+        // Restrict: level 0 takes the residual in rank order; each coarser node sums its 32 children.
+        for (int l = 0; l < levels; ++l) {
+            std::vector<V3>& v = values_[static_cast<std::size_t>(l)];
+            const std::size_t nodes = h.level_nodes[static_cast<std::size_t>(l)];
+            parallel_chunks(v.size(), [&](std::size_t lo, std::size_t hi) {
+                for (std::size_t k = lo; k < hi; ++k) {
+                    if (k >= nodes) {
+                        v[k] = V3{};
+                    } else if (l == 0) {
+                        v[k] = r[h.order[k]];
+                    } else {
+                        const std::vector<V3>& fine = values_[static_cast<std::size_t>(l - 1)];
+                        V3 acc{};
+                        for (std::uint32_t c = 0; c < kNodes; ++c) acc += fine[k * kNodes + c];
+                        v[k] = acc;
+                    }
+                }
+            });
+        }
+        // Solve each domain of each level.
+        for (int l = 0; l < levels; ++l) {
+            const std::vector<T>& dense = dense_[static_cast<std::size_t>(l)];
+            const std::vector<V3>& v = values_[static_cast<std::size_t>(l)];
+            std::vector<V3>& y = solved_[static_cast<std::size_t>(l)];
+            parallel_chunks(h.domains(l), [&](std::size_t lo, std::size_t hi) {
+                for (std::size_t d = lo; d < hi; ++d) solve_domain(&dense[d * kDim * kDim], &v[d * kNodes], &y[d * kNodes]);
+            });
+        }
+        // Prolong: from the coarsest level down, each node adds its parent's correction.
+        for (int l = levels - 2; l >= 0; --l) {
+            std::vector<V3>& y = solved_[static_cast<std::size_t>(l)];
+            const std::vector<V3>& coarse = solved_[static_cast<std::size_t>(l + 1)];
+            parallel_chunks(h.level_nodes[static_cast<std::size_t>(l)], [&](std::size_t lo, std::size_t hi) {
+                for (std::size_t k = lo; k < hi; ++k) y[k] += coarse[k >> SchwarzHierarchy::kDomainBits];
+            });
+        }
+        const std::vector<V3>& y0 = solved_[0];
+        parallel_chunks(h.vertex_count, [&](std::size_t lo, std::size_t hi) {
+            for (std::size_t p = lo; p < hi; ++p) z[h.order[p]] = y0[p];
+        });
+    }
+
+    [[nodiscard]] std::size_t memory_bytes() const {
+        std::size_t bytes = partials_.capacity() * sizeof(double);
+        for (std::size_t l = 0; l < dense_.size(); ++l)
+            bytes += dense_[l].capacity() * sizeof(T) + (values_[l].capacity() + solved_[l].capacity()) * sizeof(V3);
+        return bytes;
+    }
+
+private:
+    static void add_block(T* D, std::uint32_t a, std::uint32_t b, const M3& m) {
+        for (int r = 0; r < 3; ++r)
+            for (int c = 0; c < 3; ++c) D[(3 * a + r) * kDim + 3 * b + c] += m.m[r][c];
+    }
+
+    /// In-place Cholesky D = L·Lᵀ (lower triangle kept). Returns 1 if a pivot was not positive (then
+    /// replaced by the magnitude of the original diagonal, so the factor stays usable), else 0.
+    static double cholesky(T* D) {
+        double failed = 0.0;
+        for (std::uint32_t j = 0; j < kDim; ++j) {
+            T pivot = D[j * kDim + j];
+            for (std::uint32_t k = 0; k < j; ++k) pivot -= D[j * kDim + k] * D[j * kDim + k];
+            if (!(pivot > T(0))) {
+                failed = 1.0;
+                pivot = std::max(std::abs(D[j * kDim + j]), T(1e-12));
+            }
+            const T ljj = std::sqrt(pivot);
+            D[j * kDim + j] = ljj;
+            for (std::uint32_t i = j + 1; i < kDim; ++i) {
+                T s = D[i * kDim + j];
+                for (std::uint32_t k = 0; k < j; ++k) s -= D[i * kDim + k] * D[j * kDim + k];
+                D[i * kDim + j] = s / ljj;
+            }
+        }
+        return failed;
+    }
+
+    /// y = (L·Lᵀ)⁻¹ v for one domain (kNodes vectors of 3).
+    static void solve_domain(const T* L, const V3* v, V3* y) {
+        T w[kDim];
+        for (std::uint32_t i = 0; i < kDim; ++i) {
+            T s = v[i / 3][static_cast<int>(i % 3)];
+            for (std::uint32_t k = 0; k < i; ++k) s -= L[i * kDim + k] * w[k];
+            w[i] = s / L[i * kDim + i];
+        }
+        for (std::uint32_t i = kDim; i-- > 0;) {
+            T s = w[i];
+            for (std::uint32_t k = i + 1; k < kDim; ++k) s -= L[k * kDim + i] * w[k];
+            w[i] = s / L[i * kDim + i];
+        }
+        for (std::uint32_t a = 0; a < kNodes; ++a) y[a] = V3{w[3 * a], w[3 * a + 1], w[3 * a + 2]};
+    }
+
+    const SchwarzHierarchy* h_ = nullptr;
+    std::vector<std::vector<T>> dense_;   // per level: domains × kDim², row-major, Cholesky factor in place
+    std::vector<std::vector<V3>> values_;  // per level: the restricted residual per node
+    std::vector<std::vector<V3>> solved_;  // per level: the domain solutions per node
+    std::vector<double> partials_;
+    int pivot_failures_ = 0;
+};
+
+}  // namespace weft::cpu
