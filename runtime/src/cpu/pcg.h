@@ -77,11 +77,7 @@ public:
             return result;
         }
         while (delta > eps2 * delta0 && result.iterations < max_iterations) {
-            A.multiply(c_, q_);
-            const double cq = sum(n, [&](std::size_t i) {
-                if (fixed[i]) q_[i] = V3{};
-                return static_cast<double>(physics::dot(c_[i], q_[i]));
-            });
+            const double cq = product_along_direction(A, fixed);
             if (!(cq > 0.0)) break;  // loss of positive definiteness or breakdown: report, don't loop
             const T alpha = static_cast<T>(delta / cq);
             const double delta_new = sum(n, [&](std::size_t i) {
@@ -92,9 +88,7 @@ public:
             });
             const T beta = static_cast<T>(delta_new / delta);
             delta = delta_new;
-            parallel_chunks(n, [&](std::size_t lo, std::size_t hi) {
-                for (std::size_t i = lo; i < hi; ++i) c_[i] = fixed[i] ? V3{} : s_[i] + beta * c_[i];
-            });
+            next_direction(beta, fixed);
             ++result.iterations;
         }
         result.relative_residual = std::sqrt(std::max(delta, 0.0) / delta0);
@@ -134,11 +128,7 @@ public:
             return result;
         }
         while (delta > eps2 * delta0 && result.iterations < max_iterations) {
-            A.multiply(c_, q_);
-            const double cq = sum(n, [&](std::size_t i) {
-                if (fixed[i]) q_[i] = V3{};
-                return static_cast<double>(physics::dot(c_[i], q_[i]));
-            });
+            const double cq = product_along_direction(A, fixed);
             if (!(cq > 0.0)) break;
             const T alpha = static_cast<T>(delta / cq);
             parallel_chunks(n, [&](std::size_t lo, std::size_t hi) {
@@ -151,9 +141,7 @@ public:
             const double delta_new = sum(n, [&](std::size_t i) { return static_cast<double>(physics::dot(r_[i], s_[i])); });
             const T beta = static_cast<T>(delta_new / delta);
             delta = delta_new;
-            parallel_chunks(n, [&](std::size_t lo, std::size_t hi) {
-                for (std::size_t i = lo; i < hi; ++i) c_[i] = fixed[i] ? V3{} : s_[i] + beta * c_[i];
-            });
+            next_direction(beta, fixed);
             ++result.iterations;
         }
         result.relative_residual = std::sqrt(std::max(delta, 0.0) / delta0);
@@ -167,6 +155,23 @@ public:
     }
 
 private:
+    /// q = filter(A·c); returns cᵀq (the step length's denominator).
+    template <typename Operator>
+    double product_along_direction(const Operator& A, const std::vector<std::uint8_t>& fixed) {
+        A.multiply(c_, q_);
+        return sum(c_.size(), [&](std::size_t i) {
+            if (fixed[i]) q_[i] = V3{};
+            return static_cast<double>(physics::dot(c_[i], q_[i]));
+        });
+    }
+
+    /// c = filter(s + β·c): the next search direction from the preconditioned residual s.
+    void next_direction(T beta, const std::vector<std::uint8_t>& fixed) {
+        parallel_chunks(c_.size(), [&](std::size_t lo, std::size_t hi) {
+            for (std::size_t i = lo; i < hi; ++i) c_[i] = fixed[i] ? V3{} : s_[i] + beta * c_[i];
+        });
+    }
+
     template <typename F>
     double sum(std::size_t n, F&& per_row) {
         return deterministic_sum(n, partials_, [&](std::size_t lo, std::size_t hi) {
