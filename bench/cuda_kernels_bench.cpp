@@ -479,8 +479,8 @@ void measure(const Options& opt, const std::filesystem::path& scene_path, int l2
     const int one = 1;
     auto restart = [&] {
         // A fresh solve of the last assembled system: P^-1, dv, r, c, delta; then force `running`.
-        cuda::launch_pcg_setup(view, false, stream);  // Δv from 0 (no warm start)
-        cuda::launch_pcg_residual(view, 0, stream);
+        cuda::launch_pcg_setup(view, false, false, stream);  // Δv from 0 (no warm start)
+        cuda::launch_pcg_residual(view, 0, false, stream);
         WEFT_CUDA_CHECK(cudaMemcpyAsync(reinterpret_cast<unsigned char*>(view.control) + offsetof(cuda::PcgControl, running),
                                         &one, sizeof one, cudaMemcpyHostToDevice, stream));
     };
@@ -497,7 +497,7 @@ void measure(const Options& opt, const std::filesystem::path& scene_path, int l2
         }
     };
     auto iterations = [&] {
-        for (int k = 0; k < K; ++k) cuda::launch_pcg_iteration(view, 0, stream);
+        for (int k = 0; k < K; ++k) cuda::launch_pcg_iteration(view, 0, false, stream);
     };
     restart();
     iterations();  // warm

@@ -99,11 +99,6 @@ public:
 
     // Fast analytic colliders are swept per vertex after the solve, in the device solver as on the CPU.
     void substep(const Model& model, double t, double h, StepStats& stats) override {
-        // The Schwarz preconditioner runs on the CPU backend only so far: say so rather than solve
-        // with another preconditioner than the one asked for.
-        if (model.settings.solver.preconditioner != Preconditioner::Jacobi)
-            throw Error("solver.preconditioner = \"mas\" is not available on the cuda backend yet (use \"jacobi\", "
-                        "or --backend cpu)");
         solver_->substep(model, t, h, stats);
     }
 

@@ -30,15 +30,15 @@ void DeviceSolver::record_pcg_loop(cudaStream_t stream, bool capturing, int newt
     (void)newton;
     if (persistent_grid_ > 0) {
         // The whole loop is one cooperative kernel, in a graph or not.
-        launch_pcg_residual(view_, 0, stream);
+        launch_pcg_residual(view_, 0, false, stream);
         launch_pcg_persistent(view_, persistent_grid_, stream);
         return;
     }
     if (!capturing) {
-        launch_pcg_residual(view_, 0, stream);
+        launch_pcg_residual(view_, 0, schwarz_on_, stream);
         // Host-driven loop: batches of iterations, then the `running` flag back.
         for (;;) {
-            for (int k = 0; k < kHostCheckInterval; ++k) launch_pcg_iteration(view_, 0, stream);
+            for (int k = 0; k < kHostCheckInterval; ++k) launch_pcg_iteration(view_, 0, schwarz_on_, stream);
             WEFT_CUDA_CHECK(cudaMemcpyAsync(host_running_.get(), &view_.control->running, sizeof(int),
                                             cudaMemcpyDeviceToHost, stream));
             WEFT_CUDA_CHECK(cudaStreamSynchronize(stream));
@@ -53,7 +53,7 @@ void DeviceSolver::record_pcg_loop(cudaStream_t stream, bool capturing, int newt
     WEFT_CUDA_CHECK(cudaStreamGetCaptureInfo(stream, &status, nullptr, &graph, nullptr, nullptr, nullptr));
     cudaGraphConditionalHandle handle{};
     WEFT_CUDA_CHECK(cudaGraphConditionalHandleCreate(&handle, graph, 0, 0));
-    launch_pcg_residual(view_, handle, stream);
+    launch_pcg_residual(view_, handle, schwarz_on_, stream);
     const cudaGraphNode_t* deps = nullptr;
     std::size_t dep_count = 0;
     WEFT_CUDA_CHECK(cudaStreamGetCaptureInfo(stream, &status, nullptr, &graph, &deps, nullptr, &dep_count));
@@ -70,7 +70,7 @@ void DeviceSolver::record_pcg_loop(cudaStream_t stream, bool capturing, int newt
     try {
         // Two iterations per trip round the while node halve its per-iteration overhead; the second
         // does nothing if the first finished the solve.
-        for (int k = 0; k < kIterationsPerGraphLoop; ++k) launch_pcg_iteration(view_, handle, body_stream_);
+        for (int k = 0; k < kIterationsPerGraphLoop; ++k) launch_pcg_iteration(view_, handle, schwarz_on_, body_stream_);
     } catch (...) {
         cudaGraph_t discarded = nullptr;
         cudaStreamEndCapture(body_stream_, &discarded);
@@ -102,7 +102,9 @@ void DeviceSolver::record(cudaStream_t stream, bool capturing) {
             launch_assemble_colors(view_, layout_.triangle_colors, layout_.hinge_colors, stream);
         if (contacts) launch_contact_evaluate(view_, stream);  // gathered by the PCG setup
         mark();
-        launch_pcg_setup(view_, it == 0, stream);
+        launch_pcg_setup(view_, it == 0, schwarz_on_, stream);
+        if (schwarz_on_) launch_schwarz_factor(view_, stream);
+        mark();
         record_pcg_loop(stream, capturing, it);
         launch_pcg_finish(view_, stream);
         mark();
@@ -138,7 +140,7 @@ void DeviceSolver::capture_graph() {
 
 void DeviceSolver::launch_substep(cudaStream_t stream, int newton_iterations) {
     recorded_newton_ = newton_iterations;
-    const std::size_t event_count = 3 + 3 * static_cast<std::size_t>(recorded_newton_);
+    const std::size_t event_count = 3 + kEventsPerNewton * static_cast<std::size_t>(recorded_newton_);
     if (events_.size() < event_count) {
         // Grows only when the Newton iteration count rises past what was seen (reported in memory).
         for (std::size_t k = events_.size(); k < event_count; ++k) {

@@ -74,6 +74,7 @@ struct DeviceStats {
     /// free vertices, recorded by the commit when StepParams::bounded_shape_count > 0, else 0.
     unsigned int largest_move_bits;
     int swept_hits;  ///< vertices the swept collider test carried along (one per vertex and collider)
+    int pivot_failures;  ///< Schwarz domain factorisations that met a non-positive pivot
 };
 
 }  // namespace weft::cuda

@@ -47,10 +47,24 @@ void DeviceSolver::choose_pcg_loop() {
     // the two are within 5% either way (bandwidth, not launches, bounds the iteration there).
     constexpr std::uint32_t kOneLaunchMaxVertices = 200000;
     int grid = 0;
-    if (pcg_loop_ == PcgLoop::OneLaunch || (pcg_loop_ == PcgLoop::Auto && view_.n <= kOneLaunchMaxVertices))
+    // The Schwarz apply is several kernels with their own grids: it runs in the per-kernel loop only.
+    if (!schwarz_on_ && (pcg_loop_ == PcgLoop::OneLaunch || (pcg_loop_ == PcgLoop::Auto && view_.n <= kOneLaunchMaxVertices)))
         grid = view_.n > 0 ? pcg_persistent_grid(view_, device_) : 0;
     if (grid != persistent_grid_) destroy_graph();
     persistent_grid_ = grid;
+}
+
+void DeviceSolver::choose_preconditioner(Preconditioner preconditioner) {
+    const bool schwarz = preconditioner == Preconditioner::Schwarz;
+    if (schwarz == schwarz_on_) return;
+    if (schwarz && !schwarz_.built()) {
+        WEFT_CUDA_CHECK(cudaStreamSynchronize(active_stream()));
+        schwarz_.build(*flat_, layout_.ell.slot_position, ledger_);
+        view_.mas = schwarz_.view();
+    }
+    schwarz_on_ = schwarz;
+    destroy_graph();
+    choose_pcg_loop();
 }
 
 void DeviceSolver::set_pcg_loop(PcgLoop loop) {
@@ -86,6 +100,7 @@ void DeviceSolver::substep(const Model& model, double t, double h, StepStats& st
     // Collision detection before the solve, outside the graph on the same stream (it reads overflow
     // counters back): the contacts go straight into the solve's device list.
     if (collisions_.stale(model)) build_collisions(model);  // self-collision toggled live
+    choose_preconditioner(model.settings.solver.preconditioner);  // may change live
     if (collisions_.active()) {
         const std::size_t found = collisions_.detect(model, t, h, view_.x, view_.v, stream, stats);
         reserve_contacts(found, collisions_.kinematic_count());  // grows (and re-captures) only when needed
@@ -103,6 +118,7 @@ void DeviceSolver::substep(const Model& model, double t, double h, StepStats& st
     stats.cg_residual = std::max(stats.cg_residual, ds.cg_residual);
     stats.cg_not_converged += ds.cg_not_converged;
     stats.newton_iterations += ds.newton_iterations;
+    stats.preconditioner_pivot_failures += ds.pivot_failures;
     stats.collider_contacts = ds.contacts;
     // With the collision stages on, `detect` reported the list's size, as the CPU does.
     if (view_.contacts.capacity > 0 && !collisions_.active()) stats.collision.contacts = ds.proximity_contacts;
@@ -113,13 +129,15 @@ void DeviceSolver::substep(const Model& model, double t, double h, StepStats& st
         WEFT_CUDA_CHECK(cudaEventElapsedTime(&ms, events_[a], events_[b]));
         return static_cast<double>(ms);
     };
-    // Events: 0 start, 1 after kinematics, per Newton iteration (forces+assembly, solve, update), last.
+    // Events: 0 start, 1 after kinematics, per Newton iteration (forces+assembly, preconditioner
+    // setup, solve, update), last.
     stats.ms(Stage::Kinematics) += host_ms + elapsed(0, 1);
     std::size_t e = 1;
-    for (int it = 0; it < recorded_newton_; ++it, e += 3) {
+    for (int it = 0; it < recorded_newton_; ++it, e += kEventsPerNewton) {
         stats.ms(Stage::Forces) += elapsed(e, e + 1);
-        stats.ms(Stage::Solve) += elapsed(e + 1, e + 2);
-        stats.ms(Stage::Update) += elapsed(e + 2, e + 3);
+        stats.ms(Stage::Precondition) += elapsed(e + 1, e + 2);
+        stats.ms(Stage::Solve) += elapsed(e + 2, e + 3);
+        stats.ms(Stage::Update) += elapsed(e + 3, e + 4);
     }
     stats.ms(Stage::Update) += elapsed(e, e + 1);
 

@@ -14,6 +14,7 @@
 #include "device_contacts.h"
 #include "device_layout.h"
 #include "device_params.h"
+#include "device_schwarz.h"
 #include "device_view.h"
 #include "weft/cuda/cuda_backend.h"
 #include "weft/backend/flat_model.h"
@@ -72,6 +73,10 @@ public:
     [[nodiscard]] int graph_captures() const { return graph_captures_; }
     /// Substeps that ran the swept collider test since the build (tests: a slow collider must not).
     [[nodiscard]] int sweep_launches() const { return sweep_launches_; }
+    /// Whether the last substep solved with the Schwarz preconditioner (SolverSettings::preconditioner).
+    [[nodiscard]] bool schwarz_active() const { return schwarz_on_; }
+    /// Its levels (built on first use; tests compare them with the CPU backend's).
+    [[nodiscard]] const DeviceSchwarz& schwarz() const { return schwarz_; }
     /// Blocks of the one-launch CG loop, 0 when the loop runs a kernel per step.
     [[nodiscard]] int persistent_grid() const { return persistent_grid_; }
     /// Whether assembly runs as the row gather (else colour passes).
@@ -87,6 +92,9 @@ public:
     [[nodiscard]] cudaStream_t stream() const { return active_stream(); }
 
 private:
+    /// Timing events a Newton iteration records: after forces and assembly, after the preconditioner's
+    /// setup, after the solve, after the update.
+    static constexpr std::size_t kEventsPerNewton = 4;
     /// Enqueues one whole substep on `stream`. In graph mode (`capturing`) the CG loop becomes a
     /// conditional while node; otherwise it is driven from the host with a check every few iterations.
     void record(cudaStream_t stream, bool capturing);
@@ -100,6 +108,9 @@ private:
     /// Writes the parameters of the substep from `t` to `t + h` into the host block.
     void fill_staging(const Model& model, double t, double h);
     void build_collisions(const Model& model);
+    /// Switches the preconditioner to `preconditioner` (builds the Schwarz levels the first time;
+    /// the graph is re-captured with the other kernels).
+    void choose_preconditioner(Preconditioner preconditioner);
     void capture_graph();
     void choose_assembly();
     void choose_pcg_loop();
@@ -145,6 +156,8 @@ private:
     DeviceArray<double> partials_;
     DeviceContacts contacts_;
     DeviceCollisions collisions_;
+    DeviceSchwarz schwarz_;
+    bool schwarz_on_ = false;
 
     PinnedArray<unsigned char> host_staging_;
     PinnedArray<DeviceStats> host_stats_;

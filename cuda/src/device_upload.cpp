@@ -33,6 +33,8 @@ void DeviceSolver::build(const FlatModel& flat, const Model& model) {
     ledger_.clear();
     contacts_.release();  // vertex ids of the old model mean nothing in the new one
     collisions_.release();
+    schwarz_.release();  // its levels follow the topology: rebuilt when first used
+    schwarz_on_ = false;
     layout_ = make_device_layout(flat);
     const std::size_t n = flat.vertex_count, nt = flat.triangle_count(), nh = flat.hinge_count();
     if (n > 0x7fffffffu / 9 || layout_.ell.positions() > 0x7fffffffu / 9)

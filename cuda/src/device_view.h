@@ -7,6 +7,7 @@
 
 #include "device_contacts.h"
 #include "device_params.h"
+#include "device_schwarz.h"
 
 namespace weft::cuda {
 
@@ -48,6 +49,8 @@ struct DeviceView {
     double* partials = nullptr;
     // Proximity contacts (device_contacts.h); capacity 0 leaves the solve as it is without them.
     ContactView contacts;
+    // The Schwarz preconditioner's levels (device_schwarz.h); levels 0 until it is first used.
+    SchwarzView mas;
 };
 
 }  // namespace weft::cuda

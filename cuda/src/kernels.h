@@ -80,18 +80,21 @@ void launch_collision_scatter(const float* x1c, const float* x0c, const std::uin
                               float* dv_previous, cudaStream_t stream);
 
 // ---- PCG (pcg_kernels.cu) --------------------------------------------------------------------------
-/// Block-Jacobi inverse, Δv initialised (prescribed on filtered vertices; on the others the last
-/// substep's change when `first_newton` and warm starts are on, else 0), δ₀ of b. With contacts it
+/// Block-Jacobi inverse (`schwarz`: the diagonal block itself, for the Schwarz levels), Δv
+/// initialised (prescribed on filtered vertices; on the others the last substep's change when
+/// `first_newton` and warm starts are on, else 0), δ₀ of b (block-Jacobi only). With contacts it
 /// first gathers them into the row: b_i += Σ w_i·rhs_pair, diagonal block += Σ w_i²·C_pair.
-void launch_pcg_setup(const DeviceView& d, bool first_newton, cudaStream_t stream);
-/// r = filter(b − AΔv), c = P⁻¹r, δ; decides whether the loop runs (with contacts, A includes them:
-/// the pair pass over Δv is launched first). `handle` (0: none) is the
-/// graph's while-node condition, set to the loop's `running` flag.
-void launch_pcg_residual(const DeviceView& d, unsigned long long handle, cudaStream_t stream);
+void launch_pcg_setup(const DeviceView& d, bool first_newton, bool schwarz, cudaStream_t stream);
+/// r = filter(b − AΔv), c = M⁻¹r, δ; decides whether the loop runs (with contacts, A includes them:
+/// the pair pass over Δv is launched first). `handle` (0: none) is the graph's while-node condition,
+/// set to the loop's `running` flag. `schwarz`: M is the Schwarz preconditioner (factored by
+/// launch_schwarz_factor), and δ₀ of b is its norm of b.
+void launch_pcg_residual(const DeviceView& d, unsigned long long handle, bool schwarz, cudaStream_t stream);
 /// One CG iteration: q = filter(A c) with cᵀq (fused; with contacts the pair pass over c comes first
-/// and the SpMV gathers it), then the axpy pair with P⁻¹ and rᵀs (fused), then the new direction.
-/// Every kernel does nothing once the loop has stopped.
-void launch_pcg_iteration(const DeviceView& d, unsigned long long handle, cudaStream_t stream);
+/// and the SpMV gathers it), then the axpy pair with s = M⁻¹r and rᵀs (fused with block-Jacobi; the
+/// Schwarz apply's kernels otherwise), then the new direction. Every kernel does nothing once the
+/// loop has stopped.
+void launch_pcg_iteration(const DeviceView& d, unsigned long long handle, bool schwarz, cudaStream_t stream);
 /// Blocks for the one-launch CG loop on `device`: as many as fit at once (at most one per 256 rows),
 /// 0 if the device cannot launch cooperative kernels.
 [[nodiscard]] int pcg_persistent_grid(const DeviceView& d, int device);
@@ -101,6 +104,23 @@ void launch_pcg_iteration(const DeviceView& d, unsigned long long handle, cudaSt
 void launch_pcg_persistent(const DeviceView& d, int grid, cudaStream_t stream);
 /// Folds the finished solve into the stats.
 void launch_pcg_finish(const DeviceView& d, cudaStream_t stream);
+// ---- multilevel additive Schwarz (schwarz_kernels.cu; device_schwarz.h) ---------------------------
+/// After the PCG setup (which leaves each row's contact-augmented diagonal block in d.precond): every
+/// level's coupling blocks from the assembled matrix, then each domain's dense matrix inverted in
+/// double and stored in float. Non-positive pivots are counted in DeviceStats::pivot_failures.
+void launch_schwarz_factor(const DeviceView& d, cudaStream_t stream);
+/// What the apply reads: filter(b) (copied to r), r as it is, or r after the iteration's axpy pair
+/// (r −= αq, Δv += αc, done here for each vertex of a level-0 domain).
+enum class SchwarzInput { RightHandSide, Residual, Update };
+/// What it does with z = filter(M⁻¹r): rᵀz becomes δ₀ of b (Norm); c = z and the loop's start
+/// (Start); s = z, β and the stopping test (Iterate).
+enum class SchwarzOutput { Norm, Start, Iterate };
+/// z = M⁻¹r: the first level's domains (restricting to the next level), each coarser level's, then
+/// every vertex sums its nodes' corrections with the dot product. Update and Iterate do nothing
+/// once the loop has stopped.
+void launch_schwarz_apply(const DeviceView& d, SchwarzInput in, SchwarzOutput out, unsigned long long handle,
+                          cudaStream_t stream);
+
 /// y = A·x over the fabric matrix (benchmarks; the solver's SpMV is fused with its dot product and
 /// adds the contacts).
 void launch_spmv(const DeviceView& d, const float* x, float* y, cudaStream_t stream);

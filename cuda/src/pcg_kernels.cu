@@ -21,19 +21,10 @@
 #include "contact_terms.cuh"
 #include "cuda_check.h"
 #include "device_math.cuh"
+#include "pcg_control.cuh"
 
 namespace weft::cuda {
 namespace {
-
-__device__ inline void set_condition(unsigned long long handle, int running) {
-    if (handle != 0) cudaGraphSetConditional(static_cast<cudaGraphConditionalHandle>(handle), running ? 1u : 0u);
-}
-
-__device__ inline M3 load_precond(const DeviceView& d, std::uint32_t i) {
-    M3 m;
-    for (int e = 0; e < 9; ++e) m.m[e / 3][e % 3] = d.precond[e * d.n + i];
-    return m;
-}
 
 /// Row i of A·x.
 __device__ inline V3 row_times(const DeviceView& d, std::uint32_t i, const float* x) {
@@ -48,7 +39,7 @@ __device__ inline V3 row_times(const DeviceView& d, std::uint32_t i, const float
 }
 
 template <bool kContacts>
-__global__ void pcg_setup_kernel(DeviceView d, int first_newton) {
+__global__ void pcg_setup_kernel(DeviceView d, int first_newton, int schwarz) {
     const std::uint32_t i = blockIdx.x * blockDim.x + threadIdx.x;
     double value = 0.0;
     if (i < d.n) {
@@ -71,7 +62,9 @@ __global__ void pcg_setup_kernel(DeviceView d, int first_newton) {
                 diagonal += acc;
             }
         }
-        const M3 P = physics::inverse(diagonal);
+        // The Schwarz preconditioner aggregates the diagonal block itself (its δ₀ of b comes from its
+        // own apply, schwarz_kernels.cu); block-Jacobi keeps the inverse.
+        const M3 P = schwarz ? diagonal : physics::inverse(diagonal);
         for (int e = 0; e < 9; ++e) d.precond[e * d.n + i] = P.m[e / 3][e % 3];
         const bool fixed = d.fixed[i] != 0;
         // Filtered vertices get their prescribed change z = v_target − v_k; the rest start at 0 or,
@@ -79,7 +72,7 @@ __global__ void pcg_setup_kernel(DeviceView d, int first_newton) {
         const bool warm = first_newton && step_params(d).cg_warm_start;
         store3(d.dv, i, d.n,
                fixed ? load3(d.pin_velocity, i, d.n) - load3(d.vk, i, d.n) : (warm ? load3(d.dv_previous, i, d.n) : V3{}));
-        if (!fixed) {
+        if (!fixed && !schwarz) {
             const V3 b = load3(d.b, i, d.n);
             value = static_cast<double>(physics::dot(b, P * b));
         }
@@ -87,7 +80,9 @@ __global__ void pcg_setup_kernel(DeviceView d, int first_newton) {
     grid_sum(value, d, [&](double total) { d.control->delta0_b = total; });
 }
 
-template <bool kContacts>
+/// r = filter(b − AΔv); with block-Jacobi also c = P⁻¹r, δ = rᵀc and the loop's start. The
+/// Schwarz path (kSchwarz) stops at r: its apply and start follow (schwarz_kernels.cu).
+template <bool kContacts, bool kSchwarz>
 __global__ void pcg_residual_kernel(DeviceView d, unsigned long long handle) {
     const std::uint32_t i = blockIdx.x * blockDim.x + threadIdx.x;
     double value = 0.0;
@@ -99,28 +94,15 @@ __global__ void pcg_residual_kernel(DeviceView d, unsigned long long handle) {
                 if (contact_count(d.contacts) > 0) product = contact_gather(d.contacts, i, d.contacts.product, product);
             }
             r = load3(d.b, i, d.n) - product;
-            c = load_precond(d, i) * r;
-            value = static_cast<double>(physics::dot(r, c));
+            if constexpr (!kSchwarz) {
+                c = load_precond(d, i) * r;
+                value = static_cast<double>(physics::dot(r, c));
+            }
         }
         store3(d.r, i, d.n, r);
-        store3(d.c, i, d.n, c);
+        if constexpr (!kSchwarz) store3(d.c, i, d.n, c);
     }
-    grid_sum(value, d, [&](double delta) {
-        PcgControl& ctl = *d.control;
-        const StepParams& sp = step_params(d);
-        ctl.delta = delta;
-        // As on the CPU: measured against the larger of |b| and the initial residual.
-        ctl.delta0 = ctl.delta0_b > delta ? ctl.delta0_b : delta;
-        ctl.iterations = 0;
-        if (!(ctl.delta0 > 0.0)) {
-            ctl.converged = ctl.delta0 == 0.0;
-            ctl.running = 0;
-        } else {
-            ctl.converged = delta <= sp.cg_eps2 * ctl.delta0;
-            ctl.running = !ctl.converged && sp.cg_max_iterations > 0;
-        }
-        set_condition(handle, ctl.running);
-    });
+    if constexpr (!kSchwarz) grid_sum(value, d, [&](double delta) { start_solve(d, delta, handle); });
 }
 
 template <bool kContacts>
@@ -167,20 +149,7 @@ __global__ void pcg_update_kernel(DeviceView d, unsigned long long handle) {
         store3(d.s, i, d.n, s);
         value = static_cast<double>(physics::dot(r, s));
     }
-    grid_sum(value, d, [&](double delta_new) {
-        PcgControl& ctl = *d.control;
-        const StepParams& sp = step_params(d);
-        ctl.beta = static_cast<float>(delta_new / ctl.delta);
-        ctl.delta = delta_new;
-        ++ctl.iterations;
-        ctl.converged = delta_new <= sp.cg_eps2 * ctl.delta0;
-        // On exit the direction update of this iteration is skipped: the CPU computes it but never
-        // uses it, so Δv is the same.
-        if (ctl.converged || ctl.iterations >= sp.cg_max_iterations) {
-            ctl.running = 0;
-            set_condition(handle, 0);
-        }
-    });
+    grid_sum(value, d, [&](double delta_new) { end_iteration(d, delta_new, handle); });
 }
 
 __global__ void pcg_direction_kernel(DeviceView d) {
@@ -305,25 +274,39 @@ __global__ void spmv_kernel(DeviceView d, const float* x, float* y) {
 
 }  // namespace
 
-void launch_pcg_setup(const DeviceView& d, bool first_newton, cudaStream_t stream) {
+void launch_pcg_setup(const DeviceView& d, bool first_newton, bool schwarz, cudaStream_t stream) {
+    const int first = first_newton ? 1 : 0, mas = schwarz ? 1 : 0;
     if (d.contacts.capacity > 0)
-        pcg_setup_kernel<true><<<grid_for(d.n), kBlockSize, 0, stream>>>(d, first_newton ? 1 : 0);
+        pcg_setup_kernel<true><<<grid_for(d.n), kBlockSize, 0, stream>>>(d, first, mas);
     else
-        pcg_setup_kernel<false><<<grid_for(d.n), kBlockSize, 0, stream>>>(d, first_newton ? 1 : 0);
+        pcg_setup_kernel<false><<<grid_for(d.n), kBlockSize, 0, stream>>>(d, first, mas);
     WEFT_CUDA_CHECK_LAUNCH("pcg_setup_kernel");
 }
 
-void launch_pcg_residual(const DeviceView& d, unsigned long long handle, cudaStream_t stream) {
+void launch_pcg_residual(const DeviceView& d, unsigned long long handle, bool schwarz, cudaStream_t stream) {
+    if (schwarz) {
+        // δ₀ of b in the Schwarz norm first (as the CPU: b·M⁻¹b), then r₀ and its apply.
+        launch_schwarz_apply(d, SchwarzInput::RightHandSide, SchwarzOutput::Norm, 0, stream);
+        if (d.contacts.capacity > 0) {
+            launch_contact_product(d, d.dv, false, stream);
+            pcg_residual_kernel<true, true><<<grid_for(d.n), kBlockSize, 0, stream>>>(d, handle);
+        } else {
+            pcg_residual_kernel<false, true><<<grid_for(d.n), kBlockSize, 0, stream>>>(d, handle);
+        }
+        WEFT_CUDA_CHECK_LAUNCH("pcg_residual_kernel");
+        launch_schwarz_apply(d, SchwarzInput::Residual, SchwarzOutput::Start, handle, stream);
+        return;
+    }
     if (d.contacts.capacity > 0) {
         launch_contact_product(d, d.dv, false, stream);
-        pcg_residual_kernel<true><<<grid_for(d.n), kBlockSize, 0, stream>>>(d, handle);
+        pcg_residual_kernel<true, false><<<grid_for(d.n), kBlockSize, 0, stream>>>(d, handle);
     } else {
-        pcg_residual_kernel<false><<<grid_for(d.n), kBlockSize, 0, stream>>>(d, handle);
+        pcg_residual_kernel<false, false><<<grid_for(d.n), kBlockSize, 0, stream>>>(d, handle);
     }
     WEFT_CUDA_CHECK_LAUNCH("pcg_residual_kernel");
 }
 
-void launch_pcg_iteration(const DeviceView& d, unsigned long long handle, cudaStream_t stream) {
+void launch_pcg_iteration(const DeviceView& d, unsigned long long handle, bool schwarz, cudaStream_t stream) {
     // The pair pass cannot join the direction kernel before it: it reads c at four arbitrary rows, so
     // every row's new c must be written first (a kernel boundary). It is one small launch over the
     // contact capacity that returns at once past the pair count.
@@ -334,8 +317,14 @@ void launch_pcg_iteration(const DeviceView& d, unsigned long long handle, cudaSt
         pcg_spmv_dot_kernel<false><<<grid_for(d.n), kBlockSize, 0, stream>>>(d, handle);
     }
     WEFT_CUDA_CHECK_LAUNCH("pcg_spmv_dot_kernel");
-    pcg_update_kernel<<<grid_for(d.n), kBlockSize, 0, stream>>>(d, handle);
-    WEFT_CUDA_CHECK_LAUNCH("pcg_update_kernel");
+    if (schwarz) {
+        // The axpy pair runs inside the apply's first level (schwarz_kernels.cu), s = M⁻¹r and rᵀs
+        // in its last kernel.
+        launch_schwarz_apply(d, SchwarzInput::Update, SchwarzOutput::Iterate, handle, stream);
+    } else {
+        pcg_update_kernel<<<grid_for(d.n), kBlockSize, 0, stream>>>(d, handle);
+        WEFT_CUDA_CHECK_LAUNCH("pcg_update_kernel");
+    }
     pcg_direction_kernel<<<grid_for(d.n), kBlockSize, 0, stream>>>(d);
     WEFT_CUDA_CHECK_LAUNCH("pcg_direction_kernel");
 }

@@ -58,7 +58,7 @@ double dot(const std::vector<V3>& a, const std::vector<V3>& b) {
 
 TEST(SchwarzHierarchy, MortonOrderIsAPermutationWithCompactDomains) {
     const auto fabric = Fabric::cook(make_grid(1.0, 1.0, 63, 63));  // 64 × 64 vertices
-    const SchwarzHierarchy h = build_schwarz_hierarchy(rest_positions(*fabric));
+    const SchwarzHierarchy h = build_schwarz_hierarchy(rest_positions(*fabric), fabric->pattern());
     const std::size_t n = fabric->vertex_count();
     ASSERT_EQ(h.order.size(), n);
     std::vector<std::uint32_t> sorted = h.order;
@@ -67,35 +67,89 @@ TEST(SchwarzHierarchy, MortonOrderIsAPermutationWithCompactDomains) {
         ASSERT_EQ(sorted[v], v);
         ASSERT_EQ(h.order[h.rank[v]], v);
     }
-    // 4096 vertices: 4096, 128, 4 nodes.
+    // 4096 vertices: on a 64 × 64 grid a Morton run of 16 vertices is a connected 4 × 4 patch, so
+    // the levels have 4096, 256, 16 nodes.
     ASSERT_EQ(h.levels(), 3);
-    EXPECT_EQ(h.level_nodes[1], 128u);
-    EXPECT_EQ(h.level_nodes[2], 4u);
-    // On a regular grid a Morton run of 32 vertices is a 4 × 8 patch: no domain spans more than
-    // 8 cells of 1/63 m along an axis.
+    EXPECT_EQ(h.nodes(1), 256u);
+    EXPECT_EQ(h.nodes(2), 16u);
     const auto rest = rest_positions(*fabric);
     for (std::uint32_t d = 0; d < h.domains(0); ++d) {
-        Vec3d lo = rest[h.order[32 * d]], hi = lo;
-        for (std::uint32_t p = 32 * d; p < 32 * d + 32; ++p)
+        Vec3d lo = rest[h.order[16 * d]], hi = lo;
+        for (std::uint32_t p = 16 * d; p < 16 * d + 16; ++p)
             for (int k = 0; k < 3; ++k) {
                 lo[k] = std::min(lo[k], rest[h.order[p]][k]);
                 hi[k] = std::max(hi[k], rest[h.order[p]][k]);
             }
-        for (int k = 0; k < 3; ++k) EXPECT_LE(hi[k] - lo[k], 8.0 / 63.0 + 1e-12) << "domain " << d;
+        for (int k = 0; k < 3; ++k) EXPECT_LE(hi[k] - lo[k], 4.0 / 63.0 + 1e-12) << "domain " << d;
     }
 }
 
+// Every coarse node is one connected piece of its domain, its parent lies in its domain's range,
+// and each coarse coupling sums exactly the couplings between its two nodes' members.
+TEST(SchwarzHierarchy, CoarseNodesAreConnectedPiecesAndCouplingsSumTheirMembers) {
+    // Two sheets side by side, 1 cm apart: a domain straddling the gap holds two pieces.
+    MeshData a = make_grid(1.0, 1.0, 20, 20), b = make_grid(1.0, 1.0, 20, 20);
+    for (Vec3d& p : b.positions) p[0] += 1.01;
+    MeshData both = a;
+    const auto offset = static_cast<std::uint32_t>(a.positions.size());
+    both.positions.insert(both.positions.end(), b.positions.begin(), b.positions.end());
+    for (Triangle t : b.triangles) {
+        for (auto& v : t.v) v += offset;
+        both.triangles.push_back(t);
+    }
+    const auto fabric = Fabric::cook(both);
+    const SchwarzHierarchy h = build_schwarz_hierarchy(rest_positions(*fabric), fabric->pattern());
+    ASSERT_GE(h.levels(), 2);
+    const BlockPattern& pattern = fabric->pattern();
+    const auto sheet = [&](std::uint32_t v) { return v >= offset ? 1 : 0; };
+    // Level-1 nodes never mix the sheets, and lie in their domain's range.
+    const SchwarzLevel& l0 = h.level[0];
+    for (std::uint32_t d = 0; d < l0.domains(); ++d)
+        for (std::uint32_t p = 16 * d; p < std::min(h.vertex_count, 16 * d + 16); ++p) {
+            EXPECT_GE(l0.parent[p], l0.parent_start[d]);
+            EXPECT_LT(l0.parent[p], l0.parent_start[d + 1]);
+            for (std::uint32_t q = 16 * d; q < p; ++q) {
+                if (l0.parent[q] == l0.parent[p]) {
+                    EXPECT_EQ(sheet(h.order[q]), sheet(h.order[p]));
+                }
+            }
+        }
+    EXPECT_GT(h.nodes(1), l0.domains());  // some domain was split
+    // Level 1's coupling (a, b) sums the slots between members of a and b, each slot once.
+    std::vector<int> used(pattern.column.size(), 0);
+    const SchwarzLevel& l1 = h.level[1];
+    for (std::size_t e = 0; e < l1.entry_row.size(); ++e)
+        for (std::uint32_t k = l1.source_start[e]; k < l1.source_start[e + 1]; ++k) {
+            const std::uint32_t s = l1.source[k];
+            ++used[s];
+            const auto row = static_cast<std::uint32_t>(
+                std::upper_bound(pattern.row_start.begin(), pattern.row_start.end(), s) - pattern.row_start.begin() - 1);
+            EXPECT_EQ(l0.parent[h.rank[row]], l1.entry_row[e]);
+            EXPECT_EQ(l0.parent[h.rank[pattern.column[s]]], l1.entry_column[e]);
+        }
+    for (const int u : used) ASSERT_EQ(u, 1);
+}
+
 TEST(SchwarzHierarchy, RejectsBadInput) {
-    EXPECT_THROW((void)build_schwarz_hierarchy({}, 0), Error);
+    BlockPattern two;
+    two.row_start = {0, 1, 2};
+    two.column = {0, 1};
+    two.diagonal = {0, 1};
+    EXPECT_THROW((void)build_schwarz_hierarchy({}, BlockPattern{}, 0), Error);
     const std::vector<Vec3d> nan{{0, 0, 0}, {std::nan(""), 0, 0}};
-    EXPECT_THROW((void)build_schwarz_hierarchy(nan), Error);
+    EXPECT_THROW((void)build_schwarz_hierarchy(nan, two), Error);
+    const std::vector<Vec3d> three{{0, 0, 0}, {1, 0, 0}, {2, 0, 0}};
+    EXPECT_THROW((void)build_schwarz_hierarchy(three, two), Error);  // pattern of 2 rows
+    BlockPattern wild = two;
+    wild.column[1] = 7;
+    EXPECT_THROW((void)build_schwarz_hierarchy({three.data(), 2}, wild), Error);
 }
 
 TEST(SchwarzPreconditioner, IsSymmetricPositiveDefiniteWithAndWithoutPins) {
     const auto fabric = Fabric::cook(make_grid(1.0, 1.0, 39, 39));  // 1600 vertices: three levels
     const auto A = stiff_laplacian(*fabric, 1e-3, 10.0);
-    const SchwarzHierarchy h = build_schwarz_hierarchy(rest_positions(*fabric));
-    ASSERT_EQ(h.levels(), 3);
+    const SchwarzHierarchy h = build_schwarz_hierarchy(rest_positions(*fabric), fabric->pattern());
+    ASSERT_GE(h.levels(), 3);
     const std::size_t n = fabric->vertex_count();
     std::mt19937 rng(3);
     for (const bool pins : {false, true}) {
@@ -103,7 +157,7 @@ TEST(SchwarzPreconditioner, IsSymmetricPositiveDefiniteWithAndWithoutPins) {
         if (pins)
             for (std::size_t i = 0; i < 40; ++i) fixed[i] = 1;  // one edge of the sheet
         cpu::SchwarzPreconditioner<double> M;
-        M.build(h);
+        M.build(h, fabric->pattern());
         M.factor(A, fixed, [](std::size_t) { return M3{}; });
         EXPECT_EQ(M.pivot_failures(), 0);
         const auto filtered = [&](std::vector<V3> x) {
@@ -142,9 +196,9 @@ Iterations solve_both(int cells, double k) {
     Iterations it;
     const auto rj = pcg.solve(A, b, fixed, xj, 1e-8, 20000);
     EXPECT_TRUE(rj.converged);
-    const SchwarzHierarchy h = build_schwarz_hierarchy(rest_positions(*fabric));
+    const SchwarzHierarchy h = build_schwarz_hierarchy(rest_positions(*fabric), fabric->pattern());
     cpu::SchwarzPreconditioner<double> M;
-    M.build(h);
+    M.build(h, fabric->pattern());
     M.factor(A, fixed, [](std::size_t) { return M3{}; });
     const auto rs = pcg.solve(A, b, fixed, xs, 1e-8, 20000, &M);
     EXPECT_TRUE(rs.converged);

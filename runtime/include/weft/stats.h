@@ -15,6 +15,7 @@ enum class Stage : std::uint8_t {
     Kinematics,
     Forces,
     Assembly,
+    Precondition,  ///< the preconditioner's setup (MAS: aggregation and domain factorisation)
     Solve,
     Update,
     BroadPhase,   ///< spatial hash over the (swept) bounds, for proximity contacts and for CCD
@@ -26,7 +27,7 @@ enum class Stage : std::uint8_t {
     Count
 };
 inline constexpr std::array<std::string_view, static_cast<int>(Stage::Count)> kStageNames{
-    "kinematics", "forces", "assembly", "solve", "update", "broad_phase", "culling", "narrow_phase", "ccd",
+    "kinematics", "forces", "assembly", "precondition", "solve", "update", "broad_phase", "culling", "narrow_phase", "ccd",
     "impact_zones", "check"};
 
 /// Collision work and outcome of one step (all zero when the scene has no cloth collisions).
@@ -53,6 +54,9 @@ struct StepStats {
     int cg_iterations_max = 0;     ///< largest single solve
     double cg_residual = 0.0;      ///< largest final relative residual sqrt(δ/δ₀) of the step's solves
     int cg_not_converged = 0;      ///< solves that hit the iteration cap
+    /// MAS domain factorisations that met a non-positive pivot (a domain matrix not SPD in the
+    /// backend's precision; the pivot is replaced and the solve goes on, usually with more iterations)
+    int preconditioner_pivot_failures = 0;
     int collider_contacts = 0;     ///< vertex–collider contacts active in the last substep
     CollisionStats collision{};
     bool non_finite = false;       ///< a NaN or Inf appeared; the state was restored to the last good one

@@ -271,12 +271,15 @@ void CpuSolver<T>::substep(const Model& model, double t, double h_double, StepSt
         SchwarzPreconditioner<T>* schwarz = nullptr;
         if (solver.preconditioner == Preconditioner::Schwarz) {
             if (!schwarz_.built()) {  // once per build: the levels depend on the topology only
-                schwarz_levels_ = build_schwarz_hierarchy(flat_->initial_positions);
-                schwarz_.build(schwarz_levels_);
+                schwarz_levels_ = build_schwarz_hierarchy(flat_->initial_positions, flat_->pattern);
+                schwarz_.build(schwarz_levels_, flat_->pattern);
             }
             const bool with_contacts = contacts != nullptr && contacts->size() > 0;
             schwarz_.factor(A_, fixed_, [&](std::size_t i) { return with_contacts ? contacts->diagonal(i) : M3{}; });
             schwarz = &schwarz_;
+            stats.preconditioner_pivot_failures += schwarz_.pivot_failures();
+            stats.ms(Stage::Precondition) += ms_since(clock);
+            clock = Clock::now();
         }
         const PcgResult r = pcg_.solve(SystemOperator<T>{A_, contacts}, b_, fixed_, dv_, solver.cg_tolerance,
                                        solver.cg_max_iterations, schwarz);

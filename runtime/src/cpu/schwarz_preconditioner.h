@@ -1,15 +1,16 @@
 #pragma once
 // The multilevel additive Schwarz preconditioner on the CPU (Wu, Wang & Wang 2022; docs/methods.md
 // §2b; the levels are weft/backend/schwarz_hierarchy.h): M⁻¹ = Σ_l R_lᵀ D_l⁻¹ R_l. Every substep
-// it aggregates the assembled 3×3 blocks into each level's domain matrices (dense, 96×96 for domains
-// of 32 nodes), factors them (Cholesky), and applies all levels to a residual. Work is split by
+// it aggregates the assembled 3×3 blocks level by level into coupling blocks (the hierarchy's fixed
+// sums), writes each level's domain matrices (dense, 48×48 for domains of 16 nodes), factors them
+// (Cholesky), and applies all levels to a residual. Work is split by
 // domain, each domain written by one task in a fixed order: the result does not depend on the
 // thread count.
 //
 // Filtered (pinned) vertices: the solve acts on the free vertices only (S·A·S), so their blocks are
 // left out of every level and a vertex or node with nothing left gets the identity (it is decoupled,
 // and its value is filtered out anyway). Contact springs add their diagonal blocks (Σ w_i²·C) to
-// their vertex's node; their couplings between vertices are not aggregated yet.
+// their vertex's node, on every level; their couplings between vertices are not aggregated yet.
 
 #include <algorithm>
 #include <cmath>
@@ -29,19 +30,25 @@ public:
     using V3 = physics::Vec3<T>;
     using M3 = physics::Mat3<T>;
     static constexpr std::uint32_t kNodes = SchwarzHierarchy::kDomainSize;
-    static constexpr std::uint32_t kDim = 3 * kNodes;  // rows of a dense domain matrix
+    static constexpr std::uint32_t kDim = SchwarzHierarchy::kDomainDim;  // rows of a dense domain matrix
 
-    void build(const SchwarzHierarchy& h) {
+    /// Sizes the work arrays for `h`, built on `pattern` (the matrix's).
+    void build(const SchwarzHierarchy& h, const BlockPattern& pattern) {
         h_ = &h;
-        const int levels = h.levels();
-        dense_.resize(static_cast<std::size_t>(levels));
-        values_.resize(static_cast<std::size_t>(levels));
-        solved_.resize(static_cast<std::size_t>(levels));
-        for (int l = 0; l < levels; ++l) {
-            const std::size_t domains = h.domains(l);
-            dense_[l].assign(domains * kDim * kDim, T(0));
-            values_[l].assign(domains * kNodes, V3{});
-            solved_[l].assign(domains * kNodes, V3{});
+        const auto levels = static_cast<std::size_t>(h.levels());
+        slot_row_.resize(pattern.column.size());
+        for (std::uint32_t i = 0; i + 1 < pattern.row_start.size(); ++i)
+            for (std::uint32_t s = pattern.row_start[i]; s < pattern.row_start[i + 1]; ++s) slot_row_[s] = i;
+        couplings_.resize(levels);
+        dense_.resize(levels);
+        values_.resize(levels);
+        solved_.resize(levels);
+        for (std::size_t l = 0; l < levels; ++l) {
+            const SchwarzLevel& level = h.level[l];
+            couplings_[l].assign(l == 0 ? pattern.column.size() : level.entry_row.size(), M3{});
+            dense_[l].assign(std::size_t(level.domains()) * kDim * kDim, T(0));
+            values_[l].assign(std::size_t(level.domains()) * kNodes, V3{});
+            solved_[l].assign(std::size_t(level.domains()) * kNodes, V3{});
         }
     }
 
@@ -52,39 +59,46 @@ public:
     [[nodiscard]] int pivot_failures() const { return pivot_failures_; }
 
     /// Aggregates `A` (plus `extra_diagonal(i)`, the contact springs' share of row i's diagonal block)
-    /// into every level's domain matrices and factors them.
+    /// into every level's coupling blocks and domain matrices, and factors the domains.
     template <typename ExtraDiagonal>
     void factor(const BsrMatrix<T>& A, const std::vector<std::uint8_t>& fixed, ExtraDiagonal&& extra_diagonal) {
         const SchwarzHierarchy& h = *h_;
-        const auto& rs = A.pattern->row_start;
-        const auto& col = A.pattern->column;
+        const auto& column = A.pattern->column;
+        // Level 0: A's blocks without the filtered (pinned) rows and columns: the solve acts on S·A·S.
+        std::vector<M3>& fine = couplings_[0];
+        parallel_chunks(fine.size(), [&](std::size_t lo, std::size_t hi) {
+            for (std::size_t s = lo; s < hi; ++s) {
+                const std::uint32_t i = slot_row_[s], j = column[s];
+                fine[s] = fixed[i] || fixed[j] ? M3{} : (i == j ? A.blocks[s] + extra_diagonal(i) : A.blocks[s]);
+            }
+        });
+        // Coarser levels: each coupling block sums its listed blocks of the level below, in order.
+        for (int l = 1; l < h.levels(); ++l) {
+            const SchwarzLevel& level = h.level[static_cast<std::size_t>(l)];
+            const std::vector<M3>& below = couplings_[static_cast<std::size_t>(l - 1)];
+            std::vector<M3>& out = couplings_[static_cast<std::size_t>(l)];
+            parallel_chunks(out.size(), [&](std::size_t lo, std::size_t hi) {
+                for (std::size_t e = lo; e < hi; ++e) {
+                    M3 acc{};
+                    for (std::uint32_t k = level.source_start[e]; k < level.source_start[e + 1]; ++k) acc += below[level.source[k]];
+                    out[e] = acc;
+                }
+            });
+        }
         int failures = 0;
         for (int l = 0; l < h.levels(); ++l) {
-            const std::uint32_t shift = SchwarzHierarchy::kDomainBits * static_cast<std::uint32_t>(l);
-            const std::uint32_t domains = h.domains(l);
+            const SchwarzLevel& level = h.level[static_cast<std::size_t>(l)];
+            const std::vector<M3>& blocks = couplings_[static_cast<std::size_t>(l)];
             std::vector<T>& dense = dense_[static_cast<std::size_t>(l)];
-            failures += static_cast<int>(deterministic_sum(domains, partials_, [&](std::size_t lo, std::size_t hi) {
+            std::fill(dense.begin(), dense.end(), T(0));
+            // Each dense block comes from one coupling: the writes never collide.
+            parallel_chunks(level.dense_entry.size(), [&](std::size_t lo, std::size_t hi) {
+                for (std::size_t k = lo; k < hi; ++k) put_block(dense.data(), level.dense_block[k], blocks[level.dense_entry[k]]);
+            });
+            failures += static_cast<int>(deterministic_sum(level.domains(), partials_, [&](std::size_t lo, std::size_t hi) {
                 double failed = 0.0;
                 for (std::size_t d = lo; d < hi; ++d) {
                     T* D = &dense[d * kDim * kDim];
-                    std::fill(D, D + kDim * kDim, T(0));
-                    // The vertices of this domain are the ranks [first, last).
-                    const std::uint64_t first = std::uint64_t(d) << (shift + SchwarzHierarchy::kDomainBits);
-                    const std::uint64_t last = std::min<std::uint64_t>(
-                        h.vertex_count, std::uint64_t(d + 1) << (shift + SchwarzHierarchy::kDomainBits));
-                    for (std::uint64_t p = first; p < last; ++p) {
-                        const std::uint32_t i = h.order[p];
-                        if (fixed[i]) continue;
-                        const std::uint32_t a = (static_cast<std::uint32_t>(p) >> shift) & (kNodes - 1);
-                        for (std::uint32_t s = rs[i]; s < rs[i + 1]; ++s) {
-                            const std::uint32_t j = col[s];
-                            if (fixed[j]) continue;
-                            const std::uint32_t q = h.rank[j];
-                            if ((q >> (shift + SchwarzHierarchy::kDomainBits)) != d) continue;
-                            add_block(D, a, (q >> shift) & (kNodes - 1), A.blocks[s]);
-                        }
-                        add_block(D, a, a, extra_diagonal(i));
-                    }
                     // Nodes with nothing (all pinned, or past the end of the last domain) are decoupled.
                     for (std::uint32_t k = 0; k < kDim; ++k)
                         if (D[k * kDim + k] == T(0)) D[k * kDim + k] = T(1);
@@ -100,22 +114,23 @@ public:
     void apply(const std::vector<V3>& r, std::vector<V3>& z) {
         const SchwarzHierarchy& h = *h_;
         const int levels = h.levels();
-        // Restrict: level 0 takes the residual in rank order; each coarser node sums its 32 children.
-        for (int l = 0; l < levels; ++l) {
-            std::vector<V3>& v = values_[static_cast<std::size_t>(l)];
-            const std::size_t nodes = h.level_nodes[static_cast<std::size_t>(l)];
+        // Restrict: level 0 takes the residual in rank order; each coarser node sums its members,
+        // domain by domain (a domain's parents are its own), in node order.
+        {
+            std::vector<V3>& v = values_[0];
             parallel_chunks(v.size(), [&](std::size_t lo, std::size_t hi) {
-                for (std::size_t k = lo; k < hi; ++k) {
-                    if (k >= nodes) {
-                        v[k] = V3{};
-                    } else if (l == 0) {
-                        v[k] = r[h.order[k]];
-                    } else {
-                        const std::vector<V3>& fine = values_[static_cast<std::size_t>(l - 1)];
-                        V3 acc{};
-                        for (std::uint32_t c = 0; c < kNodes; ++c) acc += fine[k * kNodes + c];
-                        v[k] = acc;
-                    }
+                for (std::size_t p = lo; p < hi; ++p) v[p] = p < h.vertex_count ? r[h.order[p]] : V3{};
+            });
+        }
+        for (int l = 0; l + 1 < levels; ++l) {
+            const SchwarzLevel& level = h.level[static_cast<std::size_t>(l)];
+            const std::vector<V3>& v = values_[static_cast<std::size_t>(l)];
+            std::vector<V3>& coarse = values_[static_cast<std::size_t>(l + 1)];
+            std::fill(coarse.begin(), coarse.end(), V3{});
+            parallel_chunks(level.domains(), [&](std::size_t lo, std::size_t hi) {
+                for (std::size_t d = lo; d < hi; ++d) {
+                    const std::size_t end = std::min<std::size_t>(level.nodes, (d + 1) * kNodes);
+                    for (std::size_t k = d * kNodes; k < end; ++k) coarse[level.parent[k]] += v[k];
                 }
             });
         }
@@ -130,10 +145,11 @@ public:
         }
         // Prolong: from the coarsest level down, each node adds its parent's correction.
         for (int l = levels - 2; l >= 0; --l) {
+            const SchwarzLevel& level = h.level[static_cast<std::size_t>(l)];
             std::vector<V3>& y = solved_[static_cast<std::size_t>(l)];
             const std::vector<V3>& coarse = solved_[static_cast<std::size_t>(l + 1)];
-            parallel_chunks(h.level_nodes[static_cast<std::size_t>(l)], [&](std::size_t lo, std::size_t hi) {
-                for (std::size_t k = lo; k < hi; ++k) y[k] += coarse[k >> SchwarzHierarchy::kDomainBits];
+            parallel_chunks(level.nodes, [&](std::size_t lo, std::size_t hi) {
+                for (std::size_t k = lo; k < hi; ++k) y[k] += coarse[level.parent[k]];
             });
         }
         const std::vector<V3>& y0 = solved_[0];
@@ -143,16 +159,21 @@ public:
     }
 
     [[nodiscard]] std::size_t memory_bytes() const {
-        std::size_t bytes = partials_.capacity() * sizeof(double);
+        std::size_t bytes = partials_.capacity() * sizeof(double) + slot_row_.capacity() * sizeof(std::uint32_t);
         for (std::size_t l = 0; l < dense_.size(); ++l)
-            bytes += dense_[l].capacity() * sizeof(T) + (values_[l].capacity() + solved_[l].capacity()) * sizeof(V3);
+            bytes += dense_[l].capacity() * sizeof(T) + couplings_[l].capacity() * sizeof(M3) +
+                     (values_[l].capacity() + solved_[l].capacity()) * sizeof(V3);
         return bytes;
     }
 
 private:
-    static void add_block(T* D, std::uint32_t a, std::uint32_t b, const M3& m) {
+    /// Writes `m` as block `block` = (domain·kNodes + a)·kNodes + b of the dense matrices.
+    static void put_block(T* dense, std::uint32_t block, const M3& m) {
+        const std::size_t domain = block / (kNodes * kNodes);
+        const std::uint32_t a = (block / kNodes) % kNodes, b = block % kNodes;
+        T* D = dense + domain * kDim * kDim;
         for (int r = 0; r < 3; ++r)
-            for (int c = 0; c < 3; ++c) D[(3 * a + r) * kDim + 3 * b + c] += m.m[r][c];
+            for (int c = 0; c < 3; ++c) D[(3 * a + r) * kDim + 3 * b + c] = m.m[r][c];
     }
 
     /// In-place Cholesky D = L·Lᵀ (lower triangle kept). Returns 1 if a pivot was not positive (then
@@ -194,6 +215,8 @@ private:
     }
 
     const SchwarzHierarchy* h_ = nullptr;
+    std::vector<std::uint32_t> slot_row_;        // pattern slot → its row
+    std::vector<std::vector<M3>> couplings_;      // per level: the coupling blocks (level 0: per slot)
     std::vector<std::vector<T>> dense_;   // per level: domains × kDim², row-major, Cholesky factor in place
     std::vector<std::vector<V3>> values_;  // per level: the restricted residual per node
     std::vector<std::vector<V3>> solved_;  // per level: the domain solutions per node

@@ -1,0 +1,242 @@
+// The multilevel additive Schwarz preconditioner on the device (Wu, Wang & Wang 2022;
+// docs/methods.md §2b; the levels in device_schwarz.h, the same tables as the CPU backend's
+// cpu/schwarz_preconditioner.h). Every sum runs in a fixed order, so a solve has the same bits on
+// every run.
+//
+// Factor, once per Newton iteration:
+//   1. coupling kernels, level 1 up: each coupling block sums its listed blocks of the level below
+//      (level 1 reads the assembled matrix, without filtered rows and columns, with each row's
+//      contact-augmented diagonal block from the PCG setup);
+//   2. one thread block per domain of each level fills its 48×48 matrix in shared memory from its
+//      couplings, inverts it by Gauss–Jordan in double (SPD: no pivoting needed; a non-positive pivot
+//      is counted and replaced by the diagonal's magnitude) and stores the inverse in float.
+// Apply, once per CG iteration (z = M⁻¹r = Σ_l R_lᵀ D_l⁻¹ R_l r):
+//   1. one warp per level-0 domain: gathers its 16 vertices' residuals (after the iteration's axpy
+//      pair, fused here), multiplies by the domain's inverse, and sums the residual of each of the
+//      domain's pieces into the next level;
+//   2. the same per domain of each coarser level;
+//   3. one thread per vertex adds the corrections of its node on every level, filters, stores z
+//      and reduces rᵀz for CG's δ.
+#include <cuda_runtime.h>
+
+#include "cuda_check.h"
+#include "device_math.cuh"
+#include "pcg_control.cuh"
+
+namespace weft::cuda {
+namespace {
+
+constexpr std::uint32_t kNodes = kSchwarzNodes;
+constexpr std::uint32_t kDim = kSchwarzDim;
+constexpr std::uint32_t kWarpsPerBlock = kBlockSize / 32;
+static_assert(kDim <= 64, "a warp computes at most two rows of a domain solve per lane");
+
+/// Level 0's coupling block of pattern slot s: A's block, 0 where a filtered vertex is involved (the
+/// solve acts on S·A·S), the contact-augmented block on the diagonal.
+__device__ inline M3 fine_coupling(const DeviceView& d, std::uint32_t s) {
+    const SchwarzView& m = d.mas;
+    const std::uint32_t i = m.slot_row[s], j = m.slot_column[s];
+    if (d.fixed[i] || d.fixed[j]) return M3{};
+    return i == j ? load_precond(d, i) : load_block(d.blocks, m.slot_position[s]);
+}
+
+__global__ void schwarz_coupling_kernel(DeviceView d, int l) {
+    const SchwarzLevelView& level = d.mas.level[l];
+    const std::uint32_t e = blockIdx.x * blockDim.x + threadIdx.x;
+    if (e >= level.entries) return;
+    M3 acc{};
+    for (std::uint32_t k = level.source_start[e]; k < level.source_start[e + 1]; ++k) {
+        const std::uint32_t src = level.source[k];
+        acc += l == 1 ? fine_coupling(d, src) : load_block(d.mas.level[l - 1].coupling, src);
+    }
+    store_block(level.coupling, e, acc);
+}
+
+__global__ void schwarz_factor_kernel(DeviceView d, int l) {
+    const SchwarzLevelView& level = d.mas.level[l];
+    const std::uint32_t domain = blockIdx.x;
+    __shared__ double A[kDim][kDim + 1];  // +1: no bank conflicts along a column
+    __shared__ double column[kDim];
+    __shared__ double magnitude[kDim];
+    __shared__ int failed;
+    for (std::uint32_t k = threadIdx.x; k < kDim * (kDim + 1); k += blockDim.x) (&A[0][0])[k] = 0.0;
+    if (threadIdx.x == 0) failed = 0;
+    __syncthreads();
+    // Each cell comes from one coupling: no two threads write the same entries.
+    for (std::uint32_t k = level.dense_start[domain] + threadIdx.x; k < level.dense_start[domain + 1]; k += blockDim.x) {
+        const std::uint32_t cell = level.dense_cell[k];
+        const std::uint32_t a = cell / kNodes, b = cell % kNodes;
+        const M3 m = l == 0 ? fine_coupling(d, level.dense_entry[k]) : load_block(level.coupling, level.dense_entry[k]);
+        for (int r = 0; r < 3; ++r)
+            for (int c = 0; c < 3; ++c) A[3 * a + r][3 * b + c] = static_cast<double>(m.m[r][c]);
+    }
+    __syncthreads();
+    if (threadIdx.x < kDim) {
+        // Nodes with nothing (filtered, or padding past the last node) are decoupled: identity.
+        double& diagonal = A[threadIdx.x][threadIdx.x];
+        if (diagonal == 0.0) diagonal = 1.0;
+        magnitude[threadIdx.x] = fabs(diagonal);
+    }
+    __syncthreads();
+    // In-place Gauss–Jordan: after step k, column k holds the inverse's column k of the eliminated
+    // part. Column k is saved before row k changes, so no thread reads a value another is writing.
+    for (std::uint32_t k = 0; k < kDim; ++k) {
+        if (threadIdx.x < kDim) column[threadIdx.x] = A[threadIdx.x][k];
+        __syncthreads();
+        double pivot = column[k];
+        if (!(pivot > 0.0)) {
+            pivot = magnitude[k];
+            if (threadIdx.x == 0) failed = 1;
+        }
+        const double inverse = 1.0 / pivot;
+        if (threadIdx.x < kDim) A[k][threadIdx.x] = threadIdx.x == k ? inverse : A[k][threadIdx.x] * inverse;
+        __syncthreads();
+        for (std::uint32_t e = threadIdx.x; e < kDim * kDim; e += blockDim.x) {
+            const std::uint32_t i = e / kDim, j = e % kDim;
+            if (i == k) continue;
+            A[i][j] = (j == k ? 0.0 : A[i][j]) - column[i] * A[k][j];
+        }
+        __syncthreads();
+    }
+    float* out = level.inverse + static_cast<std::size_t>(domain) * kDim * kDim;
+    for (std::uint32_t e = threadIdx.x; e < kDim * kDim; e += blockDim.x) {
+        const std::uint32_t j = e / kDim, i = e % kDim;  // column-major: a warp stores one column
+        out[e] = static_cast<float>(A[i][j]);
+    }
+    if (threadIdx.x == 0 && failed) atomicAdd(&d.stats->pivot_failures, 1);
+}
+
+/// y = D⁻¹v for the warp's domain (v in shared memory), rows `lane` and `lane + 32`.
+__device__ inline void solve_domain(const float* inverse, const float* v, float* solved, std::uint32_t lane) {
+    for (std::uint32_t row = lane; row < kDim; row += 32) {
+        float y = 0.0f;
+        for (std::uint32_t j = 0; j < kDim; ++j) y += inverse[j * kDim + row] * v[j];
+        solved[row] = y;
+    }
+}
+
+/// Sums the warp's domain values (v) of each piece into the next level's node.
+__device__ inline void restrict_domain(const SchwarzLevelView& level, const SchwarzLevelView& next, std::uint32_t domain,
+                                       const float* v, std::uint32_t lane) {
+    const std::uint32_t first = level.parent_start[domain], count = level.parent_start[domain + 1] - first;
+    if (lane >= count) return;
+    const std::uint32_t me = first + lane;
+    float acc[3] = {0.0f, 0.0f, 0.0f};
+    for (std::uint32_t k = 0; k < kNodes; ++k) {
+        const std::uint32_t node = domain * kNodes + k;
+        if (node < level.nodes && level.parent[node] == me)
+            for (int c = 0; c < 3; ++c) acc[c] += v[3 * k + c];
+    }
+    for (int c = 0; c < 3; ++c) next.values[3 * me + c] = acc[c];
+}
+
+__global__ void schwarz_fine_kernel(DeviceView d, SchwarzInput in) {
+    __shared__ float values[kWarpsPerBlock][kDim];
+    if (in == SchwarzInput::Update && !d.control->running) return;
+    const SchwarzView& m = d.mas;
+    const SchwarzLevelView& level = m.level[0];
+    const std::uint32_t warp = threadIdx.x / 32, lane = threadIdx.x % 32;
+    const std::uint32_t domain = blockIdx.x * kWarpsPerBlock + warp;
+    if (domain >= level.domains) return;
+    float* v = values[warp];
+    if (lane < kNodes) {
+        const std::uint32_t p = domain * kNodes + lane;
+        V3 r{};
+        if (p < d.n) {
+            const std::uint32_t i = m.order[p];
+            if (in == SchwarzInput::RightHandSide) {
+                r = d.fixed[i] ? V3{} : load3(d.b, i, d.n);
+                store3(d.r, i, d.n, r);
+            } else if (in == SchwarzInput::Residual) {
+                r = load3(d.r, i, d.n);
+            } else {
+                const float alpha = d.control->alpha;
+                r = load3(d.r, i, d.n) - alpha * load3(d.q, i, d.n);
+                store3(d.dv, i, d.n, load3(d.dv, i, d.n) + alpha * load3(d.c, i, d.n));
+                store3(d.r, i, d.n, r);
+            }
+        }
+        v[3 * lane] = r.x;
+        v[3 * lane + 1] = r.y;
+        v[3 * lane + 2] = r.z;
+    }
+    __syncwarp();
+    solve_domain(level.inverse + static_cast<std::size_t>(domain) * kDim * kDim, v, level.solved + domain * kDim, lane);
+    if (m.levels > 1) restrict_domain(level, m.level[1], domain, v, lane);
+}
+
+__global__ void schwarz_coarse_kernel(DeviceView d, int l, int in_loop) {
+    __shared__ float values[kWarpsPerBlock][kDim];
+    if (in_loop && !d.control->running) return;
+    const SchwarzView& m = d.mas;
+    const SchwarzLevelView& level = m.level[l];
+    const std::uint32_t warp = threadIdx.x / 32, lane = threadIdx.x % 32;
+    const std::uint32_t domain = blockIdx.x * kWarpsPerBlock + warp;
+    if (domain >= level.domains) return;
+    float* v = values[warp];
+    for (std::uint32_t k = lane; k < kDim; k += 32) v[k] = level.values[domain * kDim + k];
+    __syncwarp();
+    solve_domain(level.inverse + static_cast<std::size_t>(domain) * kDim * kDim, v, level.solved + domain * kDim, lane);
+    if (l + 1 < m.levels) restrict_domain(level, m.level[l + 1], domain, v, lane);
+}
+
+__global__ void schwarz_prolong_kernel(DeviceView d, SchwarzOutput out, unsigned long long handle) {
+    if (out == SchwarzOutput::Iterate && !d.control->running) return;
+    const SchwarzView& m = d.mas;
+    const std::uint32_t i = blockIdx.x * blockDim.x + threadIdx.x;
+    double value = 0.0;
+    if (i < d.n) {
+        V3 z{};
+        if (!d.fixed[i]) {
+            std::uint32_t node = m.rank[i];
+            const float* y = m.level[0].solved + 3 * node;
+            z = V3{y[0], y[1], y[2]};
+            for (int l = 1; l < m.levels; ++l) {
+                node = m.level[l - 1].parent[node];
+                const float* yl = m.level[l].solved + 3 * node;
+                z += V3{yl[0], yl[1], yl[2]};
+            }
+        }
+        if (out == SchwarzOutput::Start) store3(d.c, i, d.n, z);
+        if (out == SchwarzOutput::Iterate) store3(d.s, i, d.n, z);
+        value = static_cast<double>(physics::dot(load3(d.r, i, d.n), z));
+    }
+    grid_sum(value, d, [&](double total) {
+        if (out == SchwarzOutput::Norm)
+            d.control->delta0_b = total;
+        else if (out == SchwarzOutput::Start)
+            start_solve(d, total, handle);
+        else
+            end_iteration(d, total, handle);
+    });
+}
+
+}  // namespace
+
+void launch_schwarz_factor(const DeviceView& d, cudaStream_t stream) {
+    const SchwarzView& m = d.mas;
+    for (int l = 1; l < m.levels; ++l) {
+        schwarz_coupling_kernel<<<grid_for(m.level[l].entries), kBlockSize, 0, stream>>>(d, l);
+        WEFT_CUDA_CHECK_LAUNCH("schwarz_coupling_kernel");
+    }
+    for (int l = 0; l < m.levels; ++l) {
+        schwarz_factor_kernel<<<m.level[l].domains, kBlockSize, 0, stream>>>(d, l);
+        WEFT_CUDA_CHECK_LAUNCH("schwarz_factor_kernel");
+    }
+}
+
+void launch_schwarz_apply(const DeviceView& d, SchwarzInput in, SchwarzOutput out, unsigned long long handle,
+                          cudaStream_t stream) {
+    const SchwarzView& m = d.mas;
+    schwarz_fine_kernel<<<blocks_for(m.level[0].domains, kWarpsPerBlock), kBlockSize, 0, stream>>>(d, in);
+    WEFT_CUDA_CHECK_LAUNCH("schwarz_fine_kernel");
+    const int in_loop = in == SchwarzInput::Update ? 1 : 0;
+    for (int l = 1; l < m.levels; ++l) {
+        schwarz_coarse_kernel<<<blocks_for(m.level[l].domains, kWarpsPerBlock), kBlockSize, 0, stream>>>(d, l, in_loop);
+        WEFT_CUDA_CHECK_LAUNCH("schwarz_coarse_kernel");
+    }
+    schwarz_prolong_kernel<<<grid_for(d.n), kBlockSize, 0, stream>>>(d, out, handle);
+    WEFT_CUDA_CHECK_LAUNCH("schwarz_prolong_kernel");
+}
+
+}  // namespace weft::cuda
