@@ -30,8 +30,8 @@ void DeviceSolver::record_pcg_loop(cudaStream_t stream, bool capturing, int newt
     (void)newton;
     if (persistent_grid_ > 0) {
         // The whole loop is one cooperative kernel, in a graph or not.
-        launch_pcg_residual(view_, 0, false, stream);
-        launch_pcg_persistent(view_, persistent_grid_, stream);
+        launch_pcg_residual(view_, 0, schwarz_on_, stream);
+        launch_pcg_persistent(view_, persistent_grid_, schwarz_on_, stream);
         return;
     }
     if (!capturing) {

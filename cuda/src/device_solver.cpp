@@ -47,9 +47,8 @@ void DeviceSolver::choose_pcg_loop() {
     // the two are within 5% either way (bandwidth, not launches, bounds the iteration there).
     constexpr std::uint32_t kOneLaunchMaxVertices = 200000;
     int grid = 0;
-    // The Schwarz apply is several kernels with their own grids: it runs in the per-kernel loop only.
-    if (!schwarz_on_ && (pcg_loop_ == PcgLoop::OneLaunch || (pcg_loop_ == PcgLoop::Auto && view_.n <= kOneLaunchMaxVertices)))
-        grid = view_.n > 0 ? pcg_persistent_grid(view_, device_) : 0;
+    if (pcg_loop_ == PcgLoop::OneLaunch || (pcg_loop_ == PcgLoop::Auto && view_.n <= kOneLaunchMaxVertices))
+        grid = view_.n > 0 ? pcg_persistent_grid(view_, device_, schwarz_on_) : 0;
     if (grid != persistent_grid_) destroy_graph();
     persistent_grid_ = grid;
 }

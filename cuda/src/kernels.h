@@ -95,13 +95,13 @@ void launch_pcg_residual(const DeviceView& d, unsigned long long handle, bool sc
 /// Schwarz apply's kernels otherwise), then the new direction. Every kernel does nothing once the
 /// loop has stopped.
 void launch_pcg_iteration(const DeviceView& d, unsigned long long handle, bool schwarz, cudaStream_t stream);
-/// Blocks for the one-launch CG loop on `device`: as many as fit at once (at most one per 256 rows),
-/// 0 if the device cannot launch cooperative kernels.
-[[nodiscard]] int pcg_persistent_grid(const DeviceView& d, int device);
-/// The whole CG loop after the residual kernel, in one cooperative launch of `grid` blocks (grid-wide
-/// barriers instead of kernel boundaries). Same algorithm and stopping rule; different summation order
-/// of the dots than the per-iteration kernels.
-void launch_pcg_persistent(const DeviceView& d, int grid, cudaStream_t stream);
+/// Blocks for the one-launch CG loop on `device` (`schwarz`: its Schwarz form): as many as fit at once
+/// (at most one per 256 rows), 0 if the device cannot launch cooperative kernels.
+[[nodiscard]] int pcg_persistent_grid(const DeviceView& d, int device, bool schwarz);
+/// The whole CG loop after its start (launch_pcg_residual), in one cooperative launch of `grid`
+/// blocks (grid-wide barriers instead of kernel boundaries). Same algorithm and stopping rule;
+/// different summation order of the dots than the per-iteration kernels.
+void launch_pcg_persistent(const DeviceView& d, int grid, bool schwarz, cudaStream_t stream);
 /// Folds the finished solve into the stats.
 void launch_pcg_finish(const DeviceView& d, cudaStream_t stream);
 // ---- multilevel additive Schwarz (schwarz_kernels.cu; device_schwarz.h) ---------------------------

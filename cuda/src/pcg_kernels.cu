@@ -22,6 +22,7 @@
 #include "cuda_check.h"
 #include "device_math.cuh"
 #include "pcg_control.cuh"
+#include "schwarz_apply.cuh"
 
 namespace weft::cuda {
 namespace {
@@ -267,6 +268,81 @@ __global__ void pcg_persistent_kernel(DeviceView d) {
     }
 }
 
+/// The one-launch loop with the Schwarz preconditioner: the same phases as the per-kernel form
+/// (SpMV and cᵀq; the axpy pair with level 0's domains; each coarser level; the corrections with rᵀs;
+/// the direction), a grid-wide barrier after each. A warp keeps the same domains in every iteration.
+template <bool kContacts>
+__global__ void pcg_schwarz_persistent_kernel(DeviceView d) {
+    namespace cg = cooperative_groups;
+    __shared__ float values[kSchwarzWarpsPerBlock][kSchwarzDim];
+    const StepParams& sp = step_params(d);
+    PcgControl& ctl = *d.control;
+    if (!ctl.running) return;  // uniform: written by the start of the solve
+    double delta = ctl.delta;
+    const double delta0 = ctl.delta0;
+    int iterations = 0, converged = 0;
+    double* partials[2] = {d.partials, d.partials + gridDim.x};
+    const std::uint32_t stride = gridDim.x * blockDim.x;
+    const std::uint32_t lane = threadIdx.x % 32, warp = threadIdx.x / 32;
+    const std::uint32_t first_warp = blockIdx.x * kSchwarzWarpsPerBlock + warp, warps = gridDim.x * kSchwarzWarpsPerBlock;
+    const SchwarzView& m = d.mas;
+    const std::uint32_t pairs = kContacts ? contact_count(d.contacts) : 0u;
+    for (;;) {
+        if constexpr (kContacts) {
+            if (pairs > 0) {
+                for (std::uint32_t p = blockIdx.x * blockDim.x + threadIdx.x; p < pairs; p += stride)
+                    contact_pair_product(d.contacts, p, d.c, d.n);
+                cg::this_grid().sync();
+            }
+        }
+        double local = 0.0;
+        for (std::uint32_t i = blockIdx.x * blockDim.x + threadIdx.x; i < d.n; i += stride) {
+            V3 q{};
+            if (!d.fixed[i]) {
+                q = row_times(d, i, d.c);
+                if constexpr (kContacts) {
+                    if (pairs > 0) q = contact_gather(d.contacts, i, d.contacts.product, q);
+                }
+            }
+            store3(d.q, i, d.n, q);
+            local += static_cast<double>(physics::dot(load3(d.c, i, d.n), q));
+        }
+        const double cq = persistent_sum(local, partials[0]);
+        if (!(cq > 0.0)) break;  // breakdown: reported as not converged
+        const float alpha = static_cast<float>(delta / cq);
+        for (std::uint32_t domain = first_warp; domain < m.level[0].domains; domain += warps)
+            schwarz_fine_domain(d, domain, lane, values[warp], SchwarzInput::Update, alpha);
+        for (int l = 1; l < m.levels; ++l) {
+            cg::this_grid().sync();
+            for (std::uint32_t domain = first_warp; domain < m.level[l].domains; domain += warps)
+                schwarz_coarse_domain(d, l, domain, lane, values[warp]);
+        }
+        cg::this_grid().sync();
+        local = 0.0;
+        for (std::uint32_t i = blockIdx.x * blockDim.x + threadIdx.x; i < d.n; i += stride) {
+            const V3 z = schwarz_correction(d, i);
+            store3(d.s, i, d.n, z);
+            local += static_cast<double>(physics::dot(load3(d.r, i, d.n), z));
+        }
+        const double delta_new = persistent_sum(local, partials[1]);
+        const float beta = static_cast<float>(delta_new / delta);
+        delta = delta_new;
+        ++iterations;
+        converged = delta_new <= sp.cg_eps2 * delta0;
+        if (converged || iterations >= sp.cg_max_iterations) break;
+        for (std::uint32_t i = blockIdx.x * blockDim.x + threadIdx.x; i < d.n; i += stride)
+            store3(d.c, i, d.n, d.fixed[i] ? V3{} : load3(d.s, i, d.n) + beta * load3(d.c, i, d.n));
+        cg::this_grid().sync();
+    }
+    cg::this_grid().sync();
+    if (blockIdx.x == 0 && threadIdx.x == 0) {
+        ctl.delta = delta;
+        ctl.iterations = iterations;
+        ctl.converged = converged;
+        ctl.running = 0;
+    }
+}
+
 __global__ void spmv_kernel(DeviceView d, const float* x, float* y) {
     const std::uint32_t i = blockIdx.x * blockDim.x + threadIdx.x;
     if (i < d.n) store3(y, i, d.n, row_times(d, i, x));
@@ -329,26 +405,35 @@ void launch_pcg_iteration(const DeviceView& d, unsigned long long handle, bool s
     WEFT_CUDA_CHECK_LAUNCH("pcg_direction_kernel");
 }
 
-int pcg_persistent_grid(const DeviceView& d, int device) {
+namespace {
+
+const void* persistent_kernel(bool contacts, bool schwarz) {
+    if (schwarz)
+        return contacts ? reinterpret_cast<const void*>(&pcg_schwarz_persistent_kernel<true>)
+                        : reinterpret_cast<const void*>(&pcg_schwarz_persistent_kernel<false>);
+    return contacts ? reinterpret_cast<const void*>(&pcg_persistent_kernel<true>)
+                    : reinterpret_cast<const void*>(&pcg_persistent_kernel<false>);
+}
+
+}  // namespace
+
+int pcg_persistent_grid(const DeviceView& d, int device, bool schwarz) {
     int per_sm = 0, sms = 0, cooperative = 0;
     WEFT_CUDA_CHECK(cudaDeviceGetAttribute(&cooperative, cudaDevAttrCooperativeLaunch, device));
     if (cooperative == 0) return 0;
     WEFT_CUDA_CHECK(cudaDeviceGetAttribute(&sms, cudaDevAttrMultiProcessorCount, device));
     // The variant the solver will launch: with contacts it may hold more registers, so fewer blocks.
-    if (d.contacts.capacity > 0)
-        WEFT_CUDA_CHECK(cudaOccupancyMaxActiveBlocksPerMultiprocessor(&per_sm, pcg_persistent_kernel<true>, kBlockSize, 0));
-    else
-        WEFT_CUDA_CHECK(cudaOccupancyMaxActiveBlocksPerMultiprocessor(&per_sm, pcg_persistent_kernel<false>, kBlockSize, 0));
+    WEFT_CUDA_CHECK(cudaOccupancyMaxActiveBlocksPerMultiprocessor(
+        &per_sm, persistent_kernel(d.contacts.capacity > 0, schwarz), kBlockSize, 0));
     const int needed = static_cast<int>(grid_for(d.n));
     return std::min(needed, per_sm * sms);
 }
 
-void launch_pcg_persistent(const DeviceView& d, int grid, cudaStream_t stream) {
+void launch_pcg_persistent(const DeviceView& d, int grid, bool schwarz, cudaStream_t stream) {
     DeviceView view = d;
     void* args[] = {&view};
-    const void* kernel = d.contacts.capacity > 0 ? reinterpret_cast<const void*>(&pcg_persistent_kernel<true>)
-                                                 : reinterpret_cast<const void*>(&pcg_persistent_kernel<false>);
-    WEFT_CUDA_CHECK(cudaLaunchCooperativeKernel(kernel, dim3(grid), dim3(kBlockSize), args, 0, stream));
+    WEFT_CUDA_CHECK(cudaLaunchCooperativeKernel(persistent_kernel(d.contacts.capacity > 0, schwarz), dim3(grid),
+                                                dim3(kBlockSize), args, 0, stream));
 }
 
 void launch_pcg_finish(const DeviceView& d, cudaStream_t stream) {

@@ -22,14 +22,13 @@
 #include "cuda_check.h"
 #include "device_math.cuh"
 #include "pcg_control.cuh"
+#include "schwarz_apply.cuh"
 
 namespace weft::cuda {
 namespace {
 
 constexpr std::uint32_t kNodes = kSchwarzNodes;
 constexpr std::uint32_t kDim = kSchwarzDim;
-constexpr std::uint32_t kWarpsPerBlock = kBlockSize / 32;
-static_assert(kDim <= 64, "a warp computes at most two rows of a domain solve per lane");
 
 /// Level 0's coupling block of pattern slot s: A's block, 0 where a filtered vertex is involved (the
 /// solve acts on S·A·S), the contact-augmented block on the diagonal.
@@ -106,97 +105,31 @@ __global__ void schwarz_factor_kernel(DeviceView d, int l) {
     if (threadIdx.x == 0 && failed) atomicAdd(&d.stats->pivot_failures, 1);
 }
 
-/// y = D⁻¹v for the warp's domain (v in shared memory), rows `lane` and `lane + 32`.
-__device__ inline void solve_domain(const float* inverse, const float* v, float* solved, std::uint32_t lane) {
-    for (std::uint32_t row = lane; row < kDim; row += 32) {
-        float y = 0.0f;
-        for (std::uint32_t j = 0; j < kDim; ++j) y += inverse[j * kDim + row] * v[j];
-        solved[row] = y;
-    }
-}
-
-/// Sums the warp's domain values (v) of each piece into the next level's node.
-__device__ inline void restrict_domain(const SchwarzLevelView& level, const SchwarzLevelView& next, std::uint32_t domain,
-                                       const float* v, std::uint32_t lane) {
-    const std::uint32_t first = level.parent_start[domain], count = level.parent_start[domain + 1] - first;
-    if (lane >= count) return;
-    const std::uint32_t me = first + lane;
-    float acc[3] = {0.0f, 0.0f, 0.0f};
-    for (std::uint32_t k = 0; k < kNodes; ++k) {
-        const std::uint32_t node = domain * kNodes + k;
-        if (node < level.nodes && level.parent[node] == me)
-            for (int c = 0; c < 3; ++c) acc[c] += v[3 * k + c];
-    }
-    for (int c = 0; c < 3; ++c) next.values[3 * me + c] = acc[c];
-}
-
 __global__ void schwarz_fine_kernel(DeviceView d, SchwarzInput in) {
-    __shared__ float values[kWarpsPerBlock][kDim];
+    __shared__ float values[kSchwarzWarpsPerBlock][kDim];
     if (in == SchwarzInput::Update && !d.control->running) return;
-    const SchwarzView& m = d.mas;
-    const SchwarzLevelView& level = m.level[0];
-    const std::uint32_t warp = threadIdx.x / 32, lane = threadIdx.x % 32;
-    const std::uint32_t domain = blockIdx.x * kWarpsPerBlock + warp;
-    if (domain >= level.domains) return;
-    float* v = values[warp];
-    if (lane < kNodes) {
-        const std::uint32_t p = domain * kNodes + lane;
-        V3 r{};
-        if (p < d.n) {
-            const std::uint32_t i = m.order[p];
-            if (in == SchwarzInput::RightHandSide) {
-                r = d.fixed[i] ? V3{} : load3(d.b, i, d.n);
-                store3(d.r, i, d.n, r);
-            } else if (in == SchwarzInput::Residual) {
-                r = load3(d.r, i, d.n);
-            } else {
-                const float alpha = d.control->alpha;
-                r = load3(d.r, i, d.n) - alpha * load3(d.q, i, d.n);
-                store3(d.dv, i, d.n, load3(d.dv, i, d.n) + alpha * load3(d.c, i, d.n));
-                store3(d.r, i, d.n, r);
-            }
-        }
-        v[3 * lane] = r.x;
-        v[3 * lane + 1] = r.y;
-        v[3 * lane + 2] = r.z;
-    }
-    __syncwarp();
-    solve_domain(level.inverse + static_cast<std::size_t>(domain) * kDim * kDim, v, level.solved + domain * kDim, lane);
-    if (m.levels > 1) restrict_domain(level, m.level[1], domain, v, lane);
+    const std::uint32_t warp = threadIdx.x / 32;
+    const std::uint32_t domain = blockIdx.x * kSchwarzWarpsPerBlock + warp;
+    if (domain >= d.mas.level[0].domains) return;
+    const float alpha = in == SchwarzInput::Update ? d.control->alpha : 0.0f;
+    schwarz_fine_domain(d, domain, threadIdx.x % 32, values[warp], in, alpha);
 }
 
 __global__ void schwarz_coarse_kernel(DeviceView d, int l, int in_loop) {
-    __shared__ float values[kWarpsPerBlock][kDim];
+    __shared__ float values[kSchwarzWarpsPerBlock][kDim];
     if (in_loop && !d.control->running) return;
-    const SchwarzView& m = d.mas;
-    const SchwarzLevelView& level = m.level[l];
-    const std::uint32_t warp = threadIdx.x / 32, lane = threadIdx.x % 32;
-    const std::uint32_t domain = blockIdx.x * kWarpsPerBlock + warp;
-    if (domain >= level.domains) return;
-    float* v = values[warp];
-    for (std::uint32_t k = lane; k < kDim; k += 32) v[k] = level.values[domain * kDim + k];
-    __syncwarp();
-    solve_domain(level.inverse + static_cast<std::size_t>(domain) * kDim * kDim, v, level.solved + domain * kDim, lane);
-    if (l + 1 < m.levels) restrict_domain(level, m.level[l + 1], domain, v, lane);
+    const std::uint32_t warp = threadIdx.x / 32;
+    const std::uint32_t domain = blockIdx.x * kSchwarzWarpsPerBlock + warp;
+    if (domain >= d.mas.level[l].domains) return;
+    schwarz_coarse_domain(d, l, domain, threadIdx.x % 32, values[warp]);
 }
 
 __global__ void schwarz_prolong_kernel(DeviceView d, SchwarzOutput out, unsigned long long handle) {
     if (out == SchwarzOutput::Iterate && !d.control->running) return;
-    const SchwarzView& m = d.mas;
     const std::uint32_t i = blockIdx.x * blockDim.x + threadIdx.x;
     double value = 0.0;
     if (i < d.n) {
-        V3 z{};
-        if (!d.fixed[i]) {
-            std::uint32_t node = m.rank[i];
-            const float* y = m.level[0].solved + 3 * node;
-            z = V3{y[0], y[1], y[2]};
-            for (int l = 1; l < m.levels; ++l) {
-                node = m.level[l - 1].parent[node];
-                const float* yl = m.level[l].solved + 3 * node;
-                z += V3{yl[0], yl[1], yl[2]};
-            }
-        }
+        const V3 z = schwarz_correction(d, i);
         if (out == SchwarzOutput::Start) store3(d.c, i, d.n, z);
         if (out == SchwarzOutput::Iterate) store3(d.s, i, d.n, z);
         value = static_cast<double>(physics::dot(load3(d.r, i, d.n), z));
@@ -228,11 +161,11 @@ void launch_schwarz_factor(const DeviceView& d, cudaStream_t stream) {
 void launch_schwarz_apply(const DeviceView& d, SchwarzInput in, SchwarzOutput out, unsigned long long handle,
                           cudaStream_t stream) {
     const SchwarzView& m = d.mas;
-    schwarz_fine_kernel<<<blocks_for(m.level[0].domains, kWarpsPerBlock), kBlockSize, 0, stream>>>(d, in);
+    schwarz_fine_kernel<<<blocks_for(m.level[0].domains, kSchwarzWarpsPerBlock), kBlockSize, 0, stream>>>(d, in);
     WEFT_CUDA_CHECK_LAUNCH("schwarz_fine_kernel");
     const int in_loop = in == SchwarzInput::Update ? 1 : 0;
     for (int l = 1; l < m.levels; ++l) {
-        schwarz_coarse_kernel<<<blocks_for(m.level[l].domains, kWarpsPerBlock), kBlockSize, 0, stream>>>(d, l, in_loop);
+        schwarz_coarse_kernel<<<blocks_for(m.level[l].domains, kSchwarzWarpsPerBlock), kBlockSize, 0, stream>>>(d, l, in_loop);
         WEFT_CUDA_CHECK_LAUNCH("schwarz_coarse_kernel");
     }
     schwarz_prolong_kernel<<<grid_for(d.n), kBlockSize, 0, stream>>>(d, out, handle);

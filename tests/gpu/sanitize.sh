@@ -35,8 +35,14 @@ run memcheck "$weft" run projectile --backend cuda --frames 3 --quiet --set 'sol
     --set 'motion.shot.origin=[0, 1, 0.1]' --set 'collision.self=false' --set 'solver.cg_max_iterations=200'
 # twist: self-collision, so the normal cones, the broad phase, the contacts and the CCD gate run.
 run memcheck "$weft" run twist --backend cuda --frames 3 --quiet --set 'solver.cg_max_iterations=200'
+# The Schwarz preconditioner: its factor and apply kernels, in the one-launch loop (drape) and the
+# per-kernel loop (flag at 1.2K vertices is one-launch too: WEFT_CUDA_PCG=kernels forces the other).
+run memcheck "$weft" run drape --backend cuda --frames 3 --quiet --set 'solver.preconditioner=mas' --set 'solver.cg_max_iterations=200'
+WEFT_CUDA_PCG=kernels run memcheck "$weft" run flag --backend cuda --frames 3 --quiet --set 'solver.preconditioner=mas' --set 'solver.cg_max_iterations=200'
 export WEFT_CUDA_GRAPHS=0
 run racecheck "$weft" run drape --backend cuda --frames 2 --quiet --set 'solver.cg_max_iterations=100'
 run synccheck "$weft" run drape --backend cuda --frames 2 --quiet --set 'solver.cg_max_iterations=100'
+WEFT_CUDA_PCG=kernels run racecheck "$weft" run drape --backend cuda --frames 2 --quiet --set 'solver.preconditioner=mas' --set 'solver.cg_max_iterations=100'
+run synccheck "$weft" run drape --backend cuda --frames 2 --quiet --set 'solver.preconditioner=mas' --set 'solver.cg_max_iterations=100'
 run initcheck "$weft" run flag --backend cuda --frames 2 --quiet --set 'solver.cg_max_iterations=100'
 exit $status

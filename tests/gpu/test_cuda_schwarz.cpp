@@ -5,6 +5,7 @@
 #include <cuda_runtime_api.h>
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cstdio>
 #include <cstring>
 #include <string>
@@ -107,6 +108,40 @@ TEST(CudaSchwarz, SameBitsOnEveryRunAndInBothLoops) {
     EXPECT_FALSE(cuda::as_cuda(host_loop->backend())->graph_active());
     EXPECT_TRUE(same_bits(a->positions(0), b->positions(0)));
     EXPECT_TRUE(same_bits(a->positions(0), host_loop->positions(0)));
+}
+
+TEST(CudaSchwarz, OneLaunchAndPerKernelLoopsAgree) {
+    // The same iteration with the dots summed in another order: float rounding only (compared after
+    // one frame of the fluttering flag and five of the drape, as for block-Jacobi in
+    // test_cuda_backend.cpp).
+    WEFT_REQUIRE_GPU();
+    for (const std::string scene : {"flag", "drape"}) {
+        const int frames = scene == "flag" ? 1 : 5;
+        const std::vector<std::string> overrides{"solver.preconditioner=mas"};
+        const auto one = make_world(scene, "cuda", overrides);
+        const auto per = make_world(scene, "cuda", overrides);
+        cuda::as_cuda(one->backend())->set_pcg_loop(cuda::PcgLoop::OneLaunch);
+        cuda::as_cuda(per->backend())->set_pcg_loop(cuda::PcgLoop::PerKernel);
+        long iterations_one = 0, iterations_per = 0;
+        for (int f = 0; f < frames; ++f) {
+            iterations_one += one->step().cg_iterations;
+            iterations_per += per->step().cg_iterations;
+        }
+        EXPECT_GT(device_solver_of(*one).persistent_grid(), 0) << scene;
+        EXPECT_EQ(device_solver_of(*per).persistent_grid(), 0) << scene;
+        const auto xo = one->positions(0), xp = per->positions(0);
+        double d = 0.0, lo = 1e30, hi = -1e30;
+        for (std::size_t i = 0; i < xo.size(); ++i) {
+            d = std::max(d, math::length(xo[i] - xp[i]));
+            lo = std::min(lo, xo[i][1]);
+            hi = std::max(hi, xo[i][1]);
+        }
+        std::printf("[ loops    ] %s: one-launch against per-kernel MAS after %d frames: %.3e m, %ld against %ld "
+                    "iterations\n",
+                    scene.c_str(), frames, d, iterations_one, iterations_per);
+        EXPECT_LT(d, 1e-4 * std::max(1.0, hi - lo)) << scene;
+        EXPECT_NEAR(double(iterations_one), double(iterations_per), 0.05 * double(iterations_per) + 4) << scene;
+    }
 }
 
 TEST(CudaSchwarz, SwitchesPreconditionerLive) {

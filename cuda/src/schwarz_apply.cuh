@@ -1,0 +1,104 @@
+#pragma once
+// The per-domain and per-vertex pieces of the Schwarz apply z = M⁻¹r (docs/methods.md §2b), shared
+// by its per-kernel form (schwarz_kernels.cu: a kernel per level) and the one-launch CG loop
+// (pcg_kernels.cu: the same pieces between grid-wide barriers). A warp owns a domain: lanes hold its
+// 16 nodes' values, then two rows each of the 48×48 solve.
+
+#include "device_math.cuh"
+
+namespace weft::cuda {
+
+inline constexpr std::uint32_t kSchwarzWarpsPerBlock = kBlockSize / 32;
+static_assert(kSchwarzDim <= 64, "a warp computes at most two rows of a domain solve per lane");
+
+/// solved = D⁻¹v for one domain (v in shared memory), rows `lane` and `lane + 32`. The inverse is
+/// column-major, so a warp's loads of one column are contiguous. (Unrolling the column loop fully,
+/// to put all of a domain's loads in flight at once, measured 15-25% slower on an H100: docs/results.md.)
+__device__ inline void schwarz_solve_domain(const float* inverse, const float* v, float* solved, std::uint32_t lane) {
+    for (std::uint32_t row = lane; row < kSchwarzDim; row += 32) {
+        float y = 0.0f;
+        for (std::uint32_t j = 0; j < kSchwarzDim; ++j) y += __ldg(&inverse[j * kSchwarzDim + row]) * v[j];
+        solved[row] = y;
+    }
+}
+
+/// Sums the domain's values (v) of each of its pieces into the next level's node (lane k: the
+/// domain's k-th piece, its members in node order).
+__device__ inline void schwarz_restrict_domain(const SchwarzLevelView& level, const SchwarzLevelView& next,
+                                               std::uint32_t domain, const float* v, std::uint32_t lane) {
+    const std::uint32_t first = level.parent_start[domain], count = level.parent_start[domain + 1] - first;
+    if (lane >= count) return;
+    const std::uint32_t me = first + lane;
+    float acc[3] = {0.0f, 0.0f, 0.0f};
+    for (std::uint32_t k = 0; k < kSchwarzNodes; ++k) {
+        const std::uint32_t node = domain * kSchwarzNodes + k;
+        if (node < level.nodes && level.parent[node] == me)
+            for (int c = 0; c < 3; ++c) acc[c] += v[3 * k + c];
+    }
+    for (int c = 0; c < 3; ++c) next.values[3 * me + c] = acc[c];
+}
+
+/// Level 0, domain `domain`, by a whole warp (`v`: 48 floats of shared memory for it): takes its 16
+/// vertices' residuals as `in` says (for Update, after r −= αq and Δv += αc, written back), solves,
+/// and restricts to level 1.
+__device__ inline void schwarz_fine_domain(const DeviceView& d, std::uint32_t domain, std::uint32_t lane, float* v,
+                                           SchwarzInput in, float alpha) {
+    const SchwarzView& m = d.mas;
+    const SchwarzLevelView& level = m.level[0];
+    if (lane < kSchwarzNodes) {
+        const std::uint32_t p = domain * kSchwarzNodes + lane;
+        V3 r{};
+        if (p < d.n) {
+            const std::uint32_t i = m.order[p];
+            if (in == SchwarzInput::RightHandSide) {
+                r = d.fixed[i] ? V3{} : load3(d.b, i, d.n);
+                store3(d.r, i, d.n, r);
+            } else if (in == SchwarzInput::Residual) {
+                r = load3(d.r, i, d.n);
+            } else {
+                r = load3(d.r, i, d.n) - alpha * load3(d.q, i, d.n);
+                store3(d.dv, i, d.n, load3(d.dv, i, d.n) + alpha * load3(d.c, i, d.n));
+                store3(d.r, i, d.n, r);
+            }
+        }
+        v[3 * lane] = r.x;
+        v[3 * lane + 1] = r.y;
+        v[3 * lane + 2] = r.z;
+    }
+    __syncwarp();
+    schwarz_solve_domain(level.inverse + static_cast<std::size_t>(domain) * kSchwarzDim * kSchwarzDim, v,
+                         level.solved + domain * kSchwarzDim, lane);
+    if (m.levels > 1) schwarz_restrict_domain(level, m.level[1], domain, v, lane);
+    __syncwarp();  // v is reused by the warp's next domain
+}
+
+/// Level l ≥ 1, domain `domain`, by a whole warp: solve and restrict to level l + 1. The values were
+/// written by other warps before a kernel boundary or grid barrier: read past L1.
+__device__ inline void schwarz_coarse_domain(const DeviceView& d, int l, std::uint32_t domain, std::uint32_t lane,
+                                             float* v) {
+    const SchwarzView& m = d.mas;
+    const SchwarzLevelView& level = m.level[l];
+    for (std::uint32_t k = lane; k < kSchwarzDim; k += 32) v[k] = __ldcg(&level.values[domain * kSchwarzDim + k]);
+    __syncwarp();
+    schwarz_solve_domain(level.inverse + static_cast<std::size_t>(domain) * kSchwarzDim * kSchwarzDim, v,
+                         level.solved + domain * kSchwarzDim, lane);
+    if (l + 1 < m.levels) schwarz_restrict_domain(level, m.level[l + 1], domain, v, lane);
+    __syncwarp();
+}
+
+/// z_i = filter(Σ_l solved_l[node_l(i)]): vertex i's correction from every level.
+__device__ inline V3 schwarz_correction(const DeviceView& d, std::uint32_t i) {
+    if (d.fixed[i]) return V3{};
+    const SchwarzView& m = d.mas;
+    std::uint32_t node = m.rank[i];
+    const float* y = m.level[0].solved + 3 * node;
+    V3 z{__ldcg(y), __ldcg(y + 1), __ldcg(y + 2)};
+    for (int l = 1; l < m.levels; ++l) {
+        node = m.level[l - 1].parent[node];
+        const float* yl = m.level[l].solved + 3 * node;
+        z += V3{__ldcg(yl), __ldcg(yl + 1), __ldcg(yl + 2)};
+    }
+    return z;
+}
+
+}  // namespace weft::cuda
