@@ -13,7 +13,7 @@ static_assert(kSchwarzDim <= 64, "a warp computes at most two rows of a domain s
 
 /// solved = D⁻¹v for one domain (v in shared memory), rows `lane` and `lane + 32`. The inverse is
 /// column-major, so a warp's loads of one column are contiguous. (Unrolling the column loop fully,
-/// to put all of a domain's loads in flight at once, measured 15-25% slower on an H100: docs/results.md.)
+/// to put all of a domain's loads in flight at once, measured 8-20% slower on an H100: docs/results.md.)
 __device__ inline void schwarz_solve_domain(const float* inverse, const float* v, float* solved, std::uint32_t lane) {
     for (std::uint32_t row = lane; row < kSchwarzDim; row += 32) {
         float y = 0.0f;
