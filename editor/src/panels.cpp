@@ -254,6 +254,7 @@ void stats_panel(Session& session, const PanelLayout& layout) {
     ImGui::Text("last step: %.2f ms, %d substeps", s.step_ms, s.substeps);
     ImGui::Text("CG: %d iterations (largest solve %d)", s.cg_iterations, s.cg_iterations_max);
     ImGui::Text("CG residual %.2e, %d solves capped", s.cg_residual, s.cg_not_converged);
+    ImGui::Text("energy: %d substeps gained (%.3g J), %d redone", s.energy_gained, s.energy_gain, s.energy_retries);
     ImGui::Text("contacts: %d collider, %d cloth", s.collider_contacts, s.collision.contacts);
     ImGui::Text("history: last %zu steps", h.step_ms.size());
     ImGui::PushItemWidth(-110.0F);
@@ -282,7 +283,8 @@ void warning_banner(Session& session, const PanelLayout& layout) {
     const StatsHistory& h = session.history();
     const bool not_converged = h.last.cg_not_converged > 0;
     const bool non_finite = h.last.non_finite;
-    if (!not_converged && !non_finite) return;
+    const bool energy = h.last.energy_gained > 0;
+    if (!not_converged && !non_finite && !energy) return;
     const float width = std::max(200.0F, layout.width - 2.0F * column_width(layout.width) - 20.0F);
     ImGui::SetNextWindowPos(ImVec2((layout.width - width) * 0.5F, 8.0F), ImGuiCond_Always);
     ImGui::SetNextWindowSize(ImVec2(width, 0.0F), ImGuiCond_Always);
@@ -297,6 +299,10 @@ void warning_banner(Session& session, const PanelLayout& layout) {
         ImGui::TextWrapped("CG did not converge in %d solves of the last step (%d of %d steps): raise the cap, "
                            "the substeps, or loosen the tolerance",
                            h.last.cg_not_converged, h.not_converged_steps, h.steps);
+    if (energy)
+        ImGui::TextWrapped("Energy gained beyond the external work in %d substeps of the last step, %.3g J (%d of %d "
+                           "steps): tighten the CG tolerance, or set the energy guard to retry",
+                           h.last.energy_gained, h.last.energy_gain, h.energy_gained_steps, h.steps);
     ImGui::End();
     ImGui::PopStyleColor();
 }

@@ -119,6 +119,8 @@ constexpr std::string_view kHessianNames[] = {"fast", "projected"};
 constexpr std::array kHessians{HessianMode::Fast, HessianMode::Projected};
 constexpr std::string_view kPreconditionerNames[] = {"jacobi", "mas"};
 constexpr std::array kPreconditioners{Preconditioner::Jacobi, Preconditioner::Schwarz};
+constexpr std::string_view kEnergyGuardNames[] = {"off", "report", "retry"};
+constexpr std::array kEnergyGuards{EnergyGuard::Off, EnergyGuard::Report, EnergyGuard::Retry};
 constexpr std::string_view kCullingNames[] = {"normal_cone", "none"};
 constexpr std::array kCullings{CollisionCulling::NormalCone, CollisionCulling::None};
 constexpr std::string_view kPlaneNames[] = {"xy", "xz"};
@@ -178,6 +180,11 @@ constexpr Parameter kTable[] = {
             "cloth (CPU backend; the CUDA backend uses jacobi)",
      .label = "preconditioner", .panel = "solver", .choices = kPreconditionerNames,
      .access = choice_field<kPreconditioners, &WorldDesc::solver, &SolverSettings::preconditioner>()},
+    {.section = "solver", .name = "energy_guard", .type = T::Choice,
+     .doc = "check every substep for energy gained beyond the external work (an inexact solve): `off`; `report`: "
+            "count it in the stats; `retry`: also redo the substep once with the CG tolerance / 100 and the cap × 4",
+     .label = "energy guard", .panel = "solver", .choices = kEnergyGuardNames,
+     .access = choice_field<kEnergyGuards, &WorldDesc::solver, &SolverSettings::energy_guard>()},
     {.section = "solver", .name = "contact_stiffness", .type = T::Real, .unit = "N/m", .range = R{0.0, 1e12},
      .doc = "per-vertex collider contact stiffness; 0 picks one from the mass and `dt`", .label = "collider stiffness",
      .panel = "solver", .log_scale = true, .access = field<&WorldDesc::solver, &SolverSettings::contact_stiffness>()},
@@ -473,6 +480,15 @@ void check_ranges(const Owner& owner, std::string_view where, std::optional<Coll
             const double v = parameter_number(p, owner);
             if (p.unset_when_negative && v < 0.0) continue;
             check_parameter_range(p, v, place);
+        } else if (p.type == ParameterType::Choice && p.access.number != nullptr) {
+            // A value cast from an integer through the API that names no choice (the scene reader
+            // only ever stores a listed one).
+            const double v = parameter_number(p, owner);
+            if (v < 0.0) {
+                std::string names;
+                for (const std::string_view c : p.choices) names += std::string(names.empty() ? "\"" : ", \"") + std::string(c) + "\"";
+                throw Error(place + ": " + std::string(p.name) + " holds a value that is none of " + names);
+            }
         } else if (p.type == ParameterType::Vector) {
             const Vec3d v = parameter_vector(p, owner);
             const std::string shown = place + ": " + std::string(p.name) + " = " + vector_text(v, 3);

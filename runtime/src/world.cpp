@@ -11,6 +11,7 @@
 #include <string>
 
 #include "cpu/energy.h"
+#include "weft/backend/energy_audit.h"
 #include "weft/backend/timing.h"
 #include "weft/error.h"
 #include "weft/parameters.h"
@@ -157,8 +158,14 @@ const StepStats& World::step() {
     stats_ = StepStats{};
     const int substeps = model_->settings.solver.substeps;
     const double h = model_->settings.solver.dt / substeps;
+    const EnergyGuard guard = model_->settings.solver.energy_guard;
+    EnergyAudit audit;
+    if (guard != EnergyGuard::Off) audit = backend_->energy_audit(*model_, time_, h, false);
     for (int s = 0; s < substeps; ++s) {
-        backend_->substep(*model_, time_, h, stats_);
+        if (guard == EnergyGuard::Off)
+            backend_->substep(*model_, time_, h, stats_);
+        else
+            guarded_substep(h, guard == EnergyGuard::Retry, audit);
         time_ += h;
         ++stats_.substeps;
     }
@@ -173,6 +180,82 @@ const StepStats& World::step() {
     }
     stats_.step_ms = ms_since(start);
     return stats_;
+}
+
+// One substep under the energy guard (docs/methods.md §1b). `audit` holds the audit of the state at
+// time_ and is left holding the one at time_ + h. What a redo restores is what the substep reads:
+// every cloth's positions and velocities (through the backend) and the time, which the World advances
+// only after this returns; motions, colliders and the gust field are functions of the time. What it
+// does not restore is the backend's own carry-over from the failed attempt: the CPU backend's CG
+// warm start is cleared by write_state (the redo starts cold, which only costs iterations), and the
+// collision stages' caches are rebuilt each substep from the state. The stats of both attempts are
+// summed: the work was done.
+void World::guarded_substep(double h, bool retry, EnergyAudit& audit) {
+    const std::size_t cloths = model_->cloths.size();
+    if (retry) {
+        guard_x_.resize(cloths);
+        guard_v_.resize(cloths);
+        for (std::size_t c = 0; c < cloths; ++c) {
+            guard_x_[c].resize(model_->cloths[c].fabric->vertex_count());
+            guard_v_[c].resize(guard_x_[c].size());
+            backend_->read_state(c, guard_x_[c], guard_v_[c]);
+        }
+    }
+    // Two corrections after the solve change the state by rules that are not an implicit step, so
+    // the criterion does not hold for them and a substep they acted in is not judged: a fast
+    // analytic collider that carried vertices along (they take its velocity), and impact zones
+    // (their projections move vertices by geometry alone, and can stretch the cloth: on `layers`
+    // they put 25 J of strain into four sheets that fell with 2 J). Returns whether it is judged.
+    const auto attempt = [&](EnergyAudit& end) {
+        const int swept = stats_.collision.swept_collider_hits;
+        const int zones = stats_.collision.impact_zones;
+        backend_->substep(*model_, time_, h, stats_);
+        end = backend_->energy_audit(*model_, time_ + h, h, false);
+        return audit.bounded && end.bounded && stats_.collision.swept_collider_hits == swept &&
+               stats_.collision.impact_zones == zones;
+    };
+    // The wind's power costs a gust evaluation per triangle, so it is measured only for a substep
+    // that gained too much without it, and then at the end of the substep alone (the factor of 2 in
+    // the criterion covers its change within the substep).
+    const auto judge = [&](EnergyAudit& end) {
+        double excess = energy_excess(audit, end, h);
+        if (excess > 0.0 && model_->settings.wind.active()) {
+            end = backend_->energy_audit(*model_, time_ + h, h, true);
+            excess = energy_excess(audit, end, h);
+        }
+        return excess;
+    };
+    EnergyAudit end;
+    if (!attempt(end)) {
+        ++stats_.energy_unchecked;
+        audit = end;
+        return;
+    }
+    double excess = judge(end);
+    if (excess > 0.0 && retry) {
+        ++stats_.energy_retries;
+        for (std::size_t c = 0; c < cloths; ++c) backend_->write_state(c, guard_x_[c], guard_v_[c]);
+        SolverSettings& solver = model_->settings.solver;
+        const double tolerance = solver.cg_tolerance;
+        const int cap = solver.cg_max_iterations;
+        // The parameter table's bounds (1e-12 and 100000), so the settings stay valid while changed.
+        solver.cg_tolerance = std::max(1e-12, tolerance / 100.0);
+        solver.cg_max_iterations = static_cast<int>(std::min<long>(100'000, 4L * cap));
+        const bool judged = attempt(end);
+        solver.cg_tolerance = tolerance;
+        solver.cg_max_iterations = cap;
+        if (!judged) {
+            ++stats_.energy_unchecked;
+            audit = end;
+            return;
+        }
+        excess = judge(end);
+    }
+    if (excess > 0.0) {
+        ++stats_.energy_gained;
+        stats_.energy_gain += excess;
+    }
+    audit = end;
 }
 
 std::vector<Vec3d> World::positions(std::size_t cloth) const {

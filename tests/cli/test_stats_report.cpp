@@ -86,6 +86,34 @@ TEST(StatsReport, CountsFailures) {
     EXPECT_NE(warnings[1].find("NaN/Inf) in 2 of 4 frames, first at frame 3"), std::string::npos) << warnings[1];
 }
 
+TEST(StatsReport, EnergyGainedIsAWarningLikeACappedSolve) {
+    std::vector<StepStats> frames{frame(10.0, 20, 12), frame(12.0, 22, 12), frame(12.0, 22, 12)};
+    frames[1].energy_gained = 1;
+    frames[1].energy_gain = 2.5;
+    frames[2].energy_retries = 1;
+    const RunSummary s = summarize(frames);
+    EXPECT_EQ(s.energy_gained, 1);
+    EXPECT_EQ(s.first_energy_frame, 2);
+    EXPECT_EQ(s.energy_retries, 1);
+    EXPECT_FALSE(s.ok());
+    RunContext c = context();
+    c.energy_guard = "report";
+    const auto warnings = run_warnings(c, s);
+    ASSERT_EQ(warnings.size(), 1u);
+    EXPECT_NE(warnings[0].find("1 of 6 substeps gained energy beyond the external work (2.5 J in all) in 1 of 3 "
+                               "frames, first at frame 2"),
+              std::string::npos)
+        << warnings[0];
+    std::ostringstream text;
+    print_run_summary(text, c, s, 0.5);
+    EXPECT_NE(text.str().find("energy guard   report: 1 of 6 substeps gained energy (2.5 J)"), std::string::npos)
+        << text.str();
+    std::ostringstream json;
+    write_run_json(json, c, s, frames, 1.0);
+    for (const char* key : {"\"energy_guard\": {", "\"gained_substeps\": 1", "\"energy_gained\": [0, 1, 0]"})
+        EXPECT_NE(json.str().find(key), std::string::npos) << key << "\n" << json.str();
+}
+
 TEST(StatsReport, CleanRunHasNoWarnings) {
     const std::vector<StepStats> frames{frame(10.0, 20, 12), frame(12.0, 22, 12)};
     const RunSummary s = summarize(frames);

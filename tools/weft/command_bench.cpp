@@ -80,6 +80,8 @@ void print_bench_table(std::ostream& out, const std::vector<BenchResult>& result
         if (s.cg_not_converged > 0) flags += std::to_string(s.cg_not_converged) + " not converged";
         if (s.non_finite_frames > 0)
             flags += (flags.empty() ? "" : ", ") + std::to_string(s.non_finite_frames) + " NaN";
+        if (s.energy_gained > 0)
+            flags += (flags.empty() ? "" : ", ") + std::to_string(s.energy_gained) + " energy gained";
         row.push_back(flags.empty() ? "-" : flags);
         table.add_row(std::move(row));
     }

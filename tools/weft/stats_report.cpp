@@ -56,6 +56,15 @@ RunSummary summarize(std::span<const StepStats> frames) {
             if (s.non_finite_frames == 0) s.first_non_finite_frame = static_cast<long long>(f) + 1;
             ++s.non_finite_frames;
         }
+        s.substeps += st.substeps;
+        if (st.energy_gained > 0) {
+            if (s.frames_energy_gained == 0) s.first_energy_frame = static_cast<long long>(f) + 1;
+            ++s.frames_energy_gained;
+        }
+        s.energy_gained += st.energy_gained;
+        s.energy_gain += st.energy_gain;
+        s.energy_retries += st.energy_retries;
+        s.energy_unchecked += st.energy_unchecked;
         const CollisionStats& c = st.collision;
         auto& sc = s.collisions;
         sc.active = sc.active || c.candidate_pairs > 0 || c.ccd_tests > 0 || c.remaining_intersections >= 0 ||
@@ -108,6 +117,9 @@ RunContext describe_run(const SceneDesc& scene, const World& world, int threads,
     c.cg_tolerance = solver.cg_tolerance;
     c.cg_max_iterations = solver.cg_max_iterations;
     c.precision = solver.precision == Precision::Float ? "float" : "double";
+    c.energy_guard = solver.energy_guard == EnergyGuard::Off      ? "off"
+                     : solver.energy_guard == EnergyGuard::Report ? "report"
+                                                                  : "retry";
     c.cloths = model.cloths.size();
     c.backend_memory_bytes = world.memory_bytes();
     std::set<const Fabric*> counted;
@@ -141,6 +153,18 @@ std::vector<std::string> run_warnings(const RunContext& context, const RunSummar
                       std::to_string(summary.first_non_finite_frame) +
                       "; the state was rolled back each time, so the motion is wrong from there on "
                       "(try a smaller time step or more substeps)");
+    }
+    if (summary.energy_gained > 0) {
+        out.push_back(std::to_string(summary.energy_gained) + " of " + std::to_string(summary.substeps) +
+                      " substeps gained energy beyond the external work (" + json_number(summary.energy_gain) +
+                      " J in all) in " + std::to_string(summary.frames_energy_gained) + " of " +
+                      std::to_string(summary.frames) + " frames, first at frame " +
+                      std::to_string(summary.first_energy_frame) +
+                      (context.energy_guard == "retry"
+                           ? std::string("; the redo with a tighter CG tolerance did not cure them")
+                           : std::string("")) +
+                      " (tighten the CG tolerance, raise the CG iteration cap or the substeps, or set "
+                      "solver.energy_guard = \"retry\")");
     }
     const auto& c = summary.collisions;
     if (c.unresolved_substeps > 0) {
@@ -203,6 +227,14 @@ void write_summary_fields(JsonWriter& json, const RunContext& c, const RunSummar
     json.field("cg_not_converged_frames", s.frames_not_converged);
     json.field("cg_residual_max", s.cg_residual_max);
     json.field("non_finite_frames", s.non_finite_frames);
+    json.key("energy_guard").begin_object();
+    json.field("mode", c.energy_guard);
+    json.field("gained_substeps", s.energy_gained);
+    json.field("gained_frames", s.frames_energy_gained);
+    json.field("gain_joules", s.energy_gain);
+    json.field("retries", s.energy_retries);
+    json.field("unchecked_substeps", s.energy_unchecked);
+    json.end_object();
 
     json.key("contacts").begin_object().field("mean", s.contacts.mean).field("max", s.contacts.max).end_object();
     const auto& col = s.collisions;
@@ -271,6 +303,9 @@ void write_run_json(std::ostream& out, const RunContext& context, const RunSumma
     json.key("contacts").begin_array(true);
     for (const StepStats& f : frames) json.value(f.collider_contacts);
     json.end_array();
+    json.key("energy_gained").begin_array(true);
+    for (const StepStats& f : frames) json.value(f.energy_gained);
+    json.end_array();
     json.end_object();
     json.end_object();
 }
@@ -302,6 +337,14 @@ void print_run_summary(std::ostream& out, const RunContext& c, const RunSummary&
         << format_fixed(s.cg_iterations.max, 0) << "; largest solve " << s.cg_iterations_max_solve << "; "
         << s.cg_not_converged << " of " << s.solves << " solves not converged\n";
     out << "  NaN/Inf        " << s.non_finite_frames << " frames\n";
+    if (c.energy_guard != "off") {
+        out << "  energy guard   " << c.energy_guard << ": " << s.energy_gained << " of " << s.substeps
+            << " substeps gained energy";
+        if (s.energy_gained > 0) out << " (" << json_number(s.energy_gain) << " J)";
+        if (c.energy_guard == "retry") out << ", " << s.energy_retries << " redone";
+        if (s.energy_unchecked > 0) out << ", " << s.energy_unchecked << " unchecked (fast or moving mesh collider)";
+        out << "\n";
+    }
     // Vertex–collider contacts of the analytic colliders; the cloth's pair springs are on the next line.
     out << "  colliders      contacts mean " << format_fixed(s.contacts.mean, 1) << ", max "
         << format_fixed(s.contacts.max, 0) << "\n";

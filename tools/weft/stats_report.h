@@ -52,6 +52,16 @@ struct RunSummary {
     std::size_t non_finite_frames = 0;
     long long first_non_finite_frame = -1;  ///< 1-based frame number, -1 if none
     Distribution contacts;                  ///< collider contacts per frame
+    /// Energy guard (solver.energy_guard; docs/methods.md §1b), over all frames: substeps whose
+    /// energy grew beyond the external work as kept (StepStats::energy_gained), the frames they fell
+    /// in, their summed excess (J), the redone substeps and those the guard could not judge.
+    long long substeps = 0;
+    long long energy_gained = 0;
+    std::size_t frames_energy_gained = 0;
+    long long first_energy_frame = -1;  ///< 1-based frame number, -1 if none
+    double energy_gain = 0.0;
+    long long energy_retries = 0;
+    long long energy_unchecked = 0;
     /// Cloth collisions (docs/collisions.md), over all frames.
     struct Collisions {
         bool active = false;                  ///< any collision stage ran
@@ -71,7 +81,8 @@ struct RunSummary {
     double simulation_seconds = 0.0;        ///< sum of step times, s
     double fps = 0.0;                       ///< frames per second of simulation time (I/O excluded)
     [[nodiscard]] bool ok() const {
-        return cg_not_converged == 0 && non_finite_frames == 0 && collisions.unresolved_substeps == 0 &&
+        return cg_not_converged == 0 && non_finite_frames == 0 && energy_gained == 0 &&
+               collisions.unresolved_substeps == 0 &&
                collisions.frames_with_intersections == 0;
     }
 };
@@ -94,6 +105,7 @@ struct RunContext {
     double cg_tolerance = 0.0;
     int cg_max_iterations = 0;
     std::string precision;  ///< "float" or "double"
+    std::string energy_guard = "off";  ///< solver.energy_guard: "off", "report" or "retry"
     /// Whether CollisionStats::culled_pairs was counted: collision.count_culled on the cpu backend
     /// (the cuda backend does not count them; weft_cuda_collision_bench measures its culling).
     bool culled_pairs_counted = false;

@@ -42,6 +42,19 @@ enum class Preconditioner : std::uint8_t {
     Schwarz,
 };
 
+/// What the world does about a substep whose energy grew beyond what the outside world can have put
+/// in (an inexact CG solve; docs/methods.md §1b, docs/tuning.md).
+enum class EnergyGuard : std::uint8_t {
+    /// No check: nothing is measured.
+    Off,
+    /// Measure the energy before and after every substep and count a gain in
+    /// `StepStats::energy_gained` (the state is kept as solved).
+    Report,
+    /// As Report, and redo a substep that gained energy once from its start with the CG tolerance
+    /// divided by 100 and the iteration cap multiplied by 4.
+    Retry,
+};
+
 /// Solver knobs. Every one trades speed against accuracy; docs/tuning.md measures them.
 struct SolverSettings {
     double dt = 1.0 / 60.0;        ///< frame time step, s.
@@ -56,6 +69,9 @@ struct SolverSettings {
     Precision precision = Precision::Double;  ///< CPU backend scalar; double is the reference
     HessianMode hessian = HessianMode::Fast;
     Preconditioner preconditioner = Preconditioner::Jacobi;
+    /// Energy check after every substep (a cost of two host reads of the state per substep on a device
+    /// backend; docs/tuning.md measures it on the CPU).
+    EnergyGuard energy_guard = EnergyGuard::Report;
     double contact_stiffness = 0.0;  ///< N/m per vertex against colliders; 0 picks a stiffness from mass and dt
     int threads = 0;               ///< CPU worker threads; 0 = all cores. Results do not depend on it.
 };

@@ -60,11 +60,23 @@ struct StepStats {
     int collider_contacts = 0;     ///< vertex–collider contacts active in the last substep
     CollisionStats collision{};
     bool non_finite = false;       ///< a NaN or Inf appeared; the state was restored to the last good one
+    /// Energy guard (SolverSettings::energy_guard; docs/methods.md §1b): substeps whose kinetic +
+    /// potential + elastic energy grew beyond the external work, as kept in the state (in retry
+    /// mode, those whose redo still gained), and the sum of their gains beyond it, J.
+    int energy_gained = 0;
+    double energy_gain = 0.0;
+    /// Substeps redone with a tighter CG tolerance because their first solve gained energy (retry
+    /// mode); those the redo did not cure are also in `energy_gained`.
+    int energy_retries = 0;
+    /// Substeps the guard could not judge: a moving mesh collider, or a fast analytic collider that
+    /// carried cloth along (work it cannot bound).
+    int energy_unchecked = 0;
     std::array<double, static_cast<int>(Stage::Count)> stage_ms{};  ///< wall time per stage, ms
     double step_ms = 0.0;          ///< wall time of the whole step, ms
-    /// No NaN, every solve converged, no collision left unresolved and no intersection found.
+    /// No NaN, every solve converged, no energy gained, no collision left unresolved and no
+    /// intersection found.
     [[nodiscard]] bool ok() const {
-        return !non_finite && cg_not_converged == 0 && collision.unresolved_substeps == 0 &&
+        return !non_finite && cg_not_converged == 0 && energy_gained == 0 && collision.unresolved_substeps == 0 &&
                collision.remaining_intersections <= 0;
     }
     [[nodiscard]] double& ms(Stage s) { return stage_ms[static_cast<int>(s)]; }

@@ -31,6 +31,7 @@ namespace weft {
 // The backend kit's types (weft/backend/): a game never needs their definitions.
 class Backend;
 struct Model;
+struct EnergyAudit;
 
 class World {
 public:
@@ -121,12 +122,15 @@ public:
 
 private:
     void ensure_built() const;
+    void guarded_substep(double h, bool retry, EnergyAudit& audit);
     std::unique_ptr<Model> model_;
     std::unique_ptr<Backend> backend_;
     mutable std::uint64_t built_version_ = ~std::uint64_t{0};
     /// Each cloth's vertex count at the last build: a rebuild carries the state of a cloth whose
     /// count did not change (a pin added) instead of starting it again.
     mutable std::vector<std::size_t> built_vertex_counts_;
+    /// The state at the start of the current substep, kept for the energy guard's redo (retry mode).
+    std::vector<std::vector<Vec3d>> guard_x_, guard_v_;
     double time_ = 0.0;
     std::size_t steps_ = 0;
     StepStats stats_{};

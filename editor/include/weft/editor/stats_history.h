@@ -43,6 +43,7 @@ struct StatsHistory {
     Series frame_ms{kCapacity};           ///< wall time between displayed frames, ms
     int steps = 0;                        ///< steps recorded since the last clear
     int not_converged_steps = 0;          ///< of those, steps with a CG solve that hit its cap
+    int energy_gained_steps = 0;          ///< of those, steps with a substep that gained energy (energy guard)
     int non_finite_steps = 0;             ///< of those, steps where NaN or Inf appeared
     StepStats last{};
 

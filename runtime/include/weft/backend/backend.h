@@ -12,6 +12,7 @@
 #include <string_view>
 #include <vector>
 
+#include "weft/backend/energy_audit.h"
 #include "weft/backend/interop.h"
 #include "weft/backend/model.h"
 #include "weft/backend_options.h"
@@ -42,6 +43,11 @@ public:
     virtual void read_state(std::size_t cloth, std::span<Vec3d> positions, std::span<Vec3d> velocities) const = 0;
     /// Overwrites a cloth's positions and velocities (reset, editing, tests).
     virtual void write_state(std::size_t cloth, std::span<const Vec3d> positions, std::span<const Vec3d> velocities) = 0;
+    /// The energy guard's audit of the current state at time `t` (s) of substeps of `h` (s), with the
+    /// wind's power when `with_wind` (weft/backend/energy_audit.h). The default reads every cloth back
+    /// with `read_state` and sums on the host; a backend that keeps its state on a device may sum there
+    /// and return the result.
+    [[nodiscard]] virtual EnergyAudit energy_audit(const Model& model, double t, double h, bool with_wind) const;
     /// Bytes of simulation state held (host or device).
     [[nodiscard]] virtual std::size_t memory_bytes() const = 0;
     /// Zero-copy output (weft/backend/interop.h): imports `slots` (each holds one 24-byte vertex per world
