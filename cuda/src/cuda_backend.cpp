@@ -112,6 +112,15 @@ public:
         solver_->write_state(first, count, x.data(), v.data());
     }
 
+    // The energy guard sums on the device; only the wind's power (asked for when a substep would
+    // otherwise be flagged) takes the host path, which reads the state back.
+    EnergyAudit energy_audit(const Model& model, double t, double h, bool with_wind) const override {
+        if (with_wind && model.settings.wind.active()) return Backend::energy_audit(model, t, h, with_wind);
+        EnergyAudit a = solver_->energy_audit(model, t, h);
+        a.with_wind = with_wind;
+        return a;
+    }
+
     std::size_t memory_bytes() const override { return solver_->memory_bytes(); }
 
     std::unique_ptr<SharedOutput> share_output(std::span<const SharedSlotHandle> slots, const DeviceUuid& device,

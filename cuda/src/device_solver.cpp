@@ -92,7 +92,7 @@ void DeviceSolver::substep(const Model& model, double t, double h, StepStats& st
     WEFT_CUDA_CHECK(cudaSetDevice(device_));
     const auto host_start = Clock::now();
     cudaStream_t stream = active_stream();
-    fill_staging(model, t, h);
+    fill_staging(model, t, h, host_staging_.get());
     WEFT_CUDA_CHECK(cudaMemcpyAsync(staging_.get(), host_staging_.get(), host_staging_.size(), cudaMemcpyHostToDevice, stream));
     const double host_ms = ms_since(host_start);
 
@@ -192,6 +192,42 @@ void DeviceSolver::sweep_colliders(float largest_move, cudaStream_t stream, Step
     ++sweep_launches_;
     stats.collision.swept_collider_hits += host_stats_[0].swept_hits;
     stats.ms(Stage::Update) += ms_since(start);
+}
+
+EnergyAudit DeviceSolver::energy_audit(const Model& model, double t, double h) {
+    EnergyAudit a;
+    // A moving mesh collider's work is not bounded (as in host_energy_audit).
+    for (const ColliderDesc& c : model.colliders)
+        if (!c.is_analytic() && !c.motion.is_static()) a.bounded = false;
+    if (view_.n == 0) return a;
+    WEFT_CUDA_CHECK(cudaSetDevice(device_));
+    cudaStream_t stream = active_stream();
+    if (audit_staging_.size() != staging_.size()) {  // first audit since the build
+        WEFT_CUDA_CHECK(cudaStreamSynchronize(stream));
+        audit_host_staging_.allocate(host_staging_.size());
+        std::memset(audit_host_staging_.get(), 0, audit_host_staging_.size());
+        audit_staging_.allocate(staging_.size(), ledger_, "energy audit");
+        audit_partials_.allocate(static_cast<std::size_t>(kEnergySums) * energy_partial_stride(view_) + kEnergySums, ledger_,
+                                 "energy audit");
+        audit_sums_.allocate(kEnergySums);
+    }
+    // The audit's own copy of the parameters at t (the solver's block belongs to its substeps).
+    fill_staging(model, t, h, audit_host_staging_.get());
+    WEFT_CUDA_CHECK(cudaMemcpyAsync(audit_staging_.get(), audit_host_staging_.get(), audit_host_staging_.size(),
+                                    cudaMemcpyHostToDevice, stream));
+    DeviceView view = view_;
+    view.staging = audit_staging_.get();
+    double* sums = audit_partials_.get() + static_cast<std::size_t>(kEnergySums) * energy_partial_stride(view_);
+    launch_energy_audit(view, audit_partials_.get(), sums, stream);
+    WEFT_CUDA_CHECK(cudaMemcpyAsync(audit_sums_.get(), sums, kEnergySums * sizeof(double), cudaMemcpyDeviceToHost, stream));
+    WEFT_CUDA_CHECK(cudaStreamSynchronize(stream));
+    const double* s = audit_sums_.get();
+    a.kinetic = s[kEnergyKinetic];
+    a.gravity = s[kEnergyGravity];
+    a.contact = s[kEnergyContact];
+    a.elastic = s[kEnergyMembrane] + s[kEnergyBending];
+    a.external_power = s[kEnergyColliderPower] + s[kEnergyGrabPower] + std::max(0.0, s[kEnergyPinPower]);
+    return a;
 }
 
 void DeviceSolver::set_stream(cudaStream_t stream) {

@@ -17,6 +17,7 @@
 #include "device_schwarz.h"
 #include "device_view.h"
 #include "weft/cuda/cuda_backend.h"
+#include "weft/backend/energy_audit.h"
 #include "weft/backend/flat_model.h"
 #include "weft/backend/model.h"
 #include "weft/stats.h"
@@ -73,6 +74,11 @@ public:
     [[nodiscard]] int graph_captures() const { return graph_captures_; }
     /// Substeps that ran the swept collider test since the build (tests: a slow collider must not).
     [[nodiscard]] int sweep_launches() const { return sweep_launches_; }
+    /// The energy guard's audit without the wind's power (weft/backend/energy_audit.h) summed on the
+    /// device, where the state lives: kinetic, gravitational, elastic and collider-penalty energy and
+    /// the power bounds of moving colliders, moving pins and the grab, at time `t` (s) of substeps of
+    /// `h` (s). Reads back a few numbers, not the state.
+    [[nodiscard]] EnergyAudit energy_audit(const Model& model, double t, double h);
     /// Whether the last substep solved with the Schwarz preconditioner (SolverSettings::preconditioner).
     [[nodiscard]] bool schwarz_active() const { return schwarz_on_; }
     /// Its levels (built on first use; tests compare them with the CPU backend's).
@@ -106,7 +112,9 @@ private:
     /// Lays out the per-substep parameter block for `model` and allocates it (host and device).
     void layout_staging(const Model& model);
     /// Writes the parameters of the substep from `t` to `t + h` into the host block.
-    void fill_staging(const Model& model, double t, double h);
+    /// Writes the parameters of the substep from `t` to `t + h` into the host block at `base` (the
+    /// solver's own, or the energy audit's).
+    void fill_staging(const Model& model, double t, double h, unsigned char* base) const;
     void build_collisions(const Model& model);
     /// Switches the preconditioner to `preconditioner` (builds the Schwarz levels the first time;
     /// the graph is re-captured with the other kernels).
@@ -160,6 +168,11 @@ private:
     bool schwarz_on_ = false;
 
     PinnedArray<unsigned char> host_staging_;
+    // The energy audit's own parameter block (same layout) and sums.
+    PinnedArray<unsigned char> audit_host_staging_;
+    DeviceArray<unsigned char> audit_staging_;
+    DeviceArray<double> audit_partials_;
+    PinnedArray<double> audit_sums_;
     PinnedArray<DeviceStats> host_stats_;
     PinnedArray<int> host_running_;
     StepParams layout_params_{};  // offsets of the arrays in the staging block

@@ -41,9 +41,8 @@ void DeviceSolver::layout_staging(const Model& model) {
     std::memset(host_staging_.get(), 0, offset);
 }
 
-void DeviceSolver::fill_staging(const Model& model, double t, double h) {
+void DeviceSolver::fill_staging(const Model& model, double t, double h, unsigned char* base) const {
     const WorldDesc& w = model.settings;
-    unsigned char* base = host_staging_.get();
     StepParams p = layout_params_;
     p.h = static_cast<float>(h);
     p.h2 = static_cast<float>(h * h);

@@ -121,6 +121,23 @@ enum class SchwarzOutput { Norm, Start, Iterate };
 void launch_schwarz_apply(const DeviceView& d, SchwarzInput in, SchwarzOutput out, unsigned long long handle,
                           cudaStream_t stream);
 
+// ---- the energy guard's audit (energy_kernels.cu) --------------------------------------------------
+/// The sums the audit returns, in this order (`sums` holds kEnergySums doubles).
+enum EnergySum : int {
+    kEnergyKinetic, kEnergyGravity, kEnergyContact, kEnergyColliderPower, kEnergyGrabPower,
+    kEnergyMembrane, kEnergyBending, kEnergyPinPower, kEnergySums
+};
+/// Blocks each sum was reduced over (the finishing kernel's argument).
+struct EnergySumCounts {
+    std::uint32_t blocks[kEnergySums];
+};
+/// Doubles of partials per sum: `partials` holds kEnergySums times this many.
+[[nodiscard]] std::uint32_t energy_partial_stride(const DeviceView& d);
+/// The audit of the state in `d` (x and v) with the parameters staged in d.staging for the
+/// substep starting at the audit's time (colliders at their start pose): every sum of EnergySum into
+/// `sums` (device memory), deterministically.
+void launch_energy_audit(const DeviceView& d, double* partials, double* sums, cudaStream_t stream);
+
 /// y = A·x over the fabric matrix (benchmarks; the solver's SpMV is fused with its dot product and
 /// adds the contacts).
 void launch_spmv(const DeviceView& d, const float* x, float* y, cudaStream_t stream);

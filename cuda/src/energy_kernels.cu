@@ -1,0 +1,195 @@
+// The energy guard's audit on the device (weft/backend/energy_audit.h; docs/methods.md §1b): the
+// same sums as host_energy_audit, in float per vertex and element and in double across them, so
+// the guard on the cuda backend reads back eight numbers instead of the state. The wind's power is
+// not here: the guard asks for it only when a substep would otherwise be flagged, and the backend
+// then falls back to the host audit.
+//
+// Each kernel writes one double per value and block (CUB's block reduction), and one block then
+// sums every value's partials in block order: the same bits on every run.
+#include <cub/block/block_reduce.cuh>
+#include <cuda_runtime.h>
+
+#include "cuda_check.h"
+#include "device_math.cuh"
+#include "weft/physics/bending.h"
+#include "weft/physics/collider_contact.h"
+#include "weft/physics/implicit_terms.h"
+#include "weft/physics/membrane.h"
+
+namespace weft::cuda {
+namespace {
+
+using Reduce = cub::BlockReduce<double, kBlockSize>;
+
+/// Sums `value` over the block into partials[blockIdx.x] (thread 0 writes).
+__device__ void block_partial(double value, double* partials) {
+    __shared__ typename Reduce::TempStorage storage;
+    const double sum = Reduce(storage).Sum(value);
+    if (threadIdx.x == 0) partials[blockIdx.x] = sum;
+    __syncthreads();  // storage is reused by the next value
+}
+
+__device__ inline V3 position(const DeviceView& d, std::uint32_t i) { return load3(d.x, i, d.n); }
+__device__ inline V3 velocity(const DeviceView& d, std::uint32_t i) { return load3(d.v, i, d.n); }
+
+/// Per vertex: kinetic and gravitational energy, the analytic colliders' penalty energy and the
+/// power bound of moving colliders (as host_energy_audit), the grab spring's power.
+__global__ void audit_vertex_kernel(DeviceView d, double* partials, std::uint32_t stride) {
+    const StepParams& sp = step_params(d);
+    const std::uint32_t i = blockIdx.x * blockDim.x + threadIdx.x;
+    double kinetic = 0.0, gravity = 0.0, contact = 0.0, collider_power = 0.0, grab_power = 0.0;
+    if (i < d.n) {
+        const float m = d.mass[i];
+        const V3 x = position(d, i), v = velocity(d, i);
+        kinetic = 0.5 * m * static_cast<double>(physics::dot(v, v));
+        gravity = -static_cast<double>(m) * static_cast<double>(physics::dot(sp.gravity, x));
+        // Pinned vertices get no collider terms in the solve (implicit_terms.h: vertex_terms).
+        if (!d.fixed[i] && sp.shape_count > 0) {
+            const ClothParams& p = staged<ClothParams>(d, sp.cloth_offset)[d.vertex_cloth[i]];
+            const float k = physics::collider_penalty_stiffness(sp.contact_stiffness, m, sp.h2);
+            const auto* shapes = staged<physics::Shape<float>>(d, sp.shape_start_offset);  // the pose at t
+            const float* friction = staged<float>(d, sp.friction_offset);
+            for (int c = 0; c < sp.shape_count; ++c) {
+                const float mu = friction[c] >= 0.0f ? friction[c] : p.friction;
+                const physics::ContactResult<float> r = physics::collider_contact(
+                    shapes[c], physics::ContactParams<float>{k, p.thickness, mu, 1e-3f}, x, v, physics::HessianKind::None);
+                if (!r.active) continue;
+                contact += r.energy;
+                // |f|·|u| for a steady contact, 2m|u|(|u| + |v|)/h for an impact (host_energy_audit).
+                const double u = physics::length(physics::shape_point_velocity(shapes[c], x));
+                collider_power += physics::length(r.force) * u + 2.0 * m * u * (u + physics::length(v)) / sp.h;
+            }
+        }
+        if (i == sp.grab_vertex && !d.fixed[i]) {
+            const V3 force = sp.grab_stiffness * (sp.grab_target - x) - sp.grab_damping * v;
+            grab_power = static_cast<double>(physics::dot(force, v));
+            grab_power = grab_power > 0.0 ? grab_power : 0.0;
+        }
+    }
+    block_partial(kinetic, partials);
+    block_partial(gravity, partials + stride);
+    block_partial(contact, partials + 2 * stride);
+    block_partial(collider_power, partials + 3 * stride);
+    block_partial(grab_power, partials + 4 * stride);
+}
+
+__device__ inline void triangle_state(const DeviceView& d, std::uint32_t t, V3 (&x)[3], float (&dm_inv)[2][2], float& area) {
+    for (int a = 0; a < 3; ++a) x[a] = position(d, d.triangle_vertices[3 * t + a]);
+    const float* rest = d.triangle_rest + 5 * t;
+    dm_inv[0][0] = rest[0];
+    dm_inv[0][1] = rest[1];
+    dm_inv[1][0] = rest[2];
+    dm_inv[1][1] = rest[3];
+    area = rest[4];
+}
+
+__global__ void audit_triangle_kernel(DeviceView d, double* partials) {
+    const StepParams& sp = step_params(d);
+    const std::uint32_t t = blockIdx.x * blockDim.x + threadIdx.x;
+    double energy = 0.0;
+    if (t < d.triangles) {
+        V3 x[3];
+        float dm_inv[2][2], area;
+        triangle_state(d, t, x, dm_inv, area);
+        const ClothParams& p = staged<ClothParams>(d, sp.cloth_offset)[d.triangle_cloth[t]];
+        energy = physics::membrane_evaluate<float>(dm_inv, area, p.membrane, x, nullptr, nullptr, physics::HessianKind::None);
+    }
+    block_partial(energy, partials);
+}
+
+__global__ void audit_hinge_kernel(DeviceView d, double* partials) {
+    const StepParams& sp = step_params(d);
+    const std::uint32_t k = blockIdx.x * blockDim.x + threadIdx.x;
+    double energy = 0.0;
+    if (k < d.hinges) {
+        const ClothParams& p = staged<ClothParams>(d, sp.cloth_offset)[d.hinge_cloth[k]];
+        if (p.bending > 0.0f) {
+            V3 x[4];
+            for (int a = 0; a < 4; ++a) x[a] = position(d, d.hinge_vertices[4 * k + a]);
+            energy = physics::bending_evaluate<float>(p.bending, d.hinge_rest[2 * k], d.hinge_rest[2 * k + 1], x, nullptr,
+                                                      nullptr, physics::HessianKind::None);
+        }
+    }
+    block_partial(energy, partials);
+}
+
+/// Per pinned vertex: ∇U·v, the power the pin puts in by holding the vertex against the elastic
+/// force (a static pin has v = 0 and adds nothing; host_energy_audit counts moving pins only).
+__global__ void audit_pin_kernel(DeviceView d, double* partials) {
+    const StepParams& sp = step_params(d);
+    const std::uint32_t k = blockIdx.x * blockDim.x + threadIdx.x;
+    double power = 0.0;
+    if (k < d.pins) {
+        const std::uint32_t i = d.pin_vertex[k];
+        V3 gradient{};
+        for (std::uint32_t e = d.vertex_triangle_start[i]; e < d.vertex_triangle_start[i + 1]; ++e) {
+            const std::uint32_t t = d.vertex_triangle[e] >> 2, corner = d.vertex_triangle[e] & 3u;
+            V3 x[3], grad[3];
+            float dm_inv[2][2], area;
+            triangle_state(d, t, x, dm_inv, area);
+            const ClothParams& p = staged<ClothParams>(d, sp.cloth_offset)[d.triangle_cloth[t]];
+            (void)physics::membrane_evaluate<float>(dm_inv, area, p.membrane, x, grad, nullptr, physics::HessianKind::None);
+            gradient += grad[corner];
+        }
+        for (std::uint32_t e = d.vertex_hinge_start[i]; e < d.vertex_hinge_start[i + 1]; ++e) {
+            const std::uint32_t h = d.vertex_hinge[e] >> 2, corner = d.vertex_hinge[e] & 3u;
+            const ClothParams& p = staged<ClothParams>(d, sp.cloth_offset)[d.hinge_cloth[h]];
+            if (!(p.bending > 0.0f)) continue;
+            V3 x[4], grad[4];
+            for (int a = 0; a < 4; ++a) x[a] = position(d, d.hinge_vertices[4 * h + a]);
+            (void)physics::bending_evaluate<float>(p.bending, d.hinge_rest[2 * h], d.hinge_rest[2 * h + 1], x, grad,
+                                                   nullptr, physics::HessianKind::None);
+            gradient += grad[corner];
+        }
+        power = static_cast<double>(physics::dot(gradient, velocity(d, i)));
+    }
+    block_partial(power, partials);
+}
+
+/// One block: sums[k] = the partials of value k in block order.
+__global__ void audit_finish_kernel(const double* partials, std::uint32_t stride, EnergySumCounts counts, double* sums) {
+    for (int k = 0; k < kEnergySums; ++k) {
+        double acc = 0.0;
+        for (std::uint32_t b = threadIdx.x; b < counts.blocks[k]; b += blockDim.x) acc += partials[k * stride + b];
+        __shared__ typename Reduce::TempStorage storage;
+        const double total = Reduce(storage).Sum(acc);
+        if (threadIdx.x == 0) sums[k] = total;
+        __syncthreads();
+    }
+}
+
+}  // namespace
+
+std::uint32_t energy_partial_stride(const DeviceView& d) {
+    std::uint32_t blocks = 1;
+    for (const std::uint32_t count : {d.n, d.triangles, d.hinges, d.pins}) blocks = std::max(blocks, grid_for(count));
+    return blocks;
+}
+
+void launch_energy_audit(const DeviceView& d, double* partials, double* sums, cudaStream_t stream) {
+    const std::uint32_t stride = energy_partial_stride(d);
+    EnergySumCounts counts{};
+    const std::uint32_t vertex_blocks = grid_for(d.n);
+    for (int k = 0; k < 5; ++k) counts.blocks[k] = vertex_blocks;
+    audit_vertex_kernel<<<vertex_blocks, kBlockSize, 0, stream>>>(d, partials, stride);
+    WEFT_CUDA_CHECK_LAUNCH("audit_vertex_kernel");
+    counts.blocks[kEnergyMembrane] = d.triangles > 0 ? grid_for(d.triangles) : 0;
+    if (d.triangles > 0) {
+        audit_triangle_kernel<<<grid_for(d.triangles), kBlockSize, 0, stream>>>(d, partials + kEnergyMembrane * stride);
+        WEFT_CUDA_CHECK_LAUNCH("audit_triangle_kernel");
+    }
+    counts.blocks[kEnergyBending] = d.hinges > 0 ? grid_for(d.hinges) : 0;
+    if (d.hinges > 0) {
+        audit_hinge_kernel<<<grid_for(d.hinges), kBlockSize, 0, stream>>>(d, partials + kEnergyBending * stride);
+        WEFT_CUDA_CHECK_LAUNCH("audit_hinge_kernel");
+    }
+    counts.blocks[kEnergyPinPower] = d.pins > 0 ? grid_for(d.pins) : 0;
+    if (d.pins > 0) {
+        audit_pin_kernel<<<grid_for(d.pins), kBlockSize, 0, stream>>>(d, partials + kEnergyPinPower * stride);
+        WEFT_CUDA_CHECK_LAUNCH("audit_pin_kernel");
+    }
+    audit_finish_kernel<<<1, kBlockSize, 0, stream>>>(partials, stride, counts, sums);
+    WEFT_CUDA_CHECK_LAUNCH("audit_finish_kernel");
+}
+
+}  // namespace weft::cuda

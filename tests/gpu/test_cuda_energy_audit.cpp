@@ -1,0 +1,84 @@
+// The energy guard on the cuda backend (energy_kernels.cu): the device audit gives the host audit's
+// sums on the same state (float against double), and the guard catches the loose drape there too.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstdio>
+#include <string>
+#include <vector>
+
+#include "weft/backend/backend.h"
+#include "weft/backend/energy_audit.h"
+#include "weft/backend/model.h"
+#include "weft/grab.h"
+
+#include "gpu_test_util.h"
+
+namespace weft {
+namespace {
+
+using test::make_world;
+
+void expect_close(double device, double host, double scale, const char* what, const std::string& scene) {
+    EXPECT_NEAR(device, host, 1e-4 * scale + 1e-9) << scene << ": " << what;
+}
+
+// hanging: pins and bending; drape: the ball's contact; flag: a capsule, pins and a grab.
+TEST(CudaEnergyAudit, DeviceSumsMatchTheHostAudit) {
+    WEFT_REQUIRE_GPU();
+    for (const std::string scene : {"hanging", "drape", "flag"}) {
+        const auto world = make_world(scene, "cuda");
+        const int frames = scene == "drape" ? 20 : 10;  // the drape touches the ball from frame 13
+        for (int f = 0; f < frames; ++f) (void)world->step();
+        if (scene == "flag") {
+            // A grabbed vertex away from the pole (vertex 0 is pinned there), pulled 10 cm.
+            const auto x = world->positions(0);
+            const auto v = static_cast<std::uint32_t>(x.size() - 1);
+            world->set_grab(VertexGrab{.cloth = 0, .vertex = v, .target = x[v] + Vec3d{0.1, 0.0, 0.0}, .stiffness = 50.0,
+                                       .damping = 0.1});
+            (void)world->step();
+        }
+        const Model& model = world->model();
+        const double t = world->time(), h = model.settings.solver.dt / model.settings.solver.substeps;
+        Backend& backend = world->backend();
+        const EnergyAudit device = backend.energy_audit(model, t, h, false);
+        const EnergyAudit host = backend.Backend::energy_audit(model, t, h, false);
+        const double scale = std::abs(host.kinetic) + std::abs(host.gravity) + std::abs(host.elastic) + host.contact;
+        std::printf("[ audit    ] %s: device K %.6e G %.6e U %.6e C %.3e P %.3e | host K %.6e G %.6e U %.6e C %.3e P %.3e\n",
+                    scene.c_str(), device.kinetic, device.gravity, device.elastic, device.contact, device.external_power,
+                    host.kinetic, host.gravity, host.elastic, host.contact, host.external_power);
+        expect_close(device.kinetic, host.kinetic, scale, "kinetic", scene);
+        expect_close(device.gravity, host.gravity, scale, "gravity", scene);
+        expect_close(device.elastic, host.elastic, scale, "elastic", scene);
+        expect_close(device.contact, host.contact, scale, "contact", scene);
+        // Power bounds: float rounding of forces and velocities only.
+        EXPECT_NEAR(device.external_power, host.external_power, 1e-3 * host.external_power + 1e-6) << scene;
+        EXPECT_EQ(device.bounded, host.bounded) << scene;
+        if (scene == "drape") {
+            EXPECT_GT(host.contact, 0.0) << "the drape lies on the ball";
+        }
+        if (scene == "hanging") {
+            EXPECT_GT(host.elastic, 0.0);
+        }
+    }
+}
+
+TEST(CudaEnergyAudit, GuardCatchesTheLooseDrapeOnTheGpu) {
+    WEFT_REQUIRE_GPU();
+    // The editor's 'loose' preset (tests/solver/test_energy_guard.cpp).
+    const std::vector<std::string> loose{"solver.substeps=1", "solver.cg_tolerance=1e-2", "solver.cg_max_iterations=50",
+                                         "solver.energy_guard=\"report\""};
+    const auto world = make_world("drape", "cuda", loose);
+    int gained = 0;
+    for (int f = 0; f < 60; ++f) gained += world->step().energy_gained;
+    std::printf("[ guard    ] loose drape on cuda: %d substeps gained energy in 60 frames\n", gained);
+    EXPECT_GT(gained, 0);
+    // Converged, the same scene gains nothing.
+    const auto converged = make_world("drape", "cuda");
+    int false_alarms = 0;
+    for (int f = 0; f < 45; ++f) false_alarms += converged->step().energy_gained;
+    EXPECT_EQ(false_alarms, 0);
+}
+
+}  // namespace
+}  // namespace weft
