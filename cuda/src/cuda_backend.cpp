@@ -86,7 +86,8 @@ public:
                format_gib(info_.memory_bytes) + "), float" + (solver_->graph_active() ? ", CUDA graph" : "") +
                (flat_.vertex_count == 0 ? ""  // strategies are chosen by size at build
                                         : std::string(solver_->row_gather() ? ", row-gather assembly" : ", colour-pass assembly") +
-                                              (solver_->persistent_grid() > 0 ? ", one-launch CG" : ", per-kernel CG"));
+                                              (solver_->persistent_grid() > 0 ? ", one-launch CG" : ", per-kernel CG") +
+                                              (solver_->schwarz_active() ? ", MAS preconditioner" : ""));
     }
 
     // Cloth collisions (self-collision, mesh colliders) run in the device solver's collision stages
@@ -112,13 +113,9 @@ public:
         solver_->write_state(first, count, x.data(), v.data());
     }
 
-    // The energy guard sums on the device; only the wind's power (asked for when a substep would
-    // otherwise be flagged) takes the host path, which reads the state back.
+    // The energy guard sums on the device (energy_kernels.cu): no state is read back.
     EnergyAudit energy_audit(const Model& model, double t, double h, bool with_wind) const override {
-        if (with_wind && model.settings.wind.active()) return Backend::energy_audit(model, t, h, with_wind);
-        EnergyAudit a = solver_->energy_audit(model, t, h);
-        a.with_wind = with_wind;
-        return a;
+        return solver_->energy_audit(model, t, h, with_wind);
     }
 
     std::size_t memory_bytes() const override { return solver_->memory_bytes(); }

@@ -54,7 +54,8 @@ void DeviceSolver::choose_pcg_loop() {
 }
 
 void DeviceSolver::choose_preconditioner(Preconditioner preconditioner) {
-    const bool schwarz = preconditioner == Preconditioner::Schwarz;
+    const bool schwarz = preconditioner == Preconditioner::Schwarz ||
+                         (preconditioner == Preconditioner::Auto && view_.n >= kAutoSchwarzMinVertices);
     if (schwarz == schwarz_on_) return;
     if (schwarz && !schwarz_.built()) {
         WEFT_CUDA_CHECK(cudaStreamSynchronize(active_stream()));
@@ -194,8 +195,9 @@ void DeviceSolver::sweep_colliders(float largest_move, cudaStream_t stream, Step
     stats.ms(Stage::Update) += ms_since(start);
 }
 
-EnergyAudit DeviceSolver::energy_audit(const Model& model, double t, double h) {
+EnergyAudit DeviceSolver::energy_audit(const Model& model, double t, double h, bool with_wind) {
     EnergyAudit a;
+    a.with_wind = with_wind;
     // A moving mesh collider's work is not bounded (as in host_energy_audit).
     for (const ColliderDesc& c : model.colliders)
         if (!c.is_analytic() && !c.motion.is_static()) a.bounded = false;
@@ -218,7 +220,7 @@ EnergyAudit DeviceSolver::energy_audit(const Model& model, double t, double h) {
     DeviceView view = view_;
     view.staging = audit_staging_.get();
     double* sums = audit_partials_.get() + static_cast<std::size_t>(kEnergySums) * energy_partial_stride(view_);
-    launch_energy_audit(view, audit_partials_.get(), sums, stream);
+    launch_energy_audit(view, with_wind, audit_partials_.get(), sums, stream);
     WEFT_CUDA_CHECK(cudaMemcpyAsync(audit_sums_.get(), sums, kEnergySums * sizeof(double), cudaMemcpyDeviceToHost, stream));
     WEFT_CUDA_CHECK(cudaStreamSynchronize(stream));
     const double* s = audit_sums_.get();
@@ -226,7 +228,8 @@ EnergyAudit DeviceSolver::energy_audit(const Model& model, double t, double h) {
     a.gravity = s[kEnergyGravity];
     a.contact = s[kEnergyContact];
     a.elastic = s[kEnergyMembrane] + s[kEnergyBending];
-    a.external_power = s[kEnergyColliderPower] + s[kEnergyGrabPower] + std::max(0.0, s[kEnergyPinPower]);
+    a.external_power =
+        s[kEnergyColliderPower] + s[kEnergyGrabPower] + s[kEnergyWindPower] + std::max(0.0, s[kEnergyPinPower]);
     return a;
 }
 

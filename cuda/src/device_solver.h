@@ -74,11 +74,11 @@ public:
     [[nodiscard]] int graph_captures() const { return graph_captures_; }
     /// Substeps that ran the swept collider test since the build (tests: a slow collider must not).
     [[nodiscard]] int sweep_launches() const { return sweep_launches_; }
-    /// The energy guard's audit without the wind's power (weft/backend/energy_audit.h) summed on the
-    /// device, where the state lives: kinetic, gravitational, elastic and collider-penalty energy and
-    /// the power bounds of moving colliders, moving pins and the grab, at time `t` (s) of substeps of
-    /// `h` (s). Reads back a few numbers, not the state.
-    [[nodiscard]] EnergyAudit energy_audit(const Model& model, double t, double h);
+    /// The energy guard's audit (weft/backend/energy_audit.h) summed on the device, where the state
+    /// lives: kinetic, gravitational, elastic and collider-penalty energy and the power bounds of
+    /// moving colliders, moving pins, the grab and (`with_wind`) the wind, at time `t` (s) of
+    /// substeps of `h` (s). Reads back a few numbers, not the state.
+    [[nodiscard]] EnergyAudit energy_audit(const Model& model, double t, double h, bool with_wind);
     /// Whether the last substep solved with the Schwarz preconditioner (SolverSettings::preconditioner).
     [[nodiscard]] bool schwarz_active() const { return schwarz_on_; }
     /// Its levels (built on first use; tests compare them with the CPU backend's).

@@ -1,8 +1,6 @@
 // The energy guard's audit on the device (weft/backend/energy_audit.h; docs/methods.md §1b): the
 // same sums as host_energy_audit, in float per vertex and element and in double across them, so
-// the guard on the cuda backend reads back eight numbers instead of the state. The wind's power is
-// not here: the guard asks for it only when a substep would otherwise be flagged, and the backend
-// then falls back to the host audit.
+// the guard on the cuda backend reads back nine numbers instead of the state.
 //
 // Each kernel writes one double per value and block (CUB's block reduction), and one block then
 // sums every value's partials in block order: the same bits on every run.
@@ -83,18 +81,34 @@ __device__ inline void triangle_state(const DeviceView& d, std::uint32_t t, V3 (
     area = rest[4];
 }
 
-__global__ void audit_triangle_kernel(DeviceView d, double* partials) {
+/// Per triangle: membrane energy and, when asked, the wind's power bound max(0, F·w) with F the
+/// triangle's drag and lift at the air velocity w of its centroid (host_energy_audit).
+__global__ void audit_triangle_kernel(DeviceView d, double* partials, std::uint32_t stride, int with_wind) {
     const StepParams& sp = step_params(d);
     const std::uint32_t t = blockIdx.x * blockDim.x + threadIdx.x;
-    double energy = 0.0;
+    double energy = 0.0, wind_power = 0.0;
     if (t < d.triangles) {
         V3 x[3];
         float dm_inv[2][2], area;
         triangle_state(d, t, x, dm_inv, area);
         const ClothParams& p = staged<ClothParams>(d, sp.cloth_offset)[d.triangle_cloth[t]];
         energy = physics::membrane_evaluate<float>(dm_inv, area, p.membrane, x, nullptr, nullptr, physics::HessianKind::None);
+        if (with_wind && sp.wind_active && (p.drag > 0.0f || p.lift > 0.0f)) {
+            V3 air = sp.wind;
+            if (sp.turbulence > 0.0f)
+                air += physics::wind_gust((x[0] + x[1] + x[2]) / 3.0f, sp.time, sp.turbulence, sp.turbulence_frequency,
+                                          sp.turbulence_scale);
+            V3 v[3];
+            for (int a = 0; a < 3; ++a) v[a] = velocity(d, d.triangle_vertices[3 * t + a]);
+            V3 per_vertex{};
+            physics::aerodynamic_force(x, v, air, physics::AeroCoefficients<float>{sp.air_density, p.drag, p.lift}, per_vertex,
+                                       static_cast<M3*>(nullptr));
+            const double power = 3.0 * static_cast<double>(physics::dot(per_vertex, air));
+            wind_power = power > 0.0 ? power : 0.0;
+        }
     }
     block_partial(energy, partials);
+    block_partial(wind_power, partials + stride);
 }
 
 __global__ void audit_hinge_kernel(DeviceView d, double* partials) {
@@ -166,16 +180,18 @@ std::uint32_t energy_partial_stride(const DeviceView& d) {
     return blocks;
 }
 
-void launch_energy_audit(const DeviceView& d, double* partials, double* sums, cudaStream_t stream) {
+void launch_energy_audit(const DeviceView& d, bool with_wind, double* partials, double* sums, cudaStream_t stream) {
     const std::uint32_t stride = energy_partial_stride(d);
     EnergySumCounts counts{};
     const std::uint32_t vertex_blocks = grid_for(d.n);
     for (int k = 0; k < 5; ++k) counts.blocks[k] = vertex_blocks;
     audit_vertex_kernel<<<vertex_blocks, kBlockSize, 0, stream>>>(d, partials, stride);
     WEFT_CUDA_CHECK_LAUNCH("audit_vertex_kernel");
-    counts.blocks[kEnergyMembrane] = d.triangles > 0 ? grid_for(d.triangles) : 0;
+    counts.blocks[kEnergyMembrane] = counts.blocks[kEnergyWindPower] = d.triangles > 0 ? grid_for(d.triangles) : 0;
+    static_assert(kEnergyWindPower == kEnergyMembrane + 1, "the triangle kernel writes both, one stride apart");
     if (d.triangles > 0) {
-        audit_triangle_kernel<<<grid_for(d.triangles), kBlockSize, 0, stream>>>(d, partials + kEnergyMembrane * stride);
+        audit_triangle_kernel<<<grid_for(d.triangles), kBlockSize, 0, stream>>>(d, partials + kEnergyMembrane * stride,
+                                                                                 stride, with_wind ? 1 : 0);
         WEFT_CUDA_CHECK_LAUNCH("audit_triangle_kernel");
     }
     counts.blocks[kEnergyBending] = d.hinges > 0 ? grid_for(d.hinges) : 0;

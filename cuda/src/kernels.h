@@ -125,7 +125,7 @@ void launch_schwarz_apply(const DeviceView& d, SchwarzInput in, SchwarzOutput ou
 /// The sums the audit returns, in this order (`sums` holds kEnergySums doubles).
 enum EnergySum : int {
     kEnergyKinetic, kEnergyGravity, kEnergyContact, kEnergyColliderPower, kEnergyGrabPower,
-    kEnergyMembrane, kEnergyBending, kEnergyPinPower, kEnergySums
+    kEnergyMembrane, kEnergyWindPower, kEnergyBending, kEnergyPinPower, kEnergySums
 };
 /// Blocks each sum was reduced over (the finishing kernel's argument).
 struct EnergySumCounts {
@@ -135,8 +135,8 @@ struct EnergySumCounts {
 [[nodiscard]] std::uint32_t energy_partial_stride(const DeviceView& d);
 /// The audit of the state in `d` (x and v) with the parameters staged in d.staging for the
 /// substep starting at the audit's time (colliders at their start pose): every sum of EnergySum into
-/// `sums` (device memory), deterministically.
-void launch_energy_audit(const DeviceView& d, double* partials, double* sums, cudaStream_t stream);
+/// `sums` (device memory), deterministically; the wind's power only `with_wind` (else 0).
+void launch_energy_audit(const DeviceView& d, bool with_wind, double* partials, double* sums, cudaStream_t stream);
 
 /// y = A·x over the fabric matrix (benchmarks; the solver's SpMV is fused with its dot product and
 /// adds the contacts).

@@ -117,8 +117,8 @@ constexpr std::string_view kPrecisionNames[] = {"float", "double"};
 constexpr std::array kPrecisions{Precision::Float, Precision::Double};
 constexpr std::string_view kHessianNames[] = {"fast", "projected"};
 constexpr std::array kHessians{HessianMode::Fast, HessianMode::Projected};
-constexpr std::string_view kPreconditionerNames[] = {"jacobi", "mas"};
-constexpr std::array kPreconditioners{Preconditioner::Jacobi, Preconditioner::Schwarz};
+constexpr std::string_view kPreconditionerNames[] = {"jacobi", "mas", "auto"};
+constexpr std::array kPreconditioners{Preconditioner::Jacobi, Preconditioner::Schwarz, Preconditioner::Auto};
 constexpr std::string_view kEnergyGuardNames[] = {"off", "report", "retry"};
 constexpr std::array kEnergyGuards{EnergyGuard::Off, EnergyGuard::Report, EnergyGuard::Retry};
 constexpr std::string_view kCullingNames[] = {"normal_cone", "none"};
@@ -176,8 +176,9 @@ constexpr Parameter kTable[] = {
      .panel = "solver", .choices = kHessianNames,
      .access = choice_field<kHessians, &WorldDesc::solver, &SolverSettings::hessian>()},
     {.section = "solver", .name = "preconditioner", .type = T::Choice,
-     .doc = "`jacobi`: 3×3 block-Jacobi; `mas`: multilevel additive Schwarz, fewer CG iterations on fine or stiff "
-            "cloth (CPU backend; the CUDA backend uses jacobi)",
+     .doc = "`jacobi`: 3×3 block-Jacobi; `mas`: multilevel additive Schwarz, several times fewer CG iterations on "
+            "fine or stiff cloth at a higher cost per iteration; `auto`: mas on the cuda backend from 100K vertices, "
+            "else jacobi (the faster, as measured)",
      .label = "preconditioner", .panel = "solver", .choices = kPreconditionerNames,
      .access = choice_field<kPreconditioners, &WorldDesc::solver, &SolverSettings::preconditioner>()},
     {.section = "solver", .name = "energy_guard", .type = T::Choice,

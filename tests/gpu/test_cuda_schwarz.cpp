@@ -159,6 +159,21 @@ TEST(CudaSchwarz, SwitchesPreconditionerLive) {
     EXPECT_EQ(totals.non_finite, 0);
 }
 
+TEST(CudaSchwarz, AutoPicksMasFromTheMeasuredSize) {
+    WEFT_REQUIRE_GPU();
+    // The shipped flag (1.2K vertices) stays on block-Jacobi; at 400 × 250 cells (100,651 vertices)
+    // `auto` takes the Schwarz preconditioner.
+    const auto small = make_world("flag", "cuda", {"solver.preconditioner=auto"});
+    const auto large = make_world("flag", "cuda", {"solver.preconditioner=auto", "cloth.flag.mesh.grid.cells=[400, 250]"});
+    (void)small->step();
+    (void)large->step();
+    ASSERT_LT(small->model().cloths[0].fabric->vertex_count(), kAutoSchwarzMinVertices);
+    ASSERT_GE(large->model().cloths[0].fabric->vertex_count(), kAutoSchwarzMinVertices);
+    EXPECT_FALSE(device_solver_of(*small).schwarz_active());
+    EXPECT_TRUE(device_solver_of(*large).schwarz_active());
+    EXPECT_NE(large->device_description().find("MAS"), std::string::npos) << large->device_description();
+}
+
 TEST(CudaSchwarz, SolvesWithProximityContacts) {
     WEFT_REQUIRE_GPU();
     // Four sheets dropped on a ball: every layer touches the next, so each solve carries contacts.

@@ -4,6 +4,7 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <cstring>
 #include <random>
 
 #include "cpu/pcg.h"
@@ -255,6 +256,23 @@ TEST(SchwarzPreconditioner, StepsACpuWorldToJacobisState) {
     for (std::size_t i = 0; i < final_state[0].size(); ++i)
         largest = std::max(largest, math::length(final_state[1][i] - final_state[0][i]));
     EXPECT_LT(largest, 1e-5);  // m, after 30 frames of a 1 m sheet
+}
+
+// `auto` is block-Jacobi on the CPU backend: the same bits as asking for jacobi.
+TEST(SchwarzPreconditioner, AutoIsJacobiOnTheCpu) {
+    std::vector<Vec3d> final_state[2];
+    for (const Preconditioner pre : {Preconditioner::Jacobi, Preconditioner::Auto}) {
+        WorldDesc desc;
+        desc.solver.preconditioner = pre;
+        World world(desc, "cpu");
+        ClothDesc cloth{.name = "sheet", .fabric = Fabric::cook(make_grid(1.0, 1.0, 20, 20))};
+        for (std::uint32_t i = 0; i <= 20; ++i) cloth.pins.push_back({.vertex = i});
+        world.add_cloth(cloth);
+        for (int frame = 0; frame < 10; ++frame) (void)world.step();
+        final_state[pre == Preconditioner::Auto ? 1 : 0] = world.positions(0);
+    }
+    ASSERT_EQ(final_state[0].size(), final_state[1].size());
+    EXPECT_EQ(std::memcmp(final_state[0].data(), final_state[1].data(), final_state[0].size() * sizeof(Vec3d)), 0);
 }
 
 }  // namespace

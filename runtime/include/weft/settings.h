@@ -4,6 +4,7 @@
 /// field, its scene key and its editor label are in the parameter table (weft/parameters.h; `weft
 /// help scene-keys`); `World` refuses values outside it.
 
+#include <cstddef>
 #include <cstdint>
 
 #include "weft/types.h"
@@ -37,10 +38,20 @@ enum class Preconditioner : std::uint8_t {
     /// iteration count grows with resolution and stiffness.
     Jacobi,
     /// Multilevel additive Schwarz (Wu, Wang & Wang 2022; docs/methods.md §2b): dense solves on
-    /// domains of 32 vertices at several levels of aggregation. Costlier per iteration, far fewer
-    /// iterations on fine or stiff cloth. CPU backend only for now.
+    /// domains of 16 vertices at several levels of aggregation. Costlier per iteration, far fewer
+    /// iterations on fine or stiff cloth.
     Schwarz,
+    /// Whichever measured faster for the backend and size (docs/tuning.md, `preconditioner`): the
+    /// Schwarz preconditioner on the cuda backend from kAutoSchwarzMinVertices vertices, block-Jacobi
+    /// below that and on the CPU backend.
+    Auto,
 };
+
+/// Where `Preconditioner::Auto` switches to the Schwarz preconditioner on a GPU: measured on an
+/// H100 (docs/results.md, issue 18), Jacobi is faster on the flag up to 80K triangles (40K vertices)
+/// and the Schwarz preconditioner from 320K (160K vertices); at 200K (the sphere, 100K vertices) they
+/// solve in about the same time, Jacobi with 142 of 240 solves capped and Schwarz with none.
+inline constexpr std::size_t kAutoSchwarzMinVertices = 100000;
 
 /// What the world does about a substep whose energy grew beyond what the outside world can have put
 /// in (an inexact CG solve; docs/methods.md §1b, docs/tuning.md).
@@ -68,7 +79,7 @@ struct SolverSettings {
     bool cg_warm_start = true;
     Precision precision = Precision::Double;  ///< CPU backend scalar; double is the reference
     HessianMode hessian = HessianMode::Fast;
-    Preconditioner preconditioner = Preconditioner::Jacobi;
+    Preconditioner preconditioner = Preconditioner::Auto;
     /// Energy check after every substep (a cost of two host reads of the state per substep on a device
     /// backend; docs/tuning.md measures it on the CPU).
     EnergyGuard energy_guard = EnergyGuard::Report;
