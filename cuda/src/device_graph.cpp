@@ -103,7 +103,7 @@ void DeviceSolver::record(cudaStream_t stream, bool capturing) {
         if (contacts) launch_contact_evaluate(view_, stream);  // gathered by the PCG setup
         mark();
         launch_pcg_setup(view_, it == 0, schwarz_on_, stream);
-        if (schwarz_on_) launch_schwarz_factor(view_, stream);
+        if (schwarz_on_) launch_schwarz_factor(view_, it, stream);
         mark();
         record_pcg_loop(stream, capturing, it);
         launch_pcg_finish(view_, stream);

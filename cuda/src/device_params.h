@@ -43,6 +43,10 @@ struct StepParams {
     std::uint32_t shape_start_offset = 0;  ///< the shapes at the start of the substep (swept test)
     /// Model::grab: the global vertex (0xFFFFFFFF when there is none), its target (m) and spring.
     std::uint32_t grab_vertex = 0xFFFFFFFFu;
+    /// Schwarz preconditioner: refactor in every Newton iteration (1), or only in the first Newton
+    /// iteration of this substep (2), or not at all in this substep (0): SolverSettings::
+    /// preconditioner_refresh, decided by the host per substep.
+    int schwarz_refactor = 1;
     float grab_stiffness = 0, grab_damping = 0;
     V3 grab_target{};
 };

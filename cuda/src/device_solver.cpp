@@ -63,6 +63,7 @@ void DeviceSolver::choose_preconditioner(Preconditioner preconditioner) {
         view_.mas = schwarz_.view();
     }
     schwarz_on_ = schwarz;
+    schwarz_factored_ = false;  // factored afresh in its first substep
     destroy_graph();
     choose_pcg_loop();
 }
@@ -94,6 +95,13 @@ void DeviceSolver::substep(const Model& model, double t, double h, StepStats& st
     const auto host_start = Clock::now();
     cudaStream_t stream = active_stream();
     fill_staging(model, t, h, host_staging_.get());
+    {
+        // Whether this substep refactors the Schwarz preconditioner (SolverSettings::preconditioner_refresh).
+        auto* sp = reinterpret_cast<StepParams*>(host_staging_.get());
+        const int k = model.settings.solver.preconditioner_refresh;
+        const long long index = substep_count_++;
+        sp->schwarz_refactor = !schwarz_factored_ || k <= 1 ? 1 : (index % k == 0 ? 2 : 0);
+    }
     WEFT_CUDA_CHECK(cudaMemcpyAsync(staging_.get(), host_staging_.get(), host_staging_.size(), cudaMemcpyHostToDevice, stream));
     const double host_ms = ms_since(host_start);
 
@@ -108,6 +116,7 @@ void DeviceSolver::substep(const Model& model, double t, double h, StepStats& st
     }
 
     launch_substep(stream, model.settings.solver.newton_iterations);
+    if (schwarz_on_) schwarz_factored_ = true;
     WEFT_CUDA_CHECK(cudaMemcpyAsync(host_stats_.get(), stats_.get(), sizeof(DeviceStats), cudaMemcpyDeviceToHost, stream));
     WEFT_CUDA_CHECK(cudaStreamSynchronize(stream));
     warm_ = true;

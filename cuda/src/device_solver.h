@@ -166,6 +166,8 @@ private:
     DeviceCollisions collisions_;
     DeviceSchwarz schwarz_;
     bool schwarz_on_ = false;
+    bool schwarz_factored_ = false;  // the device holds factors to reuse (preconditioner_refresh)
+    long long substep_count_ = 0;    // substeps since the build
 
     PinnedArray<unsigned char> host_staging_;
     // The energy audit's own parameter block (same layout) and sums.

@@ -35,6 +35,8 @@ void DeviceSolver::build(const FlatModel& flat, const Model& model) {
     collisions_.release();
     schwarz_.release();  // its levels follow the topology: rebuilt when first used
     schwarz_on_ = false;
+    schwarz_factored_ = false;
+    substep_count_ = 0;
     layout_ = make_device_layout(flat);
     const std::size_t n = flat.vertex_count, nt = flat.triangle_count(), nh = flat.hinge_count();
     if (n > 0x7fffffffu / 9 || layout_.ell.positions() > 0x7fffffffu / 9)

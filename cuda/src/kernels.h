@@ -107,8 +107,10 @@ void launch_pcg_finish(const DeviceView& d, cudaStream_t stream);
 // ---- multilevel additive Schwarz (schwarz_kernels.cu; device_schwarz.h) ---------------------------
 /// After the PCG setup (which leaves each row's contact-augmented diagonal block in d.precond): every
 /// level's coupling blocks from the assembled matrix, then each domain's dense matrix inverted in
-/// double and stored in float. Non-positive pivots are counted in DeviceStats::pivot_failures.
-void launch_schwarz_factor(const DeviceView& d, cudaStream_t stream);
+/// double and stored in float. Non-positive pivots are counted in DeviceStats::pivot_failures. In
+/// Newton iteration `newton`, the kernels do nothing when the staged StepParams::schwarz_refactor
+/// says this one reuses the last factors.
+void launch_schwarz_factor(const DeviceView& d, int newton, cudaStream_t stream);
 /// What the apply reads: filter(b) (copied to r), r as it is, or r after the iteration's axpy pair
 /// (r −= αq, Δv += αc, done here for each vertex of a level-0 domain).
 enum class SchwarzInput { RightHandSide, Residual, Update };

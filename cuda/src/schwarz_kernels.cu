@@ -39,7 +39,14 @@ __device__ inline M3 fine_coupling(const DeviceView& d, std::uint32_t s) {
     return i == j ? load_precond(d, i) : load_block(d.blocks, m.slot_position[s]);
 }
 
-__global__ void schwarz_coupling_kernel(DeviceView d, int l) {
+/// Whether Newton iteration `newton` refactors (StepParams::schwarz_refactor).
+__device__ inline bool refactors(const DeviceView& d, int newton) {
+    const int refactor = step_params(d).schwarz_refactor;
+    return refactor == 1 || (refactor == 2 && newton == 0);
+}
+
+__global__ void schwarz_coupling_kernel(DeviceView d, int l, int newton) {
+    if (!refactors(d, newton)) return;
     const SchwarzLevelView& level = d.mas.level[l];
     const std::uint32_t e = blockIdx.x * blockDim.x + threadIdx.x;
     if (e >= level.entries) return;
@@ -51,7 +58,8 @@ __global__ void schwarz_coupling_kernel(DeviceView d, int l) {
     store_block(level.coupling, e, acc);
 }
 
-__global__ void schwarz_factor_kernel(DeviceView d, int l) {
+__global__ void schwarz_factor_kernel(DeviceView d, int l, int newton) {
+    if (!refactors(d, newton)) return;
     const SchwarzLevelView& level = d.mas.level[l];
     const std::uint32_t domain = blockIdx.x;
     __shared__ double A[kDim][kDim + 1];  // +1: no bank conflicts along a column
@@ -146,14 +154,14 @@ __global__ void schwarz_prolong_kernel(DeviceView d, SchwarzOutput out, unsigned
 
 }  // namespace
 
-void launch_schwarz_factor(const DeviceView& d, cudaStream_t stream) {
+void launch_schwarz_factor(const DeviceView& d, int newton, cudaStream_t stream) {
     const SchwarzView& m = d.mas;
     for (int l = 1; l < m.levels; ++l) {
-        schwarz_coupling_kernel<<<grid_for(m.level[l].entries), kBlockSize, 0, stream>>>(d, l);
+        schwarz_coupling_kernel<<<grid_for(m.level[l].entries), kBlockSize, 0, stream>>>(d, l, newton);
         WEFT_CUDA_CHECK_LAUNCH("schwarz_coupling_kernel");
     }
     for (int l = 0; l < m.levels; ++l) {
-        schwarz_factor_kernel<<<m.level[l].domains, kBlockSize, 0, stream>>>(d, l);
+        schwarz_factor_kernel<<<m.level[l].domains, kBlockSize, 0, stream>>>(d, l, newton);
         WEFT_CUDA_CHECK_LAUNCH("schwarz_factor_kernel");
     }
 }

@@ -181,6 +181,11 @@ constexpr Parameter kTable[] = {
             "else jacobi (the faster, as measured)",
      .label = "preconditioner", .panel = "solver", .choices = kPreconditionerNames,
      .access = choice_field<kPreconditioners, &WorldDesc::solver, &SolverSettings::preconditioner>()},
+    {.section = "solver", .name = "preconditioner_refresh", .type = T::Integer, .range = R{1, 1000},
+     .doc = "`mas` only: substeps between factorisations of the preconditioner (1: every Newton iteration; more "
+            "reuses it, saving its setup at the price of some CG iterations)",
+     .label = "preconditioner refresh", .panel = "solver", .log_scale = true,
+     .access = field<&WorldDesc::solver, &SolverSettings::preconditioner_refresh>()},
     {.section = "solver", .name = "energy_guard", .type = T::Choice,
      .doc = "check every substep for energy gained beyond the external work (an inexact solve): `off`; `report`: "
             "count it in the stats; `retry`: also redo the substep once with the CG tolerance / 100 and the cap × 4",

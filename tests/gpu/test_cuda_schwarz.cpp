@@ -174,6 +174,29 @@ TEST(CudaSchwarz, AutoPicksMasFromTheMeasuredSize) {
     EXPECT_NE(large->device_description().find("MAS"), std::string::npos) << large->device_description();
 }
 
+TEST(CudaSchwarz, ReusedFactorsStillConverge) {
+    WEFT_REQUIRE_GPU();
+    std::vector<Vec3d> x[2];
+    long iterations[2] = {0, 0};
+    for (const int refresh : {1, 4}) {
+        std::vector<std::string> overrides = kMasFlag;
+        overrides.push_back("solver.preconditioner_refresh=" + std::to_string(refresh));
+        const auto world = make_world("flag", "cuda", overrides);
+        Totals totals;
+        for (int f = 0; f < 10; ++f) totals.add(world->step());
+        EXPECT_EQ(totals.not_converged, 0) << "refresh " << refresh;
+        EXPECT_EQ(totals.non_finite, 0) << "refresh " << refresh;
+        iterations[refresh == 4 ? 1 : 0] = totals.iterations;
+        x[refresh == 4 ? 1 : 0] = world->positions(0);
+    }
+    std::printf("[ refresh  ] 10 frames of the 8.8K flag: %ld CG iterations refactoring every substep, %ld every 4th\n",
+                iterations[0], iterations[1]);
+    EXPECT_FALSE(same_bits(x[0], x[1]));  // the factors really were reused
+    double largest = 0.0;
+    for (std::size_t i = 0; i < x[0].size(); ++i) largest = std::max(largest, math::length(x[1][i] - x[0][i]));
+    EXPECT_LT(largest, 2e-2);  // m: two CG stopping points of a fluttering flag (the CPU parity bound at frame 6)
+}
+
 TEST(CudaSchwarz, SolvesWithProximityContacts) {
     WEFT_REQUIRE_GPU();
     // Four sheets dropped on a ball: every layer touches the next, so each solve carries contacts.

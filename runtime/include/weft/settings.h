@@ -80,6 +80,10 @@ struct SolverSettings {
     Precision precision = Precision::Double;  ///< CPU backend scalar; double is the reference
     HessianMode hessian = HessianMode::Fast;
     Preconditioner preconditioner = Preconditioner::Auto;
+    /// Schwarz preconditioner only: substeps between its factorisations. 1 refactors in every Newton
+    /// iteration; k > 1 only in the first Newton iteration of every k-th substep, the others reusing
+    /// the last factors (a stale preconditioner is still a valid one: only the iteration count moves).
+    int preconditioner_refresh = 1;
     /// Energy check after every substep (a cost of two host reads of the state per substep on a device
     /// backend; docs/tuning.md measures it on the CPU).
     EnergyGuard energy_guard = EnergyGuard::Report;

@@ -67,6 +67,8 @@ void CpuSolver<T>::build(const FlatModel& flat, const Model& model) {
     A_.resize(flat.pattern);
     pcg_.resize(n_);
     schwarz_ = SchwarzPreconditioner<T>{};  // levels rebuilt on first use, for this topology
+    schwarz_factored_ = false;
+    substep_count_ = 0;
     collisions_.build(flat, model);
 }
 
@@ -234,6 +236,7 @@ int CpuSolver<T>::sweep_fast_colliders(T h) {
 template <typename T>
 void CpuSolver<T>::substep(const Model& model, double t, double h_double, StepStats& stats) {
     const T h = static_cast<T>(h_double);
+    const long long substep_index = substep_count_++;
     auto clock = Clock::now();
     x0_ = x_;
     v0_ = v_;
@@ -276,10 +279,16 @@ void CpuSolver<T>::substep(const Model& model, double t, double h_double, StepSt
                 schwarz_levels_ = build_schwarz_hierarchy(flat_->initial_positions, flat_->pattern);
                 schwarz_.build(schwarz_levels_, flat_->pattern);
             }
-            const bool with_contacts = contacts != nullptr && contacts->size() > 0;
-            schwarz_.factor(A_, fixed_, [&](std::size_t i) { return with_contacts ? contacts->diagonal(i) : M3{}; });
+            // Refactored every Newton iteration, or (preconditioner_refresh = k > 1) in the first
+            // Newton iteration of every k-th substep.
+            const int k = solver.preconditioner_refresh;
+            if (!schwarz_factored_ || k <= 1 || (newton == 0 && substep_index % k == 0)) {
+                const bool with_contacts = contacts != nullptr && contacts->size() > 0;
+                schwarz_.factor(A_, fixed_, [&](std::size_t i) { return with_contacts ? contacts->diagonal(i) : M3{}; });
+                schwarz_factored_ = true;
+                stats.preconditioner_pivot_failures += schwarz_.pivot_failures();
+            }
             schwarz = &schwarz_;
-            stats.preconditioner_pivot_failures += schwarz_.pivot_failures();
             stats.ms(Stage::Precondition) += ms_since(clock);
             clock = Clock::now();
         }

@@ -91,6 +91,8 @@ private:
     // positions on first use, factored once per Newton iteration.
     SchwarzHierarchy schwarz_levels_;
     SchwarzPreconditioner<T> schwarz_;
+    bool schwarz_factored_ = false;  // its factors are current enough to reuse (preconditioner_refresh)
+    long long substep_count_ = 0;    // substeps since the build
     CpuCollisions<T> collisions_;
     std::vector<ClothParams> cloth_params_;
     std::vector<physics::Shape<T>> shapes_;        // analytic colliders at the end of the substep
