@@ -175,26 +175,33 @@ TEST(CudaSchwarz, AutoPicksMasFromTheMeasuredSize) {
 }
 
 TEST(CudaSchwarz, ReusedFactorsStillConverge) {
+    // The hanging sheet settles slowly, so factors a few substeps old still fit (on the fluttering flag
+    // they do not: docs/results.md measures how the iterations grow there).
     WEFT_REQUIRE_GPU();
     std::vector<Vec3d> x[2];
     long iterations[2] = {0, 0};
     for (const int refresh : {1, 4}) {
-        std::vector<std::string> overrides = kMasFlag;
-        overrides.push_back("solver.preconditioner_refresh=" + std::to_string(refresh));
-        const auto world = make_world("flag", "cuda", overrides);
+        const std::vector<std::string> overrides{"solver.preconditioner=mas",
+                                                 "solver.preconditioner_refresh=" + std::to_string(refresh)};
+        const auto world = make_world("hanging", "cuda", overrides);
         Totals totals;
-        for (int f = 0; f < 10; ++f) totals.add(world->step());
+        for (int f = 0; f < 30; ++f) totals.add(world->step());
         EXPECT_EQ(totals.not_converged, 0) << "refresh " << refresh;
         EXPECT_EQ(totals.non_finite, 0) << "refresh " << refresh;
         iterations[refresh == 4 ? 1 : 0] = totals.iterations;
         x[refresh == 4 ? 1 : 0] = world->positions(0);
     }
-    std::printf("[ refresh  ] 10 frames of the 8.8K flag: %ld CG iterations refactoring every substep, %ld every 4th\n",
-                iterations[0], iterations[1]);
+    double largest = 0.0, lo = 1e30, hi = -1e30;
+    for (std::size_t i = 0; i < x[0].size(); ++i) {
+        largest = std::max(largest, math::length(x[1][i] - x[0][i]));
+        lo = std::min(lo, x[0][i][1]);
+        hi = std::max(hi, x[0][i][1]);
+    }
+    std::printf("[ refresh  ] 30 frames of the hanging sheet: %ld CG iterations refactoring every substep, %ld every "
+                "4th; states %.2e m apart\n",
+                iterations[0], iterations[1], largest);
     EXPECT_FALSE(same_bits(x[0], x[1]));  // the factors really were reused
-    double largest = 0.0;
-    for (std::size_t i = 0; i < x[0].size(); ++i) largest = std::max(largest, math::length(x[1][i] - x[0][i]));
-    EXPECT_LT(largest, 2e-2);  // m: two CG stopping points of a fluttering flag (the CPU parity bound at frame 6)
+    EXPECT_LT(largest, 1e-4 * (hi - lo));  // two CG stopping points of a settling sheet
 }
 
 TEST(CudaSchwarz, SolvesWithProximityContacts) {
