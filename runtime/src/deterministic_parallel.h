@@ -29,6 +29,20 @@ void parallel_chunks(std::size_t n, Body&& body) {
     });
 }
 
+/// Calls body(begin, end) over [0, n) in parallel chunks of `grain` elements, for loops whose
+/// elements are heavy (a dense 48×48 solve each) and write disjoint outputs: no reduction, so any
+/// grain gives the same result.
+template <typename Body>
+void parallel_grains(std::size_t n, std::size_t grain, Body&& body) {
+    if (n == 0) return;
+    if (n <= grain) {
+        body(std::size_t{0}, n);
+        return;
+    }
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n, grain),
+                      [&](const tbb::blocked_range<std::size_t>& r) { body(r.begin(), r.end()); });
+}
+
 /// Sums chunk(begin, end) → double over [0, n) deterministically. `partials` is scratch (kept to
 /// avoid allocating in the step).
 template <typename Chunk>

@@ -177,8 +177,8 @@ constexpr Parameter kTable[] = {
      .access = choice_field<kHessians, &WorldDesc::solver, &SolverSettings::hessian>()},
     {.section = "solver", .name = "preconditioner", .type = T::Choice,
      .doc = "`jacobi`: 3×3 block-Jacobi; `mas`: multilevel additive Schwarz, several times fewer CG iterations on "
-            "fine or stiff cloth at a higher cost per iteration; `auto`: mas on the cuda backend from 100K vertices, "
-            "else jacobi (the faster, as measured)",
+            "fine or stiff cloth at a higher cost per iteration; `auto`: mas from 100K vertices on the cuda backend and "
+            "from 15K on the cpu backend, else jacobi (the faster, as measured)",
      .label = "preconditioner", .panel = "solver", .choices = kPreconditionerNames,
      .access = choice_field<kPreconditioners, &WorldDesc::solver, &SolverSettings::preconditioner>()},
     {.section = "solver", .name = "preconditioner_refresh", .type = T::Integer, .range = R{1, 1000},

@@ -258,8 +258,9 @@ TEST(SchwarzPreconditioner, StepsACpuWorldToJacobisState) {
     EXPECT_LT(largest, 1e-5);  // m, after 30 frames of a 1 m sheet
 }
 
-// `auto` is block-Jacobi on the CPU backend: the same bits as asking for jacobi.
-TEST(SchwarzPreconditioner, AutoIsJacobiOnTheCpu) {
+// `auto` is block-Jacobi on the CPU backend below kAutoSchwarzMinVerticesCpu: the same bits as
+// asking for jacobi (441 vertices here; the switch itself is the cuda test's AutoPicksMas...).
+TEST(SchwarzPreconditioner, AutoIsJacobiOnSmallCpuCloth) {
     std::vector<Vec3d> final_state[2];
     for (const Preconditioner pre : {Preconditioner::Jacobi, Preconditioner::Auto}) {
         WorldDesc desc;
@@ -304,6 +305,24 @@ TEST(SchwarzPreconditioner, ReusedFactorsStillConvergeToTheSameState) {
         largest = std::max(largest, math::length(final_state[1][i] - final_state[0][i]));
     EXPECT_LT(largest, 1e-5);
     EXPECT_GT(largest, 0.0);  // the iterates did differ: the factors really were reused
+}
+
+// The Schwarz solve splits its work by domain and vertex with no reduction across tasks: the same
+// bits on one thread and on three.
+TEST(SchwarzPreconditioner, SameBitsOnOneAndThreeThreads) {
+    std::vector<Vec3d> final_state[2];
+    for (const int threads : {1, 3}) {
+        WorldDesc desc;
+        desc.solver.preconditioner = Preconditioner::Schwarz;
+        desc.solver.threads = threads;
+        World world(desc, "cpu");
+        ClothDesc cloth{.name = "sheet", .fabric = Fabric::cook(make_grid(1.0, 1.0, 60, 60))};
+        for (std::uint32_t i = 0; i <= 60; ++i) cloth.pins.push_back({.vertex = i});
+        world.add_cloth(cloth);
+        for (int frame = 0; frame < 5; ++frame) (void)world.step();
+        final_state[threads == 3 ? 1 : 0] = world.positions(0);
+    }
+    EXPECT_EQ(std::memcmp(final_state[0].data(), final_state[1].data(), final_state[0].size() * sizeof(Vec3d)), 0);
 }
 
 }  // namespace

@@ -42,8 +42,8 @@ enum class Preconditioner : std::uint8_t {
     /// iterations on fine or stiff cloth.
     Schwarz,
     /// Whichever measured faster for the backend and size (docs/tuning.md, `preconditioner`): the
-    /// Schwarz preconditioner on the cuda backend from kAutoSchwarzMinVertices vertices, block-Jacobi
-    /// below that and on the CPU backend.
+    /// Schwarz preconditioner from kAutoSchwarzMinVertices vertices on the cuda backend and from
+    /// kAutoSchwarzMinVerticesCpu on the CPU backend, block-Jacobi below.
     Auto,
 };
 
@@ -52,6 +52,10 @@ enum class Preconditioner : std::uint8_t {
 /// and the Schwarz preconditioner from 320K (160K vertices); at 200K (the sphere, 100K vertices) they
 /// solve in about the same time, Jacobi with 142 of 240 solves capped and Schwarz with none.
 inline constexpr std::size_t kAutoSchwarzMinVertices = 100000;
+/// The same on the CPU backend (2-core development machine, double): Jacobi and Schwarz run the
+/// flag at the same speed at 4.6K vertices (14.3 and 14.0 frames/s), Schwarz is ahead at 15.6K
+/// (3.64 against 3.54) and 1.2× faster at 40K vertices.
+inline constexpr std::size_t kAutoSchwarzMinVerticesCpu = 15000;
 
 /// What the world does about a substep whose energy grew beyond what the outside world can have put
 /// in (an inexact CG solve; docs/methods.md §1b, docs/tuning.md).

@@ -272,9 +272,11 @@ void CpuSolver<T>::substep(const Model& model, double t, double h_double, StepSt
 
         clock = Clock::now();
         SchwarzPreconditioner<T>* schwarz = nullptr;
-        // `auto` is block-Jacobi on the CPU: a Schwarz iteration costs about five Jacobi ones here, more
-        // than its fewer iterations save at every size measured (docs/results.md, issue 18).
-        if (solver.preconditioner == Preconditioner::Schwarz) {
+        // `auto`: the Schwarz preconditioner from kAutoSchwarzMinVerticesCpu vertices, where its fewer
+        // iterations outweigh their cost on the CPU (about 3.4 Jacobi iterations each; docs/results.md).
+        const bool schwarz_on = solver.preconditioner == Preconditioner::Schwarz ||
+                                (solver.preconditioner == Preconditioner::Auto && n_ >= kAutoSchwarzMinVerticesCpu);
+        if (schwarz_on) {
             if (!schwarz_.built()) {  // once per build: the levels depend on the topology only
                 schwarz_levels_ = build_schwarz_hierarchy(flat_->initial_positions, flat_->pattern);
                 schwarz_.build(schwarz_levels_, flat_->pattern);

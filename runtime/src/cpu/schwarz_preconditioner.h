@@ -3,7 +3,7 @@
 // §2b; the levels are weft/backend/schwarz_hierarchy.h): M⁻¹ = Σ_l R_lᵀ D_l⁻¹ R_l. Every substep
 // it aggregates the assembled 3×3 blocks level by level into coupling blocks (the hierarchy's fixed
 // sums), writes each level's domain matrices (dense, 48×48 for domains of 16 nodes), factors them
-// (Cholesky), and applies all levels to a residual. Work is split by
+// (Gauss–Jordan, to the explicit inverse, as on the GPU), and applies all levels to a residual. Work is split by
 // domain, each domain written by one task in a fixed order: the result does not depend on the
 // thread count.
 //
@@ -31,6 +31,9 @@ public:
     using M3 = physics::Mat3<T>;
     static constexpr std::uint32_t kNodes = SchwarzHierarchy::kDomainSize;
     static constexpr std::uint32_t kDim = SchwarzHierarchy::kDomainDim;  // rows of a dense domain matrix
+    /// Domains per task: a domain is ~5K multiply-adds to solve and ~40K to factor, so a few make a
+    /// task worth scheduling.
+    static constexpr std::size_t kDomainGrain = 8;
 
     /// Sizes the work arrays for `h`, built on `pattern` (the matrix's).
     void build(const SchwarzHierarchy& h, const BlockPattern& pattern) {
@@ -40,6 +43,7 @@ public:
         for (std::uint32_t i = 0; i + 1 < pattern.row_start.size(); ++i)
             for (std::uint32_t s = pattern.row_start[i]; s < pattern.row_start[i + 1]; ++s) slot_row_[s] = i;
         couplings_.resize(levels);
+        failed_.resize(levels);
         dense_.resize(levels);
         values_.resize(levels);
         solved_.resize(levels);
@@ -47,6 +51,7 @@ public:
             const SchwarzLevel& level = h.level[l];
             couplings_[l].assign(l == 0 ? pattern.column.size() : level.entry_row.size(), M3{});
             dense_[l].assign(std::size_t(level.domains()) * kDim * kDim, T(0));
+            failed_[l].assign(level.domains(), 0);
             values_[l].assign(std::size_t(level.domains()) * kNodes, V3{});
             solved_[l].assign(std::size_t(level.domains()) * kNodes, V3{});
         }
@@ -54,8 +59,8 @@ public:
 
     [[nodiscard]] bool built() const { return h_ != nullptr; }
     [[nodiscard]] int levels() const { return h_ ? h_->levels() : 0; }
-    /// Domain factorisations that met a non-positive pivot in the last `factor` (a matrix that is not
-    /// SPD in this precision); their pivot was replaced by the diagonal's magnitude.
+    /// Domain inversions that met a non-positive pivot in the last `factor` (a matrix that is not SPD
+    /// in this precision); their pivot was replaced by the diagonal's magnitude.
     [[nodiscard]] int pivot_failures() const { return pivot_failures_; }
 
     /// Aggregates `A` (plus `extra_diagonal(i)`, the contact springs' share of row i's diagonal block)
@@ -95,78 +100,74 @@ public:
             parallel_chunks(level.dense_entry.size(), [&](std::size_t lo, std::size_t hi) {
                 for (std::size_t k = lo; k < hi; ++k) put_block(dense.data(), level.dense_block[k], blocks[level.dense_entry[k]]);
             });
-            failures += static_cast<int>(deterministic_sum(level.domains(), partials_, [&](std::size_t lo, std::size_t hi) {
-                double failed = 0.0;
+            std::vector<std::uint8_t>& failed = failed_[static_cast<std::size_t>(l)];
+            parallel_grains(level.domains(), kDomainGrain, [&](std::size_t lo, std::size_t hi) {
                 for (std::size_t d = lo; d < hi; ++d) {
                     T* D = &dense[d * kDim * kDim];
                     // Nodes with nothing (all pinned, or past the end of the last domain) are decoupled.
                     for (std::uint32_t k = 0; k < kDim; ++k)
                         if (D[k * kDim + k] == T(0)) D[k * kDim + k] = T(1);
-                    failed += cholesky(D);
+                    failed[d] = invert(D) ? 1 : 0;
                 }
-                return failed;
-            }));
+            });
+            for (const std::uint8_t f : failed) failures += f;
         }
         pivot_failures_ = failures;
     }
 
-    /// z = M⁻¹ r over all vertices (the caller filters r before and z after).
+    /// z = M⁻¹ r over all vertices (the caller filters r before and z after). Two passes over the
+    /// vertices and one per coarse level: level 0's domains gather their residuals, solve and restrict
+    /// in one task each; each coarser level solves and restricts; then every vertex sums its nodes'
+    /// corrections on every level.
     void apply(const std::vector<V3>& r, std::vector<V3>& z) {
         const SchwarzHierarchy& h = *h_;
         const int levels = h.levels();
-        // Restrict: level 0 takes the residual in rank order; each coarser node sums its members,
-        // domain by domain (a domain's parents are its own), in node order.
-        {
-            std::vector<V3>& v = values_[0];
-            parallel_chunks(v.size(), [&](std::size_t lo, std::size_t hi) {
-                for (std::size_t p = lo; p < hi; ++p) v[p] = p < h.vertex_count ? r[h.order[p]] : V3{};
-            });
-        }
-        for (int l = 0; l + 1 < levels; ++l) {
+        for (int l = 0; l < levels; ++l) {
             const SchwarzLevel& level = h.level[static_cast<std::size_t>(l)];
-            const std::vector<V3>& v = values_[static_cast<std::size_t>(l)];
-            std::vector<V3>& coarse = values_[static_cast<std::size_t>(l + 1)];
-            std::fill(coarse.begin(), coarse.end(), V3{});
-            parallel_chunks(level.domains(), [&](std::size_t lo, std::size_t hi) {
+            std::vector<V3>& v = values_[static_cast<std::size_t>(l)];
+            const std::vector<T>& dense = dense_[static_cast<std::size_t>(l)];
+            std::vector<V3>& y = solved_[static_cast<std::size_t>(l)];
+            parallel_grains(level.domains(), kDomainGrain, [&](std::size_t lo, std::size_t hi) {
                 for (std::size_t d = lo; d < hi; ++d) {
-                    const std::size_t end = std::min<std::size_t>(level.nodes, (d + 1) * kNodes);
-                    for (std::size_t k = d * kNodes; k < end; ++k) coarse[level.parent[k]] += v[k];
+                    if (l == 0) {
+                        for (std::size_t p = d * kNodes; p < (d + 1) * kNodes; ++p) v[p] = p < h.vertex_count ? r[h.order[p]] : V3{};
+                    }
+                    solve_domain(&dense[d * kDim * kDim], &v[d * kNodes], &y[d * kNodes]);
+                    if (l + 1 < levels) restrict_domain(level, d, &v[d * kNodes], values_[static_cast<std::size_t>(l + 1)]);
                 }
             });
         }
-        // Solve each domain of each level.
-        for (int l = 0; l < levels; ++l) {
-            const std::vector<T>& dense = dense_[static_cast<std::size_t>(l)];
-            const std::vector<V3>& v = values_[static_cast<std::size_t>(l)];
-            std::vector<V3>& y = solved_[static_cast<std::size_t>(l)];
-            parallel_chunks(h.domains(l), [&](std::size_t lo, std::size_t hi) {
-                for (std::size_t d = lo; d < hi; ++d) solve_domain(&dense[d * kDim * kDim], &v[d * kNodes], &y[d * kNodes]);
-            });
-        }
-        // Prolong: from the coarsest level down, each node adds its parent's correction.
-        for (int l = levels - 2; l >= 0; --l) {
-            const SchwarzLevel& level = h.level[static_cast<std::size_t>(l)];
-            std::vector<V3>& y = solved_[static_cast<std::size_t>(l)];
-            const std::vector<V3>& coarse = solved_[static_cast<std::size_t>(l + 1)];
-            parallel_chunks(level.nodes, [&](std::size_t lo, std::size_t hi) {
-                for (std::size_t k = lo; k < hi; ++k) y[k] += coarse[level.parent[k]];
-            });
-        }
-        const std::vector<V3>& y0 = solved_[0];
         parallel_chunks(h.vertex_count, [&](std::size_t lo, std::size_t hi) {
-            for (std::size_t p = lo; p < hi; ++p) z[h.order[p]] = y0[p];
+            for (std::size_t p = lo; p < hi; ++p) {
+                V3 sum = solved_[0][p];
+                std::uint32_t node = static_cast<std::uint32_t>(p);
+                for (int l = 1; l < levels; ++l) {
+                    node = h.level[static_cast<std::size_t>(l - 1)].parent[node];
+                    sum += solved_[static_cast<std::size_t>(l)][node];
+                }
+                z[h.order[p]] = sum;
+            }
         });
     }
 
     [[nodiscard]] std::size_t memory_bytes() const {
-        std::size_t bytes = partials_.capacity() * sizeof(double) + slot_row_.capacity() * sizeof(std::uint32_t);
+        std::size_t bytes = slot_row_.capacity() * sizeof(std::uint32_t);
         for (std::size_t l = 0; l < dense_.size(); ++l)
-            bytes += dense_[l].capacity() * sizeof(T) + couplings_[l].capacity() * sizeof(M3) +
+            bytes += dense_[l].capacity() * sizeof(T) + couplings_[l].capacity() * sizeof(M3) + failed_[l].capacity() +
                      (values_[l].capacity() + solved_[l].capacity()) * sizeof(V3);
         return bytes;
     }
 
 private:
+    /// Each coarse node of domain d's pieces gets the sum of its members' values `v` (the domain's
+    /// kNodes), in node order; the domain's pieces are its own, so domains write disjoint nodes.
+    static void restrict_domain(const SchwarzLevel& level, std::size_t d, const V3* v, std::vector<V3>& coarse) {
+        const std::uint32_t first = level.parent_start[d], last = level.parent_start[d + 1];
+        for (std::uint32_t c = first; c < last; ++c) coarse[c] = V3{};
+        const std::size_t end = std::min<std::size_t>(level.nodes, (d + 1) * kNodes);
+        for (std::size_t k = d * kNodes; k < end; ++k) coarse[level.parent[k]] += v[k - d * kNodes];
+    }
+
     /// Writes `m` as block `block` = (domain·kNodes + a)·kNodes + b of the dense matrices.
     static void put_block(T* dense, std::uint32_t block, const M3& m) {
         const std::size_t domain = block / (kNodes * kNodes);
@@ -176,51 +177,58 @@ private:
             for (int c = 0; c < 3; ++c) D[(3 * a + r) * kDim + 3 * b + c] = m.m[r][c];
     }
 
-    /// In-place Cholesky D = L·Lᵀ (lower triangle kept). Returns 1 if a pivot was not positive (then
-    /// replaced by the magnitude of the original diagonal, so the factor stays usable), else 0.
-    static double cholesky(T* D) {
-        double failed = 0.0;
-        for (std::uint32_t j = 0; j < kDim; ++j) {
-            T pivot = D[j * kDim + j];
-            for (std::uint32_t k = 0; k < j; ++k) pivot -= D[j * kDim + k] * D[j * kDim + k];
+    /// In-place inverse of the SPD domain matrix by Gauss–Jordan elimination without pivoting (the
+    /// same algorithm as the GPU's, schwarz_kernels.cu): every step is a rank-one update of whole rows,
+    /// which the compiler vectorises. Returns true if a pivot was not positive (the matrix is not SPD
+    /// in this precision); it is then replaced by the magnitude of the original diagonal entry, so
+    /// the result stays usable.
+    static bool invert(T* D) {
+        bool failed = false;
+        T magnitude[kDim], column[kDim];
+        for (std::uint32_t k = 0; k < kDim; ++k) magnitude[k] = std::max(std::abs(D[k * kDim + k]), T(1e-12));
+        for (std::uint32_t k = 0; k < kDim; ++k) {
+            for (std::uint32_t i = 0; i < kDim; ++i) column[i] = D[i * kDim + k];
+            T pivot = column[k];
             if (!(pivot > T(0))) {
-                failed = 1.0;
-                pivot = std::max(std::abs(D[j * kDim + j]), T(1e-12));
+                failed = true;
+                pivot = magnitude[k];
             }
-            const T ljj = std::sqrt(pivot);
-            D[j * kDim + j] = ljj;
-            for (std::uint32_t i = j + 1; i < kDim; ++i) {
-                T s = D[i * kDim + j];
-                for (std::uint32_t k = 0; k < j; ++k) s -= D[i * kDim + k] * D[j * kDim + k];
-                D[i * kDim + j] = s / ljj;
+            const T inverse = T(1) / pivot;
+            T* row_k = D + k * kDim;
+            for (std::uint32_t j = 0; j < kDim; ++j) row_k[j] *= inverse;
+            row_k[k] = inverse;
+            for (std::uint32_t i = 0; i < kDim; ++i) {
+                if (i == k) continue;
+                T* row = D + i * kDim;
+                const T f = column[i];
+                row[k] = T(0);
+                for (std::uint32_t j = 0; j < kDim; ++j) row[j] -= f * row_k[j];
             }
         }
         return failed;
     }
 
-    /// y = (L·Lᵀ)⁻¹ v for one domain (kNodes vectors of 3).
-    static void solve_domain(const T* L, const V3* v, V3* y) {
-        T w[kDim];
+    /// y = D⁻¹ v for one domain (kNodes vectors of 3), D⁻¹ row-major.
+    static void solve_domain(const T* inverse, const V3* v, V3* y) {
+        T in[kDim], out[kDim];
+        for (std::uint32_t a = 0; a < kNodes; ++a)
+            for (int c = 0; c < 3; ++c) in[3 * a + c] = v[a][c];
         for (std::uint32_t i = 0; i < kDim; ++i) {
-            T s = v[i / 3][static_cast<int>(i % 3)];
-            for (std::uint32_t k = 0; k < i; ++k) s -= L[i * kDim + k] * w[k];
-            w[i] = s / L[i * kDim + i];
+            const T* row = inverse + i * kDim;
+            T sum = T(0);
+            for (std::uint32_t j = 0; j < kDim; ++j) sum += row[j] * in[j];
+            out[i] = sum;
         }
-        for (std::uint32_t i = kDim; i-- > 0;) {
-            T s = w[i];
-            for (std::uint32_t k = i + 1; k < kDim; ++k) s -= L[k * kDim + i] * w[k];
-            w[i] = s / L[i * kDim + i];
-        }
-        for (std::uint32_t a = 0; a < kNodes; ++a) y[a] = V3{w[3 * a], w[3 * a + 1], w[3 * a + 2]};
+        for (std::uint32_t a = 0; a < kNodes; ++a) y[a] = V3{out[3 * a], out[3 * a + 1], out[3 * a + 2]};
     }
 
     const SchwarzHierarchy* h_ = nullptr;
     std::vector<std::uint32_t> slot_row_;        // pattern slot → its row
     std::vector<std::vector<M3>> couplings_;      // per level: the coupling blocks (level 0: per slot)
-    std::vector<std::vector<T>> dense_;   // per level: domains × kDim², row-major, Cholesky factor in place
+    std::vector<std::vector<std::uint8_t>> failed_;  // per level and domain: a pivot was replaced
+    std::vector<std::vector<T>> dense_;   // per level: domains × kDim², row-major: the matrix, then its inverse
     std::vector<std::vector<V3>> values_;  // per level: the restricted residual per node
     std::vector<std::vector<V3>> solved_;  // per level: the domain solutions per node
-    std::vector<double> partials_;
     int pivot_failures_ = 0;
 };
 
