@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <cmath>
 
+#include "deterministic_parallel.h"
 #include "weft/backend/backend.h"
 #include "weft/backend/collider_shape.h"
 #include "weft/backend/material_terms.h"
@@ -16,6 +17,22 @@
 
 namespace weft {
 namespace {
+
+/// One chunk's share of the audit's sums.
+struct Parts {
+    double kinetic = 0.0, gravity = 0.0, contact = 0.0, power = 0.0, elastic = 0.0, pin_power = 0.0;
+};
+
+std::size_t chunk_count(std::size_t n) { return (n + kParallelChunk - 1) / kParallelChunk; }
+
+void add(EnergyAudit& a, double& pin_power, const Parts& p) {
+    a.kinetic += p.kinetic;
+    a.gravity += p.gravity;
+    a.contact += p.contact;
+    a.external_power += p.power;
+    a.elastic += p.elastic;
+    pin_power += p.pin_power;
+}
 
 struct ColliderNow {
     physics::Shape<double> shape;
@@ -43,6 +60,7 @@ EnergyAudit host_energy_audit(const Model& model, std::span<const std::vector<Ve
     const bool wind = with_wind && w.wind.active();
     double pin_power = 0.0;
     std::vector<char> moving_pin;  // per vertex of the current cloth: pinned to a motion that moves
+    std::vector<Parts> parts;      // per chunk of the current loop
     for (std::size_t ci = 0; ci < model.cloths.size(); ++ci) {
         const ClothDesc& cloth = model.cloths[ci];
         const Fabric& f = *cloth.fabric;
@@ -62,69 +80,90 @@ EnergyAudit host_energy_audit(const Model& model, std::span<const std::vector<Ve
             for (const PinDesc& pin : cloth.pins) pinned[pin.vertex] = 1;
         }
 
-        for (std::size_t i = 0; i < f.vertex_count(); ++i) {
-            const double m = f.masses()[i];
-            a.kinetic += 0.5 * m * physics::dot(vc[i], vc[i]);
-            a.gravity -= m * physics::dot(w.gravity, xc[i]);
-            // Pinned vertices get no collider terms in the solve (implicit_terms.h: vertex_terms).
-            if (colliders.empty() || pinned[i]) continue;
-            const double k = physics::collider_penalty_stiffness(w.solver.contact_stiffness, m, h * h);
-            for (const ColliderNow& c : colliders) {
-                const double mu = c.friction >= 0.0 ? c.friction : p.friction;
-                const physics::ContactResult<double> r = physics::collider_contact(
-                    c.shape, physics::ContactParams<double>{k, p.thickness, mu, 1e-3}, xc[i], vc[i],
-                    physics::HessianKind::None);
-                if (!r.active) continue;
-                a.contact += r.energy;
-                if (c.moving) {
-                    // Steady contact: |f|·|v_col|. Impact: a vertex struck by a collider moving at u
-                    // leaves it at most at 2u − v (an elastic bounce off a heavy wall), a gain of at most
-                    // 2m|u|(|u| + |v|); spread over the substep as a power, since the substep in which
-                    // the penalty spring releases it is not known.
-                    const double u = physics::length(physics::shape_point_velocity(c.shape, xc[i]));
-                    a.external_power += physics::length(r.force) * u + 2.0 * m * u * (u + physics::length(vc[i])) / h;
+        // Per chunk of vertices, then the chunks in order (deterministic_parallel.h): the same sums on
+        // any number of threads.
+        const std::size_t vertex_chunks = chunk_count(f.vertex_count());
+        parts.assign(vertex_chunks, Parts{});
+        parallel_chunks(f.vertex_count(), [&](std::size_t lo, std::size_t hi) {
+            Parts& out = parts[lo / kParallelChunk];
+            for (std::size_t i = lo; i < hi; ++i) {
+                const double m = f.masses()[i];
+                out.kinetic += 0.5 * m * physics::dot(vc[i], vc[i]);
+                out.gravity -= m * physics::dot(w.gravity, xc[i]);
+                // Pinned vertices get no collider terms in the solve (implicit_terms.h: vertex_terms).
+                if (colliders.empty() || pinned[i]) continue;
+                const double k = physics::collider_penalty_stiffness(w.solver.contact_stiffness, m, h * h);
+                for (const ColliderNow& c : colliders) {
+                    const double mu = c.friction >= 0.0 ? c.friction : p.friction;
+                    const physics::ContactResult<double> r = physics::collider_contact(
+                        c.shape, physics::ContactParams<double>{k, p.thickness, mu, 1e-3}, xc[i], vc[i],
+                        physics::HessianKind::None);
+                    if (!r.active) continue;
+                    out.contact += r.energy;
+                    if (c.moving) {
+                        // Steady contact: |f|·|v_col|. Impact: a vertex struck by a collider moving at u
+                        // leaves it at most at 2u − v (an elastic bounce off a heavy wall), a gain of at
+                        // most 2m|u|(|u| + |v|); spread over the substep as a power, since the substep in
+                        // which the penalty spring releases it is not known.
+                        const double u = physics::length(physics::shape_point_velocity(c.shape, xc[i]));
+                        out.power += physics::length(r.force) * u + 2.0 * m * u * (u + physics::length(vc[i])) / h;
+                    }
                 }
             }
-        }
+        });
+        for (const Parts& part : parts) add(a, pin_power, part);
 
-        for (std::size_t tri = 0; tri < f.triangle_count(); ++tri) {
-            const auto& idx = f.triangles()[tri].v;
-            const Vec3d xs[3] = {xc[idx[0]], xc[idx[1]], xc[idx[2]]};
-            const TriangleRest& r = f.triangle_rest()[tri];
-            const bool pin = any_moving_pin && (moving_pin[idx[0]] || moving_pin[idx[1]] || moving_pin[idx[2]]);
-            Vec3d grad[3];
-            a.elastic += physics::membrane_evaluate<double>(r.dm_inv, r.area, p.membrane, xs, pin ? grad : nullptr,
-                                                            nullptr, physics::HessianKind::None);
-            if (pin)
-                for (int k = 0; k < 3; ++k)
-                    if (moving_pin[idx[k]]) pin_power += physics::dot(grad[k], vc[idx[k]]);
-            if (wind && (p.drag > 0.0 || p.lift > 0.0)) {
-                // The solver's wind (implicit_terms.h: triangle_terms): mean plus the gust at the centroid.
-                Vec3d air = w.wind.velocity;
-                if (w.wind.turbulence > 0.0)
-                    air += physics::wind_gust((xs[0] + xs[1] + xs[2]) / 3.0, t, w.wind.turbulence,
-                                              w.wind.turbulence_frequency, w.wind.turbulence_scale);
-                const Vec3d vs[3] = {vc[idx[0]], vc[idx[1]], vc[idx[2]]};
-                Vec3d per_vertex{};
-                physics::aerodynamic_force(xs, vs, air, physics::AeroCoefficients<double>{w.wind.air_density, p.drag, p.lift},
-                                           per_vertex, static_cast<Mat3d*>(nullptr));
-                a.external_power += std::max(0.0, 3.0 * physics::dot(per_vertex, air));
-            }
-        }
-
-        if (p.bending > 0.0)
-            for (const Hinge& hg : f.hinges()) {
-                const Vec3d xs[4] = {xc[hg.v[0]], xc[hg.v[1]], xc[hg.v[2]], xc[hg.v[3]]};
-                const bool pin = any_moving_pin && (moving_pin[hg.v[0]] || moving_pin[hg.v[1]] ||
-                                                    moving_pin[hg.v[2]] || moving_pin[hg.v[3]]);
-                Vec3d grad[4];
-                a.elastic += physics::bending_evaluate<double>(p.bending, hg.weight, hg.rest_angle, xs,
-                                                               pin ? grad : nullptr, nullptr,
-                                                               physics::HessianKind::None);
+        parts.assign(chunk_count(f.triangle_count()), Parts{});
+        parallel_chunks(f.triangle_count(), [&](std::size_t lo, std::size_t hi) {
+            Parts& out = parts[lo / kParallelChunk];
+            for (std::size_t tri = lo; tri < hi; ++tri) {
+                const auto& idx = f.triangles()[tri].v;
+                const Vec3d xs[3] = {xc[idx[0]], xc[idx[1]], xc[idx[2]]};
+                const TriangleRest& r = f.triangle_rest()[tri];
+                const bool pin = any_moving_pin && (moving_pin[idx[0]] || moving_pin[idx[1]] || moving_pin[idx[2]]);
+                Vec3d grad[3];
+                out.elastic += physics::membrane_evaluate<double>(r.dm_inv, r.area, p.membrane, xs, pin ? grad : nullptr,
+                                                                  nullptr, physics::HessianKind::None);
                 if (pin)
-                    for (int k = 0; k < 4; ++k)
-                        if (moving_pin[hg.v[k]]) pin_power += physics::dot(grad[k], vc[hg.v[k]]);
+                    for (int k = 0; k < 3; ++k)
+                        if (moving_pin[idx[k]]) out.pin_power += physics::dot(grad[k], vc[idx[k]]);
+                if (wind && (p.drag > 0.0 || p.lift > 0.0)) {
+                    // The solver's wind (implicit_terms.h: triangle_terms): mean plus the gust at the centroid.
+                    Vec3d air = w.wind.velocity;
+                    if (w.wind.turbulence > 0.0)
+                        air += physics::wind_gust((xs[0] + xs[1] + xs[2]) / 3.0, t, w.wind.turbulence,
+                                                  w.wind.turbulence_frequency, w.wind.turbulence_scale);
+                    const Vec3d vs[3] = {vc[idx[0]], vc[idx[1]], vc[idx[2]]};
+                    Vec3d per_vertex{};
+                    physics::aerodynamic_force(xs, vs, air,
+                                               physics::AeroCoefficients<double>{w.wind.air_density, p.drag, p.lift},
+                                               per_vertex, static_cast<Mat3d*>(nullptr));
+                    out.power += std::max(0.0, 3.0 * physics::dot(per_vertex, air));
+                }
             }
+        });
+        for (const Parts& part : parts) add(a, pin_power, part);
+
+        if (p.bending > 0.0) {
+            parts.assign(chunk_count(f.hinges().size()), Parts{});
+            parallel_chunks(f.hinges().size(), [&](std::size_t lo, std::size_t hi) {
+                Parts& out = parts[lo / kParallelChunk];
+                for (std::size_t k = lo; k < hi; ++k) {
+                    const Hinge& hg = f.hinges()[k];
+                    const Vec3d xs[4] = {xc[hg.v[0]], xc[hg.v[1]], xc[hg.v[2]], xc[hg.v[3]]};
+                    const bool pin = any_moving_pin && (moving_pin[hg.v[0]] || moving_pin[hg.v[1]] ||
+                                                        moving_pin[hg.v[2]] || moving_pin[hg.v[3]]);
+                    Vec3d grad[4];
+                    out.elastic += physics::bending_evaluate<double>(p.bending, hg.weight, hg.rest_angle, xs,
+                                                                     pin ? grad : nullptr, nullptr,
+                                                                     physics::HessianKind::None);
+                    if (pin)
+                        for (int c = 0; c < 4; ++c)
+                            if (moving_pin[hg.v[c]]) out.pin_power += physics::dot(grad[c], vc[hg.v[c]]);
+                }
+            });
+            for (const Parts& part : parts) add(a, pin_power, part);
+        }
     }
     a.external_power += std::max(0.0, pin_power);
 

@@ -26,8 +26,8 @@ struct EnergyAudit {
     /// wind, pins that follow a motion, moving analytic colliders and the grab spring (see
     /// `host_energy_audit` for each term). Gravity is in `gravity`; damping and friction only take.
     double external_power = 0.0;
-    /// Whether `external_power` includes the wind's (it costs a gust evaluation per triangle, so the
-    /// guard asks for it only when a substep would otherwise be flagged).
+    /// Whether `external_power` includes the wind's (a gust evaluation per triangle; the guard asks
+    /// for it whenever the world has wind).
     bool with_wind = false;
     /// False when the world holds a source of work the audit cannot bound (a mesh collider that
     /// moves); the guard then skips the substep and counts it in `StepStats::energy_unchecked`.
