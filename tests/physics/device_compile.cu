@@ -9,6 +9,7 @@
 #include "weft/physics/eigen_sym.h"
 #include "weft/physics/hessian.h"
 #include "weft/physics/membrane.h"
+#include "weft/physics/offset_contact.h"
 #include "weft/physics/pair_contact.h"
 #include "weft/physics/proximity.h"
 #include "weft/physics/swept_collider.h"
@@ -100,6 +101,11 @@ __device__ void exercise(DeviceProbe<T>& p) {
         pair_contact(p.vec[0], p.x[2], p.v[2], PairContactParams<T>{T(1e3), T(0.01), T(0.3), T(1e-3)});
     p.mat[30] = pc.dfdx + pc.dfdv;
     p.vec[15] = pc.force;
+    // offset geometric contact (§7b)
+    const OffsetContactForce<T> oc =
+        offset_contact(p.x[2], p.v[2], p.vec[0], OffsetContactParams<T>{T(1e3), T(0.01), T(0.3), T(1e-3)});
+    p.mat[30] += oc.dfdx + oc.dfdv;
+    p.vec[15] += oc.force;
     const SweptContact<T> sc = swept_shape_contact(p.shape, p.shape, T(0.01), p.x[0], p.v[0], T(0.005), 64);
     p.vec[15] += sc.position;
     p.scalar[7] += sc.tau + T(sc.samples) + (sc.hit ? T(1) : T(0));
