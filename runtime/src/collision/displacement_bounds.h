@@ -1,0 +1,51 @@
+#pragma once
+/// @file
+/// Per-vertex conservative displacement bounds of offset geometric contact (docs/methods.md §7b;
+/// Chen et al. 2025), the CPU reference: instead of continuous collision detection, each vertex may
+/// move at most b_v = γ·min(r, d_v) in an update, where d_v is the distance from the primitives it
+/// belongs to (itself, its edges, its triangles) to the nearest primitive pair partner that shares no
+/// vertex with them, r the query radius and γ < ½ the relaxation.
+///
+/// Why no update within the bounds can make two triangles intersect: at the first instant two
+/// triangles that share no vertex touch, some vertex–face or edge–edge pair of theirs touches. Every
+/// point of a primitive moves at most as far as its farthest vertex (a convex combination), and each
+/// vertex of a pair at distance d moves at most γ·min(r, d) ≤ γ·d when d < r (the pair is one its
+/// bound was taken over) and at most γ·r ≤ γ·d otherwise. The distance can therefore shrink by at
+/// most 2γ·d < d along any straight-line update: it stays ≥ (1 − 2γ)·d > 0 for a pair that starts
+/// apart.
+
+#include <cstddef>
+#include <cstdint>
+#include <span>
+#include <vector>
+
+#include "collision/broad_phase.h"
+#include "weft/backend/collision_primitives.h"
+#include "weft/types.h"
+
+namespace weft::collision {
+
+struct DisplacementBoundsInput {
+    std::span<const Vec3d> x;             ///< positions at the start of the update, m
+    std::span<const Triangle> triangles;  ///< global vertex ids
+    std::span<const Edge> edges;          ///< unique edges, normally `build_edges(triangles)`
+    double query_radius = 0.0;            ///< r, m (> 0): partners farther than this do not limit a vertex
+    double relaxation = 0.45;             ///< γ in (0, ½): the share of the distance a vertex may cover
+};
+
+struct DisplacementBounds {
+    std::vector<double> bound;         ///< b_v per vertex, m
+    std::size_t vf_pairs = 0;          ///< vertex–face pairs measured (boxes within r)
+    std::size_t ee_pairs = 0;          ///< edge–edge pairs measured
+    std::size_t limited_vertices = 0;  ///< vertices with a partner closer than r
+};
+
+/// The bounds of every vertex (the broad phase's spatial hash finds the pairs within r; `hash` keeps
+/// its scratch between calls). Throws `weft::Error` for r ≤ 0, γ outside (0, ½) or mismatched input.
+void compute_displacement_bounds(const DisplacementBoundsInput& in, BroadPhase& hash, DisplacementBounds& out);
+
+/// Shortens each vertex's move x1 − x0 to at most its bound (along the move). Returns the number of
+/// vertices shortened.
+std::size_t truncate_displacements(std::span<const Vec3d> x0, std::span<Vec3d> x1, std::span<const double> bound);
+
+}  // namespace weft::collision

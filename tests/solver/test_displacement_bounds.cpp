@@ -1,0 +1,149 @@
+// Per-vertex conservative displacement bounds (collision/displacement_bounds.h; docs/methods.md §7b):
+// the bounds equal a brute-force search's, and no update truncated to them makes an intersection
+// (stacked sheets and random triangle soups, checked by the exact triangle test), while the same
+// updates untruncated do.
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <random>
+#include <vector>
+
+#include "collision/displacement_bounds.h"
+#include "collision/intersection_check.h"
+#include "weft/error.h"
+#include "weft/fabric.h"
+#include "weft/mesh.h"
+#include "weft/physics/proximity.h"
+
+namespace weft::collision {
+namespace {
+
+struct Soup {
+    std::vector<Vec3d> x;
+    std::vector<Triangle> triangles;
+};
+
+/// `sheets` square sheets of `cells`² cells, 1 m wide, stacked `gap` m apart along z.
+Soup stacked_sheets(int sheets, int cells, double gap) {
+    Soup s;
+    const MeshData grid = make_grid(1.0, 1.0, cells, cells);
+    for (int k = 0; k < sheets; ++k) {
+        const auto offset = static_cast<std::uint32_t>(s.x.size());
+        for (Vec3d p : grid.positions) s.x.push_back(p + Vec3d{0.0, 0.0, gap * k});
+        for (Triangle t : grid.triangles) {
+            for (auto& v : t.v) v += offset;
+            s.triangles.push_back(t);
+        }
+    }
+    return s;
+}
+
+/// `count` triangles of edge ~`size` m at random in a cube of `extent` m, minus those that intersect.
+Soup random_soup(std::mt19937& rng, int count, double size, double extent) {
+    std::uniform_real_distribution<double> u(0.0, extent), jitter(-size, size);
+    Soup s;
+    for (int k = 0; k < count; ++k) {
+        const Vec3d c{u(rng), u(rng), u(rng)};
+        const auto first = static_cast<std::uint32_t>(s.x.size());
+        for (int a = 0; a < 3; ++a) s.x.push_back(c + Vec3d{jitter(rng), jitter(rng), jitter(rng)});
+        s.triangles.push_back({{first, first + 1, first + 2}});
+    }
+    const IntersectionReport report = check_intersections(s.x, s.triangles, {.max_examples = 100000});
+    std::vector<char> drop(s.triangles.size(), 0);
+    for (const IntersectingPair& p : report.examples) drop[p.a] = drop[p.b] = 1;
+    Soup kept;
+    for (std::size_t t = 0; t < s.triangles.size(); ++t) {
+        if (drop[t]) continue;
+        const auto first = static_cast<std::uint32_t>(kept.x.size());
+        for (const std::uint32_t v : s.triangles[t].v) kept.x.push_back(s.x[v]);
+        kept.triangles.push_back({{first, first + 1, first + 2}});
+    }
+    return kept;
+}
+
+/// Every vertex moves by a random vector of length up to `reach` m.
+std::vector<Vec3d> random_moves(const std::vector<Vec3d>& x, std::mt19937& rng, double reach) {
+    std::uniform_real_distribution<double> u(-1.0, 1.0);
+    std::vector<Vec3d> x1 = x;
+    for (Vec3d& p : x1) {
+        Vec3d d;
+        do d = Vec3d{u(rng), u(rng), u(rng)};
+        while (math::length(d) > 1.0);
+        p += reach * d;
+    }
+    return x1;
+}
+
+DisplacementBounds bounds_of(const Soup& s, double radius, double relaxation = 0.45) {
+    const std::vector<Edge> edges = build_edges(s.triangles);
+    BroadPhase hash;
+    DisplacementBounds b;
+    compute_displacement_bounds({.x = s.x, .triangles = s.triangles, .edges = edges, .query_radius = radius,
+                                 .relaxation = relaxation},
+                                hash, b);
+    return b;
+}
+
+TEST(DisplacementBounds, EqualABruteForceSearch) {
+    std::mt19937 rng(5);
+    const Soup s = random_soup(rng, 120, 0.05, 0.4);
+    const double r = 0.05, gamma = 0.45;
+    const DisplacementBounds b = bounds_of(s, r, gamma);
+    std::vector<double> brute(s.x.size(), r);
+    const auto shares = [](const Triangle& t, std::uint32_t v) { return t.v[0] == v || t.v[1] == v || t.v[2] == v; };
+    for (std::uint32_t v = 0; v < s.x.size(); ++v)
+        for (const Triangle& t : s.triangles) {
+            if (shares(t, v)) continue;
+            const double d = physics::point_triangle_proximity(s.x[v], s.x[t.v[0]], s.x[t.v[1]], s.x[t.v[2]]).distance;
+            for (const std::uint32_t c : {v, t.v[0], t.v[1], t.v[2]}) brute[c] = std::min(brute[c], d);
+        }
+    const std::vector<Edge> edges = build_edges(s.triangles);
+    for (std::size_t i = 0; i < edges.size(); ++i)
+        for (std::size_t j = i + 1; j < edges.size(); ++j) {
+            const Edge &e = edges[i], &f = edges[j];
+            if (e.v[0] == f.v[0] || e.v[0] == f.v[1] || e.v[1] == f.v[0] || e.v[1] == f.v[1]) continue;
+            const double d = physics::edge_edge_proximity(s.x[e.v[0]], s.x[e.v[1]], s.x[f.v[0]], s.x[f.v[1]]).distance;
+            for (const std::uint32_t c : {e.v[0], e.v[1], f.v[0], f.v[1]}) brute[c] = std::min(brute[c], d);
+        }
+    std::size_t limited = 0;
+    for (std::size_t v = 0; v < s.x.size(); ++v) {
+        ASSERT_DOUBLE_EQ(b.bound[v], gamma * brute[v]) << "vertex " << v;
+        limited += brute[v] < r ? 1 : 0;
+    }
+    EXPECT_EQ(b.limited_vertices, limited);
+    EXPECT_GT(limited, s.x.size() / 4) << "the soup is dense enough to test something";
+}
+
+TEST(DisplacementBounds, TruncatedMovesNeverIntersect) {
+    std::mt19937 rng(17);
+    int untruncated_intersecting = 0;
+    for (int trial = 0; trial < 6; ++trial) {
+        const bool sheets = trial % 2 == 0;
+        const Soup s = sheets ? stacked_sheets(4, 16, 0.01) : random_soup(rng, 250, 0.04, 0.4);
+        ASSERT_TRUE(check_intersections(s.x, s.triangles).clean()) << "trial " << trial << " starts clean";
+        const double reach = sheets ? 0.05 : 0.1;
+        std::vector<Vec3d> x1 = random_moves(s.x, rng, reach);
+        untruncated_intersecting += check_intersections(x1, s.triangles).clean() ? 0 : 1;
+        const DisplacementBounds b = bounds_of(s, 2.0 * reach);
+        const std::size_t truncated = truncate_displacements(s.x, x1, b.bound);
+        EXPECT_GT(truncated, 0u) << "trial " << trial;
+        const IntersectionReport after = check_intersections(x1, s.triangles);
+        EXPECT_TRUE(after.clean()) << "trial " << trial << ": " << after.intersecting_pairs << " pairs intersect";
+        for (std::size_t v = 0; v < s.x.size(); ++v) ASSERT_LE(math::length(x1[v] - s.x[v]), b.bound[v] * (1 + 1e-9) + 1e-15);  // rounding of x0 + move
+    }
+    EXPECT_GE(untruncated_intersecting, 4) << "the untruncated moves must intersect for the test to mean anything";
+}
+
+TEST(DisplacementBounds, RejectBadInput) {
+    const Soup s = stacked_sheets(1, 2, 0.01);
+    EXPECT_THROW((void)bounds_of(s, 0.0), Error);
+    EXPECT_THROW((void)bounds_of(s, 0.01, 0.5), Error);
+    EXPECT_THROW((void)bounds_of(s, 0.01, 0.0), Error);
+    std::vector<Vec3d> x1 = s.x;
+    const std::vector<double> short_bounds(s.x.size() - 1, 0.1);
+    EXPECT_THROW((void)truncate_displacements(s.x, x1, short_bounds), Error);
+}
+
+}  // namespace
+}  // namespace weft::collision
