@@ -6,6 +6,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <random>
 #include <vector>
 
@@ -115,23 +116,39 @@ TEST(DisplacementBounds, EqualABruteForceSearch) {
     EXPECT_GT(limited, s.x.size() / 4) << "the soup is dense enough to test something";
 }
 
+// Both truncations, on the same moves: neither lets anything intersect, the planar one never keeps
+// less of a move than the sphere one, and the test prints how much of the moves each keeps.
 TEST(DisplacementBounds, TruncatedMovesNeverIntersect) {
     std::mt19937 rng(17);
     int untruncated_intersecting = 0;
+    double kept[2] = {0.0, 0.0}, wanted = 0.0;
     for (int trial = 0; trial < 6; ++trial) {
         const bool sheets = trial % 2 == 0;
         const Soup s = sheets ? stacked_sheets(4, 16, 0.01) : random_soup(rng, 250, 0.04, 0.4);
         ASSERT_TRUE(check_intersections(s.x, s.triangles).clean()) << "trial " << trial << " starts clean";
         const double reach = sheets ? 0.05 : 0.1;
-        std::vector<Vec3d> x1 = random_moves(s.x, rng, reach);
+        const std::vector<Vec3d> x1 = random_moves(s.x, rng, reach);
         untruncated_intersecting += check_intersections(x1, s.triangles).clean() ? 0 : 1;
         const DisplacementBounds b = bounds_of(s, 2.0 * reach);
-        const std::size_t truncated = truncate_displacements(s.x, x1, b.bound);
-        EXPECT_GT(truncated, 0u) << "trial " << trial;
-        const IntersectionReport after = check_intersections(x1, s.triangles);
-        EXPECT_TRUE(after.clean()) << "trial " << trial << ": " << after.intersecting_pairs << " pairs intersect";
-        for (std::size_t v = 0; v < s.x.size(); ++v) ASSERT_LE(math::length(x1[v] - s.x[v]), b.bound[v] * (1 + 1e-9) + 1e-15);  // rounding of x0 + move
+        std::vector<Vec3d> sphere = x1, planar = x1;
+        EXPECT_GT(truncate_displacements(s.x, sphere, b.bound), 0u) << "trial " << trial;
+        EXPECT_GT(truncate_displacements_planar(s.x, planar, b), 0u) << "trial " << trial;
+        for (const auto* result : {&sphere, &planar}) {
+            const IntersectionReport after = check_intersections(*result, s.triangles);
+            EXPECT_TRUE(after.clean()) << "trial " << trial << (result == &sphere ? " sphere: " : " planar: ")
+                                       << after.intersecting_pairs << " pairs intersect";
+        }
+        for (std::size_t v = 0; v < s.x.size(); ++v) {
+            const double a = math::length(sphere[v] - s.x[v]), p = math::length(planar[v] - s.x[v]);
+            ASSERT_LE(a, b.bound[v] * (1 + 1e-9) + 1e-15);  // rounding of x0 + move
+            ASSERT_GE(p, a * (1 - 1e-9));
+            kept[0] += a;
+            kept[1] += p;
+            wanted += math::length(x1[v] - s.x[v]);
+        }
     }
+    std::printf("share of the random moves kept: sphere bounds %.1f %%, planar bounds %.1f %%\n", 100.0 * kept[0] / wanted,
+                100.0 * kept[1] / wanted);
     EXPECT_GE(untruncated_intersecting, 4) << "the untruncated moves must intersect for the test to mean anything";
 }
 
@@ -143,6 +160,7 @@ TEST(DisplacementBounds, RejectBadInput) {
     std::vector<Vec3d> x1 = s.x;
     const std::vector<double> short_bounds(s.x.size() - 1, 0.1);
     EXPECT_THROW((void)truncate_displacements(s.x, x1, short_bounds), Error);
+    EXPECT_THROW((void)truncate_displacements_planar(s.x, x1, DisplacementBounds{}), Error);
 }
 
 }  // namespace

@@ -13,6 +13,11 @@
 /// bound was taken over) and at most γ·r ≤ γ·d otherwise. The distance can therefore shrink by at
 /// most 2γ·d < d along any straight-line update: it stays ≥ (1 − 2γ)·d > 0 for a pair that starts
 /// apart.
+///
+/// The sharper, planar variant keeps what is known about each pair: the closest points give a plane
+/// separating the two primitives (convex sets), and it suffices that no vertex moves more than γ·d
+/// *towards* each partner within r (and no more than γ·r in all): the two primitives then stay on
+/// their own sides of a slab of width (1 − 2γ)·d. Motion along the surfaces is not limited at all.
 
 #include <cstddef>
 #include <cstdint>
@@ -33,8 +38,20 @@ struct DisplacementBoundsInput {
     double relaxation = 0.45;             ///< γ in (0, ½): the share of the distance a vertex may cover
 };
 
+/// One partner of a vertex within the query radius: the vertex may move at most `limit` (m) along the
+/// unit `towards` (from its primitive's closest point to the partner's).
+struct PartnerLimit {
+    Vec3d towards;
+    double limit = 0.0;  ///< γ·d
+};
+
 struct DisplacementBounds {
     std::vector<double> bound;         ///< b_v per vertex, m
+    /// Per vertex, its partners within r (CSR: partner_start has vertices + 1 entries, in pair order),
+    /// for the planar truncation.
+    std::vector<std::uint32_t> partner_start;
+    std::vector<PartnerLimit> partners;
+    double cap = 0.0;                  ///< γ·r, m: the most any vertex may move
     std::size_t vf_pairs = 0;          ///< vertex–face pairs measured (boxes within r)
     std::size_t ee_pairs = 0;          ///< edge–edge pairs measured
     std::size_t limited_vertices = 0;  ///< vertices with a partner closer than r
@@ -47,5 +64,10 @@ void compute_displacement_bounds(const DisplacementBoundsInput& in, BroadPhase& 
 /// Shortens each vertex's move x1 − x0 to at most its bound (along the move). Returns the number of
 /// vertices shortened.
 std::size_t truncate_displacements(std::span<const Vec3d> x0, std::span<Vec3d> x1, std::span<const double> bound);
+
+/// The planar variant: shortens each vertex's move (along the move) to the longest that advances at
+/// most `limit` towards each of its partners and at most `cap` in all. Never shorter than
+/// `truncate_displacements` would make it. Returns the number of vertices shortened.
+std::size_t truncate_displacements_planar(std::span<const Vec3d> x0, std::span<Vec3d> x1, const DisplacementBounds& b);
 
 }  // namespace weft::collision
