@@ -13,6 +13,7 @@
 #include "weft/error.h"
 #include "weft/fabric.h"
 #include "weft/mesh.h"
+#include "weft/physics/membrane.h"
 #include "weft/world.h"
 
 namespace weft {
@@ -323,6 +324,142 @@ TEST(SchwarzPreconditioner, SameBitsOnOneAndThreeThreads) {
         final_state[threads == 3 ? 1 : 0] = world.positions(0);
     }
     EXPECT_EQ(std::memcmp(final_state[0].data(), final_state[1].data(), final_state[0].size() * sizeof(Vec3d)), 0);
+}
+
+// The cloth matrix the implicit step solves, A = M + h²·K with K the membrane Hessian blocks
+// (HessianKind::Fast, as the backends assemble) of a stiff sheet stretched and crumpled at random.
+cpu::BsrMatrix<double> cloth_matrix(const Fabric& fabric, std::mt19937& rng) {
+    cpu::BsrMatrix<double> A;
+    const BlockPattern& p = fabric.pattern();
+    A.resize(p);
+    const double h = 1.0 / 60.0;
+    std::normal_distribution<double> noise(0.0, 0.004);
+    std::vector<Vec3d> x(fabric.rest_positions().begin(), fabric.rest_positions().end());
+    for (Vec3d& q : x) q = 1.05 * q + Vec3d{noise(rng), noise(rng), noise(rng)};  // stretched 5 %, rumpled
+    for (std::size_t i = 0; i < fabric.vertex_count(); ++i) A.blocks[p.diagonal[i]] = M3::diagonal(fabric.masses()[i]);
+    const auto material = physics::membrane_material(2.0e4, 0.3);
+    for (std::size_t t = 0; t < fabric.triangle_count(); ++t) {
+        const auto& v = fabric.triangles()[t].v;
+        const Vec3d xs[3] = {x[v[0]], x[v[1]], x[v[2]]};
+        const TriangleRest& r = fabric.triangle_rest()[t];
+        M3 H[3][3];
+        (void)physics::membrane_evaluate<double>(r.dm_inv, r.area, material, xs, nullptr, H, physics::HessianKind::Fast);
+        for (int a = 0; a < 3; ++a)
+            for (int b = 0; b < 3; ++b) A.blocks[p.triangle_slots[9 * t + 3 * a + b]] += (h * h) * H[a][b];
+    }
+    return A;
+}
+
+// The SPD checks on the matrix the backends assemble, with a pinned edge: symmetric, positive,
+// and its PCG reaches block-Jacobi's solution in fewer iterations.
+TEST(SchwarzPreconditioner, OnAnAssembledClothMatrix) {
+    const auto fabric = Fabric::cook(make_grid(1.0, 1.0, 59, 59), {.density = 0.1});
+    std::mt19937 rng(23);
+    const auto A = cloth_matrix(*fabric, rng);
+    const std::size_t n = fabric->vertex_count();
+    std::vector<std::uint8_t> fixed(n, 0);
+    for (std::size_t i = 0; i < 60; ++i) fixed[i] = 1;
+    const SchwarzHierarchy h = build_schwarz_hierarchy(rest_positions(*fabric), fabric->pattern());
+    cpu::SchwarzPreconditioner<double> M;
+    M.build(h, fabric->pattern());
+    M.factor(A, fixed, [](std::size_t) { return M3{}; });
+    EXPECT_EQ(M.pivot_failures(), 0);
+    const auto filtered = [&](std::vector<V3> x) {
+        for (std::size_t i = 0; i < n; ++i)
+            if (fixed[i]) x[i] = V3{};
+        return x;
+    };
+    for (int trial = 0; trial < 4; ++trial) {
+        const auto x = filtered(random_vectors(n, rng)), y = filtered(random_vectors(n, rng));
+        std::vector<V3> mx(n), my(n);
+        M.apply(x, mx);
+        M.apply(y, my);
+        const double xmy = dot(filtered(my), x), ymx = dot(filtered(mx), y);
+        EXPECT_NEAR(xmy, ymx, 1e-9 * std::abs(xmy));
+        EXPECT_GT(dot(filtered(mx), x), 0.0);
+    }
+    const auto b = random_vectors(n, rng);
+    std::vector<V3> xj(n), xs(n);
+    cpu::Pcg<double> pcg;
+    pcg.resize(n);
+    const auto rj = pcg.solve(A, b, fixed, xj, 1e-9, 20000);
+    const auto rs = pcg.solve(A, b, fixed, xs, 1e-9, 20000, &M);
+    ASSERT_TRUE(rj.converged);
+    ASSERT_TRUE(rs.converged);
+    double difference = 0.0, scale = 0.0;
+    for (std::size_t i = 0; i < n; ++i) {
+        difference = std::max(difference, math::length(xs[i] - xj[i]));
+        scale = std::max(scale, math::length(xj[i]));
+    }
+    std::printf("cloth matrix, 3,600 vertices: jacobi %d, schwarz %d iterations, relative difference %.2e\n",
+                rj.iterations, rs.iterations, difference / scale);
+    EXPECT_LT(difference, 1e-6 * scale);
+    EXPECT_LT(rs.iterations, rj.iterations);
+}
+
+// A 3D block Laplacian (a 16³ lattice, 6 neighbours): Morton order in 3D, the same guarantees.
+TEST(SchwarzPreconditioner, OnA3dLaplacian) {
+    constexpr int kSide = 16;
+    const auto id = [](int i, int j, int k) { return static_cast<std::uint32_t>((k * kSide + j) * kSide + i); };
+    const std::size_t n = kSide * kSide * kSide;
+    std::vector<Vec3d> x(n);
+    BlockPattern p;
+    p.row_start.push_back(0);
+    for (int k = 0; k < kSide; ++k)
+        for (int j = 0; j < kSide; ++j)
+            for (int i = 0; i < kSide; ++i) {
+                x[id(i, j, k)] = Vec3d{double(i), double(j), double(k)};
+                std::vector<std::uint32_t> cols{id(i, j, k)};
+                if (i > 0) cols.push_back(id(i - 1, j, k));
+                if (i + 1 < kSide) cols.push_back(id(i + 1, j, k));
+                if (j > 0) cols.push_back(id(i, j - 1, k));
+                if (j + 1 < kSide) cols.push_back(id(i, j + 1, k));
+                if (k > 0) cols.push_back(id(i, j, k - 1));
+                if (k + 1 < kSide) cols.push_back(id(i, j, k + 1));
+                std::sort(cols.begin(), cols.end());
+                for (const std::uint32_t c : cols) {
+                    if (c == id(i, j, k)) p.diagonal.push_back(static_cast<std::uint32_t>(p.column.size()));
+                    p.column.push_back(c);
+                }
+                p.row_start.push_back(static_cast<std::uint32_t>(p.column.size()));
+            }
+    cpu::BsrMatrix<double> A;
+    A.resize(p);
+    for (std::size_t r = 0; r < n; ++r) {
+        double degree = 0.0;
+        for (std::uint32_t s = p.row_start[r]; s < p.row_start[r + 1]; ++s)
+            if (p.column[s] != r) {
+                A.blocks[s] = M3::diagonal(-10.0);
+                degree += 1.0;
+            }
+        A.blocks[p.diagonal[r]] = M3::diagonal(1e-3 + 10.0 * degree);
+    }
+    const SchwarzHierarchy h = build_schwarz_hierarchy(x, p);
+    EXPECT_GE(h.levels(), 3);
+    cpu::SchwarzPreconditioner<double> M;
+    M.build(h, p);
+    const std::vector<std::uint8_t> fixed(n, 0);
+    M.factor(A, fixed, [](std::size_t) { return M3{}; });
+    EXPECT_EQ(M.pivot_failures(), 0);
+    std::mt19937 rng(31);
+    for (int trial = 0; trial < 3; ++trial) {
+        const auto a = random_vectors(n, rng), c = random_vectors(n, rng);
+        std::vector<V3> ma(n), mc(n);
+        M.apply(a, ma);
+        M.apply(c, mc);
+        EXPECT_NEAR(dot(mc, a), dot(ma, c), 1e-9 * std::abs(dot(mc, a)));
+        EXPECT_GT(dot(ma, a), 0.0);
+    }
+    const auto b = random_vectors(n, rng);
+    std::vector<V3> xj(n), xs(n);
+    cpu::Pcg<double> pcg;
+    pcg.resize(n);
+    const auto rj = pcg.solve(A, b, fixed, xj, 1e-8, 20000);
+    const auto rs = pcg.solve(A, b, fixed, xs, 1e-8, 20000, &M);
+    ASSERT_TRUE(rj.converged);
+    ASSERT_TRUE(rs.converged);
+    std::printf("3D Laplacian 16^3: jacobi %d, schwarz %d iterations\n", rj.iterations, rs.iterations);
+    EXPECT_LT(rs.iterations, rj.iterations);
 }
 
 }  // namespace
