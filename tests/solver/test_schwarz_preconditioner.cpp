@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <cstring>
 #include <random>
+#include <string>
 
 #include "cpu/pcg.h"
 #include "cpu/schwarz_preconditioner.h"
@@ -56,6 +57,27 @@ double dot(const std::vector<V3>& a, const std::vector<V3>& b) {
     double s = 0.0;
     for (std::size_t i = 0; i < a.size(); ++i) s += math::dot(a[i], b[i]);
     return s;
+}
+
+/// M⁻¹ restricted to the free vertices is symmetric and positive definite: (S M⁻¹ S) checked on
+/// `trials` pairs of random filtered vectors.
+void expect_spd_on_free_vertices(cpu::SchwarzPreconditioner<double>& M, const std::vector<std::uint8_t>& fixed,
+                                 std::mt19937& rng, int trials, const std::string& what) {
+    const std::size_t n = fixed.size();
+    const auto filtered = [&](std::vector<V3> x) {
+        for (std::size_t i = 0; i < n; ++i)
+            if (fixed[i]) x[i] = V3{};
+        return x;
+    };
+    for (int trial = 0; trial < trials; ++trial) {
+        const auto x = filtered(random_vectors(n, rng)), y = filtered(random_vectors(n, rng));
+        std::vector<V3> mx(n), my(n);
+        M.apply(x, mx);
+        M.apply(y, my);
+        const double xmy = dot(filtered(my), x), ymx = dot(filtered(mx), y);
+        EXPECT_NEAR(xmy, ymx, 1e-9 * std::abs(xmy)) << what;
+        EXPECT_GT(dot(filtered(mx), x), 0.0) << what;
+    }
 }
 
 TEST(SchwarzHierarchy, MortonOrderIsAPermutationWithCompactDomains) {
@@ -162,20 +184,7 @@ TEST(SchwarzPreconditioner, IsSymmetricPositiveDefiniteWithAndWithoutPins) {
         M.build(h, fabric->pattern());
         M.factor(A, fixed, [](std::size_t) { return M3{}; });
         EXPECT_EQ(M.pivot_failures(), 0);
-        const auto filtered = [&](std::vector<V3> x) {
-            for (std::size_t i = 0; i < n; ++i)
-                if (fixed[i]) x[i] = V3{};
-            return x;
-        };
-        for (int trial = 0; trial < 5; ++trial) {
-            const auto x = filtered(random_vectors(n, rng)), y = filtered(random_vectors(n, rng));
-            std::vector<V3> mx(n), my(n);
-            M.apply(x, mx);
-            M.apply(y, my);
-            const double xmy = dot(filtered(my), x), ymx = dot(filtered(mx), y);
-            EXPECT_NEAR(xmy, ymx, 1e-9 * std::abs(xmy)) << "pins " << pins;
-            EXPECT_GT(dot(filtered(mx), x), 0.0) << "pins " << pins;
-        }
+        expect_spd_on_free_vertices(M, fixed, rng, 5, pins ? "with pins" : "without pins");
     }
 }
 
@@ -364,20 +373,7 @@ TEST(SchwarzPreconditioner, OnAnAssembledClothMatrix) {
     M.build(h, fabric->pattern());
     M.factor(A, fixed, [](std::size_t) { return M3{}; });
     EXPECT_EQ(M.pivot_failures(), 0);
-    const auto filtered = [&](std::vector<V3> x) {
-        for (std::size_t i = 0; i < n; ++i)
-            if (fixed[i]) x[i] = V3{};
-        return x;
-    };
-    for (int trial = 0; trial < 4; ++trial) {
-        const auto x = filtered(random_vectors(n, rng)), y = filtered(random_vectors(n, rng));
-        std::vector<V3> mx(n), my(n);
-        M.apply(x, mx);
-        M.apply(y, my);
-        const double xmy = dot(filtered(my), x), ymx = dot(filtered(mx), y);
-        EXPECT_NEAR(xmy, ymx, 1e-9 * std::abs(xmy));
-        EXPECT_GT(dot(filtered(mx), x), 0.0);
-    }
+    expect_spd_on_free_vertices(M, fixed, rng, 4, "cloth matrix");
     const auto b = random_vectors(n, rng);
     std::vector<V3> xj(n), xs(n);
     cpu::Pcg<double> pcg;
@@ -442,14 +438,7 @@ TEST(SchwarzPreconditioner, OnA3dLaplacian) {
     M.factor(A, fixed, [](std::size_t) { return M3{}; });
     EXPECT_EQ(M.pivot_failures(), 0);
     std::mt19937 rng(31);
-    for (int trial = 0; trial < 3; ++trial) {
-        const auto a = random_vectors(n, rng), c = random_vectors(n, rng);
-        std::vector<V3> ma(n), mc(n);
-        M.apply(a, ma);
-        M.apply(c, mc);
-        EXPECT_NEAR(dot(mc, a), dot(ma, c), 1e-9 * std::abs(dot(mc, a)));
-        EXPECT_GT(dot(ma, a), 0.0);
-    }
+    expect_spd_on_free_vertices(M, fixed, rng, 3, "3D Laplacian");
     const auto b = random_vectors(n, rng);
     std::vector<V3> xj(n), xs(n);
     cpu::Pcg<double> pcg;
