@@ -184,7 +184,7 @@ constexpr Parameter kTable[] = {
     {.section = "solver", .name = "preconditioner_refresh", .type = T::Integer, .range = R{1, 1000},
      .doc = "`mas` only: substeps between factorisations of the preconditioner (1: every Newton iteration; more "
             "reuses it, saving its setup at the price of some CG iterations)",
-     .label = "preconditioner refresh", .panel = "solver", .log_scale = true,
+     .label = "MAS refresh", .panel = "solver", .log_scale = true,
      .access = field<&WorldDesc::solver, &SolverSettings::preconditioner_refresh>()},
     {.section = "solver", .name = "energy_guard", .type = T::Choice,
      .doc = "check every substep for energy gained beyond the external work (an inexact solve): `off`; `report`: "
