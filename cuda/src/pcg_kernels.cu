@@ -200,17 +200,24 @@ __device__ double persistent_sum(double value, double* partials) {
     return result;
 }
 
-template <bool kContacts>
+/// The one-launch CG loop: the same phases as the per-kernel form, a grid-wide barrier after each
+/// (the contact pair pass; SpMV and cᵀq; the preconditioner with rᵀs; the direction). With block-Jacobi
+/// the preconditioner is fused into the axpy pair; with Schwarz it is the axpy pair with level 0's
+/// domains, each coarser level, then the corrections. A warp keeps the same domains in every iteration.
+template <bool kContacts, bool kSchwarz>
 __global__ void pcg_persistent_kernel(DeviceView d) {
     namespace cg = cooperative_groups;
+    __shared__ float values[kSchwarz ? kSchwarzWarpsPerBlock : 1][kSchwarzDim];
     const StepParams& sp = step_params(d);
     PcgControl& ctl = *d.control;
-    if (!ctl.running) return;  // uniform: written by the residual kernel
+    if (!ctl.running) return;  // uniform: written by the start of the solve
     double delta = ctl.delta;
     const double delta0 = ctl.delta0;
     int iterations = 0, converged = 0;
     double* partials[2] = {d.partials, d.partials + gridDim.x};
     const std::uint32_t stride = gridDim.x * blockDim.x;
+    const std::uint32_t lane = threadIdx.x % 32, warp = threadIdx.x / 32;
+    const std::uint32_t first_warp = blockIdx.x * kSchwarzWarpsPerBlock + warp, warps = gridDim.x * kSchwarzWarpsPerBlock;
     // Fixed for the whole solve, and the same in every block: the contact phase and its barrier are
     // skipped uniformly when the substep has no pairs.
     const std::uint32_t pairs = kContacts ? contact_count(d.contacts) : 0u;
@@ -218,8 +225,8 @@ __global__ void pcg_persistent_kernel(DeviceView d) {
         if constexpr (kContacts) {
             if (pairs > 0) {
                 // The pair pass of A_contact·c. c is complete (the barrier that ended the last
-                // iteration, or the residual kernel before this launch); the gather below waits for
-                // every pair behind one more barrier.
+                // iteration, or the kernel before this launch); the gather below waits for every pair
+                // behind one more barrier.
                 for (std::uint32_t p = blockIdx.x * blockDim.x + threadIdx.x; p < pairs; p += stride)
                     contact_pair_product(d.contacts, p, d.c, d.n);
                 cg::this_grid().sync();
@@ -241,13 +248,30 @@ __global__ void pcg_persistent_kernel(DeviceView d) {
         if (!(cq > 0.0)) break;  // breakdown: reported as not converged
         const float alpha = static_cast<float>(delta / cq);
         local = 0.0;
-        for (std::uint32_t i = blockIdx.x * blockDim.x + threadIdx.x; i < d.n; i += stride) {
-            const V3 r = load3(d.r, i, d.n) - alpha * load3(d.q, i, d.n);
-            const V3 s = load_precond(d, i) * r;
-            store3(d.dv, i, d.n, load3(d.dv, i, d.n) + alpha * load3(d.c, i, d.n));
-            store3(d.r, i, d.n, r);
-            store3(d.s, i, d.n, s);
-            local += static_cast<double>(physics::dot(r, s));
+        if constexpr (kSchwarz) {
+            const SchwarzView& m = d.mas;
+            for (std::uint32_t domain = first_warp; domain < m.level[0].domains; domain += warps)
+                schwarz_fine_domain(d, domain, lane, values[warp], SchwarzInput::Update, alpha);
+            for (int l = 1; l < m.levels; ++l) {
+                cg::this_grid().sync();
+                for (std::uint32_t domain = first_warp; domain < m.level[l].domains; domain += warps)
+                    schwarz_coarse_domain(d, l, domain, lane, values[warp]);
+            }
+            cg::this_grid().sync();
+            for (std::uint32_t i = blockIdx.x * blockDim.x + threadIdx.x; i < d.n; i += stride) {
+                const V3 z = schwarz_correction(d, i);
+                store3(d.s, i, d.n, z);
+                local += static_cast<double>(physics::dot(load3(d.r, i, d.n), z));
+            }
+        } else {
+            for (std::uint32_t i = blockIdx.x * blockDim.x + threadIdx.x; i < d.n; i += stride) {
+                const V3 r = load3(d.r, i, d.n) - alpha * load3(d.q, i, d.n);
+                const V3 s = load_precond(d, i) * r;
+                store3(d.dv, i, d.n, load3(d.dv, i, d.n) + alpha * load3(d.c, i, d.n));
+                store3(d.r, i, d.n, r);
+                store3(d.s, i, d.n, s);
+                local += static_cast<double>(physics::dot(r, s));
+            }
         }
         const double delta_new = persistent_sum(local, partials[1]);
         const float beta = static_cast<float>(delta_new / delta);
@@ -260,81 +284,6 @@ __global__ void pcg_persistent_kernel(DeviceView d) {
         cg::this_grid().sync();
     }
     cg::this_grid().sync();  // every block has read `running` before it is cleared
-    if (blockIdx.x == 0 && threadIdx.x == 0) {
-        ctl.delta = delta;
-        ctl.iterations = iterations;
-        ctl.converged = converged;
-        ctl.running = 0;
-    }
-}
-
-/// The one-launch loop with the Schwarz preconditioner: the same phases as the per-kernel form
-/// (SpMV and cᵀq; the axpy pair with level 0's domains; each coarser level; the corrections with rᵀs;
-/// the direction), a grid-wide barrier after each. A warp keeps the same domains in every iteration.
-template <bool kContacts>
-__global__ void pcg_schwarz_persistent_kernel(DeviceView d) {
-    namespace cg = cooperative_groups;
-    __shared__ float values[kSchwarzWarpsPerBlock][kSchwarzDim];
-    const StepParams& sp = step_params(d);
-    PcgControl& ctl = *d.control;
-    if (!ctl.running) return;  // uniform: written by the start of the solve
-    double delta = ctl.delta;
-    const double delta0 = ctl.delta0;
-    int iterations = 0, converged = 0;
-    double* partials[2] = {d.partials, d.partials + gridDim.x};
-    const std::uint32_t stride = gridDim.x * blockDim.x;
-    const std::uint32_t lane = threadIdx.x % 32, warp = threadIdx.x / 32;
-    const std::uint32_t first_warp = blockIdx.x * kSchwarzWarpsPerBlock + warp, warps = gridDim.x * kSchwarzWarpsPerBlock;
-    const SchwarzView& m = d.mas;
-    const std::uint32_t pairs = kContacts ? contact_count(d.contacts) : 0u;
-    for (;;) {
-        if constexpr (kContacts) {
-            if (pairs > 0) {
-                for (std::uint32_t p = blockIdx.x * blockDim.x + threadIdx.x; p < pairs; p += stride)
-                    contact_pair_product(d.contacts, p, d.c, d.n);
-                cg::this_grid().sync();
-            }
-        }
-        double local = 0.0;
-        for (std::uint32_t i = blockIdx.x * blockDim.x + threadIdx.x; i < d.n; i += stride) {
-            V3 q{};
-            if (!d.fixed[i]) {
-                q = row_times(d, i, d.c);
-                if constexpr (kContacts) {
-                    if (pairs > 0) q = contact_gather(d.contacts, i, d.contacts.product, q);
-                }
-            }
-            store3(d.q, i, d.n, q);
-            local += static_cast<double>(physics::dot(load3(d.c, i, d.n), q));
-        }
-        const double cq = persistent_sum(local, partials[0]);
-        if (!(cq > 0.0)) break;  // breakdown: reported as not converged
-        const float alpha = static_cast<float>(delta / cq);
-        for (std::uint32_t domain = first_warp; domain < m.level[0].domains; domain += warps)
-            schwarz_fine_domain(d, domain, lane, values[warp], SchwarzInput::Update, alpha);
-        for (int l = 1; l < m.levels; ++l) {
-            cg::this_grid().sync();
-            for (std::uint32_t domain = first_warp; domain < m.level[l].domains; domain += warps)
-                schwarz_coarse_domain(d, l, domain, lane, values[warp]);
-        }
-        cg::this_grid().sync();
-        local = 0.0;
-        for (std::uint32_t i = blockIdx.x * blockDim.x + threadIdx.x; i < d.n; i += stride) {
-            const V3 z = schwarz_correction(d, i);
-            store3(d.s, i, d.n, z);
-            local += static_cast<double>(physics::dot(load3(d.r, i, d.n), z));
-        }
-        const double delta_new = persistent_sum(local, partials[1]);
-        const float beta = static_cast<float>(delta_new / delta);
-        delta = delta_new;
-        ++iterations;
-        converged = delta_new <= sp.cg_eps2 * delta0;
-        if (converged || iterations >= sp.cg_max_iterations) break;
-        for (std::uint32_t i = blockIdx.x * blockDim.x + threadIdx.x; i < d.n; i += stride)
-            store3(d.c, i, d.n, d.fixed[i] ? V3{} : load3(d.s, i, d.n) + beta * load3(d.c, i, d.n));
-        cg::this_grid().sync();
-    }
-    cg::this_grid().sync();
     if (blockIdx.x == 0 && threadIdx.x == 0) {
         ctl.delta = delta;
         ctl.iterations = iterations;
@@ -409,10 +358,10 @@ namespace {
 
 const void* persistent_kernel(bool contacts, bool schwarz) {
     if (schwarz)
-        return contacts ? reinterpret_cast<const void*>(&pcg_schwarz_persistent_kernel<true>)
-                        : reinterpret_cast<const void*>(&pcg_schwarz_persistent_kernel<false>);
-    return contacts ? reinterpret_cast<const void*>(&pcg_persistent_kernel<true>)
-                    : reinterpret_cast<const void*>(&pcg_persistent_kernel<false>);
+        return contacts ? reinterpret_cast<const void*>(&pcg_persistent_kernel<true, true>)
+                        : reinterpret_cast<const void*>(&pcg_persistent_kernel<false, true>);
+    return contacts ? reinterpret_cast<const void*>(&pcg_persistent_kernel<true, false>)
+                    : reinterpret_cast<const void*>(&pcg_persistent_kernel<false, false>);
 }
 
 }  // namespace
