@@ -7,7 +7,9 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <initializer_list>
 #include <random>
+#include <span>
 #include <vector>
 
 #include "collision/displacement_bounds.h"
@@ -76,28 +78,33 @@ std::vector<Vec3d> random_moves(const std::vector<Vec3d>& x, std::mt19937& rng, 
     return x1;
 }
 
-DisplacementBounds bounds_of(const Soup& s, double radius, double relaxation = 0.45) {
+DisplacementBounds bounds_of(const Soup& s, double radius, double relaxation = 0.45,
+                             std::span<const double> radii = {}) {
     const std::vector<Edge> edges = build_edges(s.triangles);
     BroadPhase hash;
     DisplacementBounds b;
     compute_displacement_bounds({.x = s.x, .triangles = s.triangles, .edges = edges, .query_radius = radius,
-                                 .relaxation = relaxation},
+                                 .radius = radii, .relaxation = relaxation},
                                 hash, b);
     return b;
 }
 
-TEST(DisplacementBounds, EqualABruteForceSearch) {
-    std::mt19937 rng(5);
-    const Soup s = random_soup(rng, 120, 0.05, 0.4);
-    const double r = 0.05, gamma = 0.45;
-    const DisplacementBounds b = bounds_of(s, r, gamma);
-    std::vector<double> brute(s.x.size(), r);
+/// Each vertex's bound by brute force: γ·min(r_v, distance to the nearest pair it belongs to that is
+/// within the largest radius of the pair's four vertices).
+std::vector<double> brute_force_bounds(const Soup& s, std::span<const double> radius, double gamma) {
+    std::vector<double> nearest(radius.begin(), radius.end());
+    const auto limit = [&](double d, std::initializer_list<std::uint32_t> vertices) {
+        double largest = 0.0;
+        for (const std::uint32_t c : vertices) largest = std::max(largest, radius[c]);
+        if (!(d < largest)) return;
+        for (const std::uint32_t c : vertices) nearest[c] = std::min(nearest[c], d);
+    };
     const auto shares = [](const Triangle& t, std::uint32_t v) { return t.v[0] == v || t.v[1] == v || t.v[2] == v; };
     for (std::uint32_t v = 0; v < s.x.size(); ++v)
         for (const Triangle& t : s.triangles) {
             if (shares(t, v)) continue;
             const double d = physics::point_triangle_proximity(s.x[v], s.x[t.v[0]], s.x[t.v[1]], s.x[t.v[2]]).distance;
-            for (const std::uint32_t c : {v, t.v[0], t.v[1], t.v[2]}) brute[c] = std::min(brute[c], d);
+            limit(d, {v, t.v[0], t.v[1], t.v[2]});
         }
     const std::vector<Edge> edges = build_edges(s.triangles);
     for (std::size_t i = 0; i < edges.size(); ++i)
@@ -105,15 +112,48 @@ TEST(DisplacementBounds, EqualABruteForceSearch) {
             const Edge &e = edges[i], &f = edges[j];
             if (e.v[0] == f.v[0] || e.v[0] == f.v[1] || e.v[1] == f.v[0] || e.v[1] == f.v[1]) continue;
             const double d = physics::edge_edge_proximity(s.x[e.v[0]], s.x[e.v[1]], s.x[f.v[0]], s.x[f.v[1]]).distance;
-            for (const std::uint32_t c : {e.v[0], e.v[1], f.v[0], f.v[1]}) brute[c] = std::min(brute[c], d);
+            limit(d, {e.v[0], e.v[1], f.v[0], f.v[1]});
         }
+    for (double& b : nearest) b *= gamma;
+    return nearest;
+}
+
+TEST(DisplacementBounds, EqualABruteForceSearch) {
+    std::mt19937 rng(5);
+    const Soup s = random_soup(rng, 120, 0.05, 0.4);
+    const double r = 0.05, gamma = 0.45;
+    const DisplacementBounds b = bounds_of(s, r, gamma);
+    const std::vector<double> radius(s.x.size(), r);
+    const std::vector<double> brute = brute_force_bounds(s, radius, gamma);
     std::size_t limited = 0;
     for (std::size_t v = 0; v < s.x.size(); ++v) {
-        ASSERT_DOUBLE_EQ(b.bound[v], gamma * brute[v]) << "vertex " << v;
-        limited += brute[v] < r ? 1 : 0;
+        ASSERT_DOUBLE_EQ(b.bound[v], brute[v]) << "vertex " << v;
+        ASSERT_DOUBLE_EQ(b.reach[v], gamma * r);
+        limited += brute[v] < gamma * r ? 1 : 0;
     }
     EXPECT_EQ(b.limited_vertices, limited);
     EXPECT_GT(limited, s.x.size() / 4) << "the soup is dense enough to test something";
+}
+
+// Per-vertex radii (the padded broad phase): every pair within the largest radius of its vertices is
+// found, and limits all four.
+TEST(DisplacementBounds, PerVertexRadiiEqualABruteForceSearch) {
+    std::mt19937 rng(8);
+    const Soup s = random_soup(rng, 120, 0.05, 0.4);
+    std::uniform_real_distribution<double> u(0.005, 0.08);
+    std::vector<double> radius(s.x.size());
+    for (double& r : radius) r = u(rng);
+    const double gamma = 0.4;
+    const DisplacementBounds b = bounds_of(s, 0.0, gamma, radius);
+    const std::vector<double> brute = brute_force_bounds(s, radius, gamma);
+    std::size_t limited = 0;
+    for (std::size_t v = 0; v < s.x.size(); ++v) {
+        ASSERT_DOUBLE_EQ(b.bound[v], brute[v]) << "vertex " << v;
+        ASSERT_DOUBLE_EQ(b.reach[v], gamma * radius[v]);
+        limited += brute[v] < gamma * radius[v] ? 1 : 0;
+    }
+    EXPECT_EQ(b.limited_vertices, limited);
+    EXPECT_GT(limited, s.x.size() / 5);
 }
 
 // Both truncations, on the same moves: neither lets anything intersect, the planar one never keeps
@@ -129,7 +169,13 @@ TEST(DisplacementBounds, TruncatedMovesNeverIntersect) {
         const double reach = sheets ? 0.05 : 0.1;
         const std::vector<Vec3d> x1 = random_moves(s.x, rng, reach);
         untruncated_intersecting += check_intersections(x1, s.triangles).clean() ? 0 : 1;
-        const DisplacementBounds b = bounds_of(s, 2.0 * reach);
+        // Trials 1 and 4: a radius per vertex, between the move and twice it.
+        std::vector<double> radii;
+        if (trial % 3 == 1) {
+            std::uniform_real_distribution<double> u(reach, 2.0 * reach);
+            for (std::size_t v = 0; v < s.x.size(); ++v) radii.push_back(u(rng));
+        }
+        const DisplacementBounds b = bounds_of(s, 2.0 * reach, 0.45, radii);
         std::vector<Vec3d> sphere = x1, planar = x1;
         EXPECT_GT(truncate_displacements(s.x, sphere, b.bound), 0u) << "trial " << trial;
         EXPECT_GT(truncate_displacements_planar(s.x, planar, b), 0u) << "trial " << trial;
@@ -157,6 +203,9 @@ TEST(DisplacementBounds, RejectBadInput) {
     EXPECT_THROW((void)bounds_of(s, 0.0), Error);
     EXPECT_THROW((void)bounds_of(s, 0.01, 0.5), Error);
     EXPECT_THROW((void)bounds_of(s, 0.01, 0.0), Error);
+    const std::vector<double> short_radii(s.x.size() - 1, 0.1), zero_radii(s.x.size(), 0.0);
+    EXPECT_THROW((void)bounds_of(s, 0.01, 0.45, short_radii), Error);
+    EXPECT_THROW((void)bounds_of(s, 0.01, 0.45, zero_radii), Error);
     std::vector<Vec3d> x1 = s.x;
     const std::vector<double> short_bounds(s.x.size() - 1, 0.1);
     EXPECT_THROW((void)truncate_displacements(s.x, x1, short_bounds), Error);

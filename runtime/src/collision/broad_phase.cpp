@@ -162,6 +162,14 @@ void BroadPhase::find(const BroadPhaseInput& in, BroadPhaseResult& out) {
     for (std::size_t e = 0; e < ne; ++e)
         for (std::uint32_t v : in.edges[e].v)
             if (v >= n) throw Error("broad phase: edge " + std::to_string(e) + " uses vertex " + std::to_string(v));
+    const bool padded = !in.vertex_padding.empty();
+    if (padded && in.vertex_padding.size() != n)
+        throw Error("broad phase: " + std::to_string(in.vertex_padding.size()) + " vertex paddings for " +
+                    std::to_string(n) + " vertices");
+    for (std::size_t i = 0; padded && i < n; ++i)
+        if (!std::isfinite(in.vertex_padding[i]) || in.vertex_padding[i] < 0.0)
+            throw Error("broad phase: vertex " + std::to_string(i) + " has padding " +
+                        std::to_string(in.vertex_padding[i]) + " (must be finite and non-negative)");
     const bool filter_cloth = !in.self_pairs;
     if (filter_cloth && !in.triangle_cloth.empty() && in.triangle_cloth.size() != nt)
         throw Error("broad phase: " + std::to_string(in.triangle_cloth.size()) + " triangle cloth ids for " +
@@ -245,12 +253,36 @@ void BroadPhase::find(const BroadPhaseInput& in, BroadPhaseResult& out) {
         }
         if (!finite) box.lo = box.hi = {nan, nan, nan};
     };
+    // With padding, a primitive grows by the largest padding of its vertices: united from the
+    // unpadded vertex bounds first, the vertices' own padding last.
+    const auto pad = [&](Box& box, double p) {
+        box.lo = box.lo - Vec3d{p, p, p};
+        box.hi = box.hi + Vec3d{p, p, p};
+        if (!finite_box(box)) box.lo = box.hi = {nan, nan, nan};
+    };
+    const auto largest_padding = [&](std::span<const std::uint32_t> vertices) {
+        double p = 0.0;
+        for (const std::uint32_t v : vertices) p = std::max(p, in.vertex_padding[v]);
+        return p;
+    };
     parallel_chunks(ne, [&](std::size_t b, std::size_t e) {
-        for (std::size_t i = b; i < e; ++i) unite(box_[edge0 + i], in.edges[i].v);
+        for (std::size_t i = b; i < e; ++i) {
+            unite(box_[edge0 + i], in.edges[i].v);
+            if (padded) pad(box_[edge0 + i], largest_padding(in.edges[i].v));
+        }
     });
     parallel_chunks(nt, [&](std::size_t b, std::size_t e) {
-        for (std::size_t i = b; i < e; ++i) unite(box_[tri0 + i], in.triangles[i].v);
+        for (std::size_t i = b; i < e; ++i) {
+            unite(box_[tri0 + i], in.triangles[i].v);
+            if (padded) pad(box_[tri0 + i], largest_padding(in.triangles[i].v));
+        }
     });
+    if (padded) {
+        parallel_chunks(n, [&](std::size_t b, std::size_t e) {
+            for (std::size_t i = b; i < e; ++i)
+                if (finite_box(box_[i])) pad(box_[i], in.vertex_padding[i]);
+        });
+    }
 
     // ---- Grid: origin and cell size ---------------------------------------------------------------
     // Every bound lies inside the union of the vertex bounds, so the vertices give the origin.

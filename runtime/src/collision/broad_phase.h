@@ -36,6 +36,11 @@ struct BroadPhaseInput {
     /// as large as the primitives keep both the entries per primitive and the occupants per cell
     /// small).
     double cell_size = 0.0;
+    /// Extra growth per vertex, m (optional: empty, or one entry per vertex, each finite and ≥ 0). A
+    /// vertex's bound grows by thickness + its padding; an edge's or triangle's by thickness + the
+    /// largest padding of its vertices. So two primitives within max(p_a, p_b) of each other always
+    /// pair, p being each one's padding: the per-vertex query radii of the displacement bounds.
+    std::span<const double> vertex_padding;
     /// Pairs within one cloth. Always true for now; false keeps cloth–cloth pairs only.
     bool self_pairs = true;
     /// Self-collision culling (docs/methods.md §5; PSCC's cone ids), optional: either all three empty

@@ -35,6 +35,11 @@ struct DisplacementBoundsInput {
     std::span<const Triangle> triangles;  ///< global vertex ids
     std::span<const Edge> edges;          ///< unique edges, normally `build_edges(triangles)`
     double query_radius = 0.0;            ///< r, m (> 0): partners farther than this do not limit a vertex
+    /// Per-vertex query radii r_v, m (optional: empty uses `query_radius` for every vertex; else one
+    /// finite value > 0 per vertex). A pair is measured when its distance is below the largest r_v of
+    /// its four vertices, and then limits all four: a pair not measured is at least r_v from each of
+    /// its vertices, which move at most γ·r_v, so the proof above holds vertex by vertex.
+    std::span<const double> radius;
     double relaxation = 0.45;             ///< γ in (0, ½): the share of the distance a vertex may cover
 };
 
@@ -46,27 +51,36 @@ struct PartnerLimit {
 };
 
 struct DisplacementBounds {
-    std::vector<double> bound;         ///< b_v per vertex, m
+    std::vector<double> bound;         ///< b_v = γ·min(r_v, d_v) per vertex, m
+    std::vector<double> reach;         ///< γ·r_v per vertex: the most vertex v may move in any direction, m
     /// Per vertex, its partners within r (CSR: partner_start has vertices + 1 entries, in pair order),
     /// for the planar truncation.
     std::vector<std::uint32_t> partner_start;
     std::vector<PartnerLimit> partners;
-    double cap = 0.0;                  ///< γ·r, m: the most any vertex may move
-    std::size_t vf_pairs = 0;          ///< vertex–face pairs measured (boxes within r)
+    /// The pairs measured (broad-phase order) and their distances at `x`, m: what the offset contacts
+    /// are chosen from.
+    BroadPhaseResult pairs;
+    std::vector<double> vf_distance, ee_distance;
+    std::size_t vf_pairs = 0;          ///< vertex–face pairs measured (within the radius)
     std::size_t ee_pairs = 0;          ///< edge–edge pairs measured
-    std::size_t limited_vertices = 0;  ///< vertices with a partner closer than r
+    std::size_t limited_vertices = 0;  ///< vertices with a partner closer than their r_v
 };
 
 /// The bounds of every vertex (the broad phase's spatial hash finds the pairs within r; `hash` keeps
 /// its scratch between calls). Throws `weft::Error` for r ≤ 0, γ outside (0, ½) or mismatched input.
 void compute_displacement_bounds(const DisplacementBoundsInput& in, BroadPhase& hash, DisplacementBounds& out);
 
+/// The share t ∈ [0, 1] of vertex v's move `move` (m) that keeps its bounds: sphere (|t·move| ≤ b_v)
+/// or planar (t·move advances at most γ·d towards each partner and at most reach_v in all; never less
+/// than the sphere's).
+double kept_share(const DisplacementBounds& b, std::size_t v, Vec3d move, bool planar);
+
 /// Shortens each vertex's move x1 − x0 to at most its bound (along the move). Returns the number of
 /// vertices shortened.
 std::size_t truncate_displacements(std::span<const Vec3d> x0, std::span<Vec3d> x1, std::span<const double> bound);
 
 /// The planar variant: shortens each vertex's move (along the move) to the longest that advances at
-/// most `limit` towards each of its partners and at most `cap` in all. Never shorter than
+/// most `limit` towards each of its partners and at most its reach in all. Never shorter than
 /// `truncate_displacements` would make it. Returns the number of vertices shortened.
 std::size_t truncate_displacements_planar(std::span<const Vec3d> x0, std::span<Vec3d> x1, const DisplacementBounds& b);
 
