@@ -123,6 +123,10 @@ constexpr std::string_view kEnergyGuardNames[] = {"off", "report", "retry"};
 constexpr std::array kEnergyGuards{EnergyGuard::Off, EnergyGuard::Report, EnergyGuard::Retry};
 constexpr std::string_view kCullingNames[] = {"normal_cone", "none"};
 constexpr std::array kCullings{CollisionCulling::NormalCone, CollisionCulling::None};
+constexpr std::string_view kCollisionModeNames[] = {"ccd_zones", "offset"};
+constexpr std::array kCollisionModes{CollisionMode::CcdZones, CollisionMode::Offset};
+constexpr std::string_view kBoundShapeNames[] = {"planar", "sphere"};
+constexpr std::array kBoundShapes{BoundShape::Planar, BoundShape::Sphere};
 constexpr std::string_view kPlaneNames[] = {"xy", "xz"};
 constexpr std::array kPlanes{GridPlane::XY, GridPlane::XZ};
 constexpr std::string_view kEdgeNames[] = {"top", "bottom", "left", "right"};
@@ -225,6 +229,12 @@ constexpr Parameter kTable[] = {
     {.section = "collision", .name = "self", .type = T::Boolean,
      .doc = "self-contact: each cloth against itself and against the other cloths", .label = "self-collision",
      .panel = "collision", .access = field<&WorldDesc::collision, &CollisionSettings::self_collision>()},
+    {.section = "collision", .name = "mode", .type = T::Choice,
+     .doc = "`ccd_zones`: proximity springs, then CCD and impact zones after the solve (PSCC, P-Cloth); `offset`: "
+            "offset geometric contact, a smooth penalty within the contact radius and every move truncated to the "
+            "vertex's conservative bound, no CCD (docs/methods.md §7b; cpu backend only for now)",
+     .label = "contact mode", .panel = "collision", .choices = kCollisionModeNames,
+     .access = choice_field<kCollisionModes, &WorldDesc::collision, &CollisionSettings::mode>()},
     {.section = "collision", .name = "continuous", .type = T::Boolean,
      .doc = "after the solve, continuous collision detection and impact zones leave every substep free of "
             "intersections; false: proximity forces only (faster; fast or thin motion may pass through)",
@@ -260,6 +270,29 @@ constexpr Parameter kTable[] = {
      .doc = "stiffness of the proximity springs; 0: 100·m/h² from the pair's effective mass m and the substep h",
      .label = "stiffness", .panel = "collision", .log_scale = true,
      .access = field<&WorldDesc::collision, &CollisionSettings::stiffness>()},
+    {.section = "collision", .name = "relaxation", .type = T::Real, .range = R{0.05, 0.49},
+     .doc = "offset mode: the share γ of its distance to the nearest primitive a vertex may move per update (< ½: "
+            "approaching primitives keep (1 − 2γ) of their gap); smaller truncates more",
+     .label = "bound relaxation", .panel = "collision",
+     .access = field<&WorldDesc::collision, &CollisionSettings::relaxation>()},
+    {.section = "collision", .name = "bound_shape", .type = T::Choice,
+     .doc = "offset mode: `planar` limits each move only towards each nearby primitive's separating plane (keeps "
+            "about 3× more of a random move); `sphere` limits its length",
+     .label = "bound shape", .panel = "collision", .choices = kBoundShapeNames,
+     .access = choice_field<kBoundShapes, &WorldDesc::collision, &CollisionSettings::bound_shape>()},
+    {.section = "collision", .name = "max_query_radius", .type = T::Real, .unit = "contact radii", .range = R{1.0, 100.0},
+     .doc = "offset mode: the largest per-vertex query radius (each covers 1.5× the vertex's predicted move over γ); "
+            "larger: fewer truncations and reruns, more pairs measured",
+     .label = "max query radius", .panel = "collision", .log_scale = true,
+     .access = field<&WorldDesc::collision, &CollisionSettings::max_query_radius>()},
+    {.section = "collision", .name = "redetect_share", .type = T::Real, .range = R{0.0, 1.0},
+     .doc = "offset mode: rerun the detection, with one more Newton iteration, when more than this share of the free "
+            "cloth vertices was truncated",
+     .label = "redetect share", .panel = "collision",
+     .access = field<&WorldDesc::collision, &CollisionSettings::redetect_share>()},
+    {.section = "collision", .name = "max_redetections", .type = T::Integer, .range = R{0, 64},
+     .doc = "offset mode: detection reruns allowed per substep", .label = "max redetections", .panel = "collision",
+     .access = field<&WorldDesc::collision, &CollisionSettings::max_redetections>()},
     {.section = "collision", .name = "max_impact_iterations", .type = T::Integer, .range = R{1, 1000},
      .doc = "impact-zone rounds per substep before the rigid-zone fallback", .label = "impact-zone rounds",
      .panel = "collision", .log_scale = true,

@@ -79,6 +79,10 @@ RunSummary summarize(std::span<const StepStats> frames) {
         sc.rigid_zones += c.rigid_zones;
         sc.frozen_vertices += c.frozen_vertices;
         sc.unresolved_substeps += c.unresolved_substeps;
+        sc.truncated_vertices += c.truncated_vertices;
+        sc.redetections += c.redetections;
+        sc.bound_fallbacks += c.bound_fallbacks;
+        sc.query_radius_max = std::max(sc.query_radius_max, c.query_radius_max);
         if (c.remaining_intersections >= 0) {
             ++sc.checked_frames;
             sc.remaining_intersections_max = std::max<long long>(sc.remaining_intersections_max, c.remaining_intersections);
@@ -251,6 +255,8 @@ void write_summary_fields(JsonWriter& json, const RunContext& c, const RunSummar
     json.field("impact_zones", col.impact_zones).field("impact_iterations_max", col.impact_iterations_max);
     json.field("rigid_zones", col.rigid_zones).field("frozen_vertices", col.frozen_vertices);
     json.field("unresolved_substeps", col.unresolved_substeps);
+    json.field("truncated_vertices", col.truncated_vertices).field("redetections", col.redetections);
+    json.field("bound_fallbacks", col.bound_fallbacks).field("query_radius_max", col.query_radius_max);
     json.field("checked_frames", col.checked_frames);
     json.end_object();
     json.field("impact_zones", col.impact_zones);
@@ -358,6 +364,10 @@ void print_run_summary(std::ostream& out, const RunContext& c, const RunSummary&
         out << "  impact zones   " << col.impact_zones << " zones, at most " << col.impact_iterations_max
             << " rounds per substep; fallbacks: " << col.rigid_zones << " rigid, " << col.frozen_vertices
             << " frozen; unresolved substeps " << col.unresolved_substeps << "\n";
+        if (col.query_radius_max > 0.0)
+            out << "  offset bounds  " << col.truncated_vertices << " vertex moves truncated, " << col.redetections
+                << " detection reruns, " << col.bound_fallbacks << " substeps sent to the CCD fallback; query radius up to "
+                << format_fixed(1000.0 * col.query_radius_max, 2) << " mm\n";
     }
     if (col.checked_frames > 0) {
         out << "  intersections  " << col.frames_with_intersections << " of " << col.checked_frames

@@ -73,6 +73,10 @@ struct RunSummary {
         int impact_iterations_max = 0;
         long long rigid_zones = 0, frozen_vertices = 0;
         long long unresolved_substeps = 0;
+        /// Offset mode (CollisionStats): truncated vertex moves, detection reruns, CCD fallbacks and
+        /// the largest query radius (m).
+        long long truncated_vertices = 0, redetections = 0, bound_fallbacks = 0;
+        double query_radius_max = 0.0;
         std::size_t checked_frames = 0;       ///< frames the exact check ran after
         long long remaining_intersections_max = 0;
         std::size_t frames_with_intersections = 0;

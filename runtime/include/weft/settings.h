@@ -106,6 +106,23 @@ enum class CollisionCulling : std::uint8_t {
 /// are always handled by penalty contacts in the solve; mesh colliders always go through this
 /// pipeline. Only the stages a scene needs are built: with `self_collision` off and no mesh collider
 /// nothing here runs.
+/// How cloth is kept from passing through cloth (docs/collisions.md).
+enum class CollisionMode : std::uint8_t {
+    /// Proximity springs in the solve, then continuous collision detection and impact zones after it
+    /// (the PSCC / P-Cloth pipeline; docs/methods.md §6–7).
+    CcdZones,
+    /// Offset geometric contact: a smooth penalty inside the contact radius in the solve, and every
+    /// vertex's move truncated to its conservative bound (docs/methods.md §7b). No CCD; the impact
+    /// zones only as the fallback for a substep whose prescribed motion breaks a bound.
+    Offset,
+};
+
+/// The shape of the per-vertex bound the offset mode truncates moves to (docs/methods.md §7b).
+enum class BoundShape : std::uint8_t {
+    Sphere,  ///< |move| ≤ γ·min(r_v, d_v)
+    Planar,  ///< at most γ·d towards each partner's separating plane (and γ·r_v in all): keeps more of each move
+};
+
 struct CollisionSettings {
     /// Cloth against itself and against the other cloths.
     bool self_collision = false;
@@ -145,6 +162,23 @@ struct CollisionSettings {
     /// is faster per round but may need more rounds or the fallbacks. 0: the backend's default (cpu
     /// 1000, cuda 200).
     int max_impact_sweeps = 0;
+    /// Contact pipeline: CCD with impact zones, or offset contact with displacement bounds.
+    CollisionMode mode = CollisionMode::CcdZones;
+    /// Offset mode: γ, the share of its distance to the nearest primitive a vertex may move per update
+    /// (below ½, so two approaching primitives keep a gap of at least (1 − 2γ) of their distance).
+    double relaxation = 0.45;
+    /// Offset mode: sphere or planar bounds.
+    BoundShape bound_shape = BoundShape::Planar;
+    /// Offset mode: the largest per-vertex query radius, in contact radii. A vertex's radius covers
+    /// 1.5× its predicted move (relative to the cloth's mean motion) over γ, from one contact radius up
+    /// to this; a vertex moving faster is truncated and the detection rerun. Larger: fewer reruns,
+    /// more pairs measured.
+    double max_query_radius = 4.0;
+    /// Offset mode: rerun the detection (and one more Newton iteration) when more than this share of
+    /// the free cloth vertices was truncated.
+    double redetect_share = 0.01;
+    /// Offset mode: reruns allowed per substep.
+    int max_redetections = 2;
     /// Run the exact triangle–triangle intersection check after every step and report the count in
     /// `StepStats::collision.remaining_intersections` (also `weft run --check`). Costly: for tests.
     bool check = false;

@@ -44,6 +44,14 @@ struct CollisionStats {
     int frozen_vertices = 0;            ///< vertices the last-resort fallback held at their start position
     int swept_collider_hits = 0;        ///< vertices a fast analytic collider hit mid-substep and carried along
     int unresolved_substeps = 0;        ///< substeps that ended with a collision still detected (must be 0)
+    /// Offset mode (CollisionSettings::mode): free cloth vertices whose move the bounds shortened,
+    /// summed over the updates of the step; detection reruns; substeps sent to the CCD and impact-zone
+    /// fallback because a prescribed move (pin, mesh collider, fast collider) broke a bound; and the
+    /// largest per-vertex query radius used, m.
+    std::int64_t truncated_vertices = 0;
+    int redetections = 0;
+    int bound_fallbacks = 0;
+    double query_radius_max = 0.0;
     std::int64_t remaining_intersections = -1;  ///< exact check after the step; −1 when not run
 };
 

@@ -285,11 +285,12 @@ void BroadPhase::find(const BroadPhaseInput& in, BroadPhaseResult& out) {
     }
 
     // ---- Grid: origin and cell size ---------------------------------------------------------------
-    // Every bound lies inside the union of the vertex bounds, so the vertices give the origin.
+    // Unpadded, every bound lies inside the union of the vertex bounds, so the vertices give the
+    // origin; with padding an edge or triangle may reach further than its vertices' own bounds.
     Vec3d origin{std::numeric_limits<double>::infinity(), std::numeric_limits<double>::infinity(),
                  std::numeric_limits<double>::infinity()};
     Vec3d top = -origin;
-    for (std::size_t i = 0; i < n; ++i) {
+    for (std::size_t i = 0; i < (padded ? prims : n); ++i) {
         if (!finite_box(box_[i])) continue;
         origin = min3(origin, box_[i].lo);
         top = max3(top, box_[i].hi);

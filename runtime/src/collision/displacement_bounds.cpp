@@ -35,6 +35,8 @@ void compute_displacement_bounds(const DisplacementBoundsInput& in, BroadPhase& 
     query.x1 = in.x;
     query.triangles = in.triangles;
     query.edges = in.edges;
+    query.self_pairs = in.self_pairs;
+    query.triangle_cloth = in.triangle_group;
     if (per_vertex)
         query.vertex_padding = in.radius;
     else

@@ -41,6 +41,10 @@ struct DisplacementBoundsInput {
     /// its vertices, which move at most γ·r_v, so the proof above holds vertex by vertex.
     std::span<const double> radius;
     double relaxation = 0.45;             ///< γ in (0, ½): the share of the distance a vertex may cover
+    /// As BroadPhaseInput: false measures only pairs across groups (`triangle_group`), which the
+    /// bounds then certify alone (self-collision off: a cloth may cross itself).
+    bool self_pairs = true;
+    std::span<const std::uint32_t> triangle_group;
 };
 
 /// One partner of a vertex within the query radius: the vertex may move at most `limit` (m) along the

@@ -45,8 +45,18 @@ bool make_contact(const ProximityInput& in, const std::uint32_t (&ids)[4], const
     }
     if (!(inverse_effective_mass > 0.0)) return false;
     const double thickness = in.thickness_override > 0.0 ? in.thickness_override : std::max(thickness_a, thickness_b);
-    const double gap1 = dot(normal, predicted);
-    if (!(std::min(gap0, gap1) < thickness)) return false;
+    if (in.offset_bound.empty()) {
+        const double gap1 = dot(normal, predicted);
+        if (!(std::min(gap0, gap1) < thickness)) return false;
+    } else {
+        // The most the gap can shrink: each primitive moves at most as far as its farthest vertex.
+        double reach_a = 0.0, reach_b = 0.0;
+        for (int i = 0; i < 4; ++i) {
+            double& reach = i < first_side ? reach_a : reach_b;
+            reach = std::max(reach, in.offset_bound[ids[i]]);
+        }
+        if (!(gap0 - (reach_a + reach_b) < thickness)) return false;
+    }
     if (rest_neighbours(in, ids, first_side, thickness)) return false;
     for (int i = 0; i < 4; ++i) {
         c.vertex[i] = ids[i];
@@ -57,6 +67,7 @@ bool make_contact(const ProximityInput& in, const std::uint32_t (&ids)[4], const
     c.thickness = thickness;
     c.stiffness = in.stiffness_override > 0.0 ? in.stiffness_override : 100.0 / (inverse_effective_mass * in.h * in.h);
     c.friction = 0.5 * (friction_a + friction_b);
+    c.edge_edge = first_side == 2;
     return true;
 }
 
@@ -69,6 +80,9 @@ void find_proximity_contacts(const ProximityInput& in, std::vector<ProximityCont
     if (!in.rest.empty() && in.vertex_cloth.size() != in.rest.size())
         throw Error("find_proximity_contacts: " + std::to_string(in.rest.size()) + " rest positions but " +
                     std::to_string(in.vertex_cloth.size()) + " cloth ids");
+    if (!in.offset_bound.empty() && in.offset_bound.size() != n)
+        throw Error("find_proximity_contacts: " + std::to_string(in.offset_bound.size()) + " displacement bounds for " +
+                    std::to_string(n) + " vertices");
     if (!(in.h > 0.0)) throw Error("find_proximity_contacts: substep must be positive, got " + std::to_string(in.h));
     const std::size_t nvf = in.vf.size();
     const std::size_t total = nvf + in.ee.size();

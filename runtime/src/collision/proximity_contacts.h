@@ -37,6 +37,10 @@ struct ProximityInput {
     std::span<const Vec3d> rest;                 ///< rest positions of the cloth vertices, m
     std::span<const std::uint32_t> vertex_cloth;  ///< owning cloth of each cloth vertex
     double rest_exclusion = 0.0;
+    /// Offset contact (CollisionSettings::mode): each vertex's displacement bound, m. Given, a pair is
+    /// kept when it can come within the thickness under the bounds, d − (largest bound of the first
+    /// primitive + largest of the second) < thickness, d its distance at x0 (x1 is not read).
+    std::span<const double> offset_bound;
     double h = 0.0;                         ///< substep, s
     double thickness_override = 0.0;        ///< m; > 0 replaces the per-vertex thickness
     double stiffness_override = 0.0;        ///< N/m; > 0 replaces the 100·m/h² rule

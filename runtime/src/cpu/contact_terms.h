@@ -15,7 +15,9 @@
 #include "cpu/bsr_matrix.h"
 #include "deterministic_parallel.h"
 #include "weft/physics/implicit_terms.h"
+#include "weft/physics/offset_contact.h"
 #include "weft/physics/pair_contact.h"
+#include "weft/physics/proximity.h"
 
 namespace weft::cpu {
 
@@ -26,14 +28,19 @@ public:
     using M3 = physics::Mat3<T>;
 
     /// Takes the substep's contacts. Vertex ids ≥ `cloth_vertices` are kinematic (collider meshes):
-    /// they move as prescribed and are not unknowns of the solve.
-    void set(std::span<const collision::ProximityContact> contacts, std::size_t cloth_vertices) {
+    /// they move as prescribed and are not unknowns of the solve. `offset`: each pair is an offset
+    /// contact (weft/physics/offset_contact.h) whose closest points, weights and normal follow the
+    /// primitives at every evaluation, with the contact's thickness as its radius; otherwise a pair
+    /// spring along the contact's fixed normal.
+    void set(std::span<const collision::ProximityContact> contacts, std::size_t cloth_vertices, bool offset = false) {
         n_ = cloth_vertices;
+        offset_ = offset;
         const std::size_t m = contacts.size();
         ids_.resize(m);
         weight_.resize(m);
         normal_.resize(m);
         params_.resize(m);
+        edge_edge_.resize(m);
         block_.resize(m);
         rhs_.resize(m);
         scratch_.resize(m);
@@ -44,6 +51,7 @@ public:
                 weight_[p][i] = static_cast<T>(c.weight[i]);
             }
             normal_[p] = c.normal.template cast<T>();
+            edge_edge_[p] = c.edge_edge ? 1 : 0;
             params_[p] = {static_cast<T>(c.stiffness), static_cast<T>(c.thickness), static_cast<T>(c.friction),
                           T(1e-3)};
         }
@@ -74,6 +82,10 @@ public:
         const physics::ImplicitStep<T> step{h, h * h};
         parallel_chunks(ids_.size(), [&](std::size_t lo, std::size_t hi) {
             for (std::size_t p = lo; p < hi; ++p) {
+                if (offset_) {
+                    evaluate_offset(step, p, x0, wk, vk, kinematic_x1, kinematic_v);
+                    continue;
+                }
                 V3 g{}, u{}, d{};
                 for (int i = 0; i < 4; ++i) {
                     const std::uint32_t v = ids_[p][i];
@@ -101,6 +113,21 @@ public:
                 diagonal_[i] = acc;
             }
         });
+    }
+
+    /// Offset contacts: their penalty energy with cloth vertex i at x[i] and kinematic vertex k at
+    /// kinematic_x[k], J (the closest points taken there; 0 for pair springs).
+    [[nodiscard]] double energy_at(const std::vector<V3>& x, std::span<const V3> kinematic_x) const {
+        if (!offset_) return 0.0;
+        double e = 0.0;
+        for (std::size_t p = 0; p < ids_.size(); ++p) {
+            V3 y[4];
+            for (int i = 0; i < 4; ++i) y[i] = ids_[p][i] < n_ ? x[ids_[p][i]] : kinematic_x[ids_[p][i] - n_];
+            const T d = edge_edge_[p] ? physics::edge_edge_proximity(y[0], y[1], y[2], y[3]).distance
+                                      : physics::point_triangle_proximity(y[0], y[1], y[2], y[3]).distance;
+            e += static_cast<double>(physics::offset_penalty(d, params_[p].stiffness, params_[p].thickness).energy);
+        }
+        return e;
     }
 
     /// b_i += Σ_pairs w_i·(pair right-hand side).
@@ -136,11 +163,52 @@ public:
         return ids_.capacity() * sizeof(ids_[0]) + weight_.capacity() * sizeof(weight_[0]) +
                (normal_.capacity() + rhs_.capacity() + scratch_.capacity()) * sizeof(V3) +
                params_.capacity() * sizeof(params_[0]) + (block_.capacity() + diagonal_.capacity()) * sizeof(M3) +
-               (start_.capacity() + entry_.capacity() + fill_.capacity()) * sizeof(std::uint32_t);
+               (start_.capacity() + entry_.capacity() + fill_.capacity()) * sizeof(std::uint32_t) + edge_edge_.capacity();
     }
 
 private:
+    /// One offset contact at the linearisation point: closest points of its two primitives there
+    /// (vertex–face or edge–edge), hence this evaluation's weights, then the penalty of the distance.
+    void evaluate_offset(const physics::ImplicitStep<T>& step, std::size_t p, const std::vector<V3>& x0,
+                         const std::vector<V3>& wk, const std::vector<V3>& vk, std::span<const V3> kinematic_x1,
+                         std::span<const V3> kinematic_v) {
+        V3 x[4];
+        for (int i = 0; i < 4; ++i) {
+            const std::uint32_t v = ids_[p][i];
+            x[i] = v < n_ ? x0[v] + step.h * wk[v] : kinematic_x1[v - n_];
+        }
+        std::array<T, 4>& w = weight_[p];
+        V3 fallback;
+        if (edge_edge_[p]) {
+            const auto q = physics::edge_edge_proximity(x[0], x[1], x[2], x[3]);
+            w = {T(1) - q.u, q.u, -(T(1) - q.v), -q.v};
+            fallback = q.normal;
+        } else {
+            const auto q = physics::point_triangle_proximity(x[0], x[1], x[2], x[3]);
+            w = {T(1), -(T(1) - q.u - q.v), -q.u, -q.v};
+            fallback = q.normal;
+        }
+        V3 g{}, u{}, d{};
+        for (int i = 0; i < 4; ++i) {
+            const std::uint32_t v = ids_[p][i];
+            g += w[i] * x[i];
+            if (v < n_) {
+                u += w[i] * vk[v];
+                d += w[i] * (vk[v] - wk[v]);
+            } else {
+                u += w[i] * kinematic_v[v - n_];
+            }
+        }
+        const physics::PairContactParams<T>& c = params_[p];
+        const physics::OffsetContactForce<T> f = physics::offset_contact(
+            g, u, fallback, physics::OffsetContactParams<T>{c.stiffness, c.thickness, c.friction, c.slip_velocity});
+        physics::pair_contact_terms(step, f.force, f.dfdx, f.dfdv, d, rhs_[p], block_[p]);
+    }
+
     std::size_t n_ = 0;
+    bool offset_ = false;
+    std::vector<std::uint8_t> edge_edge_;
+
     std::vector<std::array<std::uint32_t, 4>> ids_;
     std::vector<std::array<T, 4>> weight_;
     std::vector<V3> normal_;

@@ -47,6 +47,14 @@ public:
         std::visit([&](auto& s) { s.write_state(first, count, x.data(), v.data()); }, solver_);
     }
 
+    // The host audit plus the offset contacts' penalty energy, a potential of the state like the
+    // membrane's (pair springs have none: their normal is frozen per substep).
+    EnergyAudit energy_audit(const Model& model, double t, double h, bool with_wind) const override {
+        EnergyAudit audit = Backend::energy_audit(model, t, h, with_wind);
+        audit.contact += std::visit([](const auto& s) { return s.offset_contact_energy(); }, solver_);
+        return audit;
+    }
+
     std::size_t memory_bytes() const override {
         return flat_.memory_bytes() + std::visit([](const auto& s) { return s.memory_bytes(); }, solver_);
     }

@@ -2,6 +2,7 @@
 #include "cpu/cpu_collisions.h"
 
 #include <algorithm>
+#include <atomic>
 #include <chrono>
 
 #include "weft/backend/timing.h"
@@ -58,6 +59,36 @@ void CpuCollisions<T>::begin_substep(const Model& model, double t, double h, con
         }
     });
 
+    offset_ = settings.mode == CollisionMode::Offset;
+    if (offset_) {
+        fallback_ = false;
+        redetections_ = 0;
+        last_truncated_ = 0;
+        // The frame the moves are bounded in translates with the cloth's mean velocity (mass-weighted
+        // over the free vertices): a stack falling together moves little relative to it.
+        Vec3d momentum{};
+        double mass = 0.0;
+        free_vertices_ = 0;
+        for (std::size_t i = 0; i < n; ++i) {
+            if (!(g.inverse_mass[i] > 0.0)) continue;
+            momentum += (1.0 / g.inverse_mass[i]) * v0[i].template cast<double>();
+            mass += 1.0 / g.inverse_mass[i];
+            ++free_vertices_;
+        }
+        shift_ = mass > 0.0 ? (h / mass) * momentum : Vec3d{};
+        x_detect_ = x0_;
+        // Each vertex's query radius covers 1.5× its predicted move in that frame over γ (so it is
+        // rarely truncated), from one contact radius to the cap.
+        const double contact = g.gap(settings), cap = settings.max_query_radius * contact;
+        radius_.resize(g.vertex_count());
+        for (std::size_t i = 0; i < radius_.size(); ++i)
+            radius_[i] = std::clamp(1.5 * math::length(x1_[i] - x0_[i] - shift_) / settings.relaxation, contact, cap);
+        remainder_.assign(n, 0.0);
+        stats.ms(Stage::BroadPhase) += ms_since(clock);
+        detect_offset(model, h, stats);
+        return;
+    }
+
     collision::BroadPhaseInput in;
     in.x0 = x0_;
     in.x1 = x1_;
@@ -99,9 +130,136 @@ void CpuCollisions<T>::begin_substep(const Model& model, double t, double h, con
 }
 
 template <typename T>
-void CpuCollisions<T>::end_substep(const Model& model, double h, const std::vector<V3>& x0, std::vector<V3>& x1,
-                                   std::vector<V3>& v, StepStats& stats) {
+void CpuCollisions<T>::detect_offset(const Model& model, double h, StepStats& stats) {
+    auto clock = Clock::now();
     const CollisionSettings& settings = model.settings.collision;
+    const collision::CollisionGeometry& g = geometry_;
+    collision::DisplacementBoundsInput in;
+    in.x = x_detect_;
+    in.triangles = g.triangles;
+    in.edges = g.edges;
+    in.radius = radius_;
+    in.relaxation = settings.relaxation;
+    in.self_pairs = g.self;
+    in.triangle_group = g.triangle_group;
+    collision::compute_displacement_bounds(in, broad_, bounds_);
+    stats.collision.candidate_pairs += static_cast<std::int64_t>(bounds_.vf_pairs + bounds_.ee_pairs);
+    for (const double r : radius_) stats.collision.query_radius_max = std::max(stats.collision.query_radius_max, r);
+    stats.ms(Stage::BroadPhase) += ms_since(clock);
+
+    clock = Clock::now();
+    collision::ProximityInput p;
+    p.x0 = x_detect_;
+    p.x1 = x_detect_;
+    p.inverse_mass = g.inverse_mass;
+    p.thickness = g.thickness;
+    p.friction = g.friction;
+    p.triangles = g.triangles;
+    p.edges = g.edges;
+    p.vf = bounds_.pairs.vf;
+    p.ee = bounds_.pairs.ee;
+    p.rest = g.rest;
+    p.vertex_cloth = g.vertex_cloth;
+    p.rest_exclusion = settings.rest_exclusion;
+    p.offset_bound = bounds_.bound;
+    p.h = h;
+    p.thickness_override = settings.thickness;
+    p.stiffness_override = settings.stiffness;
+    collision::find_proximity_contacts(p, contacts_);
+    terms_.set(contacts_, g.cloth_vertices, true);
+    stats.collision.contacts = static_cast<int>(contacts_.size());
+    stats.ms(Stage::NarrowPhase) += ms_since(clock);
+}
+
+template <typename T>
+void CpuCollisions<T>::bounded_prediction(const Model& model, double h, const std::vector<V3>& x0, std::vector<V3>& v) const {
+    const bool planar = model.settings.collision.bound_shape == BoundShape::Planar;
+    const collision::CollisionGeometry& g = geometry_;
+    parallel_chunks(g.cloth_vertices, [&](std::size_t lo, std::size_t hi) {
+        for (std::size_t i = lo; i < hi; ++i) {
+            if (!(g.inverse_mass[i] > 0.0)) continue;
+            const Vec3d move = (x0[i] + static_cast<T>(h) * v[i]).template cast<double>() - shift_ - x_detect_[i];
+            const double t = collision::kept_share(bounds_, i, move, planar);
+            if (t < 1.0) v[i] = ((x_detect_[i] + t * move + shift_ - x0[i].template cast<double>()) / h).template cast<T>();
+        }
+    });
+}
+
+template <typename T>
+std::size_t CpuCollisions<T>::truncate(const Model& model, double h, const std::vector<V3>& x0, std::vector<V3>& vk,
+                                       StepStats& stats) {
+    const auto clock = Clock::now();
+    const bool planar = model.settings.collision.bound_shape == BoundShape::Planar;
+    const collision::CollisionGeometry& g = geometry_;
+    const std::size_t n = g.cloth_vertices;
+    std::atomic<std::size_t> truncated{0};
+    std::atomic<bool> broken{false};
+    parallel_chunks(n, [&](std::size_t lo, std::size_t hi) {
+        std::size_t count = 0;
+        for (std::size_t i = lo; i < hi; ++i) {
+            const Vec3d x = (x0[i] + static_cast<T>(h) * vk[i]).template cast<double>();
+            const Vec3d move = x - shift_ - x_detect_[i];
+            const double t = collision::kept_share(bounds_, i, move, planar);
+            remainder_[i] = t < 1.0 ? (1.0 - t) * math::length(move) : 0.0;
+            if (t >= 1.0) continue;
+            if (!(g.inverse_mass[i] > 0.0)) {  // pinned: its move is prescribed
+                broken = true;
+                continue;
+            }
+            const Vec3d kept = x_detect_[i] + t * move + shift_;
+            vk[i] = ((kept - x0[i].template cast<double>()) / h).template cast<T>();
+            ++count;
+        }
+        truncated += count;
+    });
+    // Mesh colliders move as prescribed: their whole move of the piece is checked.
+    for (std::size_t i = n; i < g.vertex_count() && !broken; ++i)
+        if (collision::kept_share(bounds_, i, x1_[i] - shift_ - x_detect_[i], planar) < 1.0) broken = true;
+    fallback_ = fallback_ || broken;
+    last_truncated_ = truncated;
+    stats.collision.truncated_vertices += static_cast<std::int64_t>(last_truncated_);
+    stats.ms(Stage::Update) += ms_since(clock);
+    return last_truncated_;
+}
+
+template <typename T>
+bool CpuCollisions<T>::wants_redetection(const Model& model) const {
+    const CollisionSettings& settings = model.settings.collision;
+    return offset_ && redetections_ < settings.max_redetections &&
+           static_cast<double>(last_truncated_) > settings.redetect_share * static_cast<double>(free_vertices_);
+}
+
+template <typename T>
+void CpuCollisions<T>::redetect(const Model& model, double h, const std::vector<V3>& x0, const std::vector<V3>& vk,
+                                StepStats& stats) {
+    const CollisionSettings& settings = model.settings.collision;
+    const collision::CollisionGeometry& g = geometry_;
+    const std::size_t n = g.cloth_vertices;
+    // From here the colliders stand at t + h and the cloth where the truncation left it; each radius
+    // covers 1.5× what the truncation cut from the vertex's last move.
+    const double contact = g.gap(settings), cap = settings.max_query_radius * contact;
+    for (std::size_t i = 0; i < n; ++i) {
+        x_detect_[i] = (x0[i] + static_cast<T>(h) * vk[i]).template cast<double>();
+        radius_[i] = std::clamp(1.5 * remainder_[i] / settings.relaxation, contact, cap);
+    }
+    for (std::size_t i = n; i < g.vertex_count(); ++i) {
+        x_detect_[i] = x1_[i];
+        radius_[i] = contact;
+    }
+    shift_ = Vec3d{};
+    ++redetections_;
+    ++stats.collision.redetections;
+    detect_offset(model, h, stats);
+}
+
+template <typename T>
+void CpuCollisions<T>::end_substep(const Model& model, double h, const std::vector<V3>& x0, std::vector<V3>& x1,
+                                   std::vector<V3>& v, bool moved_after_solve, StepStats& stats) {
+    const CollisionSettings& settings = model.settings.collision;
+    if (offset_) {
+        if (!fallback_ && !moved_after_solve) return;
+        ++stats.collision.bound_fallbacks;
+    }
     if (!settings.continuous) return;
     const collision::CollisionGeometry& g = geometry_;
     parallel_chunks(g.cloth_vertices, [&](std::size_t lo, std::size_t hi) {
@@ -163,7 +321,14 @@ std::size_t CpuCollisions<T>::memory_bytes() const {
            g.triangles.capacity() * sizeof(Triangle) + g.triangle_group.capacity() * sizeof(std::uint32_t) +
            g.edges.capacity() * sizeof(collision::Edge) +
            (g.inverse_mass.capacity() + g.thickness.capacity() + g.friction.capacity()) * sizeof(double) +
-           contacts_.capacity() * sizeof(collision::ProximityContact) + terms_.memory_bytes();
+           contacts_.capacity() * sizeof(collision::ProximityContact) + terms_.memory_bytes() +
+           x_detect_.capacity() * sizeof(Vec3d) + (radius_.capacity() + remainder_.capacity()) * sizeof(double) +
+           (bounds_.bound.capacity() + bounds_.reach.capacity() + bounds_.vf_distance.capacity() +
+            bounds_.ee_distance.capacity()) * sizeof(double) +
+           bounds_.partner_start.capacity() * sizeof(std::uint32_t) +
+           bounds_.partners.capacity() * sizeof(collision::PartnerLimit) +
+           bounds_.pairs.vf.capacity() * sizeof(collision::VertexFacePair) +
+           bounds_.pairs.ee.capacity() * sizeof(collision::EdgeEdgePair);
 }
 
 template class CpuCollisions<float>;

@@ -10,6 +10,7 @@
 #include <vector>
 
 #include "collision/broad_phase.h"
+#include "collision/displacement_bounds.h"
 #include "weft/backend/collision_geometry.h"
 #include "collision/impact_zones.h"
 #include "collision/normal_cone_front.h"
@@ -41,13 +42,38 @@ public:
                        StepStats& stats);
     /// The contact springs of the current substep (for the solve).
     [[nodiscard]] ContactTerms<T>& terms() { return terms_; }
+    [[nodiscard]] const ContactTerms<T>& terms() const { return terms_; }
     [[nodiscard]] std::span<const V3> kinematic_x1() const { return kinematic_x1_t_; }
     [[nodiscard]] std::span<const V3> kinematic_v() const { return kinematic_v_t_; }
 
+    /// Offset mode (CollisionSettings::mode): true when this substep's contacts are offset contacts
+    /// and its moves must go through `truncate`.
+    [[nodiscard]] bool offset() const { return offset_; }
+    /// Offset mode, after each Newton update: truncates every free cloth vertex's move to its bound
+    /// (from the last detection), setting v_k = (x_truncated − x0)/h for those it shortens, and checks
+    /// the prescribed ones (pins, mesh colliders), whose moves cannot be shortened: one that breaks
+    /// its bound sends the substep to the CCD fallback in `end_substep`. Returns the number of free
+    /// vertices truncated.
+    std::size_t truncate(const Model& model, double h, const std::vector<V3>& x0, std::vector<V3>& vk,
+                         StepStats& stats);
+    /// Offset mode: `v` truncated like `truncate` does, with no statistics and no fallback: the
+    /// contacts' linearisation point x0 + h·v of the first Newton iteration, which the bounds keep
+    /// free of crossings (every pair keeps at least (1 − 2γ) of its distance, so no normal flips).
+    void bounded_prediction(const Model& model, double h, const std::vector<V3>& x0, std::vector<V3>& v) const;
+    /// Offset mode: true when the last truncation shortened more than CollisionSettings::redetect_share
+    /// of the free vertices and a rerun is still allowed this substep.
+    [[nodiscard]] bool wants_redetection(const Model& model) const;
+    /// Offset mode: detection again at the current (truncated) cloth positions x0 + h·v_k and the
+    /// colliders' poses at t + h; the contacts and bounds are replaced and later moves are measured
+    /// from here.
+    void redetect(const Model& model, double h, const std::vector<V3>& x0, const std::vector<V3>& vk, StepStats& stats);
+
     /// After the solve: makes x0 → x1 free of collisions (CCD and impact zones) when continuous
-    /// collisions are on, and sets v = (x1 − x0)/h for every vertex it moved.
+    /// collisions are on, and sets v = (x1 − x0)/h for every vertex it moved. In offset mode the
+    /// moves were truncated and it does nothing, unless a prescribed vertex broke its bound or
+    /// `moved_after_solve` (a fast analytic collider carried cloth along after the truncation).
     void end_substep(const Model& model, double h, const std::vector<V3>& x0, std::vector<V3>& x1, std::vector<V3>& v,
-                     StepStats& stats);
+                     bool moved_after_solve, StepStats& stats);
 
     [[nodiscard]] std::size_t memory_bytes() const;
 
@@ -68,6 +94,22 @@ private:
     void cull(const Model& model, std::span<const Vec3d> x0, std::span<const Vec3d> x1,
               collision::BroadPhaseInput& in, StepStats& stats);
     ContactTerms<T> terms_;
+
+    // Offset mode: the last detection (collision vertices, kinematic ones at the tail), the frame shift
+    // of the current piece (moves are bounded relative to a common translation: distances do not
+    // change under it), the per-vertex query radii and what the bounds allow.
+    bool offset_ = false;
+    bool fallback_ = false;        // a prescribed vertex broke its bound: CCD and impact zones after the solve
+    int redetections_ = 0;         // this substep
+    std::size_t last_truncated_ = 0;
+    std::size_t free_vertices_ = 0;
+    std::vector<Vec3d> x_detect_;
+    Vec3d shift_{};
+    std::vector<double> radius_;
+    std::vector<double> remainder_;  // per cloth vertex, the part of its last move the truncation cut, m
+    collision::DisplacementBounds bounds_;
+    /// Bounds and offset contacts at x_detect_ (radii in radius_).
+    void detect_offset(const Model& model, double h, StepStats& stats);
 };
 
 extern template class CpuCollisions<float>;

@@ -252,12 +252,24 @@ void CpuSolver<T>::substep(const Model& model, double t, double h_double, StepSt
     const std::span<const V3> kinematic_v = collide ? collisions_.kinematic_v() : std::span<const V3>(test_kinematic_v_);
 
     const SolverSettings& solver = model.settings.solver;
-    for (int newton = 0; newton < solver.newton_iterations; ++newton) {
+    // Offset contact: every Newton update is truncated to the displacement bounds, and a rerun of the
+    // detection adds one more Newton iteration (docs/methods.md §7b).
+    const bool offset = collide && collisions_.offset();
+    int newton_iterations = solver.newton_iterations;
+    for (int newton = 0; newton < newton_iterations; ++newton) {
         clock = Clock::now();
         evaluate_elements(model, t, h);
         stats.collider_contacts = evaluate_vertices(model, h);
-        if (contacts != nullptr)
-            contacts->evaluate(h, x0_, wk_, vk_, kinematic_x1, kinematic_v);
+        if (contacts != nullptr) {
+            // Offset contacts are linearised about the bounded inertial prediction in the first Newton
+            // iteration (later ones about the iterate, like every force): at x0 a pair still outside the
+            // contact radius gives no force, and the truncation alone would stop the approach.
+            if (offset && newton == 0) {
+                contact_w_ = vk_;
+                collisions_.bounded_prediction(model, h_double, x0_, contact_w_);
+            }
+            contacts->evaluate(h, x0_, offset && newton == 0 ? contact_w_ : wk_, vk_, kinematic_x1, kinematic_v);
+        }
         stats.ms(Stage::Forces) += ms_since(clock);
 
         clock = Clock::now();
@@ -305,12 +317,17 @@ void CpuSolver<T>::substep(const Model& model, double t, double h_double, StepSt
 
         clock = Clock::now();
         parallel_chunks(n_, [&](std::size_t lo, std::size_t hi) {
-            for (std::size_t i = lo; i < hi; ++i) {
-                vk_[i] += dv_[i];
-                wk_[i] = vk_[i];
-            }
+            for (std::size_t i = lo; i < hi; ++i) vk_[i] += dv_[i];
         });
         stats.ms(Stage::Update) += ms_since(clock);
+        if (offset) {
+            collisions_.truncate(model, h_double, x0_, vk_, stats);
+            if (newton + 1 == newton_iterations && collisions_.wants_redetection(model)) {
+                collisions_.redetect(model, h_double, x0_, vk_, stats);
+                ++newton_iterations;
+            }
+        }
+        wk_ = vk_;
     }
 
     clock = Clock::now();
@@ -336,7 +353,7 @@ void CpuSolver<T>::substep(const Model& model, double t, double h_double, StepSt
     stats.collision.swept_collider_hits += swept;
     stats.ms(Stage::Update) += ms_since(clock);
     // CCD and impact zones from x0 to x1; vertices they move get the velocity of the new motion.
-    if (collide && bad == 0.0) collisions_.end_substep(model, h_double, x0_, x_, v_, stats);
+    if (collide && bad == 0.0) collisions_.end_substep(model, h_double, x0_, x_, v_, swept > 0, stats);
     if ((collide || swept > 0) && bad == 0.0) {
         parallel_chunks(n_, [&](std::size_t lo, std::size_t hi) {
             for (std::size_t i = lo; i < hi; ++i) dv_previous_[i] = v_[i] - v0_[i];
@@ -359,6 +376,12 @@ void CpuSolver<T>::write_state(std::size_t first, std::size_t count, const Vec3d
         v_[first + i] = to<T>(v[i]);
         dv_previous_[first + i] = V3{};  // the motion was replaced: nothing to extrapolate from
     }
+}
+
+template <typename T>
+double CpuSolver<T>::offset_contact_energy() const {
+    if (!collisions_.active() || !collisions_.offset()) return 0.0;
+    return collisions_.terms().energy_at(x_, collisions_.kinematic_x1());
 }
 
 template <typename T>

@@ -35,6 +35,9 @@ public:
     void read_state(std::size_t first, std::size_t count, Vec3d* x, Vec3d* v) const;
     void write_state(std::size_t first, std::size_t count, const Vec3d* x, const Vec3d* v);
     [[nodiscard]] std::size_t memory_bytes() const;
+    /// Offset mode: the penalty energy of the current substep's offset contacts at the current state,
+    /// J (0 in the other mode, or before a substep).
+    [[nodiscard]] double offset_contact_energy() const;
 
     /// Test hook (tests/gpu/test_cuda_contacts.cpp holds the CUDA contact solve against this one):
     /// every later substep solves with `contacts` as if the collision stages had found them, kinematic
@@ -81,6 +84,7 @@ private:
     std::vector<V3> vertex_rhs_;
     std::vector<M3> vertex_blocks_;
     std::vector<V3> b_, dv_, pin_velocity_;
+    std::vector<V3> contact_w_;    // offset contacts: the first Newton iteration's linearisation velocity
     std::vector<V3> dv_previous_;  // v − v0 of the last substep: the warm start of the next first solve
     std::vector<std::uint8_t> fixed_;
     std::vector<int> contacts_;

@@ -18,6 +18,9 @@ struct ProximityContact {
     double thickness = 0.0;     ///< gap the spring holds, m
     double stiffness = 0.0;     ///< N/m
     double friction = 0.0;      ///< Coulomb coefficient
+    /// Edge–edge (vertex 0–1 one edge, 2–3 the other) rather than vertex–face (vertex 0 against the
+    /// triangle 1–2–3): the offset contact recomputes its closest points from this.
+    bool edge_edge = false;
 };
 
 }  // namespace weft::collision
