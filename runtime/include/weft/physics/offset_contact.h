@@ -14,13 +14,24 @@
 /// points along their primitives does not change d to first order).
 ///
 /// The penalty is the cubic
-///   E(d) = k (r − d)³ / (3r)   for d < r,   0 beyond,
+///   E(d) = k (r − d)³ / (3r)   for r/2 ≤ d < r,   0 beyond,
 /// whose value, slope and curvature all vanish at d = r (C², so Newton sees no kink where a contact
-/// starts), with force magnitude −E′ = k (r − d)²/r (k·r at touching) and curvature E″ = 2k (r − d)/r.
-/// Its Hessian in g is E″·nnᵀ + (E′/d)(I − nnᵀ): the first part is PSD; the second is negative
-/// semi-definite (E′ ≤ 0: the repulsion weakens as the pair turns) and is dropped, the PSD projection
-/// that keeps the implicit system SPD. Friction acts on the relative velocity as for the pair springs.
+/// starts), and inside half the radius a logarithmic barrier joined to it with the same value, slope
+/// and curvature at τ = r/2:
+///   E(d) = E(τ) + E′(τ)·τ·ln(d/τ) + (k/4)(d − τ)²   for d < τ,
+/// whose force E′(τ)·τ/d grows without bound as the primitives meet (OGC's split between a quadratic
+/// and a log barrier, here joined C²). A bounded force would not do: the displacement bounds keep
+/// (1 − 2γ) of a gap per update, so a pair squeezed harder than the penalty can push back closes
+/// geometrically, to 10⁻¹⁵ m within a few dozen substeps of the twisted sheet, where the exact check
+/// then finds crossings made by rounding. Below d = 10⁻³τ the barrier continues as its own quadratic
+/// Taylor expansion, so a crossed pair (d ≤ 0, which the bounds exclude) still gets a finite push.
+/// Its Hessian in g is E″·nnᵀ + (E′/d)(I − nnᵀ): the first part is PSD (E″ > 0 everywhere inside);
+/// the second is negative semi-definite (E′ ≤ 0: the repulsion weakens as the pair turns) and is
+/// dropped, the PSD projection that keeps the implicit system SPD. Friction acts on the relative
+/// velocity as for the pair springs.
 /// Intersection-freedom does not rest on the penalty: it is the per-vertex displacement bound of §7b.
+
+#include <cmath>
 
 #include "weft/math/host_device.h"
 #include "weft/physics/friction.h"
@@ -45,13 +56,36 @@ struct OffsetPenalty {
     T curvature;  ///< E″(d), N/m (≥ 0)
 };
 
-/// E(d) = k (r − d)³/(3r) inside the offset (d < r), zero outside. Defined for every finite d (a
-/// crossed pair, d < 0, keeps being pushed out, harder).
+/// The barrier starts at this share of the radius (τ = r/2 in the comment above).
+inline constexpr double kOffsetBarrierShare = 0.5;
+/// Below this share of τ the barrier continues as its quadratic Taylor expansion.
+inline constexpr double kOffsetBarrierFloor = 1e-3;
+
+/// E(d) inside the offset (d < r): the cubic down to τ = r/2, the log barrier below; zero outside.
+/// Defined for every finite d (a crossed pair, d ≤ 0, keeps being pushed out, harder).
 template <typename T>
 WEFT_HD inline OffsetPenalty<T> offset_penalty(T d, T k, T r) {
     if (!(d < r) || !(r > T(0))) return {T(0), T(0), T(0)};
-    const T s = r - d;
-    return {k * s * s * s / (T(3) * r), -k * s * s / r, T(2) * k * s / r};
+    const T tau = T(kOffsetBarrierShare) * r;
+    if (d >= tau) {
+        const T s = r - d;
+        return {k * s * s * s / (T(3) * r), -k * s * s / r, T(2) * k * s / r};
+    }
+    // The cubic's value, slope and curvature at τ; the barrier −E′(τ)·τ·ln(τ/d) plus c/2·(d − τ)²,
+    // c = E″(τ) + E′(τ)/τ (= k/2 for τ = r/2), matches all three there.
+    const T s = r - tau;
+    const T e_tau = k * s * s * s / (T(3) * r), slope_tau = -k * s * s / r, curvature_tau = T(2) * k * s / r;
+    const T c = curvature_tau + slope_tau / tau;
+    using std::log;
+    const auto barrier = [&](T x) -> OffsetPenalty<T> {
+        return {e_tau + slope_tau * tau * log(x / tau) + T(0.5) * c * (x - tau) * (x - tau),
+                slope_tau * tau / x + c * (x - tau), -slope_tau * tau / (x * x) + c};
+    };
+    const T floor = T(kOffsetBarrierFloor) * tau;
+    if (d >= floor) return barrier(d);
+    const OffsetPenalty<T> b = barrier(floor);
+    const T e = d - floor;
+    return {b.energy + b.slope * e + T(0.5) * b.curvature * e * e, b.slope + b.curvature * e, b.curvature};
 }
 
 /// The contact's force on the relative coordinate and its Jacobians; vertex i of the pair receives
