@@ -6,6 +6,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <string>
 
 #include "rest_exclusion_scene.h"
 #include "weft/error.h"
@@ -70,6 +71,57 @@ TEST(ClothCollisions, StackedSheetsOnABallStayApart) {
     };
     EXPECT_GT(top(world.positions(1)), top(world.positions(0)));
 }
+
+// Four sheets 2 cm apart dropped onto a ball, in both contact modes: every frame intersection-free,
+// and at the end the layers still in their order over the ball's top (no sheet on the wrong side of
+// another). The offset mode must also have truncated moves and found contacts, or it tested nothing.
+class StackedLayers : public ::testing::TestWithParam<CollisionMode> {};
+
+TEST_P(StackedLayers, StayInOrderOverABall) {
+    WorldDesc desc = collision_world(true);
+    desc.collision.mode = GetParam();
+    World world(desc);
+    const auto fabric = Fabric::cook(make_grid(0.6, 0.6, 12, 12, GridPlane::XZ), {.density = 0.2});
+    constexpr int kSheets = 4;
+    for (int k = 0; k < kSheets; ++k) {
+        const std::string name = "sheet" + std::to_string(k);
+        world.add_cloth(sheet(name.c_str(), fabric, {0.0, 0.33 + 0.02 * k, 0.0}));
+    }
+    ColliderDesc ball{.name = "ball", .shape = ColliderShape::Sphere};
+    ball.radius = 0.15;
+    ball.motion.origin = {0.0, 0.15, 0.0};
+    world.add_collider(ball);
+    world.add_collider(floor_plane());
+    std::int64_t truncated = 0;
+    int contacts = 0;
+    for (int frame = 0; frame < 60; ++frame) {
+        const StepStats& s = world.step();
+        ASSERT_FALSE(s.non_finite) << "frame " << frame;
+        ASSERT_EQ(s.collision.remaining_intersections, 0) << "frame " << frame;
+        ASSERT_EQ(s.collision.unresolved_substeps, 0) << "frame " << frame;
+        ASSERT_EQ(s.collision.frozen_vertices, 0) << "frame " << frame;
+        truncated += s.collision.truncated_vertices;
+        contacts = std::max(contacts, s.collision.contacts);
+    }
+    EXPECT_GT(contacts, 0);
+    if (GetParam() == CollisionMode::Offset) {
+        EXPECT_GT(truncated, 0) << "the bounds never acted: the test does not test them";
+    } else {
+        EXPECT_EQ(truncated, 0);
+    }
+    // The centre vertex of each sheet (on the ball's top): heights strictly increase with the layer.
+    const std::size_t centre = 6 * 13 + 6;
+    double below = -1.0;
+    for (int k = 0; k < kSheets; ++k) {
+        const double y = world.positions(static_cast<std::size_t>(k))[centre].y;
+        EXPECT_GT(y, below) << "sheet " << k << " is not above sheet " << k - 1;
+        EXPECT_GT(y, 0.29) << "sheet " << k << " fell off the ball";
+        below = y;
+    }
+}
+
+INSTANTIATE_TEST_SUITE_P(BothModes, StackedLayers, ::testing::Values(CollisionMode::CcdZones, CollisionMode::Offset),
+                         [](const auto& mode) { return mode.param == CollisionMode::Offset ? "offset" : "ccd_zones"; });
 
 // One long sheet folded onto itself by dropping it across a thin bar.
 TEST(ClothCollisions, SheetFoldingOverABarDoesNotPassThroughItself) {
