@@ -13,6 +13,7 @@
 #include <vector>
 
 #include "collision/displacement_bounds.h"
+#include "displacement_soups.h"
 #include "collision/intersection_check.h"
 #include "weft/error.h"
 #include "weft/fabric.h"
@@ -22,60 +23,12 @@
 namespace weft::collision {
 namespace {
 
-struct Soup {
-    std::vector<Vec3d> x;
-    std::vector<Triangle> triangles;
-};
+using test::random_moves;
+using test::Soup;
+using test::stacked_sheets;
 
-/// `sheets` square sheets of `cells`² cells, 1 m wide, stacked `gap` m apart along z.
-Soup stacked_sheets(int sheets, int cells, double gap) {
-    Soup s;
-    const MeshData grid = make_grid(1.0, 1.0, cells, cells);
-    for (int k = 0; k < sheets; ++k) {
-        const auto offset = static_cast<std::uint32_t>(s.x.size());
-        for (Vec3d p : grid.positions) s.x.push_back(p + Vec3d{0.0, 0.0, gap * k});
-        for (Triangle t : grid.triangles) {
-            for (auto& v : t.v) v += offset;
-            s.triangles.push_back(t);
-        }
-    }
-    return s;
-}
-
-/// `count` triangles of edge ~`size` m at random in a cube of `extent` m, minus those that intersect.
 Soup random_soup(std::mt19937& rng, int count, double size, double extent) {
-    std::uniform_real_distribution<double> u(0.0, extent), jitter(-size, size);
-    Soup s;
-    for (int k = 0; k < count; ++k) {
-        const Vec3d c{u(rng), u(rng), u(rng)};
-        const auto first = static_cast<std::uint32_t>(s.x.size());
-        for (int a = 0; a < 3; ++a) s.x.push_back(c + Vec3d{jitter(rng), jitter(rng), jitter(rng)});
-        s.triangles.push_back({{first, first + 1, first + 2}});
-    }
-    const IntersectionReport report = check_intersections(s.x, s.triangles, {.max_examples = 100000});
-    std::vector<char> drop(s.triangles.size(), 0);
-    for (const IntersectingPair& p : report.examples) drop[p.a] = drop[p.b] = 1;
-    Soup kept;
-    for (std::size_t t = 0; t < s.triangles.size(); ++t) {
-        if (drop[t]) continue;
-        const auto first = static_cast<std::uint32_t>(kept.x.size());
-        for (const std::uint32_t v : s.triangles[t].v) kept.x.push_back(s.x[v]);
-        kept.triangles.push_back({{first, first + 1, first + 2}});
-    }
-    return kept;
-}
-
-/// Every vertex moves by a random vector of length up to `reach` m.
-std::vector<Vec3d> random_moves(const std::vector<Vec3d>& x, std::mt19937& rng, double reach) {
-    std::uniform_real_distribution<double> u(-1.0, 1.0);
-    std::vector<Vec3d> x1 = x;
-    for (Vec3d& p : x1) {
-        Vec3d d;
-        do d = Vec3d{u(rng), u(rng), u(rng)};
-        while (math::length(d) > 1.0);
-        p += reach * d;
-    }
-    return x1;
+    return test::clean_soup(rng, count, size, extent);
 }
 
 DisplacementBounds bounds_of(const Soup& s, double radius, double relaxation = 0.45,

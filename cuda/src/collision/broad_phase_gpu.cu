@@ -61,6 +61,7 @@ struct Params {
     const std::uint32_t* triangle_patch;
     bool cull;
     float thickness;
+    const float* padding;  // per vertex, or null
     float4* box_lo;
     float4* box_hi;
     unsigned long long* cell_lo;
@@ -246,11 +247,22 @@ __global__ void bounds_kernel(Params p) {
         const float nan = __int_as_float(0x7FFFFFFF);
         float4 blo{nan, nan, nan, 0.0F}, bhi{nan, nan, nan, 0.0F};
         if (finite) {
-            blo = float4{__fsub_rd(lo[0], p.thickness), __fsub_rd(lo[1], p.thickness), __fsub_rd(lo[2], p.thickness), 0.0F};
-            bhi = float4{__fadd_ru(hi[0], p.thickness), __fadd_ru(hi[1], p.thickness), __fadd_ru(hi[2], p.thickness), 0.0F};
+            // With padding: thickness + the largest padding of the primitive's vertices, rounded up.
+            float grow = p.thickness;
+            if (p.padding != nullptr)
+                for (int a = 0; a < count; ++a) grow = fmaxf(grow, __fadd_ru(p.thickness, p.padding[v[a]]));
+            blo = float4{__fsub_rd(lo[0], grow), __fsub_rd(lo[1], grow), __fsub_rd(lo[2], grow), 0.0F};
+            bhi = float4{__fadd_ru(hi[0], grow), __fadd_ru(hi[1], grow), __fadd_ru(hi[2], grow), 0.0F};
         }
         p.box_lo[i] = blo;
         p.box_hi[i] = bhi;
+        // The grid's top covers every bound: a padded edge or triangle may reach past its vertices'
+        // own bounds (below the origin, cell coordinates clamp to 0, which keeps overlaps).
+        if (p.padding != nullptr && i >= p.n && finite) {
+            atomicMax(&s_hi[0], ordered(bhi.x));
+            atomicMax(&s_hi[1], ordered(bhi.y));
+            atomicMax(&s_hi[2], ordered(bhi.z));
+        }
         if (i < p.n && finite) {
             for (int c = 0; c < 3; ++c) atomicMin(&s_lo[c], ordered(lo[c]));
             atomicMax(&s_hi[0], ordered(bhi.x));
@@ -837,6 +849,7 @@ void GpuBroadPhase::enqueue(const GpuBroadPhaseInput& in, cudaStream_t stream) {
     p.edge_patch = in.edge_patch;
     p.triangle_patch = in.triangle_patch;
     p.thickness = float_at_least(in.thickness);
+    p.padding = in.vertex_padding;
     p.box_lo = box_lo_.get();
     p.box_hi = box_hi_.get();
     p.cell_lo = cell_lo_.get();

@@ -90,6 +90,10 @@ struct GpuBroadPhaseInput {
     const std::uint32_t* edge_patch = nullptr;
     const std::uint32_t* triangle_patch = nullptr;
     double thickness = 0.0;  ///< m, ≥ 0: every bound grows by this on each side
+    /// Extra growth per vertex, m (optional, device, vertex_count finite values ≥ 0): as
+    /// weft::collision::BroadPhaseInput::vertex_padding, a primitive grows by thickness + the largest
+    /// padding of its vertices (rounded up), so two primitives within max(p_a, p_b) always pair.
+    const float* vertex_padding = nullptr;
     /// Hash cell edge, m; 0 picks the median extent (longest axis) of the edges' bounds, computed on
     /// the device (as the CPU does, but from the float bounds: any size gives the same pairs).
     double cell_size = 0.0;

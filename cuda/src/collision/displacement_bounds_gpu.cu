@@ -1,0 +1,209 @@
+// Displacement bounds and the truncation on the GPU (see displacement_bounds_gpu.h).
+#include "collision/displacement_bounds_gpu.h"
+
+#include <cmath>
+#include <string>
+
+#include "collision/pair_geometry.cuh"
+#include "cuda_check.h"
+#include "grid_size.h"
+#include "weft/error.h"
+
+namespace weft::cuda::collision {
+namespace {
+
+constexpr unsigned kThreads = 256;
+constexpr std::uint32_t kInfinityBits = 0x7F800000U;  // +∞: above every finite non-negative float
+constexpr std::uint32_t kOneBits = 0x3F800000U;       // 1.0f
+
+__global__ void reset_kernel(GpuBoundsCounters* c, std::uint32_t* nearest, std::uint32_t n) {
+    const std::uint32_t i = blockIdx.x * blockDim.x + threadIdx.x;
+    if (i == 0) {
+        c->measured_vf = c->measured_ee = c->limited = 0;
+    }
+    if (i < n) nearest[i] = kInfinityBits;
+}
+
+/// One thread per candidate: its distance and normal at x, and, when it is within the largest radius
+/// of its four vertices, the nearest distance of each of them lowered to it.
+__global__ void pair_kernel(GpuBoundsInput in, std::uint32_t stride, GpuPairList pairs, float4* geometry,
+                            std::uint32_t* nearest, GpuBoundsCounters* counters) {
+    const std::uint32_t i = blockIdx.x * blockDim.x + threadIdx.x;
+    if (i >= candidates_in_use(pairs)) return;
+    const PairVertices pv = pair_vertices(pairs.encoding, pairs.keys[i], in.triangles, in.edges);
+    V3f x[4];
+    for (int a = 0; a < 4; ++a) x[a] = load_position(in.x, pv.id[a], stride);
+    float w[4];
+    V3f normal;
+    float d = 0.0F;
+    pair_closest(pv.vf, x, w, normal, d);
+    float largest = 0.0F;
+    for (int a = 0; a < 4; ++a) largest = fmaxf(largest, in.radius[pv.id[a]]);
+    const bool measured = d < largest;
+    geometry[i] = float4{normal.x, normal.y, normal.z, measured ? d : __int_as_float(kInfinityBits)};
+    if (!measured) return;
+    const std::uint32_t bits = __float_as_uint(fmaxf(d, 0.0F));
+    for (int a = 0; a < 4; ++a) atomicMin(&nearest[pv.id[a]], bits);
+    atomicAdd(pv.vf ? &counters->measured_vf : &counters->measured_ee, 1U);
+}
+
+__global__ void vertex_kernel(GpuBoundsInput in, const std::uint32_t* nearest, float* bound, float* reach,
+                              GpuBoundsCounters* counters) {
+    const std::uint32_t v = blockIdx.x * blockDim.x + threadIdx.x;
+    if (v >= in.vertex_count) return;
+    const float r = in.radius[v];
+    const float d = __uint_as_float(nearest[v]);
+    if (d < r) atomicAdd(&counters->limited, 1U);
+    bound[v] = in.relaxation * fminf(r, d);
+    reach[v] = in.relaxation * r;
+}
+
+/// The move of vertex v from the detection: x0 + h·v − shift − x_detect.
+__device__ inline V3f move_of(const GpuTruncateInput& t, std::uint32_t stride, std::uint32_t detect_stride,
+                              std::uint32_t v) {
+    const V3f x = load_position(t.x0, v, stride) + t.h * load_position(t.v, v, stride);
+    return x - V3f{t.shift[0], t.shift[1], t.shift[2]} - load_position(t.x_detect, v, detect_stride);
+}
+
+/// Per vertex: the share its reach (planar) or its bound (sphere) allows.
+__global__ void share_kernel(GpuTruncateInput t, std::uint32_t stride, std::uint32_t detect_stride, const float* bound,
+                             const float* reach, std::uint32_t* share, GpuBoundsCounters* counters) {
+    const std::uint32_t v = blockIdx.x * blockDim.x + threadIdx.x;
+    if (v == 0) counters->truncated = counters->broken = 0;
+    if (v >= t.vertex_count) return;
+    const float length = physics::length(move_of(t, stride, detect_stride, v));
+    const float limit = t.planar ? reach[v] : bound[v];
+    share[v] = length > limit ? __float_as_uint(limit / length) : kOneBits;
+}
+
+/// Planar: one thread per measured pair; each of its vertices may advance at most γ·d towards the
+/// partner (the first primitive's vertices along −n, the second's along +n).
+__global__ void pair_share_kernel(GpuTruncateInput t, std::uint32_t stride, std::uint32_t detect_stride,
+                                  GpuBoundsInput in, GpuPairList pairs, const float4* geometry, std::uint32_t* share) {
+    const std::uint32_t i = blockIdx.x * blockDim.x + threadIdx.x;
+    if (i >= candidates_in_use(pairs)) return;
+    const float4 g = geometry[i];
+    if (!(g.w < __int_as_float(kInfinityBits))) return;  // not measured
+    const PairVertices pv = pair_vertices(pairs.encoding, pairs.keys[i], in.triangles, in.edges);
+    const float limit = in.relaxation * g.w;
+    for (int a = 0; a < 4; ++a) {
+        const std::uint32_t v = pv.id[a];
+        if (v >= t.vertex_count) continue;
+        const float sign = a < pv.first_side ? -1.0F : 1.0F;
+        const float advance = sign * physics::dot(move_of(t, stride, detect_stride, v), V3f{g.x, g.y, g.z});
+        if (advance > limit) atomicMin(&share[v], __float_as_uint(limit / advance));
+    }
+}
+
+__global__ void apply_kernel(GpuTruncateInput t, std::uint32_t stride, std::uint32_t detect_stride,
+                             const std::uint32_t* share, GpuBoundsCounters* counters) {
+    const std::uint32_t v = blockIdx.x * blockDim.x + threadIdx.x;
+    if (v >= t.vertex_count) return;
+    const float s = __uint_as_float(share[v]);
+    if (!(s < 1.0F)) return;
+    if (t.prescribed != nullptr && t.prescribed[v] != 0) {
+        atomicAdd(&counters->broken, 1U);
+        return;
+    }
+    const V3f move = move_of(t, stride, detect_stride, v);
+    const V3f kept = load_position(t.x_detect, v, detect_stride) + s * move + V3f{t.shift[0], t.shift[1], t.shift[2]};
+    const V3f vel = (kept - load_position(t.x0, v, stride)) / t.h;
+    t.v[v] = vel.x;
+    t.v[v + static_cast<std::size_t>(stride)] = vel.y;
+    t.v[v + 2 * static_cast<std::size_t>(stride)] = vel.z;
+    atomicAdd(&counters->truncated, 1U);
+}
+
+}  // namespace
+
+void GpuDisplacementBounds::compute(const GpuBoundsInput& in, GpuBroadPhase& hash, cudaStream_t stream) {
+    if (in.vertex_count > 0 && (in.x == nullptr || in.radius == nullptr))
+        throw Error("GPU displacement bounds: positions or radii missing");
+    if (!(in.relaxation > 0.0F && in.relaxation < 0.5F))
+        throw Error("GPU displacement bounds: relaxation " + std::to_string(in.relaxation) + " (must lie in (0, 0.5))");
+    in_ = in;
+    const std::uint32_t stride = in.stride != 0 ? in.stride : in.vertex_count;
+    GpuBroadPhaseInput b;
+    b.x0 = in.x;
+    b.x1 = in.x;
+    b.vertex_count = in.vertex_count;
+    b.stride = stride;
+    b.triangles = in.triangles;
+    b.triangle_count = in.triangle_count;
+    b.edges = in.edges;
+    b.edge_count = in.edge_count;
+    b.triangle_cloth = in.triangle_cloth;
+    b.self_pairs = in.self_pairs;
+    b.vertex_padding = in.radius;
+    (void)hash.find(b, stream);
+    pairs_ = hash.pairs();
+
+    if (counters_host_.size() == 0) counters_host_.allocate(1);
+    if (counters_.size() == 0) counters_.allocate(1, ledger_, "offset bounds: counters");
+    if (nearest_bits_.size() < in.vertex_count) {
+        nearest_bits_.allocate(in.vertex_count, ledger_, "offset bounds: nearest");
+        share_bits_.allocate(in.vertex_count, ledger_, "offset bounds: shares");
+        bound_.allocate(in.vertex_count, ledger_, "offset bounds: bounds");
+        reach_.allocate(in.vertex_count, ledger_, "offset bounds: reach");
+    }
+    if (pair_geometry_.size() < pairs_.capacity) pair_geometry_.allocate(pairs_.capacity, ledger_, "offset bounds: pairs");
+
+    reset_kernel<<<blocks_for(in.vertex_count, kThreads), kThreads, 0, stream>>>(counters_.get(), nearest_bits_.get(),
+                                                                                in.vertex_count);
+    WEFT_CUDA_CHECK_LAUNCH("reset_kernel");
+    if (pairs_.capacity > 0) {
+        pair_kernel<<<blocks_for(pairs_.capacity, kThreads), kThreads, 0, stream>>>(
+            in, stride, pairs_, pair_geometry_.get(), nearest_bits_.get(), counters_.get());
+        WEFT_CUDA_CHECK_LAUNCH("pair_kernel");
+    }
+    vertex_kernel<<<blocks_for(in.vertex_count, kThreads), kThreads, 0, stream>>>(in, nearest_bits_.get(), bound_.get(),
+                                                                                 reach_.get(), counters_.get());
+    WEFT_CUDA_CHECK_LAUNCH("vertex_kernel");
+}
+
+void GpuDisplacementBounds::truncate(const GpuTruncateInput& t, cudaStream_t stream) {
+    if (t.vertex_count > in_.vertex_count)
+        throw Error("GPU displacement bounds: truncating " + std::to_string(t.vertex_count) + " vertices with bounds for " +
+                    std::to_string(in_.vertex_count));
+    if (t.vertex_count > 0 && (t.x_detect == nullptr || t.x0 == nullptr || t.v == nullptr))
+        throw Error("GPU displacement bounds: truncation arrays missing");
+    if (!(t.h > 0.0F)) throw Error("GPU displacement bounds: h must be positive");
+    const std::uint32_t stride = t.stride != 0 ? t.stride : t.vertex_count;
+    const std::uint32_t detect_stride =
+        t.detect_stride != 0 ? t.detect_stride : (in_.stride != 0 ? in_.stride : in_.vertex_count);
+    share_kernel<<<blocks_for(t.vertex_count, kThreads), kThreads, 0, stream>>>(t, stride, detect_stride, bound_.get(),
+                                                                               reach_.get(), share_bits_.get(), counters_.get());
+    WEFT_CUDA_CHECK_LAUNCH("share_kernel");
+    if (t.planar && pairs_.capacity > 0) {
+        pair_share_kernel<<<blocks_for(pairs_.capacity, kThreads), kThreads, 0, stream>>>(
+            t, stride, detect_stride, in_, pairs_, pair_geometry_.get(), share_bits_.get());
+        WEFT_CUDA_CHECK_LAUNCH("pair_share_kernel");
+    }
+    apply_kernel<<<blocks_for(t.vertex_count, kThreads), kThreads, 0, stream>>>(t, stride, detect_stride,
+                                                                               share_bits_.get(), counters_.get());
+    WEFT_CUDA_CHECK_LAUNCH("apply_kernel");
+}
+
+const GpuBoundsCounters& GpuDisplacementBounds::read_back(cudaStream_t stream) {
+    if (counters_.get() == nullptr) throw Error("GPU displacement bounds: read_back before compute");
+    WEFT_CUDA_CHECK(cudaMemcpyAsync(counters_host_.get(), counters_.get(), sizeof(GpuBoundsCounters),
+                                    cudaMemcpyDeviceToHost, stream));
+    WEFT_CUDA_CHECK(cudaStreamSynchronize(stream));
+    return counters();
+}
+
+void GpuDisplacementBounds::download(std::vector<float>& bound, std::vector<float>& reach, cudaStream_t stream) const {
+    bound.resize(in_.vertex_count);
+    reach.resize(in_.vertex_count);
+    if (in_.vertex_count == 0) return;
+    WEFT_CUDA_CHECK(cudaMemcpyAsync(bound.data(), bound_.get(), bound.size() * sizeof(float), cudaMemcpyDeviceToHost, stream));
+    WEFT_CUDA_CHECK(cudaMemcpyAsync(reach.data(), reach_.get(), reach.size() * sizeof(float), cudaMemcpyDeviceToHost, stream));
+    WEFT_CUDA_CHECK(cudaStreamSynchronize(stream));
+}
+
+std::size_t GpuDisplacementBounds::memory_bytes() const {
+    return nearest_bits_.bytes() + share_bits_.bytes() + bound_.bytes() + reach_.bytes() + pair_geometry_.bytes() +
+           counters_.bytes();
+}
+
+}  // namespace weft::cuda::collision
