@@ -45,7 +45,75 @@ __global__ void collision_scatter_kernel(const float* x1c, const float* x0c, con
     }
 }
 
+/// Offset mode: Σ m·v and Σ m over the free cloth vertices (double atomics into sums[0..3]), for the
+/// frame the moves are bounded in.
+__global__ void offset_momentum_kernel(const float* v, const float* inverse_mass, std::uint32_t n, double* sums) {
+    const std::uint32_t i = blockIdx.x * blockDim.x + threadIdx.x;
+    if (i >= n || !(inverse_mass[i] > 0.0f)) return;
+    const double m = 1.0 / static_cast<double>(inverse_mass[i]);
+    for (int c = 0; c < 3; ++c) atomicAdd(&sums[c], m * static_cast<double>(v[c * n + i]));
+    atomicAdd(&sums[3], m);
+}
+
+/// Offset mode: each collision vertex's query radius, 1.5× its move over γ (`move` = x1c − x0c −
+/// shift, or `remainder` when given, for the cloth) clamped to [contact, cap]; the largest in
+/// `largest` (float bits: non-negative floats order like their bits).
+__global__ void offset_radius_kernel(const float* x0c, const float* x1c, const float* remainder, std::uint32_t n,
+                                     std::uint32_t vertices, const float* shift, float relaxation, float contact,
+                                     float cap, float* radius, std::uint32_t* largest) {
+    const std::uint32_t i = blockIdx.x * blockDim.x + threadIdx.x;
+    if (i >= vertices) return;
+    float length = 0.0f;
+    if (remainder != nullptr) {
+        length = i < n ? remainder[i] : 0.0f;
+    } else {
+        float sq = 0.0f;
+        for (int c = 0; c < 3; ++c) {
+            const float d = x1c[c * vertices + i] - x0c[c * vertices + i] - shift[c];
+            sq += d * d;
+        }
+        length = sqrtf(sq);
+    }
+    const float r = fminf(fmaxf(1.5f * length / relaxation, contact), cap);
+    radius[i] = r;
+    atomicMax(largest, __float_as_uint(r));
+}
+
+/// Offset mode, a rerun of the detection: the cloth where the truncation left it (x0 + h·v_k), the
+/// kinematic vertices at their pose at t + h (x1c).
+__global__ void offset_detect_positions_kernel(const float* x0, const float* vk, std::uint32_t n, const float* h,
+                                               const float* x1c, std::uint32_t vertices, float* detect) {
+    const std::uint32_t i = blockIdx.x * blockDim.x + threadIdx.x;
+    if (i >= vertices) return;
+    for (int c = 0; c < 3; ++c)
+        detect[c * vertices + i] = i < n ? __fadd_rn(x0[c * n + i], __fmul_rn(*h, vk[c * n + i])) : x1c[c * vertices + i];
+}
+
 }  // namespace
+
+void launch_offset_momentum(const float* v, const float* inverse_mass, std::uint32_t n, double* sums, cudaStream_t stream) {
+    WEFT_CUDA_CHECK(cudaMemsetAsync(sums, 0, 4 * sizeof(double), stream));
+    if (n == 0) return;
+    offset_momentum_kernel<<<grid_for(n), kBlockSize, 0, stream>>>(v, inverse_mass, n, sums);
+    WEFT_CUDA_CHECK_LAUNCH("offset_momentum_kernel");
+}
+
+void launch_offset_radius(const float* x0c, const float* x1c, const float* remainder, std::uint32_t n,
+                          std::uint32_t vertices, const float* shift, float relaxation, float contact, float cap,
+                          float* radius, std::uint32_t* largest, cudaStream_t stream) {
+    WEFT_CUDA_CHECK(cudaMemsetAsync(largest, 0, sizeof(std::uint32_t), stream));
+    if (vertices == 0) return;
+    offset_radius_kernel<<<grid_for(vertices), kBlockSize, 0, stream>>>(x0c, x1c, remainder, n, vertices, shift,
+                                                                         relaxation, contact, cap, radius, largest);
+    WEFT_CUDA_CHECK_LAUNCH("offset_radius_kernel");
+}
+
+void launch_offset_detect_positions(const float* x0, const float* vk, std::uint32_t n, const float* h, const float* x1c,
+                                    std::uint32_t vertices, float* detect, cudaStream_t stream) {
+    if (vertices == 0) return;
+    offset_detect_positions_kernel<<<grid_for(vertices), kBlockSize, 0, stream>>>(x0, vk, n, h, x1c, vertices, detect);
+    WEFT_CUDA_CHECK_LAUNCH("offset_detect_positions_kernel");
+}
 
 void launch_collision_predict(const float* x, const float* v, std::uint32_t n, float h, float* x0c, float* x1c,
                               std::uint32_t stride, cudaStream_t stream) {

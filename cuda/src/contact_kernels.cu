@@ -10,7 +10,9 @@
 #include "contact_terms.cuh"
 #include "cuda_check.h"
 #include "weft/physics/implicit_terms.h"
+#include "weft/physics/offset_contact.h"
 #include "weft/physics/pair_contact.h"
+#include "weft/physics/proximity.h"
 
 namespace weft::cuda {
 namespace {
@@ -111,9 +113,69 @@ __device__ inline void evaluate_pair(const DeviceView& d, std::uint32_t p) {
     for (int e = 0; e < 9; ++e) c.block[e * c.capacity + p] = C.m[e / 3][e % 3];
 }
 
+/// An offset contact at the linearisation point, as the CPU's ContactTerms::evaluate_offset: the
+/// closest points of its two primitives there give this evaluation's weights (written back into the
+/// list, which the SpMV and the gathers read), then the penalty of the distance.
+__device__ inline void evaluate_offset_pair(const DeviceView& d, std::uint32_t p) {
+    const ContactView& c = d.contacts;
+    const float h = step_params(d).h;
+    const physics::ImplicitStep<float> step{h, h * h};
+    DeviceContact& pair = c.list[p];
+    const uint4 ids = reinterpret_cast<const uint4*>(c.list)[4 * p];
+    const std::uint32_t id[4] = {ids.x, ids.y, ids.z, ids.w};
+    V3 x[4];
+    for (int j = 0; j < 4; ++j) {
+        const std::uint32_t v = id[j];
+        x[j] = v < d.n ? load3(d.x0, v, d.n) + h * load3(d.wk, v, d.n)
+                       : load3(c.kinematic_x1, v - d.n, c.kinematic_capacity);
+    }
+    float w[4];
+    V3 fallback;
+    if ((pair.pair & kEdgeEdgeContactBit) != 0) {
+        const auto q = physics::edge_edge_proximity(x[0], x[1], x[2], x[3]);
+        w[0] = 1.0f - q.u;
+        w[1] = q.u;
+        w[2] = -(1.0f - q.v);
+        w[3] = -q.v;
+        fallback = q.normal;
+    } else {
+        const auto q = physics::point_triangle_proximity(x[0], x[1], x[2], x[3]);
+        w[0] = 1.0f;
+        w[1] = -(1.0f - q.u - q.v);
+        w[2] = -q.u;
+        w[3] = -q.v;
+        fallback = q.normal;
+    }
+    reinterpret_cast<float4*>(c.list)[4 * p + 1] = float4{w[0], w[1], w[2], w[3]};
+    V3 g{}, u{}, dvw{};
+    for (int j = 0; j < 4; ++j) {
+        const std::uint32_t v = id[j];
+        g += w[j] * x[j];
+        if (v < d.n) {
+            const V3 wk = load3(d.wk, v, d.n), vk = load3(d.vk, v, d.n);
+            u += w[j] * vk;
+            dvw += w[j] * (vk - wk);
+        } else {
+            u += w[j] * load3(c.kinematic_v, v - d.n, c.kinematic_capacity);
+        }
+    }
+    const physics::OffsetContactForce<float> f = physics::offset_contact(
+        g, u, fallback, physics::OffsetContactParams<float>{pair.stiffness, pair.thickness, pair.friction, 1e-3f});
+    V3 rhs;
+    M3 C;
+    physics::pair_contact_terms(step, f.force, f.dfdx, f.dfdv, dvw, rhs, C);
+    store3(c.rhs, p, c.capacity, rhs);
+    for (int e = 0; e < 9; ++e) c.block[e * c.capacity + p] = C.m[e / 3][e % 3];
+}
+
 __global__ void contact_evaluate_kernel(DeviceView d) {
     const std::uint32_t m = contact_count(d.contacts);
-    for (std::uint32_t p = first_thread(); p < m; p += thread_stride()) evaluate_pair(d, p);
+    for (std::uint32_t p = first_thread(); p < m; p += thread_stride()) {
+        if ((d.contacts.list[p].pair & kOffsetContactBit) != 0)
+            evaluate_offset_pair(d, p);
+        else
+            evaluate_pair(d, p);
+    }
 }
 
 /// s_p = C_p·Σ_j w_j x_j for every pair (the gather is fused into the PCG row kernels).

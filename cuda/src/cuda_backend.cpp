@@ -100,10 +100,6 @@ public:
 
     // Fast analytic colliders are swept per vertex after the solve, in the device solver as on the CPU.
     void substep(const Model& model, double t, double h, StepStats& stats) override {
-        const CollisionSettings& c = model.settings.collision;
-        if (c.mode == CollisionMode::Offset && needs_cloth_collisions(model))
-            throw Error("CUDA backend: collision.mode = \"offset\" runs on the cpu backend only for now; use "
-                        "--backend cpu or collision.mode = \"ccd_zones\"");
         solver_->substep(model, t, h, stats);
     }
 

@@ -3,6 +3,7 @@
 #include "device_collisions.h"
 
 #include <algorithm>
+#include <bit>
 #include <chrono>
 #include <cstdio>
 #include <cstdlib>
@@ -126,6 +127,8 @@ void DeviceCollisions::build(const FlatModel& flat, const Model& model) {
         layout.cloth_triangles = static_cast<std::uint32_t>(flat.triangle_count());
         cones_.build(hierarchy, layout);
     }
+    free_vertices_ = 0;
+    for (std::size_t i = 0; i < n_; ++i) free_vertices_ += g.inverse_mass[i] > 0.0 ? 1 : 0;
     active_ = true;
 }
 
@@ -184,6 +187,55 @@ std::size_t DeviceCollisions::detect(const Model& model, double t, double h, con
         }
     }
 
+    offset_ = settings.mode == CollisionMode::Offset;
+    if (offset_) {
+        fallback_ = false;
+        redetections_ = 0;
+        if (detect_positions_.size() < 3 * static_cast<std::size_t>(vertices_)) {
+            detect_positions_.allocate(3 * static_cast<std::size_t>(vertices_), ledger_, "offset: detection positions");
+            radius_.allocate(vertices_, ledger_, "offset: query radii");
+            remainder_.allocate(std::max<std::uint32_t>(n_, 1), ledger_, "offset: truncation remainders");
+            offset_sums_.allocate(4, ledger_, "offset: frame");
+            offset_shift_.allocate(3, ledger_, "offset: frame");
+            offset_largest_.allocate(1, ledger_, "offset: frame");
+            offset_host_.allocate(4);
+        }
+        // The frame the moves are bounded in translates with the cloth's mean velocity (mass-weighted
+        // over the free vertices), as on the CPU.
+        launch_offset_momentum(v, inverse_mass_.get(), n_, offset_sums_.get(), stream);
+        WEFT_CUDA_CHECK(cudaMemcpyAsync(offset_host_.get(), offset_sums_.get(), 4 * sizeof(double), cudaMemcpyDeviceToHost, stream));
+        WEFT_CUDA_CHECK(cudaStreamSynchronize(stream));
+        const double* sums = offset_host_.get();
+        float host_shift[3] = {0.0F, 0.0F, 0.0F};
+        if (sums[3] > 0.0)
+            for (int c = 0; c < 3; ++c) host_shift[c] = static_cast<float>(h * sums[c] / sums[3]);
+        // Synchronous: host_shift is on the stack (the stream is idle here anyway).
+        WEFT_CUDA_CHECK(cudaMemcpy(offset_shift_.get(), host_shift, sizeof(host_shift), cudaMemcpyHostToDevice));
+        const float contact = static_cast<float>(geometry_.gap(settings));
+        launch_offset_radius(x0c, x1c, nullptr, n_, vertices_, offset_shift_.get(), static_cast<float>(settings.relaxation),
+                             contact, static_cast<float>(settings.max_query_radius) * contact, radius_.get(),
+                             offset_largest_.get(), stream);
+        WEFT_CUDA_CHECK(cudaMemcpyAsync(detect_positions_.get(), x0c, 3 * static_cast<std::size_t>(vertices_) * sizeof(float),
+                                        cudaMemcpyDeviceToDevice, stream));
+        stats.ms(Stage::BroadPhase) += ms_since(clock);
+        const std::size_t found = detect_offset(model, h, stream, stats);
+        if (nk > 0) {
+            // Mesh colliders move as prescribed: their whole move is checked against their bounds.
+            collision::GpuTruncateInput k;
+            k.x_detect = detect_positions_.get();
+            k.x0 = x1c + n_;
+            k.first = n_;
+            k.vertex_count = static_cast<std::uint32_t>(nk);
+            k.stride = vertices_;
+            k.detect_stride = vertices_;
+            k.shift_device = offset_shift_.get();
+            k.planar = settings.bound_shape == BoundShape::Planar;
+            bounds_.truncate(k, stream);
+            fallback_ = bounds_.read_back(stream).broken > 0;
+        }
+        return found;
+    }
+
     const double thickness = geometry_.gap(settings);
     collision::GpuBroadPhaseInput in = broad_phase_input(thickness);
     stats.ms(Stage::BroadPhase) += ms_since(clock);
@@ -219,6 +271,98 @@ std::size_t DeviceCollisions::detect(const Model& model, double t, double h, con
     return pc.contacts;
 }
 
+std::size_t DeviceCollisions::detect_offset(const Model& model, double h, cudaStream_t stream, StepStats& stats) {
+    auto clock = Clock::now();
+    const CollisionSettings& settings = model.settings.collision;
+    collision::GpuBoundsInput b;
+    b.x = detect_positions_.get();
+    b.vertex_count = vertices_;
+    b.stride = vertices_;
+    b.triangles = triangles_.get();
+    b.triangle_count = triangle_count_;
+    b.edges = edges_.get();
+    b.edge_count = edge_count_;
+    b.self_pairs = geometry_.self;
+    b.triangle_cloth = triangle_group_.get();
+    b.radius = radius_.get();
+    b.relaxation = static_cast<float>(settings.relaxation);
+    bounds_.compute(b, broad_, stream);
+    const collision::GpuBoundsCounters& c = bounds_.read_back(stream);
+    stats.collision.candidate_pairs += static_cast<std::int64_t>(c.measured_vf + c.measured_ee);
+    std::uint32_t largest = 0;
+    WEFT_CUDA_CHECK(cudaMemcpy(&largest, offset_largest_.get(), sizeof(largest), cudaMemcpyDeviceToHost));
+    stats.collision.query_radius_max = std::max(stats.collision.query_radius_max, static_cast<double>(std::bit_cast<float>(largest)));
+    stats.ms(Stage::BroadPhase) += ms_since(clock);
+
+    clock = Clock::now();
+    collision::GpuProximityInput p;
+    p.x0 = detect_positions_.get();
+    p.x1 = detect_positions_.get();
+    p.vertex_count = vertices_;
+    p.inverse_mass = inverse_mass_.get();
+    p.thickness = thickness_.get();
+    p.friction = friction_.get();
+    p.triangles = triangles_.get();
+    p.edges = edges_.get();
+    p.rest = rest_.get();
+    p.vertex_cloth = vertex_cloth_.get();
+    p.rest_count = rest_.get() != nullptr ? n_ : 0U;
+    p.rest_exclusion = static_cast<float>(settings.rest_exclusion);
+    p.h = static_cast<float>(h);
+    p.thickness_override = static_cast<float>(settings.thickness);
+    p.stiffness_override = static_cast<float>(settings.stiffness);
+    p.offset_bound = bounds_.bound();
+    const collision::GpuProximityCounters& pc = proximity_.find(p, bounds_.pairs(), stream);
+    stats.collision.contacts = static_cast<int>(pc.contacts);
+    stats.ms(Stage::NarrowPhase) += ms_since(clock);
+    return pc.contacts;
+}
+
+void DeviceCollisions::enqueue_truncation(const Model& model, const float* x0, float* vk, float* wk,
+                                          const std::uint8_t* fixed, const float* h_device, cudaStream_t stream) {
+    collision::GpuTruncateInput t;
+    t.x_detect = detect_positions_.get();
+    t.x0 = x0;
+    t.v = vk;
+    t.v_copy = wk;
+    t.remainder = remainder_.get();
+    t.vertex_count = n_;
+    t.stride = n_;
+    t.detect_stride = vertices_;
+    t.prescribed = fixed;
+    t.h_device = h_device;
+    t.shift_device = offset_shift_.get();
+    t.planar = model.settings.collision.bound_shape == BoundShape::Planar;
+    bounds_.truncate(t, stream);
+}
+
+bool DeviceCollisions::finish_truncation(const Model& model, cudaStream_t stream, StepStats& stats) {
+    const collision::GpuBoundsCounters& c = bounds_.read_back(stream);
+    stats.collision.truncated_vertices += c.truncated;
+    if (c.broken > 0) fallback_ = true;
+    const CollisionSettings& settings = model.settings.collision;
+    return redetections_ < settings.max_redetections &&
+           static_cast<double>(c.truncated) > settings.redetect_share * static_cast<double>(free_vertices_);
+}
+
+std::size_t DeviceCollisions::redetect(const Model& model, double h, const float* x0, const float* vk,
+                                       const float* h_device, cudaStream_t stream, StepStats& stats) {
+    const CollisionSettings& settings = model.settings.collision;
+    float* x1c = positions_.get() + 3 * static_cast<std::size_t>(vertices_);
+    // From here the colliders stand at t + h and the cloth where the truncation left it; each radius
+    // covers 1.5× what the truncation cut from the vertex's last move; no frame shift.
+    launch_offset_detect_positions(x0, vk, n_, h_device, x1c, vertices_, detect_positions_.get(), stream);
+    WEFT_CUDA_CHECK(cudaMemsetAsync(offset_shift_.get(), 0, 3 * sizeof(float), stream));
+    const float contact = static_cast<float>(geometry_.gap(settings));
+    launch_offset_radius(nullptr, nullptr, remainder_.get(), n_, vertices_, offset_shift_.get(),
+                         static_cast<float>(settings.relaxation), contact,
+                         static_cast<float>(settings.max_query_radius) * contact, radius_.get(), offset_largest_.get(),
+                         stream);
+    ++redetections_;
+    ++stats.collision.redetections;
+    return detect_offset(model, h, stream, stats);
+}
+
 void DeviceCollisions::publish(const ContactInputs& list, cudaStream_t stream, StepStats& stats) {
     if (!active_) return;
     const auto clock = Clock::now();
@@ -245,9 +389,14 @@ void DeviceCollisions::publish(const ContactInputs& list, cudaStream_t stream, S
 }
 
 bool DeviceCollisions::resolve(const Model& model, double h, float* x, float* v, const float* v0, float* dv_previous,
-                               cudaStream_t stream, StepStats& stats) {
+                               bool moved_after_solve, cudaStream_t stream, StepStats& stats) {
     const CollisionSettings& settings = model.settings.collision;
-    if (!active_ || !settings.continuous) return false;
+    if (!active_) return false;
+    if (offset_) {
+        if (!fallback_ && !moved_after_solve) return false;
+        ++stats.collision.bound_fallbacks;
+    }
+    if (!settings.continuous) return false;
     float* x0c = positions_.get();
     float* x1c = x0c + 3 * static_cast<std::size_t>(vertices_);
     // x0c and the kinematic part of x1c still hold what `detect` placed there.
@@ -291,7 +440,7 @@ bool DeviceCollisions::resolve(const Model& model, double h, float* x, float* v,
 std::size_t DeviceCollisions::memory_bytes() const {
     if (!active_) return 0;
     return ledger_.total() + broad_.memory_bytes() + proximity_.memory_bytes() + zones_.memory_bytes() +
-           cones_.memory_bytes();
+           cones_.memory_bytes() + bounds_.memory_bytes();
 }
 
 }  // namespace weft::cuda

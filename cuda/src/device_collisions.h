@@ -27,6 +27,7 @@
 
 #include "collision/broad_phase_gpu.h"
 #include "collision/ccd_gpu.h"
+#include "collision/displacement_bounds_gpu.h"
 #include "weft/backend/collision_geometry.h"
 #include "collision/impact_zones_gpu.h"
 #include "collision/normal_cone_gpu.h"
@@ -72,8 +73,28 @@ public:
     /// After the solve (`x`, `v` the solved cloth state; the substep's start is what `detect` read):
     /// the GPU impact zones. The vertices they move get v = (x1 − x0)/h and, as on the CPU, the warm
     /// start of the next substep's solve dv_previous = v − v0. Returns true when they changed anything.
+    /// In offset mode (CollisionSettings::mode) it runs only as the fallback: when a prescribed move
+    /// broke a bound or `moved_after_solve` (a fast analytic collider carried cloth along).
     bool resolve(const Model& model, double h, float* x, float* v, const float* v0, float* dv_previous,
-                 cudaStream_t stream, StepStats& stats);
+                 bool moved_after_solve, cudaStream_t stream, StepStats& stats);
+
+    // ---- offset contact (docs/methods.md §7b; the CPU's CpuCollisions::truncate and redetect) ----
+    /// True when the last `detect` ran in offset mode: the contacts are offset contacts, every Newton
+    /// update goes through `enqueue_truncation`, and `resolve` is only the fallback.
+    [[nodiscard]] bool offset() const { return offset_; }
+    /// After a Newton update (enqueued; no synchronisation): truncates the free cloth vertices' v_k
+    /// (and w_k) to the bounds of the last detection; pinned ones (`fixed`) are counted, not moved.
+    /// h is read from device memory (the solver's step parameters).
+    void enqueue_truncation(const Model& model, const float* x0, float* vk, float* wk, const std::uint8_t* fixed,
+                            const float* h_device, cudaStream_t stream);
+    /// After the substep's Newton iterations (synchronises): the last truncation's counts into
+    /// `stats`; true when more than CollisionSettings::redetect_share of the free vertices were
+    /// truncated and a rerun is still allowed.
+    bool finish_truncation(const Model& model, cudaStream_t stream, StepStats& stats);
+    /// A rerun of the detection at the truncated state x0 + h·v_k (colliders at t + h). Returns the
+    /// contact count, as `detect`; `publish` follows.
+    std::size_t redetect(const Model& model, double h, const float* x0, const float* vk, const float* h_device,
+                         cudaStream_t stream, StepStats& stats);
 
     /// Device memory held, bytes.
     [[nodiscard]] std::size_t memory_bytes() const;
@@ -104,6 +125,21 @@ private:
     collision::GpuBroadPhase broad_;  // over the predicted motion (proximity)
     collision::GpuProximityContacts proximity_;
     collision::GpuImpactZones zones_;  // over the solved motion (its own broad phase and CCD)
+
+    // Offset mode: the bounds (taken at detect_positions_, with radii radius_), the frame shift, the
+    // largest radius (float bits) and the momentum sums the shift comes from.
+    /// The bounds and offset contacts at detect_positions_ (radii in radius_ and shift already set).
+    std::size_t detect_offset(const Model& model, double h, cudaStream_t stream, StepStats& stats);
+    bool offset_ = false;
+    bool fallback_ = false;
+    int redetections_ = 0;
+    std::size_t free_vertices_ = 0;
+    collision::GpuDisplacementBounds bounds_;
+    DeviceArray<float> detect_positions_, radius_, remainder_;
+    DeviceArray<double> offset_sums_;  // Σ m·v (3), Σ m
+    DeviceArray<float> offset_shift_;  // 3
+    DeviceArray<std::uint32_t> offset_largest_;
+    PinnedArray<double> offset_host_;  // the momentum sums
 };
 
 }  // namespace weft::cuda

@@ -56,7 +56,7 @@ bool DeviceContacts::reserve(std::size_t pairs, std::size_t kinematic, std::uint
     v.kinematic_capacity = static_cast<std::uint32_t>(kinematic_capacity);
     unsigned char* base = input_.get();
     v.count = reinterpret_cast<const std::uint32_t*>(base + count_offset_);
-    v.list = reinterpret_cast<const DeviceContact*>(base + list_offset);
+    v.list = reinterpret_cast<DeviceContact*>(base + list_offset);
     v.kinematic_x1 = kinematic_capacity > 0 ? reinterpret_cast<const float*>(base + kinematic_offset_) : nullptr;
     v.kinematic_v = kinematic_capacity > 0 ? v.kinematic_x1 + 3 * kinematic_capacity : nullptr;
     v.start = start_.get();

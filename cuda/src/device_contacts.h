@@ -41,15 +41,26 @@ struct DeviceContact {
     float thickness;          ///< m
     float stiffness;          ///< N/m
     float friction;           ///< Coulomb coefficient
-    std::uint32_t pair;       ///< index of the candidate it came from (not read by the solve)
+    /// Index of the candidate it came from (bits below kEdgeEdgeContactBit; not read by the solve),
+    /// and the two flags above it.
+    std::uint32_t pair;
 };
 static_assert(sizeof(DeviceContact) == 64, "four 16-byte loads per contact");
+
+/// DeviceContact::pair flag: an offset contact (weft/physics/offset_contact.h; collision.mode =
+/// "offset"), whose closest points, weights and normal the solve recomputes at every evaluation and
+/// whose `thickness` is the contact radius.
+inline constexpr std::uint32_t kOffsetContactBit = 1U << 31;
+/// DeviceContact::pair flag of an offset contact: edge–edge (vertices 0–1 against 2–3) rather than
+/// vertex–face (vertex 0 against the triangle 1–2–3).
+inline constexpr std::uint32_t kEdgeEdgeContactBit = 1U << 30;
 
 /// The contact arrays as raw pointers, inside DeviceView (passed by value to every kernel).
 struct ContactView {
     std::uint32_t capacity = 0;            ///< pairs the arrays hold; 0: the solve has no contact path
     std::uint32_t kinematic_capacity = 0;  ///< component stride of the kinematic arrays
-    const DeviceContact* list = nullptr;
+    /// Written by the solve only for offset contacts (their weights follow the closest points).
+    DeviceContact* list = nullptr;
     const std::uint32_t* count = nullptr;  ///< pairs in use this substep (clamped to the capacity)
     /// Kinematic vertices (mesh colliders) at t + h and their velocities, SoA with stride
     /// `kinematic_capacity`: component c of kinematic vertex k at [c·kinematic_capacity + k].

@@ -109,10 +109,35 @@ void DeviceSolver::record(cudaStream_t stream, bool capturing) {
         launch_pcg_finish(view_, stream);
         mark();
         launch_newton_update(view_, stream);
+        record_truncation(stream);
         mark();
     }
     launch_commit(view_, stream);
     mark();
+}
+
+void DeviceSolver::record_truncation(cudaStream_t stream) {
+    if (offset_model_ == nullptr) return;
+    const float* h = &reinterpret_cast<const StepParams*>(view_.staging)->h;
+    collisions_.enqueue_truncation(*offset_model_, view_.x0, view_.vk, view_.wk, view_.fixed, h, stream);
+}
+
+void DeviceSolver::record_extra_newton(cudaStream_t stream) {
+    // The contacts of the rerun detection: their incidence, then one Newton iteration as in record().
+    if (view_.contacts.capacity > 0) launch_contact_incidence(view_, contacts_.scan_storage(), contacts_.scan_storage_bytes(), stream);
+    launch_begin_newton(view_, stream);
+    if (row_gather_)
+        launch_assemble_rows(view_, stream);
+    else
+        launch_assemble_colors(view_, layout_.triangle_colors, layout_.hinge_colors, stream);
+    if (view_.contacts.capacity > 0) launch_contact_evaluate(view_, stream);
+    launch_pcg_setup(view_, false, schwarz_on_, stream);
+    if (schwarz_on_) launch_schwarz_factor(view_, 1, stream);
+    record_pcg_loop(stream, false, 1);
+    launch_pcg_finish(view_, stream);
+    launch_newton_update(view_, stream);
+    record_truncation(stream);
+    launch_commit(view_, stream);
 }
 
 void DeviceSolver::capture_graph() {
@@ -150,7 +175,9 @@ void DeviceSolver::launch_substep(cudaStream_t stream, int newton_iterations) {
         }
     }
 
-    const bool want_graph = use_graph_ && !graph_unsupported_ && warm_;
+    // Offset contact is recorded directly: its truncation reads buffers that a rerun of the detection
+    // may reallocate (a shortcut: the graph would have to be re-captured on every growth).
+    const bool want_graph = use_graph_ && !graph_unsupported_ && warm_ && offset_model_ == nullptr;
     if (want_graph && (graph_exec_ == nullptr || graph_newton_ != recorded_newton_)) {
         try {
             capture_graph();

@@ -115,8 +115,24 @@ void DeviceSolver::substep(const Model& model, double t, double h, StepStats& st
         collisions_.publish(contacts_.inputs(), stream, stats);
     }
 
+    offset_model_ = collisions_.active() && collisions_.offset() ? &model : nullptr;
     launch_substep(stream, model.settings.solver.newton_iterations);
     if (schwarz_on_) schwarz_factored_ = true;
+    if (offset_model_ != nullptr) {
+        // Offset contact: while too many moves were truncated, detect again where the truncation left
+        // the cloth and take one more Newton iteration from there (CollisionSettings::redetect_share).
+        while (collisions_.finish_truncation(model, stream, stats)) {
+            const auto extra = Clock::now();
+            const std::size_t found = collisions_.redetect(model, h, view_.x0, view_.vk,
+                                                           &reinterpret_cast<const StepParams*>(view_.staging)->h, stream, stats);
+            reserve_contacts(found, collisions_.kinematic_count());
+            collisions_.publish(contacts_.inputs(), stream, stats);
+            record_extra_newton(stream);
+            WEFT_CUDA_CHECK(cudaStreamSynchronize(stream));
+            stats.ms(Stage::Solve) += ms_since(extra);
+        }
+        offset_model_ = nullptr;
+    }
     WEFT_CUDA_CHECK(cudaMemcpyAsync(host_stats_.get(), stats_.get(), sizeof(DeviceStats), cudaMemcpyDeviceToHost, stream));
     WEFT_CUDA_CHECK(cudaStreamSynchronize(stream));
     warm_ = true;
@@ -152,11 +168,14 @@ void DeviceSolver::substep(const Model& model, double t, double h, StepStats& st
 
     // After the solve and before CCD, as on the CPU: vertices that an analytic collider ran into
     // during the substep ride along with it (outside the graph, which stays as captured).
+    const int swept_before = stats.collision.swept_collider_hits;
     if (ds.non_finite == 0) sweep_colliders(std::bit_cast<float>(ds.largest_move_bits), stream, stats);
 
-    // After the solve: CCD and the impact zones on the device (device_collisions.h).
+    // After the solve: CCD and the impact zones on the device (device_collisions.h); in offset mode
+    // only as the fallback.
     if (collisions_.active() && ds.non_finite == 0) {
-        (void)collisions_.resolve(model, h, view_.x, view_.v, view_.v0, view_.dv_previous, stream, stats);
+        (void)collisions_.resolve(model, h, view_.x, view_.v, view_.v0, view_.dv_previous,
+                                  stats.collision.swept_collider_hits > swept_before, stream, stats);
         ledger_.set("cloth collisions", collisions_.memory_bytes());  // the detection buffers grow on use
     }
 

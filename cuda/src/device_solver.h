@@ -109,6 +109,11 @@ private:
     /// the captured graph (captured again when the iteration count changed) once warm and where graphs
     /// work, else recorded directly with the host-driven CG loop.
     void launch_substep(cudaStream_t stream, int newton_iterations);
+    /// Offset contact: one more Newton iteration after a rerun of the detection (recorded directly,
+    /// never in the graph), then the commit again.
+    void record_extra_newton(cudaStream_t stream);
+    /// Offset contact: the truncation after a Newton update (when `offset_model_` is set).
+    void record_truncation(cudaStream_t stream);
     /// Lays out the per-substep parameter block for `model` and allocates it (host and device).
     void layout_staging(const Model& model);
     /// Writes the parameters of the substep from `t` to `t + h` into the host block.
@@ -186,6 +191,9 @@ private:
     // Stage timing: events recorded between stages (in the graph too).
     std::vector<cudaEvent_t> events_;
     int recorded_newton_ = 0;
+    /// The model of the substep being recorded when its contacts are offset contacts (the
+    /// truncation reads its settings); null otherwise.
+    const Model* offset_model_ = nullptr;
 
     AssemblyStrategy assembly_ = AssemblyStrategy::Auto;
     bool row_gather_ = true;

@@ -44,12 +44,17 @@ const SceneCase kScenes[] = {
 // 10 cm width) needs the swept collider test, which the exact check cannot judge (it looks at
 // triangles, not at analytic colliders): test_cuda_fast_colliders.cpp runs it against the CPU.
 
-TEST(CudaCollisions, EveryCollisionSceneEndsEveryFrameWithoutIntersections) {
+// Both contact modes: CCD with impact zones, and offset contact (truncation to the displacement
+// bounds, the impact zones only as the fallback).
+class CudaCollisionModes : public ::testing::TestWithParam<const char*> {};
+
+TEST_P(CudaCollisionModes, EveryCollisionSceneEndsEveryFrameWithoutIntersections) {
     WEFT_REQUIRE_GPU();
     for (const SceneCase& c : kScenes) {
         SCOPED_TRACE(c.scene);
         std::vector<std::string> overrides = c.overrides;
         overrides.emplace_back("collision.check=true");
+        overrides.emplace_back(std::string("collision.mode=") + GetParam());
         std::unique_ptr<World> world;
         try {
             world = make_world(c.scene, "cuda", overrides);
@@ -60,8 +65,8 @@ TEST(CudaCollisions, EveryCollisionSceneEndsEveryFrameWithoutIntersections) {
             std::printf("[ collide  ] %-10s skipped: %s\n", c.scene, e.what());
             continue;
         }
-        int intersecting = 0, unresolved = 0, non_finite = 0, zones = 0, contacts_max = 0;
-        std::int64_t ccd_hits = 0;
+        int intersecting = 0, unresolved = 0, non_finite = 0, zones = 0, contacts_max = 0, redetections = 0, fallbacks = 0;
+        std::int64_t ccd_hits = 0, truncated = 0;
         const auto start = std::chrono::steady_clock::now();
         for (int f = 0; f < c.frames; ++f) {
             const StepStats& s = world->step();
@@ -71,17 +76,24 @@ TEST(CudaCollisions, EveryCollisionSceneEndsEveryFrameWithoutIntersections) {
             zones += s.collision.impact_zones;
             ccd_hits += s.collision.ccd_hits;
             contacts_max = std::max(contacts_max, s.collision.contacts);
+            truncated += s.collision.truncated_vertices;
+            redetections += s.collision.redetections;
+            fallbacks += s.collision.bound_fallbacks;
         }
         const double ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
-        std::printf("[ collide  ] %-10s %4d frames: %d intersecting, %d unresolved substeps, %d impact zones, %lld CCD "
-                    "hits, up to %d contacts, %.2f ms/frame (check included)\n",
-                    c.scene, c.frames, intersecting, unresolved, zones, static_cast<long long>(ccd_hits), contacts_max,
-                    ms / c.frames);
+        std::printf("[ collide  ] %-9s %-10s %4d frames: %d intersecting, %d unresolved substeps, %d impact zones, "
+                    "%lld CCD hits, up to %d contacts, %lld truncated, %d reruns, %d fallbacks, %.2f ms/frame (check "
+                    "included)\n",
+                    GetParam(), c.scene, c.frames, intersecting, unresolved, zones, static_cast<long long>(ccd_hits),
+                    contacts_max, static_cast<long long>(truncated), redetections, fallbacks, ms / c.frames);
         EXPECT_EQ(intersecting, 0);
         EXPECT_EQ(unresolved, 0);
         EXPECT_EQ(non_finite, 0);
     }
 }
+
+INSTANTIATE_TEST_SUITE_P(BothModes, CudaCollisionModes, ::testing::Values("ccd_zones", "offset"),
+                         [](const auto& mode) { return std::string(mode.param); });
 
 TEST(CudaCollisions, ContactCountOfOneStateMatchesTheCpu) {
     WEFT_REQUIRE_GPU();

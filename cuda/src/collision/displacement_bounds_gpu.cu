@@ -58,59 +58,75 @@ __global__ void vertex_kernel(GpuBoundsInput in, const std::uint32_t* nearest, f
     reach[v] = in.relaxation * r;
 }
 
-/// The move of vertex v from the detection: x0 + h·v − shift − x_detect.
+__device__ inline float step_h(const GpuTruncateInput& t) { return t.h_device != nullptr ? *t.h_device : t.h; }
+__device__ inline V3f step_shift(const GpuTruncateInput& t) {
+    return t.shift_device != nullptr ? V3f{t.shift_device[0], t.shift_device[1], t.shift_device[2]}
+                                     : V3f{t.shift[0], t.shift[1], t.shift[2]};
+}
+
+/// The proposal of local vertex i: x0 + h·v, or x0 alone for a check.
+__device__ inline V3f proposal(const GpuTruncateInput& t, std::uint32_t stride, std::uint32_t i) {
+    const V3f x = load_position(t.x0, i, stride);
+    return t.v != nullptr ? x + step_h(t) * load_position(t.v, i, stride) : x;
+}
+
+/// The move of local vertex i from the detection: proposal − shift − x_detect.
 __device__ inline V3f move_of(const GpuTruncateInput& t, std::uint32_t stride, std::uint32_t detect_stride,
-                              std::uint32_t v) {
-    const V3f x = load_position(t.x0, v, stride) + t.h * load_position(t.v, v, stride);
-    return x - V3f{t.shift[0], t.shift[1], t.shift[2]} - load_position(t.x_detect, v, detect_stride);
+                              std::uint32_t i) {
+    return proposal(t, stride, i) - step_shift(t) - load_position(t.x_detect, t.first + i, detect_stride);
 }
 
 /// Per vertex: the share its reach (planar) or its bound (sphere) allows.
 __global__ void share_kernel(GpuTruncateInput t, std::uint32_t stride, std::uint32_t detect_stride, const float* bound,
-                             const float* reach, std::uint32_t* share, GpuBoundsCounters* counters) {
-    const std::uint32_t v = blockIdx.x * blockDim.x + threadIdx.x;
-    if (v == 0) counters->truncated = counters->broken = 0;
-    if (v >= t.vertex_count) return;
-    const float length = physics::length(move_of(t, stride, detect_stride, v));
-    const float limit = t.planar ? reach[v] : bound[v];
-    share[v] = length > limit ? __float_as_uint(limit / length) : kOneBits;
+                             const float* reach, std::uint32_t* share, GpuBoundsCounters* counters, int reset) {
+    const std::uint32_t i = blockIdx.x * blockDim.x + threadIdx.x;
+    if (i == 0 && reset) counters->truncated = counters->broken = 0;
+    if (i >= t.vertex_count) return;
+    const float length = physics::length(move_of(t, stride, detect_stride, i));
+    const float limit = t.planar ? reach[t.first + i] : bound[t.first + i];
+    share[t.first + i] = length > limit ? __float_as_uint(limit / length) : kOneBits;
 }
 
 /// Planar: one thread per measured pair; each of its vertices may advance at most γ·d towards the
 /// partner (the first primitive's vertices along −n, the second's along +n).
 __global__ void pair_share_kernel(GpuTruncateInput t, std::uint32_t stride, std::uint32_t detect_stride,
                                   GpuBoundsInput in, GpuPairList pairs, const float4* geometry, std::uint32_t* share) {
-    const std::uint32_t i = blockIdx.x * blockDim.x + threadIdx.x;
-    if (i >= candidates_in_use(pairs)) return;
-    const float4 g = geometry[i];
+    const std::uint32_t k = blockIdx.x * blockDim.x + threadIdx.x;
+    if (k >= candidates_in_use(pairs)) return;
+    const float4 g = geometry[k];
     if (!(g.w < __int_as_float(kInfinityBits))) return;  // not measured
-    const PairVertices pv = pair_vertices(pairs.encoding, pairs.keys[i], in.triangles, in.edges);
+    const PairVertices pv = pair_vertices(pairs.encoding, pairs.keys[k], in.triangles, in.edges);
     const float limit = in.relaxation * g.w;
     for (int a = 0; a < 4; ++a) {
         const std::uint32_t v = pv.id[a];
-        if (v >= t.vertex_count) continue;
+        if (v < t.first || v - t.first >= t.vertex_count) continue;
         const float sign = a < pv.first_side ? -1.0F : 1.0F;
-        const float advance = sign * physics::dot(move_of(t, stride, detect_stride, v), V3f{g.x, g.y, g.z});
+        const float advance = sign * physics::dot(move_of(t, stride, detect_stride, v - t.first), V3f{g.x, g.y, g.z});
         if (advance > limit) atomicMin(&share[v], __float_as_uint(limit / advance));
     }
 }
 
 __global__ void apply_kernel(GpuTruncateInput t, std::uint32_t stride, std::uint32_t detect_stride,
                              const std::uint32_t* share, GpuBoundsCounters* counters) {
-    const std::uint32_t v = blockIdx.x * blockDim.x + threadIdx.x;
-    if (v >= t.vertex_count) return;
-    const float s = __uint_as_float(share[v]);
-    if (!(s < 1.0F)) return;
-    if (t.prescribed != nullptr && t.prescribed[v] != 0) {
+    const std::uint32_t i = blockIdx.x * blockDim.x + threadIdx.x;
+    if (i >= t.vertex_count) return;
+    const float s = __uint_as_float(share[t.first + i]);
+    const bool cut = s < 1.0F;
+    const V3f move = move_of(t, stride, detect_stride, i);
+    if (t.remainder != nullptr) t.remainder[i] = cut ? (1.0F - s) * physics::length(move) : 0.0F;
+    if (!cut) return;
+    if (t.v == nullptr || (t.prescribed != nullptr && t.prescribed[i] != 0)) {
         atomicAdd(&counters->broken, 1U);
         return;
     }
-    const V3f move = move_of(t, stride, detect_stride, v);
-    const V3f kept = load_position(t.x_detect, v, detect_stride) + s * move + V3f{t.shift[0], t.shift[1], t.shift[2]};
-    const V3f vel = (kept - load_position(t.x0, v, stride)) / t.h;
-    t.v[v] = vel.x;
-    t.v[v + static_cast<std::size_t>(stride)] = vel.y;
-    t.v[v + 2 * static_cast<std::size_t>(stride)] = vel.z;
+    const V3f kept = load_position(t.x_detect, t.first + i, detect_stride) + s * move + step_shift(t);
+    const V3f vel = (kept - load_position(t.x0, i, stride)) / step_h(t);
+    for (float* out : {t.v, t.v_copy}) {
+        if (out == nullptr) continue;
+        out[i] = vel.x;
+        out[i + static_cast<std::size_t>(stride)] = vel.y;
+        out[i + 2 * static_cast<std::size_t>(stride)] = vel.z;
+    }
     atomicAdd(&counters->truncated, 1U);
 }
 
@@ -161,18 +177,19 @@ void GpuDisplacementBounds::compute(const GpuBoundsInput& in, GpuBroadPhase& has
     WEFT_CUDA_CHECK_LAUNCH("vertex_kernel");
 }
 
-void GpuDisplacementBounds::truncate(const GpuTruncateInput& t, cudaStream_t stream) {
-    if (t.vertex_count > in_.vertex_count)
-        throw Error("GPU displacement bounds: truncating " + std::to_string(t.vertex_count) + " vertices with bounds for " +
+void GpuDisplacementBounds::truncate(const GpuTruncateInput& t, cudaStream_t stream, bool reset_counts) {
+    if (std::uint64_t{t.first} + t.vertex_count > in_.vertex_count)
+        throw Error("GPU displacement bounds: truncating vertices [" + std::to_string(t.first) + ", " +
+                    std::to_string(std::uint64_t{t.first} + t.vertex_count) + ") with bounds for " +
                     std::to_string(in_.vertex_count));
-    if (t.vertex_count > 0 && (t.x_detect == nullptr || t.x0 == nullptr || t.v == nullptr))
+    if (t.vertex_count > 0 && (t.x_detect == nullptr || t.x0 == nullptr))
         throw Error("GPU displacement bounds: truncation arrays missing");
-    if (!(t.h > 0.0F)) throw Error("GPU displacement bounds: h must be positive");
+    if (t.h_device == nullptr && !(t.h > 0.0F)) throw Error("GPU displacement bounds: h must be positive");
     const std::uint32_t stride = t.stride != 0 ? t.stride : t.vertex_count;
     const std::uint32_t detect_stride =
         t.detect_stride != 0 ? t.detect_stride : (in_.stride != 0 ? in_.stride : in_.vertex_count);
-    share_kernel<<<blocks_for(t.vertex_count, kThreads), kThreads, 0, stream>>>(t, stride, detect_stride, bound_.get(),
-                                                                               reach_.get(), share_bits_.get(), counters_.get());
+    share_kernel<<<blocks_for(t.vertex_count, kThreads), kThreads, 0, stream>>>(
+        t, stride, detect_stride, bound_.get(), reach_.get(), share_bits_.get(), counters_.get(), reset_counts ? 1 : 0);
     WEFT_CUDA_CHECK_LAUNCH("share_kernel");
     if (t.planar && pairs_.capacity > 0) {
         pair_share_kernel<<<blocks_for(pairs_.capacity, kThreads), kThreads, 0, stream>>>(

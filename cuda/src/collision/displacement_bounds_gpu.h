@@ -49,19 +49,27 @@ struct GpuBoundsInput {
     float relaxation = 0.45F;       ///< γ in (0, ½)
 };
 
-/// One truncation: vertex v proposes x0_v + h·v_v; its move from the detection is that minus `shift`
-/// minus x_detect_v (the bounds' positions). Truncated vertices get v = (x_detect + t·move + shift −
-/// x0)/h; prescribed ones (pins, kinematic vertices) are never changed but flagged when t < 1.
+/// One truncation: local vertex i (bounds vertex first + i) proposes x0_i + h·v_i; its move from the
+/// detection is that minus the frame shift minus x_detect (the bounds' positions). Truncated vertices
+/// get v = (x_detect + t·move + shift − x0)/h (and v_copy the same); prescribed ones (pins) are never
+/// changed but counted in `broken` when t < 1. Without `v` the positions x0 are the proposal and every
+/// vertex is prescribed (a check of kinematic moves). h and the shift are read from device memory
+/// when their pointers are given (a CUDA graph replays them per substep), else from the fields.
 struct GpuTruncateInput {
     const float* x_detect = nullptr;  ///< the positions the bounds were taken at (GpuBoundsInput::x)
     const float* x0 = nullptr;        ///< start of the substep, m
-    float* v = nullptr;               ///< in/out, m/s
-    std::uint32_t vertex_count = 0;   ///< vertices to truncate (a prefix of the bounds' vertices)
+    float* v = nullptr;               ///< in/out, m/s (null: check only)
+    float* v_copy = nullptr;          ///< optional: receives the truncated velocities too
+    float* remainder = nullptr;       ///< optional, per local vertex: (1 − t)·|move|, m
+    std::uint32_t first = 0;          ///< bounds index of local vertex 0
+    std::uint32_t vertex_count = 0;   ///< local vertices
     std::uint32_t stride = 0;         ///< component stride of x0 and v; 0 means vertex_count
     std::uint32_t detect_stride = 0;  ///< component stride of x_detect; 0 means the bounds' stride
-    const std::uint8_t* prescribed = nullptr;  ///< 1: cannot be shortened (optional)
+    const std::uint8_t* prescribed = nullptr;  ///< per local vertex, 1: cannot be shortened (optional)
     float h = 1.0F;
+    const float* h_device = nullptr;
     float shift[3] = {0.0F, 0.0F, 0.0F};
+    const float* shift_device = nullptr;  ///< 3 floats
     bool planar = true;
 };
 
@@ -81,7 +89,8 @@ public:
     /// one host synchronisation), then the pair and vertex passes, enqueued on `stream`.
     void compute(const GpuBoundsInput& in, GpuBroadPhase& hash, cudaStream_t stream);
     /// Truncates the moves of the vertices in `t` to the bounds of the last `compute` (enqueued).
-    void truncate(const GpuTruncateInput& t, cudaStream_t stream);
+    /// `reset_counts` false adds to the last truncation's counts (a check after a truncation).
+    void truncate(const GpuTruncateInput& t, cudaStream_t stream, bool reset_counts = true);
     /// Copies the counters to the host and waits.
     const GpuBoundsCounters& read_back(cudaStream_t stream);
     [[nodiscard]] const GpuBoundsCounters& counters() const { return *counters_host_.get(); }

@@ -9,6 +9,7 @@
 #include "collision/grow_and_rerun.h"
 #include "collision/pair_geometry.cuh"
 #include "cuda_check.h"
+#include "device_contacts.h"
 #include "grid_size.h"
 
 namespace weft::cuda::collision {
@@ -59,8 +60,19 @@ __device__ __noinline__ bool make_contact(const GpuProximityInput& in, std::uint
     if (!(inverse_effective_mass > 0.0F)) return false;
     const float thickness =
         in.thickness_override > 0.0F ? in.thickness_override : physics::max_(thickness_a, thickness_b);
-    const float gap1 = physics::dot(normal, predicted);
-    if (!(physics::min_(gap0, gap1) < thickness)) return false;
+    if (in.offset_bound == nullptr) {
+        const float gap1 = physics::dot(normal, predicted);
+        if (!(physics::min_(gap0, gap1) < thickness)) return false;
+    } else {
+        // The most the gap can shrink under the bounds: each primitive moves at most as far as its
+        // farthest vertex.
+        float reach_a = 0.0F, reach_b = 0.0F;
+        for (int i = 0; i < 4; ++i) {
+            float& reach = i < pv.first_side ? reach_a : reach_b;
+            reach = physics::max_(reach, in.offset_bound[pv.id[i]]);
+        }
+        if (!(gap0 - (reach_a + reach_b) < thickness)) return false;
+    }
     if (rest_neighbours(in, pv, thickness)) return false;
     for (int i = 0; i < 4; ++i) {
         c.vertex[i] = pv.id[i];
@@ -101,6 +113,7 @@ __global__ void contact_write_kernel(GpuProximityInput in, std::uint32_t stride,
     GpuProximityContact c;
     (void)make_contact(in, stride, pairs.encoding, pairs.keys[i], c);  // true: the same code decided pass 1
     c.pair = i;
+    if (in.offset_bound != nullptr) c.pair |= kOffsetContactBit | (pairs.encoding.is_ee(pairs.keys[i]) ? kEdgeEdgeContactBit : 0U);
     out[at] = c;
 }
 

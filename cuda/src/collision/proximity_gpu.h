@@ -50,6 +50,11 @@ struct GpuProximityInput {
     float h = 0.0F;                   ///< substep, s (> 0)
     float thickness_override = 0.0F;  ///< m; > 0 replaces the per-vertex thickness
     float stiffness_override = 0.0F;  ///< N/m; > 0 replaces the 100·m/h² rule
+    /// Offset contact, as ProximityInput::offset_bound on the CPU: per vertex its displacement bound
+    /// (m, device). Given, a pair is kept when d − (largest bound of the first primitive + largest of
+    /// the second) < thickness, d its distance at x0, and is flagged kOffsetContactBit (with
+    /// kEdgeEdgeContactBit for an edge–edge pair) in `pair`.
+    const float* offset_bound = nullptr;
 };
 
 /// One contact (64 bytes): the gap vector g = Σ weight[i]·x[vertex[i]] held along `normal`.

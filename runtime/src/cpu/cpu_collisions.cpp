@@ -172,20 +172,6 @@ void CpuCollisions<T>::detect_offset(const Model& model, double h, StepStats& st
 }
 
 template <typename T>
-void CpuCollisions<T>::bounded_prediction(const Model& model, double h, const std::vector<V3>& x0, std::vector<V3>& v) const {
-    const bool planar = model.settings.collision.bound_shape == BoundShape::Planar;
-    const collision::CollisionGeometry& g = geometry_;
-    parallel_chunks(g.cloth_vertices, [&](std::size_t lo, std::size_t hi) {
-        for (std::size_t i = lo; i < hi; ++i) {
-            if (!(g.inverse_mass[i] > 0.0)) continue;
-            const Vec3d move = (x0[i] + static_cast<T>(h) * v[i]).template cast<double>() - shift_ - x_detect_[i];
-            const double t = collision::kept_share(bounds_, i, move, planar);
-            if (t < 1.0) v[i] = ((x_detect_[i] + t * move + shift_ - x0[i].template cast<double>()) / h).template cast<T>();
-        }
-    });
-}
-
-template <typename T>
 std::size_t CpuCollisions<T>::truncate(const Model& model, double h, const std::vector<V3>& x0, std::vector<V3>& vk,
                                        StepStats& stats) {
     const auto clock = Clock::now();

@@ -56,10 +56,6 @@ public:
     /// vertices truncated.
     std::size_t truncate(const Model& model, double h, const std::vector<V3>& x0, std::vector<V3>& vk,
                          StepStats& stats);
-    /// Offset mode: `v` truncated like `truncate` does, with no statistics and no fallback: the
-    /// contacts' linearisation point x0 + h·v of the first Newton iteration, which the bounds keep
-    /// free of crossings (every pair keeps at least (1 − 2γ) of its distance, so no normal flips).
-    void bounded_prediction(const Model& model, double h, const std::vector<V3>& x0, std::vector<V3>& v) const;
     /// Offset mode: true when the last truncation shortened more than CollisionSettings::redetect_share
     /// of the free vertices and a rerun is still allowed this substep.
     [[nodiscard]] bool wants_redetection(const Model& model) const;

@@ -260,16 +260,7 @@ void CpuSolver<T>::substep(const Model& model, double t, double h_double, StepSt
         clock = Clock::now();
         evaluate_elements(model, t, h);
         stats.collider_contacts = evaluate_vertices(model, h);
-        if (contacts != nullptr) {
-            // Offset contacts are linearised about the bounded inertial prediction in the first Newton
-            // iteration (later ones about the iterate, like every force): at x0 a pair still outside the
-            // contact radius gives no force, and the truncation alone would stop the approach.
-            if (offset && newton == 0) {
-                contact_w_ = vk_;
-                collisions_.bounded_prediction(model, h_double, x0_, contact_w_);
-            }
-            contacts->evaluate(h, x0_, offset && newton == 0 ? contact_w_ : wk_, vk_, kinematic_x1, kinematic_v);
-        }
+        if (contacts != nullptr) contacts->evaluate(h, x0_, wk_, vk_, kinematic_x1, kinematic_v);
         stats.ms(Stage::Forces) += ms_since(clock);
 
         clock = Clock::now();
