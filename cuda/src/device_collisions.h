@@ -21,6 +21,7 @@
 
 #include <cuda_runtime_api.h>
 
+#include <bit>
 #include <cstddef>
 #include <cstdint>
 #include <vector>
@@ -82,6 +83,13 @@ public:
     /// True when the last `detect` ran in offset mode: the contacts are offset contacts, every Newton
     /// update goes through `enqueue_truncation`, and `resolve` is only the fallback.
     [[nodiscard]] bool offset() const { return offset_; }
+    /// What a CUDA graph that captured `enqueue_truncation` depends on besides its arguments: the
+    /// bounds' buffers (their generation), the bound shape and γ. Equal values: the capture is valid.
+    [[nodiscard]] std::uint64_t truncation_key(const Model& model) const {
+        const CollisionSettings& c = model.settings.collision;
+        return (bounds_.generation() << 33) ^ (std::uint64_t{c.bound_shape == BoundShape::Planar} << 32) ^
+               std::bit_cast<std::uint32_t>(static_cast<float>(c.relaxation));
+    }
     /// After a Newton update (enqueued; no synchronisation): truncates the free cloth vertices' v_k
     /// (and w_k) to the bounds of the last detection; pinned ones (`fixed`) are counted, not moved.
     /// h is read from device memory (the solver's step parameters).

@@ -161,6 +161,7 @@ void DeviceSolver::capture_graph() {
     }
     ++graph_captures_;
     graph_newton_ = recorded_newton_;
+    graph_truncation_key_ = offset_model_ != nullptr ? collisions_.truncation_key(*offset_model_) | 1U : 0U;
 }
 
 void DeviceSolver::launch_substep(cudaStream_t stream, int newton_iterations) {
@@ -175,10 +176,12 @@ void DeviceSolver::launch_substep(cudaStream_t stream, int newton_iterations) {
         }
     }
 
-    // Offset contact is recorded directly: its truncation reads buffers that a rerun of the detection
-    // may reallocate (a shortcut: the graph would have to be re-captured on every growth).
-    const bool want_graph = use_graph_ && !graph_unsupported_ && warm_ && offset_model_ == nullptr;
-    if (want_graph && (graph_exec_ == nullptr || graph_newton_ != recorded_newton_)) {
+    // Offset contact's truncation is captured too; the graph is captured again when its buffers grew
+    // or its settings changed (DeviceCollisions::truncation_key), or when offset contact is switched.
+    const std::uint64_t truncation_key = offset_model_ != nullptr ? collisions_.truncation_key(*offset_model_) | 1U : 0U;
+    const bool want_graph = use_graph_ && !graph_unsupported_ && warm_;
+    if (want_graph &&
+        (graph_exec_ == nullptr || graph_newton_ != recorded_newton_ || graph_truncation_key_ != truncation_key)) {
         try {
             capture_graph();
         } catch (const Error&) {

@@ -194,6 +194,8 @@ private:
     /// The model of the substep being recorded when its contacts are offset contacts (the
     /// truncation reads its settings); null otherwise.
     const Model* offset_model_ = nullptr;
+    /// The truncation the graph was captured with (DeviceCollisions::truncation_key; 0: none).
+    std::uint64_t graph_truncation_key_ = 0;
 
     AssemblyStrategy assembly_ = AssemblyStrategy::Auto;
     bool row_gather_ = true;

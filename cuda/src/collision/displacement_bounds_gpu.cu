@@ -15,6 +15,7 @@ namespace {
 constexpr unsigned kThreads = 256;
 constexpr std::uint32_t kInfinityBits = 0x7F800000U;  // +∞: above every finite non-negative float
 constexpr std::uint32_t kOneBits = 0x3F800000U;       // 1.0f
+constexpr std::uint32_t kEdgeEdgeFlag = 1U << 31;      // in the last id of pair_ids_
 
 __global__ void reset_kernel(GpuBoundsCounters* c, std::uint32_t* nearest, std::uint32_t n) {
     const std::uint32_t i = blockIdx.x * blockDim.x + threadIdx.x;
@@ -26,11 +27,12 @@ __global__ void reset_kernel(GpuBoundsCounters* c, std::uint32_t* nearest, std::
 
 /// One thread per candidate: its distance and normal at x, and, when it is within the largest radius
 /// of its four vertices, the nearest distance of each of them lowered to it.
-__global__ void pair_kernel(GpuBoundsInput in, std::uint32_t stride, GpuPairList pairs, float4* geometry,
+__global__ void pair_kernel(GpuBoundsInput in, std::uint32_t stride, GpuPairList pairs, float4* geometry, uint4* ids,
                             std::uint32_t* nearest, GpuBoundsCounters* counters) {
     const std::uint32_t i = blockIdx.x * blockDim.x + threadIdx.x;
     if (i >= candidates_in_use(pairs)) return;
     const PairVertices pv = pair_vertices(pairs.encoding, pairs.keys[i], in.triangles, in.edges);
+    ids[i] = uint4{pv.id[0], pv.id[1], pv.id[2], pv.id[3] | (pv.vf ? 0U : kEdgeEdgeFlag)};
     V3f x[4];
     for (int a = 0; a < 4; ++a) x[a] = load_position(in.x, pv.id[a], stride);
     float w[4];
@@ -90,17 +92,20 @@ __global__ void share_kernel(GpuTruncateInput t, std::uint32_t stride, std::uint
 /// Planar: one thread per measured pair; each of its vertices may advance at most γ·d towards the
 /// partner (the first primitive's vertices along −n, the second's along +n).
 __global__ void pair_share_kernel(GpuTruncateInput t, std::uint32_t stride, std::uint32_t detect_stride,
-                                  GpuBoundsInput in, GpuPairList pairs, const float4* geometry, std::uint32_t* share) {
+                                  float relaxation, const std::uint32_t* count, std::uint32_t capacity,
+                                  const uint4* ids, const float4* geometry, std::uint32_t* share) {
     const std::uint32_t k = blockIdx.x * blockDim.x + threadIdx.x;
-    if (k >= candidates_in_use(pairs)) return;
+    if (k >= capacity || k >= *count) return;
     const float4 g = geometry[k];
     if (!(g.w < __int_as_float(kInfinityBits))) return;  // not measured
-    const PairVertices pv = pair_vertices(pairs.encoding, pairs.keys[k], in.triangles, in.edges);
-    const float limit = in.relaxation * g.w;
+    const uint4 q = ids[k];
+    const std::uint32_t id[4] = {q.x, q.y, q.z, q.w & ~kEdgeEdgeFlag};
+    const int first_side = (q.w & kEdgeEdgeFlag) != 0 ? 2 : 1;
+    const float limit = relaxation * g.w;
     for (int a = 0; a < 4; ++a) {
-        const std::uint32_t v = pv.id[a];
+        const std::uint32_t v = id[a];
         if (v < t.first || v - t.first >= t.vertex_count) continue;
-        const float sign = a < pv.first_side ? -1.0F : 1.0F;
+        const float sign = a < first_side ? -1.0F : 1.0F;
         const float advance = sign * physics::dot(move_of(t, stride, detect_stride, v - t.first), V3f{g.x, g.y, g.z});
         if (advance > limit) atomicMin(&share[v], __float_as_uint(limit / advance));
     }
@@ -157,19 +162,25 @@ void GpuDisplacementBounds::compute(const GpuBoundsInput& in, GpuBroadPhase& has
     if (counters_host_.size() == 0) counters_host_.allocate(1);
     if (counters_.size() == 0) counters_.allocate(1, ledger_, "offset bounds: counters");
     if (nearest_bits_.size() < in.vertex_count) {
+        ++generation_;
         nearest_bits_.allocate(in.vertex_count, ledger_, "offset bounds: nearest");
         share_bits_.allocate(in.vertex_count, ledger_, "offset bounds: shares");
         bound_.allocate(in.vertex_count, ledger_, "offset bounds: bounds");
         reach_.allocate(in.vertex_count, ledger_, "offset bounds: reach");
     }
-    if (pair_geometry_.size() < pairs_.capacity) pair_geometry_.allocate(pairs_.capacity, ledger_, "offset bounds: pairs");
+    if (capacity_ < pairs_.capacity) {
+        capacity_ = pairs_.capacity;
+        pair_geometry_.allocate(capacity_, ledger_, "offset bounds: pairs");
+        pair_ids_.allocate(capacity_, ledger_, "offset bounds: pairs");
+        ++generation_;
+    }
 
     reset_kernel<<<blocks_for(in.vertex_count, kThreads), kThreads, 0, stream>>>(counters_.get(), nearest_bits_.get(),
                                                                                 in.vertex_count);
     WEFT_CUDA_CHECK_LAUNCH("reset_kernel");
     if (pairs_.capacity > 0) {
         pair_kernel<<<blocks_for(pairs_.capacity, kThreads), kThreads, 0, stream>>>(
-            in, stride, pairs_, pair_geometry_.get(), nearest_bits_.get(), counters_.get());
+            in, stride, pairs_, pair_geometry_.get(), pair_ids_.get(), nearest_bits_.get(), counters_.get());
         WEFT_CUDA_CHECK_LAUNCH("pair_kernel");
     }
     vertex_kernel<<<blocks_for(in.vertex_count, kThreads), kThreads, 0, stream>>>(in, nearest_bits_.get(), bound_.get(),
@@ -191,9 +202,10 @@ void GpuDisplacementBounds::truncate(const GpuTruncateInput& t, cudaStream_t str
     share_kernel<<<blocks_for(t.vertex_count, kThreads), kThreads, 0, stream>>>(
         t, stride, detect_stride, bound_.get(), reach_.get(), share_bits_.get(), counters_.get(), reset_counts ? 1 : 0);
     WEFT_CUDA_CHECK_LAUNCH("share_kernel");
-    if (t.planar && pairs_.capacity > 0) {
-        pair_share_kernel<<<blocks_for(pairs_.capacity, kThreads), kThreads, 0, stream>>>(
-            t, stride, detect_stride, in_, pairs_, pair_geometry_.get(), share_bits_.get());
+    if (t.planar && capacity_ > 0) {
+        pair_share_kernel<<<blocks_for(capacity_, kThreads), kThreads, 0, stream>>>(
+            t, stride, detect_stride, in_.relaxation, pairs_.count, capacity_, pair_ids_.get(), pair_geometry_.get(),
+            share_bits_.get());
         WEFT_CUDA_CHECK_LAUNCH("pair_share_kernel");
     }
     apply_kernel<<<blocks_for(t.vertex_count, kThreads), kThreads, 0, stream>>>(t, stride, detect_stride,
@@ -220,7 +232,7 @@ void GpuDisplacementBounds::download(std::vector<float>& bound, std::vector<floa
 
 std::size_t GpuDisplacementBounds::memory_bytes() const {
     return nearest_bits_.bytes() + share_bits_.bytes() + bound_.bytes() + reach_.bytes() + pair_geometry_.bytes() +
-           counters_.bytes();
+           pair_ids_.bytes() + counters_.bytes();
 }
 
 }  // namespace weft::cuda::collision

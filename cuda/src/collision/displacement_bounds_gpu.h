@@ -103,6 +103,10 @@ public:
     [[nodiscard]] const float4* pair_geometry() const { return pair_geometry_.get(); }
     [[nodiscard]] const GpuPairList& pairs() const { return pairs_; }
 
+    /// Bumped whenever an array the truncation reads is reallocated: a CUDA graph that captured
+    /// `truncate` must be captured again.
+    [[nodiscard]] std::uint64_t generation() const { return generation_; }
+
     /// Downloads b_v and reach_v (tests). Synchronises.
     void download(std::vector<float>& bound, std::vector<float>& reach, cudaStream_t stream) const;
     [[nodiscard]] std::size_t memory_bytes() const;
@@ -110,6 +114,13 @@ public:
 private:
     GpuBoundsInput in_{};
     GpuPairList pairs_{};
+    // The truncation's own copy of each candidate (its four vertices, the edge–edge flag in bit 31 of
+    // the last), sized by capacity_ ≥ the broad phase's capacity, so that it reads no buffer of the
+    // broad phase but its count (whose pointer is fixed): a captured truncation stays valid while the
+    // broad phase alternates or grows its pair buffers, until capacity_ itself grows.
+    std::uint32_t capacity_ = 0;
+    std::uint64_t generation_ = 0;
+    DeviceArray<uint4> pair_ids_;
     MemoryLedger ledger_;
     DeviceArray<std::uint32_t> nearest_bits_, share_bits_;
     DeviceArray<float> bound_, reach_;
