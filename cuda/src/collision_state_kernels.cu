@@ -58,21 +58,25 @@ __global__ void offset_momentum_kernel(const float* v, const float* inverse_mass
 /// Offset mode: each collision vertex's query radius, 1.5× its move over γ (`move` = x1c − x0c −
 /// shift, or `remainder` when given, for the cloth) clamped to [contact, cap]; the largest in
 /// `largest` (float bits: non-negative floats order like their bits).
-__global__ void offset_radius_kernel(const float* x0c, const float* x1c, const float* remainder, std::uint32_t n,
-                                     std::uint32_t vertices, const float* shift, float relaxation, float contact,
-                                     float cap, float* radius, std::uint32_t* largest) {
+__global__ void offset_radius_kernel(const float* x0c, const float* x1c, const float* remainder, const float* dv_previous,
+                                     float h, std::uint32_t n, std::uint32_t vertices, const float* shift,
+                                     float relaxation, float contact, float cap, float* radius, std::uint32_t* largest) {
     const std::uint32_t i = blockIdx.x * blockDim.x + threadIdx.x;
     if (i >= vertices) return;
     float length = 0.0f;
     if (remainder != nullptr) {
         length = i < n ? remainder[i] : 0.0f;
     } else {
-        float sq = 0.0f;
+        // The predicted move at the start velocity and with the last velocity change repeated; the
+        // longer (as the CPU).
+        float sq = 0.0f, sq_accelerated = 0.0f;
         for (int c = 0; c < 3; ++c) {
             const float d = x1c[c * vertices + i] - x0c[c * vertices + i] - shift[c];
+            const float a = i < n && dv_previous != nullptr ? d + h * dv_previous[c * n + i] : d;
             sq += d * d;
+            sq_accelerated += a * a;
         }
-        length = sqrtf(sq);
+        length = sqrtf(fmaxf(sq, sq_accelerated));
     }
     const float r = fminf(fmaxf(1.5f * length / relaxation, contact), cap);
     radius[i] = r;
@@ -98,13 +102,13 @@ void launch_offset_momentum(const float* v, const float* inverse_mass, std::uint
     WEFT_CUDA_CHECK_LAUNCH("offset_momentum_kernel");
 }
 
-void launch_offset_radius(const float* x0c, const float* x1c, const float* remainder, std::uint32_t n,
-                          std::uint32_t vertices, const float* shift, float relaxation, float contact, float cap,
-                          float* radius, std::uint32_t* largest, cudaStream_t stream) {
+void launch_offset_radius(const float* x0c, const float* x1c, const float* remainder, const float* dv_previous, float h,
+                          std::uint32_t n, std::uint32_t vertices, const float* shift, float relaxation, float contact,
+                          float cap, float* radius, std::uint32_t* largest, cudaStream_t stream) {
     WEFT_CUDA_CHECK(cudaMemsetAsync(largest, 0, sizeof(std::uint32_t), stream));
     if (vertices == 0) return;
-    offset_radius_kernel<<<grid_for(vertices), kBlockSize, 0, stream>>>(x0c, x1c, remainder, n, vertices, shift,
-                                                                         relaxation, contact, cap, radius, largest);
+    offset_radius_kernel<<<grid_for(vertices), kBlockSize, 0, stream>>>(
+        x0c, x1c, remainder, dv_previous, h, n, vertices, shift, relaxation, contact, cap, radius, largest);
     WEFT_CUDA_CHECK_LAUNCH("offset_radius_kernel");
 }
 

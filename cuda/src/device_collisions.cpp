@@ -156,7 +156,7 @@ collision::GpuBroadPhaseInput DeviceCollisions::broad_phase_input(double thickne
 }
 
 std::size_t DeviceCollisions::detect(const Model& model, double t, double h, const float* x, const float* v,
-                                     cudaStream_t stream, StepStats& stats) {
+                                     const float* dv_previous, cudaStream_t stream, StepStats& stats) {
     if (!active_) return 0;
     auto clock = Clock::now();
     const CollisionSettings& settings = model.settings.collision;
@@ -212,7 +212,8 @@ std::size_t DeviceCollisions::detect(const Model& model, double t, double h, con
         // Synchronous: host_shift is on the stack (the stream is idle here anyway).
         WEFT_CUDA_CHECK(cudaMemcpy(offset_shift_.get(), host_shift, sizeof(host_shift), cudaMemcpyHostToDevice));
         const float contact = static_cast<float>(geometry_.gap(settings));
-        launch_offset_radius(x0c, x1c, nullptr, n_, vertices_, offset_shift_.get(), static_cast<float>(settings.relaxation),
+        launch_offset_radius(x0c, x1c, nullptr, dv_previous, static_cast<float>(h), n_, vertices_, offset_shift_.get(),
+                             static_cast<float>(settings.relaxation),
                              contact, static_cast<float>(settings.max_query_radius) * contact, radius_.get(),
                              offset_largest_.get(), stream);
         WEFT_CUDA_CHECK(cudaMemcpyAsync(detect_positions_.get(), x0c, 3 * static_cast<std::size_t>(vertices_) * sizeof(float),
@@ -354,7 +355,7 @@ std::size_t DeviceCollisions::redetect(const Model& model, double h, const float
     launch_offset_detect_positions(x0, vk, n_, h_device, x1c, vertices_, detect_positions_.get(), stream);
     WEFT_CUDA_CHECK(cudaMemsetAsync(offset_shift_.get(), 0, 3 * sizeof(float), stream));
     const float contact = static_cast<float>(geometry_.gap(settings));
-    launch_offset_radius(nullptr, nullptr, remainder_.get(), n_, vertices_, offset_shift_.get(),
+    launch_offset_radius(nullptr, nullptr, remainder_.get(), nullptr, 0.0F, n_, vertices_, offset_shift_.get(),
                          static_cast<float>(settings.relaxation), contact,
                          static_cast<float>(settings.max_query_radius) * contact, radius_.get(), offset_largest_.get(),
                          stream);

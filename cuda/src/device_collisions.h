@@ -66,8 +66,9 @@ public:
     /// solver's SoA arrays of `n` cloth vertices, which the substep takes as x0, v0) and the colliders'
     /// poses at t and t + h. Synchronises `stream`. Returns the contact count: the solver's list must
     /// hold that many before `publish`.
-    std::size_t detect(const Model& model, double t, double h, const float* x, const float* v, cudaStream_t stream,
-                       StepStats& stats);
+    /// `dv_previous` (the last substep's velocity change) sharpens the offset mode's predicted moves.
+    std::size_t detect(const Model& model, double t, double h, const float* x, const float* v, const float* dv_previous,
+                       cudaStream_t stream, StepStats& stats);
     /// Enqueues the copy of the contacts, their count and the kinematic arrays into `list` (capacity
     /// ≥ the count `detect` returned, kinematic capacity ≥ kinematic_count()).
     void publish(const ContactInputs& list, cudaStream_t stream, StepStats& stats);

@@ -110,7 +110,7 @@ void DeviceSolver::substep(const Model& model, double t, double h, StepStats& st
     if (collisions_.stale(model)) build_collisions(model);  // self-collision toggled live
     choose_preconditioner(model.settings.solver.preconditioner);  // may change live
     if (collisions_.active()) {
-        const std::size_t found = collisions_.detect(model, t, h, view_.x, view_.v, stream, stats);
+        const std::size_t found = collisions_.detect(model, t, h, view_.x, view_.v, view_.dv_previous, stream, stats);
         reserve_contacts(found, collisions_.kinematic_count());  // grows (and re-captures) only when needed
         collisions_.publish(contacts_.inputs(), stream, stats);
     }

@@ -72,9 +72,9 @@ void launch_contact_product(const DeviceView& d, const float* x, bool in_cg_loop
 /// Σ m·v, Σ m), the per-vertex query radii (and their largest, as float bits), and the positions of a
 /// rerun detection (h read from device memory).
 void launch_offset_momentum(const float* v, const float* inverse_mass, std::uint32_t n, double* sums, cudaStream_t stream);
-void launch_offset_radius(const float* x0c, const float* x1c, const float* remainder, std::uint32_t n,
-                          std::uint32_t vertices, const float* shift, float relaxation, float contact, float cap,
-                          float* radius, std::uint32_t* largest, cudaStream_t stream);
+void launch_offset_radius(const float* x0c, const float* x1c, const float* remainder, const float* dv_previous, float h,
+                          std::uint32_t n, std::uint32_t vertices, const float* shift, float relaxation, float contact,
+                          float cap, float* radius, std::uint32_t* largest, cudaStream_t stream);
 void launch_offset_detect_positions(const float* x0, const float* vk, std::uint32_t n, const float* h, const float* x1c,
                                     std::uint32_t vertices, float* detect, cudaStream_t stream);
 void launch_collision_predict(const float* x, const float* v, std::uint32_t n, float h, float* x0c, float* x1c,

@@ -38,7 +38,7 @@ void CpuCollisions<T>::build(const FlatModel& flat, const Model& model) {
 
 template <typename T>
 void CpuCollisions<T>::begin_substep(const Model& model, double t, double h, const std::vector<V3>& x0,
-                                     const std::vector<V3>& v0, StepStats& stats) {
+                                     const std::vector<V3>& v0, const std::vector<V3>& dv_previous, StepStats& stats) {
     auto clock = Clock::now();
     const CollisionSettings& settings = model.settings.collision;
     const collision::CollisionGeometry& g = geometry_;
@@ -78,11 +78,16 @@ void CpuCollisions<T>::begin_substep(const Model& model, double t, double h, con
         shift_ = mass > 0.0 ? (h / mass) * momentum : Vec3d{};
         x_detect_ = x0_;
         // Each vertex's query radius covers 1.5× its predicted move in that frame over γ (so it is
-        // rarely truncated), from one contact radius to the cap.
+        // rarely truncated), from one contact radius to the cap. The move is predicted both at the
+        // start velocity and with the last substep's velocity change repeated (a vertex slowing
+        // against a collider, or speeding up), and the longer is taken.
         const double contact = g.gap(settings), cap = settings.max_query_radius * contact;
         radius_.resize(g.vertex_count());
-        for (std::size_t i = 0; i < radius_.size(); ++i)
-            radius_[i] = std::clamp(1.5 * math::length(x1_[i] - x0_[i] - shift_) / settings.relaxation, contact, cap);
+        for (std::size_t i = 0; i < radius_.size(); ++i) {
+            double move = math::length(x1_[i] - x0_[i] - shift_);
+            if (i < n) move = std::max(move, math::length(x1_[i] + h * dv_previous[i].template cast<double>() - x0_[i] - shift_));
+            radius_[i] = std::clamp(1.5 * move / settings.relaxation, contact, cap);
+        }
         remainder_.assign(n, 0.0);
         stats.ms(Stage::BroadPhase) += ms_since(clock);
         detect_offset(model, h, stats);

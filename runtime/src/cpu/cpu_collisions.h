@@ -38,8 +38,10 @@ public:
 
     /// Finds the substep's proximity contacts from the start state (x0, v0) of the cloth and the
     /// colliders' poses at t and t + h, and hands them to `terms()`.
+    /// `dv_previous` (the last substep's velocity change per cloth vertex) sharpens the offset mode's
+    /// prediction of each vertex's move, which sizes its query radius.
     void begin_substep(const Model& model, double t, double h, const std::vector<V3>& x0, const std::vector<V3>& v0,
-                       StepStats& stats);
+                       const std::vector<V3>& dv_previous, StepStats& stats);
     /// The contact springs of the current substep (for the solve).
     [[nodiscard]] ContactTerms<T>& terms() { return terms_; }
     [[nodiscard]] const ContactTerms<T>& terms() const { return terms_; }
