@@ -19,9 +19,7 @@ constexpr std::uint32_t kEdgeEdgeFlag = 1U << 31;      // in the last id of pair
 
 __global__ void reset_kernel(GpuBoundsCounters* c, std::uint32_t* nearest, std::uint32_t n) {
     const std::uint32_t i = blockIdx.x * blockDim.x + threadIdx.x;
-    if (i == 0) {
-        c->measured_vf = c->measured_ee = c->limited = 0;
-    }
+    if (i == 0) *c = GpuBoundsCounters{};  // every field: read_back copies the whole block
     if (i < n) nearest[i] = kInfinityBits;
 }
 
