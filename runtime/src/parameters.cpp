@@ -232,7 +232,7 @@ constexpr Parameter kTable[] = {
     {.section = "collision", .name = "mode", .type = T::Choice,
      .doc = "`ccd_zones`: proximity springs, then CCD and impact zones after the solve (PSCC, P-Cloth); `offset`: "
             "offset geometric contact, a smooth penalty within the contact radius and every move truncated to the "
-            "vertex's conservative bound, no CCD (docs/methods.md §7b; cpu backend only for now)",
+            "vertex's conservative bound, no CCD (docs/methods.md §7b)",
      .label = "contact mode", .panel = "collision", .choices = kCollisionModeNames,
      .access = choice_field<kCollisionModes, &WorldDesc::collision, &CollisionSettings::mode>()},
     {.section = "collision", .name = "continuous", .type = T::Boolean,
