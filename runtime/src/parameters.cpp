@@ -248,7 +248,8 @@ constexpr Parameter kTable[] = {
     {.section = "collision", .name = "cull_contacts", .type = T::Boolean,
      .doc = "also cull the proximity contacts' candidates (over the predicted motion), not only the CCD detections: "
             "faster, but a patch that folds during the solve then has no springs inside it and the impact zones take "
-            "every crossing (`falling` at 48²: 30× more CCD hits)",
+            "every crossing (`falling` at 48²: 30× more CCD hits). Offset mode (cpu): culls the bound query, "
+            "certified again over each actual update",
      .label = "cull contacts", .panel = "collision",
      .access = field<&WorldDesc::collision, &CollisionSettings::cull_contacts>()},
     {.section = "collision", .name = "count_culled", .type = T::Boolean,

@@ -15,6 +15,9 @@
 #include "collision/displacement_bounds.h"
 #include "displacement_soups.h"
 #include "collision/intersection_check.h"
+#include "collision/normal_cone_front.h"
+#include "sheet_deformations.h"
+#include "weft/backend/patch_hierarchy.h"
 #include "weft/error.h"
 #include "weft/fabric.h"
 #include "weft/mesh.h"
@@ -149,6 +152,85 @@ TEST(DisplacementBounds, TruncatedMovesNeverIntersect) {
     std::printf("share of the random moves kept: sphere bounds %.1f %%, planar bounds %.1f %%\n", 100.0 * kept[0] / wanted,
                 100.0 * kept[1] / wanted);
     EXPECT_GE(untruncated_intersecting, 4) << "the untruncated moves must intersect for the test to mean anything";
+}
+
+// The certificate of the culled bound query: every culled patch must map into one certified patch.
+TEST(DisplacementBounds, CulledPatchesHoldOnlyInsideOneCertifiedPatch) {
+    const std::uint32_t none = kNoPatch;
+    // Patches 7 and 9 become one certified patch 3: holds.
+    EXPECT_TRUE(patches_hold(std::vector<std::uint32_t>{7, 7, 9, none}, std::vector<std::uint32_t>{3, 3, 3, 5}));
+    // A culled primitive that lost its patch: a pair inside patch 7 is no longer certified.
+    EXPECT_FALSE(patches_hold(std::vector<std::uint32_t>{7, 7, 9}, std::vector<std::uint32_t>{3, none, 4}));
+    // Patch 7 split in two: a pair across the halves was culled but is not certified.
+    EXPECT_FALSE(patches_hold(std::vector<std::uint32_t>{7, 7, 7}, std::vector<std::uint32_t>{3, 3, 4}));
+    // Nothing was culled: nothing to certify.
+    EXPECT_TRUE(patches_hold(std::vector<std::uint32_t>{none, none}, std::vector<std::uint32_t>{none, 1}));
+    EXPECT_THROW((void)patches_hold(std::vector<std::uint32_t>{1}, std::vector<std::uint32_t>{}), Error);
+}
+
+// Culling the bound query by a front over one motion, then certifying it over the motion actually
+// taken, against brute force: on folded and rolled sheets moved at random (small moves in the first
+// three trials, where the patches hold; large ones after, where they fail and the solver would measure
+// every pair), the pairs the culled query skipped are exactly the pairs inside one detection patch;
+// whenever the patches hold over the truncated update, the truncated state is intersection-free.
+TEST(DisplacementBounds, CulledQueryIsSafeWhereThePatchesHold) {
+    std::mt19937 rng(31);
+    int held = 0, failed = 0, culled_total = 0;
+    for (int trial = 0; trial < 6; ++trial) {
+        // A 24² sheet, folded (trials 0, 2, 4) or rolled, 1 m wide: 4 cm cells, radius 6 cm.
+        const MeshData grid = make_grid(1.0, 1.0, 24, 24);
+        Soup s{grid.positions, grid.triangles};
+        for (Vec3d& p : s.x) {
+            const Vec3d q{p.x + 0.5, p.y + 0.5, 0.0};
+            p = trial % 2 == 0 ? test::fold(q, 0.3, 0.5, 2.6 + 0.1 * trial) : test::roll(q, 0.4, 0.08, 0.03);
+        }
+        const std::vector<Edge> edges = build_edges(s.triangles);
+        PatchHierarchy hierarchy = build_patch_hierarchy(s.x, s.triangles, edges, {});
+        NormalConeFront front(hierarchy);
+        const std::vector<Vec3d> predicted = test::random_moves(s.x, rng, 0.002);
+        front.update(s.x, predicted);
+        std::vector<std::uint32_t> before;
+        for (const auto span : {front.vertex_patch(), front.edge_patch(), front.triangle_patch()})
+            before.insert(before.end(), span.begin(), span.end());
+        const std::size_t nv = s.x.size(), ne = edges.size();
+        const std::span<const std::uint32_t> ids(before);
+        BroadPhase hash;
+        DisplacementBounds culled, full;
+        DisplacementBoundsInput in{.x = s.x, .triangles = s.triangles, .edges = edges, .query_radius = 0.06};
+        compute_displacement_bounds(in, hash, full);
+        in.vertex_patch = ids.subspan(0, nv);
+        in.edge_patch = ids.subspan(nv, ne);
+        in.triangle_patch = ids.subspan(nv + ne);
+        compute_displacement_bounds(in, hash, culled);
+        // Brute force: the measured pairs the culled query lacks are all inside one patch.
+        std::size_t same_patch = 0;
+        for (std::size_t k = 0; k < full.pairs.vf.size(); ++k) {
+            if (!(full.vf_distance[k] < 0.06)) continue;
+            const auto& p = full.pairs.vf[k];
+            const bool inside = before[p.vertex] != kNoPatch && before[p.vertex] == before[nv + ne + p.triangle];
+            same_patch += inside ? 1 : 0;
+        }
+        EXPECT_EQ(culled.vf_pairs + same_patch, full.vf_pairs) << "trial " << trial;
+        culled_total += static_cast<int>(same_patch);
+        // The actual update: a random move, truncated to the culled bounds, then certified.
+        std::vector<Vec3d> x1 = test::random_moves(s.x, rng, trial < 3 ? 0.003 : 0.03);
+        (void)truncate_displacements_planar(s.x, x1, culled);
+        front.update(s.x, x1);
+        std::vector<std::uint32_t> after;
+        for (const auto span : {front.vertex_patch(), front.edge_patch(), front.triangle_patch()})
+            after.insert(after.end(), span.begin(), span.end());
+        if (!patches_hold(before, after)) {
+            ++failed;
+            continue;
+        }
+        ++held;
+        const IntersectionReport report = check_intersections(x1, s.triangles);
+        EXPECT_TRUE(report.clean()) << "trial " << trial << ": " << report.intersecting_pairs << " pairs intersect";
+    }
+    std::printf("culled bound query: %d vertex-face pairs culled, patches held in %d of %d updates\n", culled_total, held,
+                held + failed);
+    EXPECT_GT(culled_total, 0) << "the culling must skip something for the test to mean anything";
+    EXPECT_GT(held, 0);
 }
 
 TEST(DisplacementBounds, RejectBadInput) {

@@ -82,6 +82,7 @@ RunSummary summarize(std::span<const StepStats> frames) {
         sc.truncated_vertices += c.truncated_vertices;
         sc.redetections += c.redetections;
         sc.bound_fallbacks += c.bound_fallbacks;
+        sc.uncullings += c.uncullings;
         sc.query_radius_max = std::max(sc.query_radius_max, c.query_radius_max);
         if (c.remaining_intersections >= 0) {
             ++sc.checked_frames;
@@ -257,6 +258,7 @@ void write_summary_fields(JsonWriter& json, const RunContext& c, const RunSummar
     json.field("unresolved_substeps", col.unresolved_substeps);
     json.field("truncated_vertices", col.truncated_vertices).field("redetections", col.redetections);
     json.field("bound_fallbacks", col.bound_fallbacks).field("query_radius_max", col.query_radius_max);
+    json.field("uncullings", col.uncullings);
     json.field("checked_frames", col.checked_frames);
     json.end_object();
     json.field("impact_zones", col.impact_zones);
@@ -366,8 +368,9 @@ void print_run_summary(std::ostream& out, const RunContext& c, const RunSummary&
             << " frozen; unresolved substeps " << col.unresolved_substeps << "\n";
         if (col.query_radius_max > 0.0)
             out << "  offset bounds  " << col.truncated_vertices << " vertex moves truncated, " << col.redetections
-                << " detection reruns, " << col.bound_fallbacks << " substeps sent to the CCD fallback; query radius up to "
-                << format_fixed(1000.0 * col.query_radius_max, 2) << " mm\n";
+                << " detection reruns, " << col.bound_fallbacks << " substeps sent to the CCD fallback, "
+                << col.uncullings << " uncullings; query radius up to " << format_fixed(1000.0 * col.query_radius_max, 2)
+                << " mm\n";
     }
     if (col.checked_frames > 0) {
         out << "  intersections  " << col.frames_with_intersections << " of " << col.checked_frames

@@ -75,7 +75,7 @@ struct RunSummary {
         long long unresolved_substeps = 0;
         /// Offset mode (CollisionStats): truncated vertex moves, detection reruns, CCD fallbacks and
         /// the largest query radius (m).
-        long long truncated_vertices = 0, redetections = 0, bound_fallbacks = 0;
+        long long truncated_vertices = 0, redetections = 0, bound_fallbacks = 0, uncullings = 0;
         double query_radius_max = 0.0;
         std::size_t checked_frames = 0;       ///< frames the exact check ran after
         long long remaining_intersections_max = 0;

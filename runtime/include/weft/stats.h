@@ -52,6 +52,10 @@ struct CollisionStats {
     int redetections = 0;
     int bound_fallbacks = 0;
     double query_radius_max = 0.0;
+    /// Offset mode with normal-cone culling (CPU): updates after which a patch the bound query had
+    /// culled no longer passed over the actual move, so every pair was measured and the move
+    /// truncated again.
+    int uncullings = 0;
     std::int64_t remaining_intersections = -1;  ///< exact check after the step; −1 when not run
 };
 

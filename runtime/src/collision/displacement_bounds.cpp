@@ -5,6 +5,7 @@
 #include <cmath>
 #include <initializer_list>
 #include <string>
+#include <unordered_map>
 
 #include "weft/error.h"
 #include "weft/physics/proximity.h"
@@ -37,6 +38,10 @@ void compute_displacement_bounds(const DisplacementBoundsInput& in, BroadPhase& 
     query.edges = in.edges;
     query.self_pairs = in.self_pairs;
     query.triangle_cloth = in.triangle_group;
+    query.vertex_patch = in.vertex_patch;
+    query.edge_patch = in.edge_patch;
+    query.triangle_patch = in.triangle_patch;
+    query.count_culled = false;
     if (per_vertex)
         query.vertex_padding = in.radius;
     else
@@ -105,6 +110,21 @@ void compute_displacement_bounds(const DisplacementBoundsInput& in, BroadPhase& 
     out.partners.resize(entries.size());
     std::vector<std::uint32_t> fill(out.partner_start.begin(), out.partner_start.end() - 1);
     for (const Entry& e : entries) out.partners[fill[e.vertex]++] = e.limit;
+}
+
+bool patches_hold(std::span<const std::uint32_t> before, std::span<const std::uint32_t> after) {
+    if (before.size() != after.size())
+        throw Error("patches_hold: " + std::to_string(before.size()) + " ids before, " + std::to_string(after.size()) +
+                    " after");
+    // Each culled patch must map to exactly one certified patch.
+    std::unordered_map<std::uint32_t, std::uint32_t> image;
+    for (std::size_t p = 0; p < before.size(); ++p) {
+        if (before[p] == kNoPatch) continue;
+        if (after[p] == kNoPatch) return false;
+        const auto [it, inserted] = image.emplace(before[p], after[p]);
+        if (!inserted && it->second != after[p]) return false;
+    }
+    return true;
 }
 
 double kept_share(const DisplacementBounds& b, std::size_t v, Vec3d move, bool planar) {

@@ -45,7 +45,18 @@ struct DisplacementBoundsInput {
     /// bounds then certify alone (self-collision off: a cloth may cross itself).
     bool self_pairs = true;
     std::span<const std::uint32_t> triangle_group;
+    /// Normal-cone patch ids (optional, as BroadPhaseInput): pairs inside one patch are not measured.
+    /// Sound only when the caller then certifies every such patch over the actual update (a patch
+    /// that passes the normal-cone test over a motion never collides with itself during it,
+    /// normal_cone_front.h) and measures them after all where it does not (`patches_hold`).
+    std::span<const std::uint32_t> vertex_patch, edge_patch, triangle_patch;
 };
+
+/// True when every primitive that shared a patch id other than kNoPatch in `before` (the ids the
+/// bounds culled with) still shares one with the same primitives in `after` (the ids of a front
+/// updated over the actual update): then every pair the culling skipped lies in one patch that is
+/// free of self-collision over that update. Spans: vertex, edge and triangle ids, concatenated.
+[[nodiscard]] bool patches_hold(std::span<const std::uint32_t> before, std::span<const std::uint32_t> after);
 
 /// One partner of a vertex within the query radius: the vertex may move at most `limit` (m) along the
 /// unit `towards` (from its primitive's closest point to the partner's).

@@ -106,8 +106,17 @@ private:
     std::vector<double> radius_;
     std::vector<double> remainder_;  // per cloth vertex, the part of its last move the truncation cut, m
     collision::DisplacementBounds bounds_;
-    /// Bounds and offset contacts at x_detect_ (radii in radius_).
-    void detect_offset(const Model& model, double h, StepStats& stats);
+    /// Bounds and offset contacts at x_detect_ (radii in radius_), culled by the normal cones over
+    /// x_detect_ → x_end when culling is on.
+    void detect_offset(const Model& model, double h, std::span<const Vec3d> x_end, StepStats& stats);
+    void measure_bounds(const Model& model, bool culled);
+    void find_offset_contacts(const Model& model, double h, StepStats& stats);
+    std::size_t truncate_to_bounds(const Model& model, double h, const std::vector<V3>& x0, std::vector<V3>& vk,
+                                   StepStats& stats);
+    bool culled_ = false;  // the current bounds skipped same-patch pairs
+    std::vector<std::uint32_t> detect_patch_, update_patch_;  // vertex, edge, triangle ids, concatenated
+    std::vector<V3> proposal_;
+    std::vector<Vec3d> x_update_;
 };
 
 extern template class CpuCollisions<float>;
