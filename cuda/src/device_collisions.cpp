@@ -155,6 +155,27 @@ collision::GpuBroadPhaseInput DeviceCollisions::broad_phase_input(double thickne
     return in;
 }
 
+collision::GpuProximityInput DeviceCollisions::proximity_input(const CollisionSettings& settings, const float* x0,
+                                                             const float* x1, double h) const {
+    collision::GpuProximityInput p;
+    p.x0 = x0;
+    p.x1 = x1;
+    p.vertex_count = vertices_;
+    p.inverse_mass = inverse_mass_.get();
+    p.thickness = thickness_.get();
+    p.friction = friction_.get();
+    p.triangles = triangles_.get();
+    p.edges = edges_.get();
+    p.rest = rest_.get();
+    p.vertex_cloth = vertex_cloth_.get();
+    p.rest_count = rest_.get() != nullptr ? n_ : 0U;
+    p.rest_exclusion = static_cast<float>(settings.rest_exclusion);
+    p.h = static_cast<float>(h);
+    p.thickness_override = static_cast<float>(settings.thickness);
+    p.stiffness_override = static_cast<float>(settings.stiffness);
+    return p;
+}
+
 std::size_t DeviceCollisions::detect(const Model& model, double t, double h, const float* x, const float* v,
                                      const float* dv_previous, cudaStream_t stream, StepStats& stats) {
     if (!active_) return 0;
@@ -250,22 +271,7 @@ std::size_t DeviceCollisions::detect(const Model& model, double t, double h, con
     stats.ms(Stage::BroadPhase) += ms_since(clock);
 
     clock = Clock::now();
-    collision::GpuProximityInput p;
-    p.x0 = x0c;
-    p.x1 = x1c;
-    p.vertex_count = vertices_;
-    p.inverse_mass = inverse_mass_.get();
-    p.thickness = thickness_.get();
-    p.friction = friction_.get();
-    p.triangles = triangles_.get();
-    p.edges = edges_.get();
-    p.rest = rest_.get();
-    p.vertex_cloth = vertex_cloth_.get();
-    p.rest_count = rest_.get() != nullptr ? n_ : 0U;
-    p.rest_exclusion = static_cast<float>(settings.rest_exclusion);
-    p.h = static_cast<float>(h);
-    p.thickness_override = static_cast<float>(settings.thickness);
-    p.stiffness_override = static_cast<float>(settings.stiffness);
+    const collision::GpuProximityInput p = proximity_input(settings, x0c, x1c, h);
     const collision::GpuProximityCounters& pc = proximity_.find(p, broad_.pairs(), stream);
     stats.collision.contacts = static_cast<int>(pc.contacts);
     stats.ms(Stage::NarrowPhase) += ms_since(clock);
@@ -296,22 +302,7 @@ std::size_t DeviceCollisions::detect_offset(const Model& model, double h, cudaSt
     stats.ms(Stage::BroadPhase) += ms_since(clock);
 
     clock = Clock::now();
-    collision::GpuProximityInput p;
-    p.x0 = detect_positions_.get();
-    p.x1 = detect_positions_.get();
-    p.vertex_count = vertices_;
-    p.inverse_mass = inverse_mass_.get();
-    p.thickness = thickness_.get();
-    p.friction = friction_.get();
-    p.triangles = triangles_.get();
-    p.edges = edges_.get();
-    p.rest = rest_.get();
-    p.vertex_cloth = vertex_cloth_.get();
-    p.rest_count = rest_.get() != nullptr ? n_ : 0U;
-    p.rest_exclusion = static_cast<float>(settings.rest_exclusion);
-    p.h = static_cast<float>(h);
-    p.thickness_override = static_cast<float>(settings.thickness);
-    p.stiffness_override = static_cast<float>(settings.stiffness);
+    collision::GpuProximityInput p = proximity_input(settings, detect_positions_.get(), detect_positions_.get(), h);
     p.offset_bound = bounds_.bound();
     const collision::GpuProximityCounters& pc = proximity_.find(p, bounds_.pairs(), stream);
     stats.collision.contacts = static_cast<int>(pc.contacts);

@@ -111,6 +111,9 @@ public:
 private:
     /// The broad-phase input over `x0c` → `x1c` with bounds grown by `thickness` (m).
     [[nodiscard]] collision::GpuBroadPhaseInput broad_phase_input(double thickness) const;
+    /// The proximity contacts' input between `x0` and `x1` (collision-space SoA, stride vertices_).
+    [[nodiscard]] collision::GpuProximityInput proximity_input(const CollisionSettings& settings, const float* x0,
+                                                               const float* x1, double h) const;
     /// With culling on: computes the patch ids over in.x0 → in.x1 and attaches them to `in`.
     void cull(const Model& model, collision::GpuBroadPhaseInput& in, cudaStream_t stream);
 

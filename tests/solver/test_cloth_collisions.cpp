@@ -40,6 +40,17 @@ ClothDesc sheet(const char* name, const std::shared_ptr<const Fabric>& fabric, V
 
 ColliderDesc floor_plane() { return ColliderDesc{.name = "floor", .shape = ColliderShape::Plane}; }
 
+// A thin horizontal bar across z, 25 cm up, and the floor: a sheet dropped across it folds onto itself.
+void add_bar_and_floor(World& world) {
+    ColliderDesc bar{.name = "bar", .shape = ColliderShape::Capsule};
+    bar.radius = 0.02;
+    bar.half_height = 0.4;
+    bar.motion.origin = {0.0, 0.25, 0.0};
+    bar.motion.initial_rotation = rotation_from_vector({1.5707963267948966, 0.0, 0.0});
+    world.add_collider(bar);
+    world.add_collider(floor_plane());
+}
+
 // Two sheets dropped one above the other onto a ball and the floor.
 void add_stacked_sheets_on_a_ball(World& world) {
     const auto fabric = Fabric::cook(make_grid(0.6, 0.6, 12, 12, GridPlane::XZ), {.density = 0.2});
@@ -129,13 +140,7 @@ TEST(ClothCollisions, SheetFoldingOverABarDoesNotPassThroughItself) {
     World world(collision_world(true));
     const auto fabric = Fabric::cook(make_grid(0.8, 0.3, 20, 8, GridPlane::XZ), {.density = 0.2});
     world.add_cloth(sheet("strip", fabric, {0.1, 0.3, 0.0}));
-    ColliderDesc bar{.name = "bar", .shape = ColliderShape::Capsule};
-    bar.radius = 0.02;
-    bar.half_height = 0.4;
-    bar.motion.origin = {0.0, 0.25, 0.0};
-    bar.motion.initial_rotation = rotation_from_vector({1.5707963267948966, 0.0, 0.0});
-    world.add_collider(bar);
-    world.add_collider(floor_plane());
+    add_bar_and_floor(world);
     for (int frame = 0; frame < 60; ++frame) {
         const StepStats& s = world.step();
         ASSERT_FALSE(s.non_finite) << "frame " << frame;
@@ -155,13 +160,7 @@ TEST(ClothCollisions, OffsetContactWithACulledBoundQueryStaysIntersectionFree) {
     World world(desc);
     const auto fabric = Fabric::cook(make_grid(0.6, 0.2, 60, 20, GridPlane::XZ), {.density = 0.2});
     world.add_cloth(sheet("strip", fabric, {0.1, 0.3, 0.0}));
-    ColliderDesc bar{.name = "bar", .shape = ColliderShape::Capsule};
-    bar.radius = 0.02;
-    bar.half_height = 0.4;
-    bar.motion.origin = {0.0, 0.25, 0.0};
-    bar.motion.initial_rotation = rotation_from_vector({1.5707963267948966, 0.0, 0.0});
-    world.add_collider(bar);
-    world.add_collider(floor_plane());
+    add_bar_and_floor(world);
     double culling_ms = 0.0;
     int uncullings = 0;
     for (int frame = 0; frame < 45; ++frame) {

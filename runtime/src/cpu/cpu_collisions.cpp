@@ -37,6 +37,30 @@ void CpuCollisions<T>::build(const FlatModel& flat, const Model& model) {
 }
 
 template <typename T>
+collision::ProximityInput CpuCollisions<T>::proximity_input(const CollisionSettings& settings, std::span<const Vec3d> x0,
+                                                            std::span<const Vec3d> x1,
+                                                            const collision::BroadPhaseResult& pairs, double h) const {
+    const collision::CollisionGeometry& g = geometry_;
+    collision::ProximityInput p;
+    p.x0 = x0;
+    p.x1 = x1;
+    p.inverse_mass = g.inverse_mass;
+    p.thickness = g.thickness;
+    p.friction = g.friction;
+    p.triangles = g.triangles;
+    p.edges = g.edges;
+    p.vf = pairs.vf;
+    p.ee = pairs.ee;
+    p.rest = g.rest;
+    p.vertex_cloth = g.vertex_cloth;
+    p.rest_exclusion = settings.rest_exclusion;
+    p.h = h;
+    p.thickness_override = settings.thickness;
+    p.stiffness_override = settings.stiffness;
+    return p;
+}
+
+template <typename T>
 void CpuCollisions<T>::begin_substep(const Model& model, double t, double h, const std::vector<V3>& x0,
                                      const std::vector<V3>& v0, const std::vector<V3>& dv_previous, StepStats& stats) {
     auto clock = Clock::now();
@@ -112,23 +136,7 @@ void CpuCollisions<T>::begin_substep(const Model& model, double t, double h, con
     stats.ms(Stage::BroadPhase) += ms_since(clock);
 
     clock = Clock::now();
-    collision::ProximityInput p;
-    p.x0 = x0_;
-    p.x1 = x1_;
-    p.inverse_mass = g.inverse_mass;
-    p.thickness = g.thickness;
-    p.friction = g.friction;
-    p.triangles = g.triangles;
-    p.edges = g.edges;
-    p.vf = pairs_.vf;
-    p.ee = pairs_.ee;
-    p.rest = g.rest;
-    p.vertex_cloth = g.vertex_cloth;
-    p.rest_exclusion = settings.rest_exclusion;
-    p.h = h;
-    p.thickness_override = settings.thickness;
-    p.stiffness_override = settings.stiffness;
-    collision::find_proximity_contacts(p, contacts_);
+    collision::find_proximity_contacts(proximity_input(settings, x0_, x1_, pairs_, h), contacts_);
     terms_.set(contacts_, n);
     stats.collision.contacts = static_cast<int>(contacts_.size());
     stats.ms(Stage::NarrowPhase) += ms_since(clock);
@@ -190,23 +198,8 @@ void CpuCollisions<T>::find_offset_contacts(const Model& model, double h, StepSt
     const auto clock = Clock::now();
     const CollisionSettings& settings = model.settings.collision;
     const collision::CollisionGeometry& g = geometry_;
-    collision::ProximityInput p;
-    p.x0 = x_detect_;
-    p.x1 = x_detect_;
-    p.inverse_mass = g.inverse_mass;
-    p.thickness = g.thickness;
-    p.friction = g.friction;
-    p.triangles = g.triangles;
-    p.edges = g.edges;
-    p.vf = bounds_.pairs.vf;
-    p.ee = bounds_.pairs.ee;
-    p.rest = g.rest;
-    p.vertex_cloth = g.vertex_cloth;
-    p.rest_exclusion = settings.rest_exclusion;
+    collision::ProximityInput p = proximity_input(settings, x_detect_, x_detect_, bounds_.pairs, h);
     p.offset_bound = bounds_.bound;
-    p.h = h;
-    p.thickness_override = settings.thickness;
-    p.stiffness_override = settings.stiffness;
     collision::find_proximity_contacts(p, contacts_);
     terms_.set(contacts_, g.cloth_vertices, true);
     stats.collision.contacts = static_cast<int>(contacts_.size());

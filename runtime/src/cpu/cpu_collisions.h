@@ -110,6 +110,10 @@ private:
     /// x_detect_ → x_end when culling is on.
     void detect_offset(const Model& model, double h, std::span<const Vec3d> x_end, StepStats& stats);
     void measure_bounds(const Model& model, bool culled);
+    /// The narrow phase's input for `pairs` between x0 and x1 (both modes).
+    [[nodiscard]] collision::ProximityInput proximity_input(const CollisionSettings& settings, std::span<const Vec3d> x0,
+                                                            std::span<const Vec3d> x1,
+                                                            const collision::BroadPhaseResult& pairs, double h) const;
     void find_offset_contacts(const Model& model, double h, StepStats& stats);
     std::size_t truncate_to_bounds(const Model& model, double h, const std::vector<V3>& x0, std::vector<V3>& vk,
                                    StepStats& stats);
