@@ -256,6 +256,10 @@ void stats_panel(Session& session, const PanelLayout& layout) {
     ImGui::Text("CG residual %.2e, %d solves capped", s.cg_residual, s.cg_not_converged);
     ImGui::Text("energy: %d substeps gained (%.3g J), %d redone", s.energy_gained, s.energy_gain, s.energy_retries);
     ImGui::Text("contacts: %d collider, %d cloth", s.collider_contacts, s.collision.contacts);
+    // Offset contact (collision.mode = offset): what the displacement bounds did in the last step.
+    if (s.collision.query_radius_max > 0.0)
+        ImGui::Text("offset: %lld truncated, %d reruns, %d fallbacks", static_cast<long long>(s.collision.truncated_vertices),
+                    s.collision.redetections, s.collision.bound_fallbacks);
     ImGui::Text("history: last %zu steps", h.step_ms.size());
     ImGui::PushItemWidth(-110.0F);
     plot("ms / step", h.step_ms, "%.2f ms");
