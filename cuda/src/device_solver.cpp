@@ -254,7 +254,7 @@ EnergyAudit DeviceSolver::energy_audit(const Model& model, double t, double h, b
     const double* s = audit_sums_.get();
     a.kinetic = s[kEnergyKinetic];
     a.gravity = s[kEnergyGravity];
-    a.contact = s[kEnergyContact];
+    a.contact = s[kEnergyContact] + s[kEnergyOffsetContact];
     a.elastic = s[kEnergyMembrane] + s[kEnergyBending];
     a.external_power =
         s[kEnergyColliderPower] + s[kEnergyGrabPower] + s[kEnergyWindPower] + std::max(0.0, s[kEnergyPinPower]);

@@ -7,7 +7,10 @@
 #include <cub/block/block_reduce.cuh>
 #include <cuda_runtime.h>
 
+#include "contact_terms.cuh"
 #include "cuda_check.h"
+#include "weft/physics/offset_contact.h"
+#include "weft/physics/proximity.h"
 #include "device_math.cuh"
 #include "weft/physics/bending.h"
 #include "weft/physics/collider_contact.h"
@@ -160,6 +163,29 @@ __global__ void audit_pin_kernel(DeviceView d, double* partials) {
     block_partial(power, partials);
 }
 
+/// The offset contacts of the last substep (docs/methods.md §7b) at the current state: their penalty
+/// energy with the closest points taken here, as the CPU's ContactTerms::energy_at. Grid-stride over
+/// the list (its count lives on the device); one partial per block.
+__global__ void audit_offset_contact_kernel(DeviceView d, double* partials) {
+    const ContactView& c = d.contacts;
+    const std::uint32_t m = contact_count(c);
+    double energy = 0.0;
+    for (std::uint32_t p = blockIdx.x * blockDim.x + threadIdx.x; p < m; p += gridDim.x * blockDim.x) {
+        const DeviceContact& pair = c.list[p];
+        if ((pair.pair & kOffsetContactBit) == 0) continue;
+        V3 x[4];
+        for (int j = 0; j < 4; ++j) {
+            const std::uint32_t v = pair.vertex[j];
+            x[j] = v < d.n ? position(d, v) : load3(c.kinematic_x1, v - d.n, c.kinematic_capacity);
+        }
+        const float distance = (pair.pair & kEdgeEdgeContactBit) != 0
+                                   ? physics::edge_edge_proximity(x[0], x[1], x[2], x[3]).distance
+                                   : physics::point_triangle_proximity(x[0], x[1], x[2], x[3]).distance;
+        energy += static_cast<double>(physics::offset_penalty(distance, pair.stiffness, pair.thickness).energy);
+    }
+    block_partial(energy, partials);
+}
+
 /// One block: sums[k] = the partials of value k in block order.
 __global__ void audit_finish_kernel(const double* partials, std::uint32_t stride, EnergySumCounts counts, double* sums) {
     for (int k = 0; k < kEnergySums; ++k) {
@@ -203,6 +229,13 @@ void launch_energy_audit(const DeviceView& d, bool with_wind, double* partials, 
     if (d.pins > 0) {
         audit_pin_kernel<<<grid_for(d.pins), kBlockSize, 0, stream>>>(d, partials + kEnergyPinPower * stride);
         WEFT_CUDA_CHECK_LAUNCH("audit_pin_kernel");
+    }
+    // Offset contacts: at most `stride` blocks (grid-stride over the list), none without a list.
+    counts.blocks[kEnergyOffsetContact] = d.contacts.capacity > 0 ? std::min(stride, grid_for(d.contacts.capacity)) : 0;
+    if (counts.blocks[kEnergyOffsetContact] > 0) {
+        audit_offset_contact_kernel<<<counts.blocks[kEnergyOffsetContact], kBlockSize, 0, stream>>>(
+            d, partials + kEnergyOffsetContact * stride);
+        WEFT_CUDA_CHECK_LAUNCH("audit_offset_contact_kernel");
     }
     audit_finish_kernel<<<1, kBlockSize, 0, stream>>>(partials, stride, counts, sums);
     WEFT_CUDA_CHECK_LAUNCH("audit_finish_kernel");

@@ -136,7 +136,9 @@ void launch_schwarz_apply(const DeviceView& d, SchwarzInput in, SchwarzOutput ou
 /// The sums the audit returns, in this order (`sums` holds kEnergySums doubles).
 enum EnergySum : int {
     kEnergyKinetic, kEnergyGravity, kEnergyContact, kEnergyColliderPower, kEnergyGrabPower,
-    kEnergyMembrane, kEnergyWindPower, kEnergyBending, kEnergyPinPower, kEnergySums
+    kEnergyMembrane, kEnergyWindPower, kEnergyBending, kEnergyPinPower,
+    kEnergyOffsetContact,  ///< the offset contacts' penalty energy (collision.mode = offset), J
+    kEnergySums
 };
 /// Blocks each sum was reduced over (the finishing kernel's argument).
 struct EnergySumCounts {

@@ -67,6 +67,28 @@ TEST(CudaEnergyAudit, DeviceSumsMatchTheHostAudit) {
     }
 }
 
+// Offset contact (collision.mode = offset): the device audit adds the offset contacts' penalty energy
+// to the colliders' (the host audit of the same backend has no contact list, so the difference is
+// that energy); it is positive once the sheets of `layers` lie on each other.
+TEST(CudaEnergyAudit, OffsetContactEnergyIsInTheDeviceAudit) {
+    WEFT_REQUIRE_GPU();
+    const auto world = make_world("layers", "cuda", {"collision.mode=offset"});
+    int contacts = 0;
+    for (int f = 0; f < 40; ++f) contacts = world->step().collision.contacts;
+    ASSERT_GT(contacts, 0) << "the sheets never met";
+    const Model& model = world->model();
+    const double t = world->time(), h = model.settings.solver.dt / model.settings.solver.substeps;
+    Backend& backend = world->backend();
+    const EnergyAudit device = backend.energy_audit(model, t, h, false);
+    const EnergyAudit host = backend.Backend::energy_audit(model, t, h, false);
+    const double offset = device.contact - host.contact;
+    std::printf("[ audit    ] layers offset: %d contacts, offset contact energy %.3e J, elastic %.3e J\n", contacts, offset,
+                host.elastic);
+    EXPECT_GT(offset, 0.0);
+    EXPECT_TRUE(std::isfinite(offset));
+    EXPECT_NEAR(device.elastic, host.elastic, 1e-4 * (std::abs(host.elastic) + std::abs(host.kinetic)) + 1e-9);
+}
+
 TEST(CudaEnergyAudit, GuardCatchesTheLooseDrapeOnTheGpu) {
     WEFT_REQUIRE_GPU();
     // The editor's 'loose' preset (tests/solver/test_energy_guard.cpp).
