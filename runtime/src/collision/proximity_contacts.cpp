@@ -20,9 +20,8 @@ bool rest_neighbours(const ProximityInput& in, const std::uint32_t (&ids)[4], in
         if (v >= in.rest.size()) return false;
     if (in.vertex_cloth[ids[0]] != in.vertex_cloth[ids[3]]) return false;
     const auto& r = in.rest;
-    const double distance =
-        first_side == 1 ? physics::point_triangle_proximity(r[ids[0]], r[ids[1]], r[ids[2]], r[ids[3]]).distance
-                        : physics::edge_edge_proximity(r[ids[0]], r[ids[1]], r[ids[2]], r[ids[3]]).distance;
+    const Vec3d x[4] = {r[ids[0]], r[ids[1]], r[ids[2]], r[ids[3]]};
+    const double distance = physics::pair_closest_points(first_side == 2, x).distance;
     return distance < in.rest_exclusion * thickness;
 }
 
@@ -91,24 +90,14 @@ void find_proximity_contacts(const ProximityInput& in, std::vector<ProximityCont
     parallel_chunks(total, [&](std::size_t lo, std::size_t hi) {
         for (std::size_t k = lo; k < hi; ++k) {
             std::uint32_t ids[4];
-            double w[4];
-            Vec3d normal;
-            double gap0 = 0.0;
-            int first_side = 1;
-            if (k < nvf) {
+            const bool edge_edge = k >= nvf;
+            if (!edge_edge) {
                 const VertexFacePair& p = in.vf[k];
                 const Triangle& t = in.triangles[p.triangle];
                 ids[0] = p.vertex;
                 ids[1] = t.v[0];
                 ids[2] = t.v[1];
                 ids[3] = t.v[2];
-                const auto q = physics::point_triangle_proximity(in.x0[ids[0]], in.x0[ids[1]], in.x0[ids[2]], in.x0[ids[3]]);
-                w[0] = 1.0;
-                w[1] = -(1.0 - q.u - q.v);
-                w[2] = -q.u;
-                w[3] = -q.v;
-                normal = q.normal;
-                gap0 = q.distance;
             } else {
                 const EdgeEdgePair& p = in.ee[k - nvf];
                 const Edge& e = in.edges[p.a];
@@ -117,16 +106,10 @@ void find_proximity_contacts(const ProximityInput& in, std::vector<ProximityCont
                 ids[1] = e.v[1];
                 ids[2] = f.v[0];
                 ids[3] = f.v[1];
-                const auto q = physics::edge_edge_proximity(in.x0[ids[0]], in.x0[ids[1]], in.x0[ids[2]], in.x0[ids[3]]);
-                w[0] = 1.0 - q.u;
-                w[1] = q.u;
-                w[2] = -(1.0 - q.v);
-                w[3] = -q.v;
-                normal = q.normal;
-                gap0 = q.distance;
-                first_side = 2;
             }
-            keep[k] = make_contact(in, ids, w, first_side, normal, gap0, out[k]) ? 1 : 0;
+            const Vec3d x[4] = {in.x0[ids[0]], in.x0[ids[1]], in.x0[ids[2]], in.x0[ids[3]]};
+            const physics::PairClosestPoints<double> c = physics::pair_closest_points(edge_edge, x);
+            keep[k] = make_contact(in, ids, c.weight, edge_edge ? 2 : 1, c.normal, c.distance, out[k]) ? 1 : 0;
         }
     });
     // Stable compaction: the contacts keep the candidates' order.

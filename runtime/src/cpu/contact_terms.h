@@ -123,8 +123,7 @@ public:
         for (std::size_t p = 0; p < ids_.size(); ++p) {
             V3 y[4];
             for (int i = 0; i < 4; ++i) y[i] = ids_[p][i] < n_ ? x[ids_[p][i]] : kinematic_x[ids_[p][i] - n_];
-            const T d = edge_edge_[p] ? physics::edge_edge_proximity(y[0], y[1], y[2], y[3]).distance
-                                      : physics::point_triangle_proximity(y[0], y[1], y[2], y[3]).distance;
+            const T d = physics::pair_closest_points(edge_edge_[p] != 0, y).distance;
             e += static_cast<double>(physics::offset_penalty(d, params_[p].stiffness, params_[p].thickness).energy);
         }
         return e;
@@ -177,17 +176,10 @@ private:
             const std::uint32_t v = ids_[p][i];
             x[i] = v < n_ ? x0[v] + step.h * wk[v] : kinematic_x1[v - n_];
         }
+        const physics::PairClosestPoints<T> closest = physics::pair_closest_points(edge_edge_[p] != 0, x);
         std::array<T, 4>& w = weight_[p];
-        V3 fallback;
-        if (edge_edge_[p]) {
-            const auto q = physics::edge_edge_proximity(x[0], x[1], x[2], x[3]);
-            w = {T(1) - q.u, q.u, -(T(1) - q.v), -q.v};
-            fallback = q.normal;
-        } else {
-            const auto q = physics::point_triangle_proximity(x[0], x[1], x[2], x[3]);
-            w = {T(1), -(T(1) - q.u - q.v), -q.u, -q.v};
-            fallback = q.normal;
-        }
+        for (int i = 0; i < 4; ++i) w[i] = closest.weight[i];
+        const V3 fallback = closest.normal;
         V3 g{}, u{}, d{};
         for (int i = 0; i < 4; ++i) {
             const std::uint32_t v = ids_[p][i];

@@ -274,4 +274,26 @@ WEFT_HD inline EdgeEdgeProximity<T> edge_edge_proximity(Vec3<T> e0, Vec3<T> e1, 
     return res;
 }
 
+/// A contact pair's closest points as the gap function g = Σ_i weight[i]·x[i] over its four vertices
+/// uses them: vertex–face (x[0] against the triangle x[1..3]): weights (1, −(1 − u − v), −u, −v);
+/// edge–edge (x[0]x[1] against x[2]x[3]): (1 − a, a, −(1 − b), −b). The normal points from the second
+/// primitive towards the first. The one definition of the pair weights the CPU's narrow phase and
+/// contact terms share.
+template <typename T>
+struct PairClosestPoints {
+    T weight[4];
+    Vec3<T> normal;  ///< unit
+    T distance;      ///< m
+};
+
+template <typename T>
+WEFT_HD inline PairClosestPoints<T> pair_closest_points(bool edge_edge, const Vec3<T> (&x)[4]) {
+    if (edge_edge) {
+        const auto q = edge_edge_proximity(x[0], x[1], x[2], x[3]);
+        return {{T(1) - q.u, q.u, -(T(1) - q.v), -q.v}, q.normal, q.distance};
+    }
+    const auto q = point_triangle_proximity(x[0], x[1], x[2], x[3]);
+    return {{T(1), -(T(1) - q.u - q.v), -q.u, -q.v}, q.normal, q.distance};
+}
+
 }  // namespace weft::physics
