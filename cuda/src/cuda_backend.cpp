@@ -133,7 +133,7 @@ public:
     bool graph_active() const override { return solver_->graph_active(); }
     void set_assembly(AssemblyStrategy strategy) override { solver_->set_assembly(strategy); }
     void set_pcg_loop(PcgLoop loop) override { solver_->set_pcg_loop(loop); }
-    std::vector<std::pair<std::string, std::size_t>> memory_breakdown() const override { return solver_->ledger().entries(); }
+    std::vector<std::pair<std::string, std::size_t>> memory_breakdown() const override { return solver_->memory_breakdown(); }
 
     DeviceSolver& solver() { return *solver_; }
 

@@ -357,6 +357,7 @@ std::size_t DeviceCollisions::redetect(const Model& model, double h, const float
 
 void DeviceCollisions::publish(const ContactInputs& list, cudaStream_t stream, StepStats& stats) {
     if (!active_) return;
+    count_buffer_growths(stats);
     const auto clock = Clock::now();
     const std::size_t count = proximity_.counters().contacts;
     if (count > list.capacity || kinematic_count_ > list.kinematic_capacity || list.count == nullptr)
@@ -412,6 +413,7 @@ bool DeviceCollisions::resolve(const Model& model, double h, float* x, float* v,
     if (settings.max_impact_sweeps > 0) in.max_sweeps = settings.max_impact_sweeps;
     const weft::collision::ImpactZoneReport report = zones_.resolve(in, stream);
     weft::collision::add_to_stats(report, stats);
+    count_buffer_growths(stats);
     if (report.constraints == 0) return false;  // the gate found nothing: x and v stand
     if (trace_zones_)
         std::fprintf(stderr,
@@ -429,10 +431,30 @@ bool DeviceCollisions::resolve(const Model& model, double h, float* x, float* v,
     return true;
 }
 
+void DeviceCollisions::count_buffer_growths(StepStats& stats) {
+    const int total = broad_.reruns() + proximity_.reruns() + zones_.buffer_growths();
+    stats.collision.buffer_growths += total - growths_counted_;
+    growths_counted_ = total;
+}
+
 std::size_t DeviceCollisions::memory_bytes() const {
     if (!active_) return 0;
     return ledger_.total() + broad_.memory_bytes() + proximity_.memory_bytes() + zones_.memory_bytes() +
            cones_.memory_bytes() + bounds_.memory_bytes();
+}
+
+std::vector<std::pair<std::string, std::size_t>> DeviceCollisions::memory_breakdown() const {
+    std::vector<std::pair<std::string, std::size_t>> parts;
+    if (!active_) return parts;
+    for (const auto& [what, bytes] : ledger_.entries()) parts.emplace_back("collisions: " + what, bytes);
+    const std::size_t pairs = broad_.pair_memory_bytes();
+    parts.emplace_back("collisions: broad phase pairs", pairs);
+    parts.emplace_back("collisions: broad phase hash", broad_.memory_bytes() - pairs);
+    parts.emplace_back("collisions: proximity contacts", proximity_.memory_bytes());
+    parts.emplace_back("collisions: impact zones and CCD", zones_.memory_bytes());
+    parts.emplace_back("collisions: normal cones", cones_.memory_bytes());
+    parts.emplace_back("collisions: offset bounds", bounds_.memory_bytes());
+    return parts;
 }
 
 }  // namespace weft::cuda

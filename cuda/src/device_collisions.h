@@ -24,6 +24,8 @@
 #include <bit>
 #include <cstddef>
 #include <cstdint>
+#include <string>
+#include <utility>
 #include <vector>
 
 #include "collision/broad_phase_gpu.h"
@@ -107,8 +109,13 @@ public:
 
     /// Device memory held, bytes.
     [[nodiscard]] std::size_t memory_bytes() const;
+    /// `memory_bytes` by purpose, each name prefixed "collisions: ".
+    [[nodiscard]] std::vector<std::pair<std::string, std::size_t>> memory_breakdown() const;
 
 private:
+    /// Adds to `stats` the buffer growths (grow-and-rerun passes) since the last call.
+    void count_buffer_growths(StepStats& stats);
+
     /// The broad-phase input over `x0c` → `x1c` with bounds grown by `thickness` (m).
     [[nodiscard]] collision::GpuBroadPhaseInput broad_phase_input(double thickness) const;
     /// The proximity contacts' input between `x0` and `x1` (collision-space SoA, stride vertices_).
@@ -145,6 +152,7 @@ private:
     bool offset_ = false;
     bool fallback_ = false;
     int redetections_ = 0;
+    int growths_counted_ = 0;  // count_buffer_growths: the passes' rerun total seen so far
     std::size_t free_vertices_ = 0;
     collision::GpuDisplacementBounds bounds_;
     DeviceArray<float> detect_positions_, radius_, remainder_;

@@ -41,6 +41,14 @@ DeviceSolver::~DeviceSolver() {
     if (stream_ != nullptr) cudaStreamDestroy(stream_);
 }
 
+std::vector<std::pair<std::string, std::size_t>> DeviceSolver::memory_breakdown() const {
+    std::vector<std::pair<std::string, std::size_t>> parts;
+    for (const auto& entry : ledger_.entries())
+        if (entry.first != "cloth collisions") parts.push_back(entry);
+    for (auto& part : collisions_.memory_breakdown()) parts.push_back(std::move(part));
+    return parts;
+}
+
 void DeviceSolver::choose_pcg_loop() {
     // Measured on an H200 (docs/results.md, solve ms per frame): one cooperative launch per solve is
     // 1.6× faster than a kernel per step up to 40K vertices and 1.2× at 100K; from 216K vertices on

@@ -90,6 +90,8 @@ public:
     [[nodiscard]] bool graph_active() const { return graph_active_; }
     [[nodiscard]] std::size_t memory_bytes() const { return ledger_.total(); }
     [[nodiscard]] const MemoryLedger& ledger() const { return ledger_; }
+    /// The ledger with its "cloth collisions" entry split by purpose (DeviceCollisions::memory_breakdown).
+    [[nodiscard]] std::vector<std::pair<std::string, std::size_t>> memory_breakdown() const;
     [[nodiscard]] int device() const { return device_; }
 
     // For benchmarks: the arrays, the layout and the stream the solver uses.

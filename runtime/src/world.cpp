@@ -148,6 +148,7 @@ const Model& World::model() const { return *model_; }
 std::string_view World::backend_name() const { return backend_->name(); }
 std::string World::device_description() const { return backend_->device_description(); }
 std::size_t World::memory_bytes() const { return backend_->memory_bytes(); }
+std::vector<std::pair<std::string, std::size_t>> World::memory_breakdown() const { return backend_->memory_breakdown(); }
 void World::release_grab() { model_->grab.reset(); }
 const std::optional<VertexGrab>& World::grab() const { return model_->grab; }
 

@@ -528,9 +528,13 @@ TEST(CudaBackend, DeviceMemoryIsAtMostOneKilobytePerTriangle) {
     const std::size_t bytes = world->backend().memory_bytes();
     const double per_triangle = static_cast<double>(bytes) / static_cast<double>(triangles);
     std::printf("[ memory   ] %zu bytes on the device, %.0f per triangle:\n", bytes, per_triangle);
-    for (const auto& [what, b] : as_cuda(world->backend())->memory_breakdown())
+    std::size_t sum = 0;
+    for (const auto& [what, b] : as_cuda(world->backend())->memory_breakdown()) {
         std::printf("[ memory   ]   %-32s %10zu (%.0f per triangle)\n", what.c_str(), b,
                     static_cast<double>(b) / static_cast<double>(triangles));
+        sum += b;
+    }
+    EXPECT_EQ(sum, bytes) << "the breakdown must account for every byte";
     EXPECT_LE(per_triangle, 1024.0);
     EXPECT_GT(per_triangle, 100.0);  // the ledger counts the matrix at least (~9 blocks of 36 B per vertex)
 }

@@ -82,6 +82,15 @@ TEST(ClothCollisions, StackedSheetsOnABallStayApart) {
         return std::max_element(x.begin(), x.end(), [](Vec3d a, Vec3d b) { return a.y < b.y; })->y;
     };
     EXPECT_GT(top(world.positions(1)), top(world.positions(0)));
+
+    // Where the memory goes: the parts sum to the total, and the contacts' buffers are a part.
+    std::size_t sum = 0, collisions = 0;
+    for (const auto& [what, bytes] : world.memory_breakdown()) {
+        sum += bytes;
+        if (what == "collisions") collisions = bytes;
+    }
+    EXPECT_EQ(sum, world.memory_bytes());
+    EXPECT_GT(collisions, 0U);
 }
 
 // Four sheets 2 cm apart dropped onto a ball, in both contact modes: every frame intersection-free,

@@ -83,6 +83,7 @@ RunSummary summarize(std::span<const StepStats> frames) {
         sc.redetections += c.redetections;
         sc.bound_fallbacks += c.bound_fallbacks;
         sc.uncullings += c.uncullings;
+        sc.buffer_growths += c.buffer_growths;
         sc.query_radius_max = std::max(sc.query_radius_max, c.query_radius_max);
         if (c.remaining_intersections >= 0) {
             ++sc.checked_frames;
@@ -127,6 +128,7 @@ RunContext describe_run(const SceneDesc& scene, const World& world, int threads,
                                                                   : "retry";
     c.cloths = model.cloths.size();
     c.backend_memory_bytes = world.memory_bytes();
+    c.backend_memory_breakdown = world.memory_breakdown();
     std::set<const Fabric*> counted;
     for (const ClothDesc& cloth : model.cloths) {
         if (!cloth.fabric) continue;
@@ -258,7 +260,7 @@ void write_summary_fields(JsonWriter& json, const RunContext& c, const RunSummar
     json.field("unresolved_substeps", col.unresolved_substeps);
     json.field("truncated_vertices", col.truncated_vertices).field("redetections", col.redetections);
     json.field("bound_fallbacks", col.bound_fallbacks).field("query_radius_max", col.query_radius_max);
-    json.field("uncullings", col.uncullings);
+    json.field("uncullings", col.uncullings).field("buffer_growths", col.buffer_growths);
     json.field("checked_frames", col.checked_frames);
     json.end_object();
     json.field("impact_zones", col.impact_zones);
@@ -271,6 +273,9 @@ void write_summary_fields(JsonWriter& json, const RunContext& c, const RunSummar
     json.field("backend", c.backend_memory_bytes)
         .field("fabric", c.fabric_memory_bytes)
         .field("total", c.memory_bytes());
+    json.end_object();
+    json.key("backend_memory_breakdown").begin_object();
+    for (const auto& [what, bytes] : c.backend_memory_breakdown) json.field(what, bytes);
     json.end_object();
     json.field("memory_bytes_per_triangle", c.memory_bytes_per_triangle());
     json.field("simulation_seconds", s.simulation_seconds);
@@ -379,7 +384,10 @@ void print_run_summary(std::ostream& out, const RunContext& c, const RunSummary&
     out << "  memory         " << format_bytes(static_cast<double>(c.memory_bytes())) << " (backend "
         << format_bytes(static_cast<double>(c.backend_memory_bytes)) << " + fabric "
         << format_bytes(static_cast<double>(c.fabric_memory_bytes)) << "; "
-        << format_fixed(c.memory_bytes_per_triangle(), 0) << " B per triangle)\n";
+        << format_fixed(c.memory_bytes_per_triangle(), 0) << " B per triangle";
+    if (s.collisions.buffer_growths > 0)
+        out << "; collision buffers grown " << s.collisions.buffer_growths << " times while stepping";
+    out << ")\n";
     if (capture != nullptr) {
         out << "  capture        " << capture->frames << " frames by " << capture->renderer << " (" << capture->device
             << "): " << format_fixed(capture->render_ms_median, 2) << " ms host time to draw (overlapping the next step), "

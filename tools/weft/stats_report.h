@@ -10,6 +10,7 @@
 #include <ostream>
 #include <span>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "weft/backend_options.h"
@@ -76,6 +77,7 @@ struct RunSummary {
         /// Offset mode (CollisionStats): truncated vertex moves, detection reruns, CCD fallbacks and
         /// the largest query radius (m).
         long long truncated_vertices = 0, redetections = 0, bound_fallbacks = 0, uncullings = 0;
+        long long buffer_growths = 0;  ///< collision buffers grown while stepping (GPU)
         double query_radius_max = 0.0;
         std::size_t checked_frames = 0;       ///< frames the exact check ran after
         long long remaining_intersections_max = 0;
@@ -114,6 +116,7 @@ struct RunContext {
     /// (the cuda backend does not count them; weft_cuda_collision_bench measures its culling).
     bool culled_pairs_counted = false;
     std::size_t backend_memory_bytes = 0;
+    std::vector<std::pair<std::string, std::size_t>> backend_memory_breakdown;  ///< by purpose
     std::size_t fabric_memory_bytes = 0;     ///< each shared fabric counted once
     std::vector<std::string> cook_warnings;  ///< from the fabrics' cook reports, prefixed by cloth name
     [[nodiscard]] std::size_t memory_bytes() const { return backend_memory_bytes + fabric_memory_bytes; }

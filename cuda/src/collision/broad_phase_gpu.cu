@@ -724,6 +724,8 @@ void GpuBroadPhase::mark(Stage stage, cudaStream_t stream) {
     if (timing_) WEFT_CUDA_CHECK(cudaEventRecord(events_[stage + 1], stream));
 }
 
+std::size_t GpuBroadPhase::pair_memory_bytes() const { return pair_keys_[0].bytes() + pair_keys_[1].bytes(); }
+
 std::size_t GpuBroadPhase::memory_bytes() const {
     std::size_t b = box_lo_.bytes() + box_hi_.bytes() + cell_lo_.bytes() + cell_hi_.bytes() + counts_.bytes() +
                     state_.bytes() + oversized_.bytes() + vertex_cloth_.bytes() + cell_id_.bytes() +

@@ -182,6 +182,8 @@ public:
     [[nodiscard]] int reruns() const { return reruns_; }
     /// Device memory held, bytes.
     [[nodiscard]] std::size_t memory_bytes() const;
+    /// The share of `memory_bytes` held by the candidate-pair lists (both of the alternating pair).
+    [[nodiscard]] std::size_t pair_memory_bytes() const;
 
     /// Records CUDA events between the stages of each `enqueue` (benchmarks); `stage_ms` reads them
     /// once the stream has reached the end of the call.

@@ -110,6 +110,8 @@ public:
                   cudaStream_t stream) const;
 
     [[nodiscard]] std::size_t memory_bytes() const;
+    /// Times its broad phase and CCD grew a buffer to a measured need (collision/grow_and_rerun.h).
+    [[nodiscard]] int buffer_growths() const { return broad_.reruns() + ccd_.reruns(); }
 
     /// Counters the kernels leave on the device (read back once per round).
     struct Counters {

@@ -56,6 +56,9 @@ struct CollisionStats {
     /// culled no longer passed over the actual move, so every pair was measured and the move
     /// truncated again.
     int uncullings = 0;
+    /// GPU: collision buffers (candidate pairs, contacts, CCD hits) grown to a measured need in the
+    /// step, each a rerun of its pass; device memory grows with them (sized from use, not in advance).
+    int buffer_growths = 0;
     std::int64_t remaining_intersections = -1;  ///< exact check after the step; −1 when not run
 };
 

@@ -114,6 +114,8 @@ public:
     [[nodiscard]] std::string_view backend_name() const;
     [[nodiscard]] std::string device_description() const;
     [[nodiscard]] std::size_t memory_bytes() const;
+    /// `memory_bytes` split by purpose (bytes each): where a scene's memory goes.
+    [[nodiscard]] std::vector<std::pair<std::string, std::size_t>> memory_breakdown() const;
 
     /// The backend that steps this world (weft/backend/backend.h): for tools and backend-specific
     /// hooks such as `weft::cuda::as_cuda(world.backend())`.

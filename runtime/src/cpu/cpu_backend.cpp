@@ -58,6 +58,12 @@ public:
     std::size_t memory_bytes() const override {
         return flat_.memory_bytes() + std::visit([](const auto& s) { return s.memory_bytes(); }, solver_);
     }
+    std::vector<std::pair<std::string, std::size_t>> memory_breakdown() const override {
+        const std::size_t collisions = std::visit([](const auto& s) { return s.collision_memory_bytes(); }, solver_);
+        return {{"model", flat_.memory_bytes()},
+                {"solver", std::visit([](const auto& s) { return s.memory_bytes(); }, solver_) - collisions},
+                {"collisions", collisions}};
+    }
 
 private:
     /// A solver of precision_ for the flattened model, built inside the backend's task arena.

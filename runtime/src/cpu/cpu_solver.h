@@ -35,6 +35,8 @@ public:
     void read_state(std::size_t first, std::size_t count, Vec3d* x, Vec3d* v) const;
     void write_state(std::size_t first, std::size_t count, const Vec3d* x, const Vec3d* v);
     [[nodiscard]] std::size_t memory_bytes() const;
+    /// The share of `memory_bytes` held by the collision pipeline.
+    [[nodiscard]] std::size_t collision_memory_bytes() const { return collisions_.memory_bytes(); }
     /// Offset mode: the penalty energy of the current substep's offset contacts at the current state,
     /// J (0 in the other mode, or before a substep).
     [[nodiscard]] double offset_contact_energy() const;

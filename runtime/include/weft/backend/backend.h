@@ -10,6 +10,7 @@
 #include <span>
 #include <string>
 #include <string_view>
+#include <utility>
 #include <vector>
 
 #include "weft/backend/energy_audit.h"
@@ -50,6 +51,9 @@ public:
     [[nodiscard]] virtual EnergyAudit energy_audit(const Model& model, double t, double h, bool with_wind) const;
     /// Bytes of simulation state held (host or device).
     [[nodiscard]] virtual std::size_t memory_bytes() const = 0;
+    /// `memory_bytes` split by purpose (bytes each, summing to it), for stats and benchmarks. The
+    /// default is one entry, "state".
+    [[nodiscard]] virtual std::vector<std::pair<std::string, std::size_t>> memory_breakdown() const;
     /// Zero-copy output (weft/backend/interop.h): imports `slots` (each holds one 24-byte vertex per world
     /// vertex, positions then normals in float, then kSlotStampBytes) made on the GPU `device`, and
     /// returns their writer. The fds belong to the backend from the call on, imported or closed.
