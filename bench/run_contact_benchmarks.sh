@@ -12,7 +12,8 @@
 # each as CASE_ccd_zones and CASE_offset (stats JSON and log in OUT_DIR), each under a time limit
 # (LIMIT seconds, 240: a run that hits it is reported with the frames it finished), then the tables
 # (summary.txt). Runs with `weft run --stats` (per-frame series); exit status: the number of runs
-# that failed other than by the time limit.
+# that failed other than by the time limit. A variant: EXTRA (more `weft run` arguments for every run,
+# e.g. "--set collision.max_query_radius=2") and TAG (appended to the run names).
 set -uo pipefail
 
 if [[ $# -lt 2 ]]; then
@@ -32,11 +33,13 @@ MODES=${MODES:-"offset ccd_zones"}
 failed=0
 
 run() {  # run NAME FRAMES SCENE ARGS...
-    local name=$1 frames=$2 scene=$3
+    local name=$1${TAG:-} frames=$2 scene=$3
     shift 3
+    # shellcheck disable=SC2206 # EXTRA is a list of words on purpose
+    local extra=(${EXTRA:-})
     for mode in $MODES; do
         echo "== ${name}_$mode"
-        timeout --signal=INT --kill-after=15 "$LIMIT" "$WEFT" run "$scene" --backend cuda "$@" \
+        timeout --signal=INT --kill-after=15 "$LIMIT" "$WEFT" run "$scene" --backend cuda "$@" "${extra[@]}" \
             --set "collision.mode=$mode" --frames "$frames" --stats "$OUT/${name}_$mode.json" \
             >"$OUT/${name}_$mode.log" 2>&1
         local rc=$?
