@@ -39,8 +39,9 @@ __global__ void contact_count_kernel(DeviceView d) {
     const std::uint32_t m = contact_count(c);
     if (first_thread() == 0) d.stats->proximity_contacts = static_cast<int>(m);
     for (std::uint32_t e = first_thread(); e < 4 * m; e += thread_stride()) {
-        const std::uint32_t v = c.list[e >> 2].vertex[e & 3u];
-        if (v < d.n) atomicAdd(&c.fill[v], 1u);
+        const DeviceContact& pair = c.list[e >> 2];
+        const std::uint32_t v = pair.vertex[e & 3u];
+        if (v < d.n && (pair.pair & kInactiveContactBit) == 0) atomicAdd(&c.fill[v], 1u);
     }
 }
 
@@ -51,8 +52,9 @@ __global__ void contact_scatter_kernel(DeviceView d) {
     const ContactView& c = d.contacts;
     const std::uint32_t corners = 4 * contact_count(c);
     for (std::uint32_t e = first_thread(); e < corners; e += thread_stride()) {
-        const std::uint32_t v = c.list[e >> 2].vertex[e & 3u];
-        if (v >= d.n) continue;
+        const DeviceContact& pair = c.list[e >> 2];
+        const std::uint32_t v = pair.vertex[e & 3u];
+        if (v >= d.n || (pair.pair & kInactiveContactBit) != 0) continue;
         const std::uint32_t slot = c.start[v] + atomicSub(&c.fill[v], 1u) - 1u;
         c.entries[slot] = e;
     }
@@ -165,7 +167,13 @@ __device__ inline void evaluate_offset_pair(const DeviceView& d, std::uint32_t p
     M3 C;
     physics::pair_contact_terms(step, f.force, f.dfdx, f.dfdv, dvw, rhs, C);
     store3(c.rhs, p, c.capacity, rhs);
-    for (int e = 0; e < 9; ++e) c.block[e * c.capacity + p] = C.m[e / 3][e % 3];
+    bool zero = rhs.x == 0.0f && rhs.y == 0.0f && rhs.z == 0.0f;
+    for (int e = 0; e < 9; ++e) {
+        c.block[e * c.capacity + p] = C.m[e / 3][e % 3];
+        zero = zero && C.m[e / 3][e % 3] == 0.0f;
+    }
+    // Exactly zero terms add exactly nothing to any sum: leaving the pair out changes no result.
+    pair.pair = zero ? (pair.pair | kInactiveContactBit) : (pair.pair & ~kInactiveContactBit);
 }
 
 __global__ void contact_evaluate_kernel(DeviceView d) {

@@ -24,6 +24,7 @@ __device__ inline M3 load_contact_block(const ContactView& c, std::uint32_t p) {
 /// First pass of A_contact·x for pair p: s_p = C_p·Σ_j w_j x_j over its cloth corners (kinematic
 /// vertices are not unknowns of the solve: they add nothing).
 __device__ inline void contact_pair_product(const ContactView& c, std::uint32_t p, const float* x, std::uint32_t n) {
+    if ((c.list[p].pair & kInactiveContactBit) != 0) return;  // not in the incidence: its product is never read
     const uint4 ids = reinterpret_cast<const uint4*>(c.list)[4 * p];
     const float4 w = reinterpret_cast<const float4*>(c.list)[4 * p + 1];
     V3 s{};

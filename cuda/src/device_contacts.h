@@ -41,8 +41,8 @@ struct DeviceContact {
     float thickness;          ///< m
     float stiffness;          ///< N/m
     float friction;           ///< Coulomb coefficient
-    /// Index of the candidate it came from (bits below kEdgeEdgeContactBit; not read by the solve),
-    /// and the two flags above it.
+    /// Index of the candidate it came from (bits below kInactiveContactBit; not read by the solve),
+    /// and the three flags above it.
     std::uint32_t pair;
 };
 static_assert(sizeof(DeviceContact) == 64, "four 16-byte loads per contact");
@@ -54,6 +54,11 @@ inline constexpr std::uint32_t kOffsetContactBit = 1U << 31;
 /// DeviceContact::pair flag of an offset contact: edge–edge (vertices 0–1 against 2–3) rather than
 /// vertex–face (vertex 0 against the triangle 1–2–3).
 inline constexpr std::uint32_t kEdgeEdgeContactBit = 1U << 30;
+/// DeviceContact::pair flag of an offset contact, set by each evaluation: the pair is beyond its
+/// contact radius at the linearisation point, so its right-hand side and block are exactly zero. The
+/// incidence rebuilt after the evaluation leaves it out and the pair pass skips it: the CG pays only
+/// for pairs in contact, not for every pair whose bounds let it come close (most of them).
+inline constexpr std::uint32_t kInactiveContactBit = 1U << 29;
 
 /// The contact arrays as raw pointers, inside DeviceView (passed by value to every kernel).
 struct ContactView {

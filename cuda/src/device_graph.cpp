@@ -91,8 +91,11 @@ void DeviceSolver::record(cudaStream_t stream, bool capturing) {
     launch_begin_substep(view_, stream);
     launch_pin_velocities(view_, stream);
     const bool contacts = view_.contacts.capacity > 0;
+    // Offset contacts change from active to inactive with every evaluation: their incidence is built
+    // after each (record_contact_evaluation), this one only for pair springs.
+    const bool offset = offset_model_ != nullptr;
     // The incidence of this substep's contacts (timed with the substep's start, as "kinematics").
-    if (contacts) launch_contact_incidence(view_, contacts_.scan_storage(), contacts_.scan_storage_bytes(), stream);
+    if (contacts && !offset) launch_contact_incidence(view_, contacts_.scan_storage(), contacts_.scan_storage_bytes(), stream);
     mark();
     for (int it = 0; it < newton; ++it) {
         launch_begin_newton(view_, stream);
@@ -100,7 +103,7 @@ void DeviceSolver::record(cudaStream_t stream, bool capturing) {
             launch_assemble_rows(view_, stream);
         else
             launch_assemble_colors(view_, layout_.triangle_colors, layout_.hinge_colors, stream);
-        if (contacts) launch_contact_evaluate(view_, stream);  // gathered by the PCG setup
+        if (contacts) record_contact_evaluation(stream);  // gathered by the PCG setup
         mark();
         launch_pcg_setup(view_, it == 0, schwarz_on_, stream);
         if (schwarz_on_) launch_schwarz_factor(view_, it, stream);
@@ -116,6 +119,13 @@ void DeviceSolver::record(cudaStream_t stream, bool capturing) {
     mark();
 }
 
+void DeviceSolver::record_contact_evaluation(cudaStream_t stream) {
+    launch_contact_evaluate(view_, stream);
+    // Offset mode: the incidence of the pairs the evaluation found in contact (kInactiveContactBit).
+    if (offset_model_ != nullptr)
+        launch_contact_incidence(view_, contacts_.scan_storage(), contacts_.scan_storage_bytes(), stream);
+}
+
 void DeviceSolver::record_truncation(cudaStream_t stream) {
     if (offset_model_ == nullptr) return;
     const float* h = &reinterpret_cast<const StepParams*>(view_.staging)->h;
@@ -123,14 +133,14 @@ void DeviceSolver::record_truncation(cudaStream_t stream) {
 }
 
 void DeviceSolver::record_extra_newton(cudaStream_t stream) {
-    // The contacts of the rerun detection: their incidence, then one Newton iteration as in record().
-    if (view_.contacts.capacity > 0) launch_contact_incidence(view_, contacts_.scan_storage(), contacts_.scan_storage_bytes(), stream);
+    // One Newton iteration over the contacts of the rerun detection, as in record() (offset mode only:
+    // the evaluation builds their incidence).
     launch_begin_newton(view_, stream);
     if (row_gather_)
         launch_assemble_rows(view_, stream);
     else
         launch_assemble_colors(view_, layout_.triangle_colors, layout_.hinge_colors, stream);
-    if (view_.contacts.capacity > 0) launch_contact_evaluate(view_, stream);
+    if (view_.contacts.capacity > 0) record_contact_evaluation(stream);
     launch_pcg_setup(view_, false, schwarz_on_, stream);
     if (schwarz_on_) launch_schwarz_factor(view_, 1, stream);
     record_pcg_loop(stream, false, 1);

@@ -114,6 +114,9 @@ private:
     /// Offset contact: one more Newton iteration after a rerun of the detection (recorded directly,
     /// never in the graph), then the commit again.
     void record_extra_newton(cudaStream_t stream);
+    /// The contacts' evaluation at the Newton iterate, and in offset mode the incidence of the pairs in
+    /// contact.
+    void record_contact_evaluation(cudaStream_t stream);
     /// Offset contact: the truncation after a Newton update (when `offset_model_` is set).
     void record_truncation(cudaStream_t stream);
     /// Lays out the per-substep parameter block for `model` and allocates it (host and device).
