@@ -1,0 +1,83 @@
+#pragma once
+/// @file
+/// The world's vertices cut into parts, one per GPU (docs/multi-gpu.md): which rows each part owns,
+/// which vertices it reads but does not own (its ghosts, or halo), and which of its own vertices it
+/// sends to each other part. Backend kit: built once per topology, on the host.
+///
+/// A part's rows are the matrix rows of its owned vertices. Every element that touches an owned
+/// vertex couples it to the element's other vertices, and the block pattern holds a block for every
+/// such pair, so the ghosts of a part are exactly the pattern neighbours of its rows that other
+/// parts own: one ring of the pattern is as deep as both the product A·x of the owned rows and the
+/// assembly of their forces and blocks need.
+///
+/// Owned vertices are listed interior first (no pattern neighbour outside the part), then boundary:
+/// a pipelined product computes the interior rows while the ghosts' values travel, then the
+/// boundary rows (P-Cloth's overlap of the halo exchange with the SpMV).
+
+#include <cstdint>
+#include <span>
+#include <string>
+#include <vector>
+
+#include "weft/fabric.h"
+
+namespace weft {
+
+/// One part of a VertexPartition. Vertex ids are global (the FlatModel's) unless said otherwise.
+struct PartitionPart {
+    /// The vertices this part owns, interior first, each group in increasing global id.
+    std::vector<std::uint32_t> owned;
+    std::uint32_t interior = 0;  ///< owned[0, interior) are interior, the rest boundary
+    /// The vertices its rows read that other parts own, grouped by owner part (in increasing part,
+    /// then global id): those of part q are ghosts[ghost_start[q], ghost_start[q + 1]).
+    std::vector<std::uint32_t> ghosts;
+    std::vector<std::uint32_t> ghost_start;  ///< size parts + 1
+    /// The owned vertices other parts read, grouped by receiving part in the order that part lists
+    /// them among its ghosts: part q receives send[send_start[q], send_start[q + 1]), which are
+    /// indices into `owned` (local), so that part q's ghosts from this part are
+    /// owned[send[send_start[q] + k]] for k in order.
+    std::vector<std::uint32_t> send;
+    std::vector<std::uint32_t> send_start;  ///< size parts + 1
+    double work = 0.0;                      ///< the sum of its owned vertices' work
+
+    [[nodiscard]] std::uint32_t boundary() const { return static_cast<std::uint32_t>(owned.size()) - interior; }
+};
+
+/// How well a partition cuts: what the multi-GPU solve pays per product and per step.
+struct PartitionQuality {
+    std::uint64_t cut_blocks = 0;      ///< off-diagonal pattern blocks whose row and column lie in different parts
+    std::uint64_t halo_vertices = 0;   ///< ghosts summed over the parts (values received per product)
+    std::uint64_t boundary_vertices = 0;  ///< owned boundary vertices summed over the parts
+    double imbalance = 1.0;            ///< the largest part's work over the mean part's (1 is perfect)
+};
+
+struct VertexPartition {
+    std::uint32_t parts = 0;
+    std::vector<std::uint32_t> part_of;      ///< the owning part of each global vertex
+    std::vector<std::uint32_t> local_index;  ///< each global vertex's index in its owner's `owned`
+    std::vector<PartitionPart> part;
+    PartitionQuality quality;
+};
+
+/// The work of each row for balancing: the pattern's blocks in it (the product's and the
+/// assembly's cost both follow them).
+[[nodiscard]] std::vector<double> row_work(const BlockPattern& pattern);
+
+/// Cuts `order` (every vertex once, e.g. the multilevel Schwarz preconditioner's level-0 order:
+/// spatially local runs) into `parts` contiguous runs of nearly equal `work`, each run a whole
+/// number of `granule` consecutive entries (the preconditioner's domain size keeps every level-0
+/// domain on one part), and returns each vertex's part. Throws weft::Error naming the value when
+/// `parts` is 0, or greater than the granules there are, or the sizes disagree.
+[[nodiscard]] std::vector<std::uint32_t> cut_order(std::span<const std::uint32_t> order, std::span<const double> work,
+                                                   std::uint32_t parts, std::uint32_t granule);
+
+/// The owned, interior, ghost and send lists of each part for the assignment `part_of` (each
+/// vertex's part, < parts; a part may own nothing) on `pattern`, and the quality of the cut.
+/// Deterministic. Throws weft::Error when the sizes disagree or a part id is out of range.
+[[nodiscard]] VertexPartition build_partition(const BlockPattern& pattern, std::span<const std::uint32_t> part_of,
+                                              std::uint32_t parts, std::span<const double> work);
+
+/// One line: parts, cut blocks, halo and boundary vertices, imbalance (for logs and benchmarks).
+[[nodiscard]] std::string describe(const PartitionQuality& quality, std::uint32_t parts);
+
+}  // namespace weft

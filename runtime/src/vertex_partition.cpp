@@ -1,0 +1,151 @@
+// Vertex partitions for the multi-GPU solve (weft/backend/vertex_partition.h, docs/multi-gpu.md).
+#include "weft/backend/vertex_partition.h"
+
+#include <algorithm>
+#include <cstdio>
+#include <limits>
+
+#include "weft/error.h"
+
+namespace weft {
+
+std::vector<double> row_work(const BlockPattern& pattern) {
+    const std::size_t n = pattern.row_start.empty() ? 0 : pattern.row_start.size() - 1;
+    std::vector<double> work(n);
+    for (std::size_t i = 0; i < n; ++i) work[i] = static_cast<double>(pattern.row_start[i + 1] - pattern.row_start[i]);
+    return work;
+}
+
+std::vector<std::uint32_t> cut_order(std::span<const std::uint32_t> order, std::span<const double> work,
+                                     std::uint32_t parts, std::uint32_t granule) {
+    const std::size_t n = order.size();
+    if (work.size() != n)
+        throw Error("cut_order: " + std::to_string(work.size()) + " work values for " + std::to_string(n) + " vertices");
+    if (granule == 0) throw Error("cut_order: the granule must be at least 1");
+    const std::size_t granules = (n + granule - 1) / granule;
+    if (parts == 0 || parts > granules)
+        throw Error("cut_order: cannot cut " + std::to_string(n) + " vertices (" + std::to_string(granules) +
+                    " runs of " + std::to_string(granule) + ") into " + std::to_string(parts) + " parts");
+    // prefix[g] = the work of granules [0, g), summed in order (the same bits on every run).
+    std::vector<double> prefix(granules + 1, 0.0);
+    for (std::size_t g = 0; g < granules; ++g) {
+        double sum = 0.0;
+        for (std::size_t p = g * granule; p < std::min(n, (g + 1) * granule); ++p) {
+            if (order[p] >= n) throw Error("cut_order: order lists vertex " + std::to_string(order[p]) + " of " + std::to_string(n));
+            sum += work[order[p]];
+        }
+        prefix[g + 1] = prefix[g] + sum;
+    }
+    const double total = prefix[granules];
+    // Cut k after the granule boundary nearest to k/parts of the work, keeping every part non-empty.
+    std::vector<std::size_t> cut(parts + 1, 0);
+    cut[parts] = granules;
+    for (std::uint32_t k = 1; k < parts; ++k) {
+        const double target = total * static_cast<double>(k) / static_cast<double>(parts);
+        auto b = static_cast<std::size_t>(std::lower_bound(prefix.begin(), prefix.end(), target) - prefix.begin());
+        if (b > 0 && target - prefix[b - 1] < (b <= granules ? prefix[b] : total) - target) --b;
+        const std::size_t lo = cut[k - 1] + 1, hi = granules - (parts - k);
+        cut[k] = std::clamp(b, lo, hi);
+    }
+    std::vector<std::uint32_t> part_of(n, std::numeric_limits<std::uint32_t>::max());
+    for (std::uint32_t k = 0; k < parts; ++k)
+        for (std::size_t p = cut[k] * granule; p < std::min(n, cut[k + 1] * granule); ++p) {
+            if (part_of[order[p]] != std::numeric_limits<std::uint32_t>::max())
+                throw Error("cut_order: vertex " + std::to_string(order[p]) + " is listed twice");
+            part_of[order[p]] = k;
+        }
+    return part_of;
+}
+
+VertexPartition build_partition(const BlockPattern& pattern, std::span<const std::uint32_t> part_of,
+                                std::uint32_t parts, std::span<const double> work) {
+    const std::size_t n = pattern.row_start.empty() ? 0 : pattern.row_start.size() - 1;
+    if (part_of.size() != n || work.size() != n)
+        throw Error("build_partition: " + std::to_string(part_of.size()) + " part ids and " + std::to_string(work.size()) +
+                    " work values for " + std::to_string(n) + " rows");
+    if (parts == 0) throw Error("build_partition: 0 parts");
+    VertexPartition out;
+    out.parts = parts;
+    out.part_of.assign(part_of.begin(), part_of.end());
+    out.local_index.assign(n, 0);
+    out.part.resize(parts);
+
+    // Owned lists: interior rows first, then boundary, each in increasing global id.
+    std::vector<std::uint8_t> boundary(n, 0);
+    for (std::size_t i = 0; i < n; ++i) {
+        const std::uint32_t p = part_of[i];
+        if (p >= parts) throw Error("build_partition: vertex " + std::to_string(i) + " is in part " + std::to_string(p) +
+                                    " of " + std::to_string(parts));
+        for (std::uint32_t s = pattern.row_start[i]; s < pattern.row_start[i + 1]; ++s) {
+            const std::uint32_t j = pattern.column[s];
+            if (part_of[j] != p) {
+                boundary[i] = 1;
+                if (j != i) ++out.quality.cut_blocks;
+            }
+        }
+    }
+    for (int pass = 0; pass < 2; ++pass)
+        for (std::size_t i = 0; i < n; ++i) {
+            if (boundary[i] != static_cast<std::uint8_t>(pass)) continue;
+            PartitionPart& part = out.part[part_of[i]];
+            out.local_index[i] = static_cast<std::uint32_t>(part.owned.size());
+            part.owned.push_back(static_cast<std::uint32_t>(i));
+            if (pass == 0) part.interior = static_cast<std::uint32_t>(part.owned.size());
+            part.work += work[i];
+        }
+
+    // Ghosts: the off-part columns of each part's boundary rows, by owner part, then global id. The
+    // mark array holds the last part that listed each vertex (parts are taken in turn).
+    std::vector<std::uint32_t> mark(n, std::numeric_limits<std::uint32_t>::max());
+    for (std::uint32_t p = 0; p < parts; ++p) {
+        PartitionPart& part = out.part[p];
+        for (std::size_t k = part.interior; k < part.owned.size(); ++k) {
+            const std::uint32_t i = part.owned[k];
+            for (std::uint32_t s = pattern.row_start[i]; s < pattern.row_start[i + 1]; ++s) {
+                const std::uint32_t j = pattern.column[s];
+                if (part_of[j] == p || mark[j] == p) continue;
+                mark[j] = p;
+                part.ghosts.push_back(j);
+            }
+        }
+        std::sort(part.ghosts.begin(), part.ghosts.end(), [&](std::uint32_t a, std::uint32_t b) {
+            return part_of[a] != part_of[b] ? part_of[a] < part_of[b] : a < b;
+        });
+        part.ghost_start.assign(parts + 1, 0);
+        for (const std::uint32_t g : part.ghosts) ++part.ghost_start[part_of[g] + 1];
+        for (std::uint32_t q = 0; q < parts; ++q) part.ghost_start[q + 1] += part.ghost_start[q];
+        out.quality.halo_vertices += part.ghosts.size();
+        out.quality.boundary_vertices += part.boundary();
+    }
+
+    // Sends mirror the ghosts: part p sends to q what q lists as its ghosts from p, in q's order.
+    for (std::uint32_t p = 0; p < parts; ++p) {
+        PartitionPart& part = out.part[p];
+        part.send_start.assign(parts + 1, 0);
+        for (std::uint32_t q = 0; q < parts; ++q) {
+            const PartitionPart& receiver = out.part[q];
+            for (std::uint32_t k = receiver.ghost_start[p]; k < receiver.ghost_start[p + 1]; ++k)
+                part.send.push_back(out.local_index[receiver.ghosts[k]]);
+            part.send_start[q + 1] = static_cast<std::uint32_t>(part.send.size());
+        }
+    }
+
+    double total = 0.0, largest = 0.0;
+    for (const PartitionPart& part : out.part) {
+        total += part.work;
+        largest = std::max(largest, part.work);
+    }
+    out.quality.imbalance = total > 0.0 ? largest * static_cast<double>(parts) / total : 1.0;
+    return out;
+}
+
+std::string describe(const PartitionQuality& quality, std::uint32_t parts) {
+    char line[200];
+    std::snprintf(line, sizeof line, "%u parts: %llu cut blocks, %llu halo vertices, %llu boundary vertices, imbalance %.3f",
+                  parts, static_cast<unsigned long long>(quality.cut_blocks),
+                  static_cast<unsigned long long>(quality.halo_vertices),
+                  static_cast<unsigned long long>(quality.boundary_vertices), quality.imbalance);
+    return line;
+}
+
+}  // namespace weft

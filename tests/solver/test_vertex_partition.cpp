@@ -1,0 +1,201 @@
+// Vertex partitions for the multi-GPU solve (weft/backend/vertex_partition.h): every vertex owned
+// once, interior rows with no neighbour elsewhere, ghosts exactly the off-part pattern neighbours,
+// sends that mirror them, balanced cuts along the preconditioner's order, and a product assembled
+// part by part through the halo lists that equals the whole product bit for bit.
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <random>
+#include <set>
+
+#include "weft/backend/schwarz_hierarchy.h"
+#include "weft/backend/vertex_partition.h"
+#include "weft/error.h"
+#include "weft/fabric.h"
+#include "weft/mesh.h"
+
+namespace weft {
+namespace {
+
+struct Grid {
+    std::shared_ptr<const Fabric> fabric;
+    SchwarzHierarchy hierarchy;
+};
+
+Grid make_cloth(int cells) {
+    Grid g;
+    g.fabric = Fabric::cook(make_grid(1.0, 1.0, cells, cells));
+    const std::vector<Vec3d> rest(g.fabric->rest_positions().begin(), g.fabric->rest_positions().end());
+    g.hierarchy = build_schwarz_hierarchy(rest, g.fabric->pattern());
+    return g;
+}
+
+VertexPartition partition_along_order(const Grid& g, std::uint32_t parts) {
+    const std::vector<double> work = row_work(g.fabric->pattern());
+    const std::vector<std::uint32_t> part_of =
+        cut_order(g.hierarchy.order, work, parts, SchwarzHierarchy::kDomainSize);
+    return build_partition(g.fabric->pattern(), part_of, parts, work);
+}
+
+// The structural promises, checked from the pattern alone.
+void expect_consistent(const BlockPattern& pattern, const VertexPartition& vp) {
+    const std::size_t n = pattern.row_start.size() - 1;
+    std::vector<int> owners(n, 0);
+    for (std::uint32_t p = 0; p < vp.parts; ++p) {
+        const PartitionPart& part = vp.part[p];
+        for (std::size_t k = 0; k < part.owned.size(); ++k) {
+            const std::uint32_t i = part.owned[k];
+            ++owners[i];
+            EXPECT_EQ(vp.part_of[i], p);
+            EXPECT_EQ(vp.local_index[i], k);
+            bool off_part = false;
+            for (std::uint32_t s = pattern.row_start[i]; s < pattern.row_start[i + 1]; ++s)
+                off_part = off_part || vp.part_of[pattern.column[s]] != p;
+            EXPECT_EQ(off_part, k >= part.interior) << "vertex " << i << " listed on the wrong side";
+        }
+        // Ghosts: exactly the off-part columns of the part's rows, grouped by owner.
+        std::set<std::uint32_t> expected;
+        for (const std::uint32_t i : part.owned)
+            for (std::uint32_t s = pattern.row_start[i]; s < pattern.row_start[i + 1]; ++s)
+                if (vp.part_of[pattern.column[s]] != p) expected.insert(pattern.column[s]);
+        EXPECT_EQ(std::set<std::uint32_t>(part.ghosts.begin(), part.ghosts.end()), expected);
+        EXPECT_EQ(part.ghosts.size(), expected.size()) << "a ghost listed twice";
+        ASSERT_EQ(part.ghost_start.size(), vp.parts + 1);
+        for (std::uint32_t q = 0; q < vp.parts; ++q)
+            for (std::uint32_t k = part.ghost_start[q]; k < part.ghost_start[q + 1]; ++k)
+                EXPECT_EQ(vp.part_of[part.ghosts[k]], q);
+        EXPECT_EQ(part.ghost_start[p + 1] - part.ghost_start[p], 0U) << "a part is its own ghost";
+        // Sends: what each receiver lists, in its order.
+        ASSERT_EQ(part.send_start.size(), vp.parts + 1);
+        for (std::uint32_t q = 0; q < vp.parts; ++q) {
+            const PartitionPart& receiver = vp.part[q];
+            ASSERT_EQ(part.send_start[q + 1] - part.send_start[q], receiver.ghost_start[p + 1] - receiver.ghost_start[p]);
+            for (std::uint32_t k = 0; k < part.send_start[q + 1] - part.send_start[q]; ++k)
+                EXPECT_EQ(part.owned[part.send[part.send_start[q] + k]], receiver.ghosts[receiver.ghost_start[p] + k]);
+        }
+    }
+    for (std::size_t i = 0; i < n; ++i) EXPECT_EQ(owners[i], 1) << "vertex " << i;
+}
+
+TEST(VertexPartition, CutsAlongThePreconditionerOrderAreConsistentAndBalanced) {
+    const Grid g = make_cloth(47);  // 48² vertices
+    for (const std::uint32_t parts : {1U, 2U, 3U, 4U, 8U}) {
+        const VertexPartition vp = partition_along_order(g, parts);
+        SCOPED_TRACE(describe(vp.quality, parts));
+        expect_consistent(g.fabric->pattern(), vp);
+        // Whole level-0 domains of the preconditioner on each part.
+        for (std::size_t p = 0; p + SchwarzHierarchy::kDomainSize <= g.hierarchy.order.size(); p += SchwarzHierarchy::kDomainSize)
+            for (std::uint32_t k = 1; k < SchwarzHierarchy::kDomainSize; ++k)
+                EXPECT_EQ(vp.part_of[g.hierarchy.order[p + k]], vp.part_of[g.hierarchy.order[p]]) << "domain at " << p;
+        // Balanced to within a domain's work per part.
+        EXPECT_LT(vp.quality.imbalance, 1.0 + 0.05 * parts);
+        if (parts == 1) {
+            EXPECT_EQ(vp.quality.cut_blocks, 0U);
+            EXPECT_EQ(vp.part[0].interior, g.fabric->vertex_count());
+        } else {
+            EXPECT_GT(vp.quality.halo_vertices, 0U);
+            // A spatially local cut: far fewer halo vertices than vertices.
+            EXPECT_LT(vp.quality.halo_vertices, g.fabric->vertex_count() / 3);
+        }
+    }
+}
+
+TEST(VertexPartition, AnyAssignmentIsConsistentEmptyPartsIncluded) {
+    const Grid g = make_cloth(20);
+    const std::size_t n = g.fabric->vertex_count();
+    std::mt19937 rng(7);
+    std::vector<std::uint32_t> part_of(n);
+    for (auto& p : part_of) p = static_cast<std::uint32_t>(rng() % 3);  // part 3 of 4 stays empty
+    const VertexPartition vp = build_partition(g.fabric->pattern(), part_of, 4, row_work(g.fabric->pattern()));
+    expect_consistent(g.fabric->pattern(), vp);
+    EXPECT_TRUE(vp.part[3].owned.empty());
+}
+
+// y = A·x by parts: each part copies its ghosts' values from the owners' send lists (the halo
+// exchange), then multiplies its owned rows with local and ghost values. Equal to the whole product
+// bit for bit: every row sums its blocks in the pattern's order either way.
+TEST(VertexPartition, ProductThroughTheHaloEqualsTheWholeProduct) {
+    const Grid g = make_cloth(31);
+    const BlockPattern& pattern = g.fabric->pattern();
+    const std::size_t n = g.fabric->vertex_count();
+    std::mt19937 rng(11);
+    std::uniform_real_distribution<double> u(-1.0, 1.0);
+    std::vector<double> block(pattern.block_count()), x(n);
+    for (double& b : block) b = u(rng);
+    for (double& v : x) v = u(rng);
+    std::vector<double> whole(n, 0.0);
+    for (std::size_t i = 0; i < n; ++i)
+        for (std::uint32_t s = pattern.row_start[i]; s < pattern.row_start[i + 1]; ++s) whole[i] += block[s] * x[pattern.column[s]];
+
+    for (const std::uint32_t parts : {2U, 5U}) {
+        const VertexPartition vp = partition_along_order(g, parts);
+        // Each part's local vector: owned values, then ghosts (filled only through the exchange).
+        std::vector<std::vector<double>> local(parts);
+        for (std::uint32_t p = 0; p < parts; ++p) {
+            local[p].assign(vp.part[p].owned.size() + vp.part[p].ghosts.size(), std::nan(""));
+            for (std::size_t k = 0; k < vp.part[p].owned.size(); ++k) local[p][k] = x[vp.part[p].owned[k]];
+        }
+        for (std::uint32_t p = 0; p < parts; ++p)  // the exchange: p sends to every q
+            for (std::uint32_t q = 0; q < parts; ++q) {
+                const PartitionPart& from = vp.part[p];
+                const PartitionPart& to = vp.part[q];
+                for (std::uint32_t k = 0; k < from.send_start[q + 1] - from.send_start[q]; ++k)
+                    local[q][to.owned.size() + to.ghost_start[p] + k] = local[p][from.send[from.send_start[q] + k]];
+            }
+        std::vector<double> by_parts(n, std::nan(""));
+        for (std::uint32_t p = 0; p < parts; ++p) {
+            const PartitionPart& part = vp.part[p];
+            // Global id → local slot of this part (owned or ghost).
+            auto slot = [&](std::uint32_t j) -> std::size_t {
+                if (vp.part_of[j] == p) return vp.local_index[j];
+                const auto first = part.ghosts.begin() + part.ghost_start[vp.part_of[j]];
+                const auto last = part.ghosts.begin() + part.ghost_start[vp.part_of[j] + 1];
+                const auto it = std::lower_bound(first, last, j);
+                EXPECT_TRUE(it != last && *it == j) << "vertex " << j << " is not a ghost of part " << p;
+                return part.owned.size() + static_cast<std::size_t>(it - part.ghosts.begin());
+            };
+            for (const std::uint32_t i : part.owned) {
+                double sum = 0.0;
+                for (std::uint32_t s = pattern.row_start[i]; s < pattern.row_start[i + 1]; ++s)
+                    sum += block[s] * local[p][slot(pattern.column[s])];
+                by_parts[i] = sum;
+            }
+        }
+        for (std::size_t i = 0; i < n; ++i) ASSERT_EQ(by_parts[i], whole[i]) << "row " << i << ", " << parts << " parts";
+    }
+}
+
+TEST(VertexPartition, SameInputSameCut) {
+    const Grid g = make_cloth(30);
+    const VertexPartition a = partition_along_order(g, 4), b = partition_along_order(g, 4);
+    EXPECT_EQ(a.part_of, b.part_of);
+    for (std::uint32_t p = 0; p < 4; ++p) {
+        EXPECT_EQ(a.part[p].owned, b.part[p].owned);
+        EXPECT_EQ(a.part[p].ghosts, b.part[p].ghosts);
+        EXPECT_EQ(a.part[p].send, b.part[p].send);
+    }
+}
+
+TEST(VertexPartition, BadInputIsAnErrorNamingTheValue) {
+    const Grid g = make_cloth(3);  // 16 vertices: one domain
+    const std::vector<double> work = row_work(g.fabric->pattern());
+    try {
+        (void)cut_order(g.hierarchy.order, work, 2, SchwarzHierarchy::kDomainSize);
+        FAIL() << "cut 16 vertices in domains of 16 into 2 parts";
+    } catch (const Error& e) {
+        EXPECT_NE(std::string(e.what()).find("into 2 parts"), std::string::npos) << e.what();
+    }
+    EXPECT_THROW((void)cut_order(g.hierarchy.order, work, 0, 1), Error);
+    EXPECT_THROW((void)cut_order(g.hierarchy.order, std::vector<double>(3), 1, 1), Error);
+    std::vector<std::uint32_t> part_of(g.fabric->vertex_count(), 0);
+    part_of[5] = 2;
+    try {
+        (void)build_partition(g.fabric->pattern(), part_of, 2, work);
+        FAIL() << "part 2 of 2 accepted";
+    } catch (const Error& e) {
+        EXPECT_NE(std::string(e.what()).find("vertex 5 is in part 2"), std::string::npos) << e.what();
+    }
+}
+
+}  // namespace
+}  // namespace weft
