@@ -11,6 +11,8 @@ BUILD_PACKAGES=(cmake ninja-build g++ pkg-config)
 RUNTIME_PACKAGES=(libtbb-dev libtomlplusplus-dev libglm-dev)
 ASSETS_PACKAGES=(libassimp-dev)
 TEST_PACKAGES=(libgtest-dev libgmock-dev libbenchmark-dev python3)
+# The multi-GPU partition benchmark compares its cut with METIS (bench/partition_bench.cpp).
+BENCH_PACKAGES=(libmetis-dev)
 # The renderer (WEFT_RENDER): Vulkan loader, headers, glslc, lavapipe and the validation layers;
 # EGL and OpenGL through GLVND with Mesa's llvmpipe; libpng for the captured frames; GLFW for the
 # window of `weft view`, and Xvfb (xvfb-run needs xauth) to test it without a display.
@@ -19,7 +21,7 @@ RENDER_PACKAGES=(libvulkan-dev glslc mesa-vulkan-drivers vulkan-validationlayers
 # The editor (WEFT_EDITOR, `weft edit`): Dear ImGui with its GLFW and Vulkan backends in one static
 # library (its font atlas needs stb); GLFW and Vulkan come with the renderer's group.
 EDITOR_PACKAGES=(libimgui-dev libstb-dev)
-PACKAGE_GROUPS=(BUILD_PACKAGES RUNTIME_PACKAGES ASSETS_PACKAGES TEST_PACKAGES RENDER_PACKAGES EDITOR_PACKAGES)
+PACKAGE_GROUPS=(BUILD_PACKAGES RUNTIME_PACKAGES ASSETS_PACKAGES TEST_PACKAGES BENCH_PACKAGES RENDER_PACKAGES EDITOR_PACKAGES)
 
 if [[ "${WEFT_SKIP_DEPS:-0}" == "1" ]]; then
     echo "deps: skipped (WEFT_SKIP_DEPS=1)"
