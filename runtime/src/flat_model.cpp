@@ -7,6 +7,32 @@
 
 namespace weft {
 
+void build_gather_tables(FlatModel& f) {
+    // Counting sort by destination: entries stay in element order (deterministic).
+    const auto build_gather = [](std::size_t rows, const std::vector<std::uint32_t>& dest,
+                                 std::vector<std::uint32_t>& start, std::vector<std::uint32_t>& index) {
+        start.assign(rows + 1, 0);
+        for (std::uint32_t d : dest) ++start[d + 1];
+        for (std::size_t r = 0; r < rows; ++r) start[r + 1] += start[r];
+        index.resize(dest.size());
+        std::vector<std::uint32_t> cursor(start.begin(), start.end() - 1);
+        for (std::size_t e = 0; e < dest.size(); ++e) index[cursor[dest[e]]++] = static_cast<std::uint32_t>(e);
+    };
+    const BlockPattern& p = f.pattern;
+    std::vector<std::uint32_t> dest;
+    dest.reserve(3 * f.triangles.size() + 4 * f.hinges.size());
+    for (const Triangle& t : f.triangles)
+        for (std::uint32_t v : t.v) dest.push_back(v);
+    for (const Hinge& h : f.hinges)
+        for (std::uint32_t v : h.v) dest.push_back(v);
+    build_gather(f.vertex_count, dest, f.vertex_force_start, f.vertex_force_index);
+    dest.clear();
+    dest.reserve(p.triangle_slots.size() + p.hinge_slots.size());
+    dest.insert(dest.end(), p.triangle_slots.begin(), p.triangle_slots.end());
+    dest.insert(dest.end(), p.hinge_slots.begin(), p.hinge_slots.end());
+    build_gather(p.column.size(), dest, f.slot_block_start, f.slot_block_index);
+}
+
 FlatModel flatten(const Model& model) {
     FlatModel f;
     const std::size_t cloths = model.cloths.size();
@@ -93,28 +119,7 @@ FlatModel flatten(const Model& model) {
         }
     }
 
-    // Gather tables (counting sort by destination keeps entries in element order: deterministic).
-    const auto build_gather = [](std::size_t rows, const std::vector<std::uint32_t>& dest,
-                                 std::vector<std::uint32_t>& start, std::vector<std::uint32_t>& index) {
-        start.assign(rows + 1, 0);
-        for (std::uint32_t d : dest) ++start[d + 1];
-        for (std::size_t r = 0; r < rows; ++r) start[r + 1] += start[r];
-        index.resize(dest.size());
-        std::vector<std::uint32_t> cursor(start.begin(), start.end() - 1);
-        for (std::size_t e = 0; e < dest.size(); ++e) index[cursor[dest[e]]++] = static_cast<std::uint32_t>(e);
-    };
-    std::vector<std::uint32_t> dest;
-    dest.reserve(3 * nt + 4 * nh);
-    for (const Triangle& t : f.triangles)
-        for (std::uint32_t v : t.v) dest.push_back(v);
-    for (const Hinge& h : f.hinges)
-        for (std::uint32_t v : h.v) dest.push_back(v);
-    build_gather(nv, dest, f.vertex_force_start, f.vertex_force_index);
-    dest.clear();
-    dest.reserve(9 * nt + 16 * nh);
-    dest.insert(dest.end(), p.triangle_slots.begin(), p.triangle_slots.end());
-    dest.insert(dest.end(), p.hinge_slots.begin(), p.hinge_slots.end());
-    build_gather(p.column.size(), dest, f.slot_block_start, f.slot_block_index);
+    build_gather_tables(f);
     return f;
 }
 

@@ -54,6 +54,9 @@ struct FlatModel {
                                                                      std::size_t velocities) const;
 };
 
+/// Fills `f`'s gather tables (vertex_force_*, slot_block_*) from its elements and pattern.
+void build_gather_tables(FlatModel& f);
+
 /// Flattens `model` (throws `weft::Error` if a cloth has no fabric).
 [[nodiscard]] FlatModel flatten(const Model& model);
 
