@@ -43,6 +43,13 @@ WEFT_CUDA_PCG=kernels run memcheck "$weft" run flag --backend cuda --frames 3 --
 # the truncation after every Newton update; the sheets of layers start 2 cm apart, within the radius cap.
 run memcheck "$weft" run layers --backend cuda --frames 3 --quiet --set 'collision.mode=offset' --set 'solver.cg_max_iterations=200'
 run initcheck "$weft" run layers --backend cuda --frames 2 --quiet --set 'collision.mode=offset' --set 'solver.cg_max_iterations=100'
+# The multi-GPU building blocks (halo exchange, parts' products): the test binary beside weft, every
+# ghost filled before it is read (initcheck) and no write outside a receiver's ghost range (memcheck).
+parts_test="$(dirname "$weft")/test_multi_gpu_parts"
+if [[ -x "$parts_test" ]]; then
+    run memcheck "$parts_test" --gtest_filter='MultiGpuParts.*'
+    run initcheck "$parts_test" --gtest_filter='MultiGpuParts.PartsOnOneGpu*'
+fi
 export WEFT_CUDA_GRAPHS=0
 run racecheck "$weft" run drape --backend cuda --frames 2 --quiet --set 'solver.cg_max_iterations=100'
 run synccheck "$weft" run drape --backend cuda --frames 2 --quiet --set 'solver.cg_max_iterations=100'

@@ -77,8 +77,8 @@ void upload_owned(const std::vector<PartModel>& parts, const std::vector<int>& d
     }
 }
 
-// The exchange, then the product of every part's owned rows (interior rows before the exchange, as
-// the pipelined product runs them); returns the global result (SoA) and checks every ghost.
+// The product of every part's owned rows as the pipelined product runs it: the exchange begins, the
+// interior rows run while it travels, the boundary rows follow it; returns the global result (SoA) and checks every ghost.
 std::vector<float> product_by_parts(const FlatModel& flat, const std::vector<float>& blocks, const std::vector<float>& x,
                                     std::uint32_t count, const std::vector<int>& devices) {
     const std::size_t n = flat.vertex_count;
@@ -98,11 +98,12 @@ std::vector<float> product_by_parts(const FlatModel& flat, const std::vector<flo
     LocalVectors v;
     upload_owned(parts, devices, x, n, v);
     HaloExchange halo(vp, devices, raw);
-    for (std::uint32_t p = 0; p < count; ++p) {  // interior rows: no ghost read
+    halo.begin(v.x);
+    for (std::uint32_t p = 0; p < count; ++p) {  // interior rows, while the ghosts travel
         WEFT_CUDA_CHECK(cudaSetDevice(devices[p]));
         matrices[p]->multiply(v.x[p], v.y[p], 0, matrices[p]->interior(), raw[p]);
     }
-    halo.exchange(v.x);
+    halo.finish();
     for (std::uint32_t p = 0; p < count; ++p) {  // boundary rows, after the ghosts landed
         WEFT_CUDA_CHECK(cudaSetDevice(devices[p]));
         matrices[p]->multiply(v.x[p], v.y[p], matrices[p]->interior(), matrices[p]->owned(), raw[p]);

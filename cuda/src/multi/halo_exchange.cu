@@ -59,6 +59,7 @@ HaloExchange::HaloExchange(const VertexPartition& partition, std::span<const int
         part.ghost_start = src.ghost_start;
         WEFT_CUDA_CHECK(cudaSetDevice(part.device));
         part.send.upload(src.send, ledger_, "halo send lists");
+        WEFT_CUDA_CHECK(cudaStreamCreateWithFlags(&part.halo, cudaStreamNonBlocking));
         WEFT_CUDA_CHECK(cudaEventCreateWithFlags(&part.ready, cudaEventDisableTiming));
         WEFT_CUDA_CHECK(cudaEventCreateWithFlags(&part.pushed, cudaEventDisableTiming));
     }
@@ -76,16 +77,16 @@ HaloExchange::~HaloExchange() {
     for (Part& part : part_) {
         if (part.ready != nullptr) cudaEventDestroy(part.ready);
         if (part.pushed != nullptr) cudaEventDestroy(part.pushed);
+        if (part.halo != nullptr) cudaStreamDestroy(part.halo);
     }
 }
 
-void HaloExchange::exchange(std::span<float* const> vectors) {
+void HaloExchange::begin(std::span<float* const> vectors) {
     const std::uint32_t parts = this->parts();
     if (vectors.size() != parts)
-        throw Error("HaloExchange::exchange: " + std::to_string(vectors.size()) + " vectors for " + std::to_string(parts) + " parts");
+        throw Error("HaloExchange::begin: " + std::to_string(vectors.size()) + " vectors for " + std::to_string(parts) + " parts");
     int previous = 0;
     WEFT_CUDA_CHECK(cudaGetDevice(&previous));
-    // A push may overwrite ghosts its receiver still reads: it waits for the receiver's earlier work.
     for (Part& part : part_) {
         WEFT_CUDA_CHECK(cudaSetDevice(part.device));
         WEFT_CUDA_CHECK(cudaEventRecord(part.ready, part.stream));
@@ -93,22 +94,28 @@ void HaloExchange::exchange(std::span<float* const> vectors) {
     for (std::uint32_t p = 0; p < parts; ++p) {
         Part& from = part_[p];
         WEFT_CUDA_CHECK(cudaSetDevice(from.device));
+        WEFT_CUDA_CHECK(cudaStreamWaitEvent(from.halo, from.ready, 0));  // the values to send are written
         for (std::uint32_t q = 0; q < parts; ++q) {
             const std::uint32_t first = from.send_start[q], count = from.send_start[q + 1] - first;
             if (count == 0) continue;
             const Part& to = part_[q];
-            WEFT_CUDA_CHECK(cudaStreamWaitEvent(from.stream, to.ready, 0));
-            push_kernel<<<grid_for(count), kBlockSize, 0, from.stream>>>(vectors[p], from.local, from.send.get() + first, count,
-                                                                         vectors[q], to.local, to.owned + to.ghost_start[p]);
+            WEFT_CUDA_CHECK(cudaStreamWaitEvent(from.halo, to.ready, 0));  // the old ghosts are read
+            push_kernel<<<grid_for(count), kBlockSize, 0, from.halo>>>(vectors[p], from.local, from.send.get() + first, count,
+                                                                       vectors[q], to.local, to.owned + to.ghost_start[p]);
             WEFT_CUDA_CHECK_LAUNCH("push_kernel");
         }
-        WEFT_CUDA_CHECK(cudaEventRecord(from.pushed, from.stream));
+        WEFT_CUDA_CHECK(cudaEventRecord(from.pushed, from.halo));
     }
-    // Each receiver goes on once every part that sends to it has pushed.
-    for (std::uint32_t q = 0; q < parts; ++q) {
+    WEFT_CUDA_CHECK(cudaSetDevice(previous));
+}
+
+void HaloExchange::finish() {
+    int previous = 0;
+    WEFT_CUDA_CHECK(cudaGetDevice(&previous));
+    for (std::uint32_t q = 0; q < parts(); ++q) {
         Part& to = part_[q];
         WEFT_CUDA_CHECK(cudaSetDevice(to.device));
-        for (std::uint32_t p = 0; p < parts; ++p)
+        for (std::uint32_t p = 0; p < parts(); ++p)
             if (p != q && to.ghost_start[p + 1] > to.ghost_start[p])
                 WEFT_CUDA_CHECK(cudaStreamWaitEvent(to.stream, part_[p].pushed, 0));
     }

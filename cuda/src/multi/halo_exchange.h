@@ -3,8 +3,12 @@
 /// The halo exchange of the multi-GPU solve (docs/multi-gpu.md): every part pushes the values of
 /// its boundary vertices that other parts read straight into those parts' ghost ranges, with a
 /// gather kernel that writes to the receiver's memory (peer access over NVLink between GPUs, plain
-/// stores between parts on one GPU, the test mode). No host synchronisation: events order each
-/// push after the receiver's earlier work and each receiver's later work after the pushes it needs.
+/// stores between parts on one GPU, the test mode). No host synchronisation: the pushes run on a
+/// halo stream of each part, ordered by events after the work already enqueued on the sender's and
+/// the receiver's streams, and each receiver's later work waits for the pushes it needs.
+///
+/// Pipelined use (P-Cloth's SpMV): `begin`, then the interior rows on the parts' streams (they read
+/// owned values only, and run while the pushes travel), then `finish`, then the boundary rows.
 ///
 /// Vectors are a part's local structure-of-arrays float3 (x, y, z runs of `local` values each): its
 /// owned vertices, then its ghosts grouped by owner (PartitionPart), so the values from one sender
@@ -32,10 +36,17 @@ public:
     HaloExchange(const HaloExchange&) = delete;
     HaloExchange& operator=(const HaloExchange&) = delete;
 
-    /// Fills every part's ghosts in `vectors[p]` (device pointers, one local vector per part) from
-    /// their owners. Enqueued: on return each part's stream waits for the pushes into it, and each
-    /// push waited for the work its receiver's stream had enqueued before.
-    void exchange(std::span<float* const> vectors);
+    /// Starts filling every part's ghosts in `vectors[p]` (device pointers, one local vector per
+    /// part) from their owners: each push waits for the work enqueued so far on its sender's stream
+    /// (the values) and its receiver's stream (earlier reads of the ghosts).
+    void begin(std::span<float* const> vectors);
+    /// Makes each part's stream wait for the pushes into it (enqueued; no host wait).
+    void finish();
+    /// begin then finish.
+    void exchange(std::span<float* const> vectors) {
+        begin(vectors);
+        finish();
+    }
 
     [[nodiscard]] std::uint32_t parts() const { return static_cast<std::uint32_t>(part_.size()); }
     /// Local vertices (owned + ghosts) of part p: the component stride of its vectors.
@@ -51,6 +62,7 @@ private:
         std::uint32_t owned = 0, local = 0;
         std::vector<std::uint32_t> send_start, ghost_start;  // host copies (PartitionPart)
         DeviceArray<std::uint32_t> send;                      // on the part's device
+        cudaStream_t halo = nullptr;                          // the pushes this part sends
         cudaEvent_t ready = nullptr, pushed = nullptr;
     };
     std::vector<Part> part_;

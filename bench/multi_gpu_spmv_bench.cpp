@@ -1,0 +1,233 @@
+// The multi-GPU product A·x on a scene's pattern (docs/multi-gpu.md): per part count G and device
+// placement, the time of one product (a) with the halo exchange first and every row after it, and
+// (b) pipelined, the interior rows running while the ghosts travel, then the boundary rows; the time
+// hidden is (a) − (b). Also the exchange alone and the bytes it moves between devices. Random blocks
+// (the product's cost does not depend on the values). Medians of repeated timed runs, a table on
+// stdout and JSON with --json.
+//
+//   weft_multi_gpu_spmv_bench SCENE.toml [--set key=value ...] [--parts 1,2] [--one-gpu] [--repeats 200] [--json FILE]
+//
+// Parts go round-robin over the visible GPUs; --one-gpu puts every part on GPU 0 (the test mode).
+#include <cuda_runtime_api.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cstdio>
+#include <fstream>
+#include <iostream>
+#include <memory>
+#include <random>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include "cuda_check.h"
+#include "multi/halo_exchange.h"
+#include "multi/part_matrix.h"
+#include "weft/backend/flat_model.h"
+#include "weft/backend/part_model.h"
+#include "weft/backend/schwarz_hierarchy.h"
+#include "weft/backend/vertex_partition.h"
+#include "weft/error.h"
+#include "weft/scene.h"
+#include "weft/world.h"
+
+namespace {
+
+using Clock = std::chrono::steady_clock;
+using weft::cuda::multi::HaloExchange;
+using weft::cuda::multi::PartMatrix;
+
+struct Row {
+    std::uint32_t parts = 0;
+    int devices = 0;
+    double exchange_us = 0, sequential_us = 0, pipelined_us = 0;
+    std::uint64_t halo_bytes = 0;
+};
+
+double median(std::vector<double> v) {
+    std::sort(v.begin(), v.end());
+    return v.empty() ? 0.0 : v[v.size() / 2];
+}
+
+/// Everything G parts need: matrices, streams, local vectors.
+class Setup {
+public:
+    Setup(const weft::FlatModel& flat, const weft::SchwarzHierarchy& h, std::uint32_t parts, const std::vector<int>& devices)
+        : devices_(devices) {
+        const std::vector<double> work = weft::row_work(flat.pattern);
+        vp_ = weft::build_partition(flat.pattern, weft::cut_order(h.order, work, parts, weft::SchwarzHierarchy::kDomainSize),
+                                    parts, work);
+        std::mt19937 rng(3);
+        std::uniform_real_distribution<float> u(-1.0F, 1.0F);
+        std::vector<float> blocks(9 * flat.pattern.block_count());
+        for (float& b : blocks) b = u(rng);
+        for (std::uint32_t p = 0; p < parts; ++p) {
+            const weft::PartModel pm = weft::extract_part(flat, vp_, p);
+            WEFT_CUDA_CHECK(cudaSetDevice(devices[p]));
+            matrices_.push_back(std::make_unique<PartMatrix>(pm, devices[p]));
+            matrices_.back()->set_blocks(blocks);
+            cudaStream_t s = nullptr;
+            WEFT_CUDA_CHECK(cudaStreamCreateWithFlags(&s, cudaStreamNonBlocking));
+            streams_.push_back(s);
+            std::vector<float> x(3 * pm.model.vertex_count);
+            for (float& v : x) v = u(rng);
+            float *dx = nullptr, *dy = nullptr;
+            WEFT_CUDA_CHECK(cudaMalloc(reinterpret_cast<void**>(&dx), x.size() * sizeof(float)));
+            WEFT_CUDA_CHECK(cudaMalloc(reinterpret_cast<void**>(&dy), x.size() * sizeof(float)));
+            WEFT_CUDA_CHECK(cudaMemcpy(dx, x.data(), x.size() * sizeof(float), cudaMemcpyHostToDevice));
+            x_.push_back(dx);
+            y_.push_back(dy);
+        }
+        halo_ = std::make_unique<HaloExchange>(vp_, devices_, streams_);
+    }
+    ~Setup() {
+        halo_.reset();
+        for (std::size_t p = 0; p < x_.size(); ++p) {
+            cudaSetDevice(devices_[p]);
+            cudaFree(x_[p]);
+            cudaFree(y_[p]);
+            cudaStreamDestroy(streams_[p]);
+        }
+    }
+    Setup(const Setup&) = delete;
+    Setup& operator=(const Setup&) = delete;
+
+    void exchange() { halo_->exchange(x_); }
+    void begin_exchange() { halo_->begin(x_); }
+    void finish_exchange() { halo_->finish(); }
+    void rows(bool interior, bool boundary) {
+        for (std::size_t p = 0; p < matrices_.size(); ++p) {
+            WEFT_CUDA_CHECK(cudaSetDevice(devices_[p]));
+            const PartMatrix& m = *matrices_[p];
+            m.multiply(x_[p], y_[p], interior ? 0 : m.interior(), boundary ? m.owned() : m.interior(), streams_[p]);
+        }
+    }
+    void sync() {
+        for (std::size_t p = 0; p < streams_.size(); ++p) {
+            WEFT_CUDA_CHECK(cudaSetDevice(devices_[p]));
+            WEFT_CUDA_CHECK(cudaStreamSynchronize(streams_[p]));
+        }
+    }
+    [[nodiscard]] std::uint64_t halo_bytes() const { return halo_->bytes_between_devices(); }
+
+    /// Median wall time of `body` (µs) over `repeats` runs, each run synchronised at its end.
+    template <typename Body>
+    double time_us(int repeats, Body body) {
+        for (int w = 0; w < 5; ++w) body();
+        sync();
+        std::vector<double> us;
+        for (int r = 0; r < repeats; ++r) {
+            const auto t = Clock::now();
+            body();
+            sync();
+            us.push_back(std::chrono::duration<double, std::micro>(Clock::now() - t).count());
+        }
+        return median(us);
+    }
+
+private:
+    std::vector<int> devices_;
+    weft::VertexPartition vp_;
+    std::vector<std::unique_ptr<PartMatrix>> matrices_;
+    std::vector<cudaStream_t> streams_;
+    std::vector<float*> x_, y_;
+    std::unique_ptr<HaloExchange> halo_;
+};
+
+std::vector<std::uint32_t> parse_parts(const std::string& list) {
+    std::vector<std::uint32_t> out;
+    std::stringstream in(list);
+    std::string item;
+    while (std::getline(in, item, ',')) {
+        std::size_t used = 0;
+        const unsigned long v = std::stoul(item, &used);
+        if (used != item.size() || v == 0 || v > 64) throw weft::Error("--parts: '" + item + "' is not a part count in 1..64");
+        out.push_back(static_cast<std::uint32_t>(v));
+    }
+    return out;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+    try {
+        if (argc < 2) {
+            std::cerr << "usage: weft_multi_gpu_spmv_bench SCENE.toml [--set key=value ...] [--parts 1,2] [--one-gpu] "
+                         "[--repeats N] [--json FILE]\n";
+            return 2;
+        }
+        std::vector<std::string> overrides;
+        std::vector<std::uint32_t> counts{1, 2};
+        bool one_gpu = false;
+        int repeats = 200;
+        std::string json_path;
+        for (int a = 2; a < argc; ++a) {
+            const std::string arg = argv[a];
+            if (arg == "--one-gpu") {
+                one_gpu = true;
+                continue;
+            }
+            if (a + 1 >= argc) throw weft::Error("'" + arg + "' needs a value");
+            if (arg == "--set") overrides.emplace_back(argv[++a]);
+            else if (arg == "--parts") counts = parse_parts(argv[++a]);
+            else if (arg == "--repeats") repeats = std::max(1, std::stoi(argv[++a]));
+            else if (arg == "--json") json_path = argv[++a];
+            else throw weft::Error("unknown argument '" + arg + "'");
+        }
+        int gpus = 0;
+        WEFT_CUDA_CHECK(cudaGetDeviceCount(&gpus));
+        if (gpus == 0) throw weft::Error("no CUDA device");
+        const weft::SceneDesc scene = weft::load_scene(argv[1], overrides);
+        const auto world = weft::build_world(scene, "cpu");
+        const weft::FlatModel flat = weft::flatten(world->model());
+        const weft::SchwarzHierarchy h = weft::build_schwarz_hierarchy(flat.initial_positions, flat.pattern);
+        cudaDeviceProp prop{};
+        WEFT_CUDA_CHECK(cudaGetDeviceProperties(&prop, 0));
+        std::printf("%s: %zu vertices, %zu blocks; %d × %s%s\n", argv[1], flat.vertex_count, flat.pattern.block_count(), gpus,
+                    prop.name, one_gpu ? " (every part on GPU 0)" : "");
+        std::vector<Row> rows;
+        for (const std::uint32_t parts : counts) {
+            std::vector<int> devices(parts);
+            for (std::uint32_t p = 0; p < parts; ++p) devices[p] = one_gpu ? 0 : static_cast<int>(p % static_cast<std::uint32_t>(gpus));
+            Setup setup(flat, h, parts, devices);
+            Row r;
+            r.parts = parts;
+            r.devices = one_gpu ? 1 : std::min<int>(gpus, static_cast<int>(parts));
+            r.exchange_us = setup.time_us(repeats, [&] { setup.exchange(); });
+            r.sequential_us = setup.time_us(repeats, [&] {
+                setup.exchange();
+                setup.rows(true, true);
+            });
+            r.pipelined_us = setup.time_us(repeats, [&] {
+                setup.begin_exchange();
+                setup.rows(true, false);
+                setup.finish_exchange();
+                setup.rows(false, true);
+            });
+            r.halo_bytes = setup.halo_bytes();
+            rows.push_back(r);
+        }
+        std::printf("| parts | GPUs | exchange µs | exchange then product µs | pipelined µs | hidden µs | bytes between GPUs |\n");
+        std::printf("|---|---|---|---|---|---|---|\n");
+        for (const Row& r : rows)
+            std::printf("| %u | %d | %.1f | %.1f | %.1f | %.1f | %llu |\n", r.parts, r.devices, r.exchange_us, r.sequential_us,
+                        r.pipelined_us, r.sequential_us - r.pipelined_us, static_cast<unsigned long long>(r.halo_bytes));
+        if (!json_path.empty()) {
+            std::ofstream json(json_path);
+            json << "{\"scene\": \"" << argv[1] << "\", \"gpu\": \"" << prop.name << "\", \"rows\": [";
+            for (std::size_t k = 0; k < rows.size(); ++k) {
+                const Row& r = rows[k];
+                json << (k ? ", " : "") << "{\"parts\": " << r.parts << ", \"gpus\": " << r.devices
+                     << ", \"exchange_us\": " << r.exchange_us << ", \"sequential_us\": " << r.sequential_us
+                     << ", \"pipelined_us\": " << r.pipelined_us << ", \"halo_bytes\": " << r.halo_bytes << "}";
+            }
+            json << "]}\n";
+            if (!json) throw weft::Error("cannot write '" + json_path + "'");
+        }
+        return 0;
+    } catch (const std::exception& e) {
+        std::cerr << "weft_multi_gpu_spmv_bench: " << e.what() << "\n";
+        return 1;
+    }
+}
