@@ -75,6 +75,7 @@ public:
             float *dx = nullptr, *dy = nullptr;
             WEFT_CUDA_CHECK(cudaMalloc(reinterpret_cast<void**>(&dx), x.size() * sizeof(float)));
             WEFT_CUDA_CHECK(cudaMalloc(reinterpret_cast<void**>(&dy), x.size() * sizeof(float)));
+        WEFT_CUDA_CHECK(cudaMemset(dy, 0, x.size() * sizeof(float)));  // ghost rows are never computed
             WEFT_CUDA_CHECK(cudaMemcpy(dx, x.data(), x.size() * sizeof(float), cudaMemcpyHostToDevice));
             x_.push_back(dx);
             y_.push_back(dy);

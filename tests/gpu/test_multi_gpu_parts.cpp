@@ -70,6 +70,7 @@ void upload_owned(const std::vector<PartModel>& parts, const std::vector<int>& d
         float *dx = nullptr, *dy = nullptr;
         WEFT_CUDA_CHECK(cudaMalloc(reinterpret_cast<void**>(&dx), host.size() * sizeof(float)));
         WEFT_CUDA_CHECK(cudaMalloc(reinterpret_cast<void**>(&dy), host.size() * sizeof(float)));
+        WEFT_CUDA_CHECK(cudaMemset(dy, 0, host.size() * sizeof(float)));  // ghost rows are never computed
         WEFT_CUDA_CHECK(cudaMemcpy(dx, host.data(), host.size() * sizeof(float), cudaMemcpyHostToDevice));
         out.x.push_back(dx);
         out.y.push_back(dy);
