@@ -2,9 +2,9 @@
 // placement, the time of one product (a) with the halo exchange first and every row after it, and
 // (b) pipelined, the interior rows running while the ghosts travel, then the boundary rows; the time
 // hidden is (a) − (b), launched from the host and captured as CUDA graphs (how the solver runs). Also
-// the exchange alone and the bytes it moves between devices. Random blocks
-// (the product's cost does not depend on the values). Medians of repeated timed runs, a table on
-// stdout and JSON with --json.
+// the exchange alone, the bytes it moves between devices, and the single-reduction CG's time per
+// iteration as the host drives it (multi/part_pcg.h), on a stiff SPD matrix of the scene's pattern.
+// Medians of repeated timed runs, a table on stdout and JSON with --json.
 //
 //   weft_multi_gpu_spmv_bench SCENE.toml [--set key=value ...] [--parts 1,2] [--one-gpu] [--repeats 200] [--json FILE]
 //
@@ -25,6 +25,7 @@
 #include "cuda_check.h"
 #include "multi/halo_exchange.h"
 #include "multi/part_matrix.h"
+#include "multi/part_pcg.h"
 #include "weft/backend/flat_model.h"
 #include "weft/backend/part_model.h"
 #include "weft/backend/schwarz_hierarchy.h"
@@ -38,11 +39,13 @@ namespace {
 using Clock = std::chrono::steady_clock;
 using weft::cuda::multi::HaloExchange;
 using weft::cuda::multi::PartMatrix;
+using weft::cuda::multi::PartPcg;
 
 struct Row {
     std::uint32_t parts = 0;
     int devices = 0;
     double exchange_us = 0, sequential_us = 0, pipelined_us = 0, sequential_graph_us = 0, pipelined_graph_us = 0;
+    double cg_iteration_us = 0;
     std::uint64_t halo_bytes = 0;
 };
 
@@ -61,8 +64,18 @@ public:
                                     parts, work);
         std::mt19937 rng(3);
         std::uniform_real_distribution<float> u(-1.0F, 1.0F);
-        std::vector<float> blocks(9 * flat.pattern.block_count());
-        for (float& b : blocks) b = u(rng);
+        // A stiff SPD matrix on the pattern (m·I + k·L ⊗ I₃) so that the CG runs too; the product's
+        // cost does not depend on the values.
+        std::vector<float> blocks(9 * flat.pattern.block_count(), 0.0F);
+        for (std::size_t i = 0; i < flat.vertex_count; ++i) {
+            float degree = 0.0F;
+            for (std::uint32_t s = flat.pattern.row_start[i]; s < flat.pattern.row_start[i + 1]; ++s)
+                if (flat.pattern.column[s] != i) {
+                    for (int d = 0; d < 3; ++d) blocks[9 * s + 4 * d] = -100.0F;
+                    degree += 1.0F;
+                }
+            for (int d = 0; d < 3; ++d) blocks[9 * flat.pattern.diagonal[i] + 4 * d] = 1.0F + 100.0F * degree;
+        }
         for (std::uint32_t p = 0; p < parts; ++p) {
             const weft::PartModel pm = weft::extract_part(flat, vp_, p);
             WEFT_CUDA_CHECK(cudaSetDevice(devices[p]));
@@ -82,8 +95,29 @@ public:
             y_.push_back(dy);
         }
         halo_ = std::make_unique<HaloExchange>(vp_, devices_, streams_);
+        std::vector<const PartMatrix*> raw;
+        for (const auto& m : matrices_) raw.push_back(m.get());
+        pcg_ = std::make_unique<PartPcg>(raw, *halo_, streams_);
+    }
+
+    /// Mean µs per iteration of the single-reduction CG run for `iterations` (tolerance 0), as the
+    /// host drives it today (one synchronisation per iteration), with x as the right-hand side.
+    double cg_us_per_iteration(int iterations) {
+        std::vector<float*> solution;
+        for (std::size_t p = 0; p < y_.size(); ++p) {
+            WEFT_CUDA_CHECK(cudaSetDevice(devices_[p]));
+            WEFT_CUDA_CHECK(cudaMemsetAsync(y_[p], 0, 3 * matrices_[p]->local() * sizeof(float), streams_[p]));
+            solution.push_back(y_[p]);
+        }
+        const std::vector<const float*> rhs(x_.begin(), x_.end());
+        const auto t = Clock::now();
+        const weft::cuda::multi::PartPcgResult r = pcg_->solve(rhs, solution, 0.0, iterations);
+        sync();
+        const double us = std::chrono::duration<double, std::micro>(Clock::now() - t).count();
+        return us / std::max(1, r.iterations);
     }
     ~Setup() {
+        pcg_.reset();
         halo_.reset();
         for (std::size_t p = 0; p < x_.size(); ++p) {
             cudaSetDevice(devices_[p]);
@@ -183,6 +217,7 @@ private:
     std::vector<cudaStream_t> streams_;
     std::vector<float*> x_, y_;
     std::unique_ptr<HaloExchange> halo_;
+    std::unique_ptr<PartPcg> pcg_;
 };
 
 std::vector<std::uint32_t> parse_parts(const std::string& list) {
@@ -268,14 +303,17 @@ int main(int argc, char** argv) {
                 setup.rows(false, true);
             }, true);
             r.halo_bytes = setup.halo_bytes();
+            setup.cg_us_per_iteration(20);  // warm
+            r.cg_iteration_us = setup.cg_us_per_iteration(200);
             rows.push_back(r);
         }
-        std::printf("| parts | GPUs | exchange µs | exchange then product µs | pipelined µs | the same as graphs: exchange then product µs | pipelined µs | hidden by the pipeline µs | bytes between GPUs |\n");
-        std::printf("|---|---|---|---|---|---|---|---|---|\n");
+        std::printf("| parts | GPUs | exchange µs | exchange then product µs | pipelined µs | the same as graphs: exchange then product µs | pipelined µs | hidden by the pipeline µs | bytes between GPUs | CG µs per iteration (host-driven) |\n");
+        std::printf("|---|---|---|---|---|---|---|---|---|---|\n");
         for (const Row& r : rows)
-            std::printf("| %u | %d | %.1f | %.1f | %.1f | %.1f | %.1f | %.1f | %llu |\n", r.parts, r.devices, r.exchange_us,
+            std::printf("| %u | %d | %.1f | %.1f | %.1f | %.1f | %.1f | %.1f | %llu | %.1f |\n", r.parts, r.devices, r.exchange_us,
                         r.sequential_us, r.pipelined_us, r.sequential_graph_us, r.pipelined_graph_us,
-                        r.sequential_graph_us - r.pipelined_graph_us, static_cast<unsigned long long>(r.halo_bytes));
+                        r.sequential_graph_us - r.pipelined_graph_us, static_cast<unsigned long long>(r.halo_bytes),
+                        r.cg_iteration_us);
         if (!json_path.empty()) {
             std::ofstream json(json_path);
             json << "{\"scene\": \"" << argv[1] << "\", \"gpu\": \"" << prop.name << "\", \"rows\": [";
@@ -284,7 +322,8 @@ int main(int argc, char** argv) {
                 json << (k ? ", " : "") << "{\"parts\": " << r.parts << ", \"gpus\": " << r.devices
                      << ", \"exchange_us\": " << r.exchange_us << ", \"sequential_us\": " << r.sequential_us
                      << ", \"pipelined_us\": " << r.pipelined_us << ", \"sequential_graph_us\": " << r.sequential_graph_us
-                     << ", \"pipelined_graph_us\": " << r.pipelined_graph_us << ", \"halo_bytes\": " << r.halo_bytes << "}";
+                     << ", \"pipelined_graph_us\": " << r.pipelined_graph_us << ", \"cg_iteration_us\": " << r.cg_iteration_us
+                     << ", \"halo_bytes\": " << r.halo_bytes << "}";
             }
             json << "]}\n";
             if (!json) throw weft::Error("cannot write '" + json_path + "'");

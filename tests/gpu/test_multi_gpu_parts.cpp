@@ -4,6 +4,7 @@
 // one GPU (the test mode, any GPU host) and, where two GPUs are present, two parts on two GPUs.
 #include <cuda_runtime_api.h>
 
+#include <cmath>
 #include <cstdio>
 #include <random>
 #include <vector>
@@ -11,6 +12,7 @@
 #include "gpu_test_util.h"
 #include "multi/halo_exchange.h"
 #include "multi/part_matrix.h"
+#include "multi/part_pcg.h"
 #include "weft/backend/flat_model.h"
 #include "weft/backend/part_model.h"
 #include "weft/backend/schwarz_hierarchy.h"
@@ -24,6 +26,8 @@ namespace {
 
 using cuda::multi::HaloExchange;
 using cuda::multi::PartMatrix;
+using cuda::multi::PartPcg;
+using cuda::multi::PartPcgResult;
 
 // Two cloths (a flag-like sheet and a smaller one beside it): a world's flat model.
 FlatModel two_cloths() {
@@ -163,6 +167,115 @@ TEST(MultiGpuParts, TwoPartsOnTwoGpusGiveTheWholeProductsBits) {
     const std::vector<float> whole = product_by_parts(problem.flat, problem.blocks, problem.x, 1, {0});
     const std::vector<float> by_parts = product_by_parts(problem.flat, problem.blocks, problem.x, 2, {0, 1});
     for (std::size_t k = 0; k < whole.size(); ++k) ASSERT_EQ(by_parts[k], whole[k]) << "entry " << k;
+}
+
+// A stiff SPD system on the pattern: A = m·I + k·L ⊗ I₃ (L the pattern's graph Laplacian), the shape of
+// cloth's k·h²/m-dominated matrices; blocks as PartMatrix::set_blocks reads them.
+std::vector<float> stiff_laplacian(const BlockPattern& pattern, float mass, float k) {
+    std::vector<float> blocks(9 * pattern.block_count(), 0.0F);
+    for (std::size_t i = 0; i + 1 < pattern.row_start.size(); ++i) {
+        float degree = 0.0F;
+        for (std::uint32_t s = pattern.row_start[i]; s < pattern.row_start[i + 1]; ++s)
+            if (pattern.column[s] != i) {
+                for (int d = 0; d < 3; ++d) blocks[9 * s + 4 * d] = -k;
+                degree += 1.0F;
+            }
+        for (int d = 0; d < 3; ++d) blocks[9 * pattern.diagonal[i] + 4 * d] = mass + k * degree;
+    }
+    return blocks;
+}
+
+struct Solve {
+    std::vector<float> x;  // global SoA
+    PartPcgResult result;
+};
+
+// The single-reduction CG across `count` parts on `devices`, from x = 0.
+Solve solve_by_parts(const FlatModel& flat, const std::vector<float>& blocks, const std::vector<float>& b, std::uint32_t count,
+                     const std::vector<int>& devices) {
+    const std::size_t n = flat.vertex_count;
+    const VertexPartition vp = partition(flat, count);
+    std::vector<PartModel> parts;
+    std::vector<std::unique_ptr<PartMatrix>> matrices;
+    std::vector<const PartMatrix*> raw_matrices;
+    std::vector<std::unique_ptr<test::Stream>> streams;
+    std::vector<cudaStream_t> raw;
+    for (std::uint32_t p = 0; p < count; ++p) {
+        parts.push_back(extract_part(flat, vp, p));
+        WEFT_CUDA_CHECK(cudaSetDevice(devices[p]));
+        matrices.push_back(std::make_unique<PartMatrix>(parts.back(), devices[p]));
+        matrices.back()->set_blocks(blocks);
+        raw_matrices.push_back(matrices.back().get());
+        streams.push_back(std::make_unique<test::Stream>());
+        raw.push_back(streams.back()->s);
+    }
+    LocalVectors rhs, x;
+    upload_owned(parts, devices, b, n, rhs);
+    upload_owned(parts, devices, std::vector<float>(3 * n, 0.0F), n, x);
+    HaloExchange halo(vp, devices, raw);
+    PartPcg pcg(raw_matrices, halo, raw);
+    Solve out;
+    out.result = pcg.solve(std::vector<const float*>(rhs.x.begin(), rhs.x.end()), x.x, 1e-5, 2000);
+    out.x.assign(3 * n, std::nanf(""));
+    for (std::uint32_t p = 0; p < count; ++p) {
+        const PartModel& pm = parts[p];
+        const std::size_t local = pm.model.vertex_count;
+        std::vector<float> hx(3 * local);
+        WEFT_CUDA_CHECK(cudaSetDevice(devices[p]));
+        WEFT_CUDA_CHECK(cudaStreamSynchronize(raw[p]));
+        WEFT_CUDA_CHECK(cudaMemcpy(hx.data(), x.x[p], hx.size() * sizeof(float), cudaMemcpyDeviceToHost));
+        for (std::uint32_t i = 0; i < pm.owned; ++i)
+            for (std::size_t c = 0; c < 3; ++c) out.x[c * n + pm.global_vertex[i]] = hx[c * local + i];
+    }
+    return out;
+}
+
+// ‖b − A·x‖ / ‖b‖ in double on the host.
+double relative_residual(const BlockPattern& pattern, const std::vector<float>& blocks, const std::vector<float>& b,
+                         const std::vector<float>& x) {
+    const std::size_t n = pattern.row_start.size() - 1;
+    double rr = 0.0, bb = 0.0;
+    for (std::size_t i = 0; i < n; ++i)
+        for (std::size_t r = 0; r < 3; ++r) {
+            double acc = static_cast<double>(b[r * n + i]);
+            for (std::uint32_t s = pattern.row_start[i]; s < pattern.row_start[i + 1]; ++s)
+                for (std::size_t c = 0; c < 3; ++c)
+                    acc -= static_cast<double>(blocks[9 * s + 3 * r + c]) * static_cast<double>(x[c * n + pattern.column[s]]);
+            rr += acc * acc;
+            bb += static_cast<double>(b[r * n + i]) * static_cast<double>(b[r * n + i]);
+        }
+    return std::sqrt(rr / bb);
+}
+
+// The parts' CG solves the whole system: it converges, its residual is small in double, and it takes
+// the iterations of the one-part solve (their sums differ only in the order the parts add them).
+TEST(MultiGpuParts, SingleReductionCgAcrossPartsMatchesOnePart) {
+    WEFT_REQUIRE_GPU();
+    const Problem problem;
+    const std::vector<float> blocks = stiff_laplacian(problem.flat.pattern, 1.0F, 200.0F);
+    const Solve one = solve_by_parts(problem.flat, blocks, problem.x, 1, {0});
+    ASSERT_TRUE(one.result.converged) << one.result.iterations << " iterations, residual " << one.result.relative_residual;
+    EXPECT_GT(one.result.iterations, 20) << "too easy a system to test anything";
+    EXPECT_LT(relative_residual(problem.flat.pattern, blocks, problem.x, one.x), 1e-3);
+    int devices = 0;
+    WEFT_CUDA_CHECK(cudaGetDeviceCount(&devices));
+    std::vector<std::pair<std::uint32_t, std::vector<int>>> cases{{3, {0, 0, 0}}, {5, {0, 0, 0, 0, 0}}};
+    if (devices >= 2) cases.push_back({2, {0, 1}});
+    for (const auto& [count, placement] : cases) {
+        const Solve parts = solve_by_parts(problem.flat, blocks, problem.x, count, placement);
+        SCOPED_TRACE(std::to_string(count) + " parts on " + (placement.back() == 0 ? "one GPU" : "two GPUs"));
+        std::printf("[ multi    ] %u parts: %d iterations (one part: %d), residual %.2e\n", count, parts.result.iterations,
+                    one.result.iterations, parts.result.relative_residual);
+        ASSERT_TRUE(parts.result.converged);
+        EXPECT_LE(std::abs(parts.result.iterations - one.result.iterations), 2);
+        EXPECT_LT(relative_residual(problem.flat.pattern, blocks, problem.x, parts.x), 1e-3);
+        double largest = 0.0, difference = 0.0;
+        for (std::size_t k = 0; k < one.x.size(); ++k) {
+            largest = std::max(largest, std::abs(static_cast<double>(one.x[k])));
+            difference = std::max(difference, std::abs(static_cast<double>(parts.x[k]) - static_cast<double>(one.x[k])));
+        }
+        EXPECT_LT(difference, 1e-3 * largest);
+    }
 }
 
 TEST(MultiGpuParts, BadInputIsAnError) {

@@ -50,6 +50,7 @@ PartMatrix::PartMatrix(const PartModel& part, int device)
     WEFT_CUDA_CHECK(cudaSetDevice(device_));
     slice_start_.upload(ell.slice_start, ledger_, "part matrix structure");
     column_.upload(ell.column, ledger_, "part matrix structure");
+    diagonal_.upload(ell.diagonal, ledger_, "part matrix structure");
     blocks_.allocate(9 * ell.positions(), ledger_, "part matrix blocks");
     WEFT_CUDA_CHECK(cudaSetDevice(previous));
 }

@@ -29,6 +29,9 @@ public:
     /// device must be current). x and y are local structure-of-arrays vectors of stride `local()`.
     void multiply(const float* x, float* y, std::uint32_t begin, std::uint32_t end, cudaStream_t stream) const;
 
+    /// The ELL blocks (9 floats each) and each owned row's diagonal position (device arrays).
+    [[nodiscard]] const float* blocks() const { return blocks_.get(); }
+    [[nodiscard]] const std::uint32_t* diagonal() const { return diagonal_.get(); }
     [[nodiscard]] std::uint32_t owned() const { return owned_; }
     [[nodiscard]] std::uint32_t interior() const { return interior_; }
     [[nodiscard]] std::uint32_t local() const { return local_; }
@@ -40,7 +43,7 @@ private:
     std::uint32_t owned_ = 0, interior_ = 0, local_ = 0;
     std::vector<std::uint32_t> global_slot_position_;  // per ELL position: the global slot, or ~0 for padding
     MemoryLedger ledger_;
-    DeviceArray<std::uint32_t> slice_start_, column_;
+    DeviceArray<std::uint32_t> slice_start_, column_, diagonal_;
     DeviceArray<float> blocks_;
 };
 
