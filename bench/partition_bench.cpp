@@ -4,8 +4,14 @@
 // and boundary vertices, the imbalance of the row work, the bytes one product's halo exchange moves
 // (float3 per ghost) and the time to build. A table on stdout, JSON with --json.
 //
-//   weft_partition_bench SCENE.toml [--set key=value ...] [--parts 2,4,8] [--json FILE]
+// With --cg, also what the cut does to the multilevel Schwarz preconditioner if no level crossed it
+// (each part's preconditioner built on its own rows, no communication): CG iterations (CPU, double)
+// on a stiff SPD matrix of the scene's pattern, m·I + k·L ⊗ I₃ with k/m = 1000 (cloth's k·h²/m
+// regime), against the whole preconditioner and block-Jacobi.
+//
+//   weft_partition_bench SCENE.toml [--set key=value ...] [--parts 2,4,8] [--cg] [--json FILE]
 #include <chrono>
+#include <random>
 #include <cstdio>
 #include <fstream>
 #include <iostream>
@@ -13,6 +19,9 @@
 #include <string>
 #include <vector>
 
+#include "cpu/bsr_matrix.h"
+#include "cpu/pcg.h"
+#include "cpu/schwarz_preconditioner.h"
 #include "weft/backend/flat_model.h"
 #include "weft/backend/schwarz_hierarchy.h"
 #include "weft/backend/vertex_partition.h"
@@ -61,6 +70,59 @@ std::vector<std::uint32_t> metis_parts(const weft::BlockPattern& pattern, std::u
 }
 #endif
 
+using V3 = weft::physics::Vec3<double>;
+using M3 = weft::physics::Mat3<double>;
+
+/// m·I + k·L ⊗ I₃ on `pattern` (L the pattern's graph Laplacian).
+weft::cpu::BsrMatrix<double> stiff_laplacian(const weft::BlockPattern& pattern, double mass, double k) {
+    weft::cpu::BsrMatrix<double> A;
+    A.resize(pattern);
+    for (std::size_t i = 0; i + 1 < pattern.row_start.size(); ++i) {
+        double degree = 0.0;
+        for (std::uint32_t s = pattern.row_start[i]; s < pattern.row_start[i + 1]; ++s)
+            if (pattern.column[s] != i) {
+                A.blocks[s] = M3::diagonal(-k);
+                degree += 1.0;
+            }
+        A.blocks[pattern.diagonal[i]] = M3::diagonal(mass + k * degree);
+    }
+    return A;
+}
+
+/// `pattern` without the blocks between different parts (the triangle and hinge slot maps are not
+/// carried: only the rows are used).
+weft::BlockPattern cut_pattern(const weft::BlockPattern& pattern, const std::vector<std::uint32_t>& part_of) {
+    weft::BlockPattern out;
+    out.row_start.push_back(0);
+    for (std::size_t i = 0; i + 1 < pattern.row_start.size(); ++i) {
+        for (std::uint32_t s = pattern.row_start[i]; s < pattern.row_start[i + 1]; ++s) {
+            if (part_of[pattern.column[s]] != part_of[i]) continue;
+            if (s == pattern.diagonal[i]) out.diagonal.push_back(static_cast<std::uint32_t>(out.column.size()));
+            out.column.push_back(pattern.column[s]);
+        }
+        out.row_start.push_back(static_cast<std::uint32_t>(out.column.size()));
+    }
+    return out;
+}
+
+/// CG iterations to 1e-6 with the multilevel Schwarz preconditioner built on `pattern` (the whole
+/// pattern, or a cut one) for the system `A` of the whole pattern.
+int schwarz_iterations(const weft::FlatModel& flat, const weft::cpu::BsrMatrix<double>& A, const weft::BlockPattern& pattern,
+                       const std::vector<V3>& b) {
+    const std::size_t n = flat.vertex_count;
+    weft::cpu::BsrMatrix<double> restricted = stiff_laplacian(pattern, 1e-3, 1.0);  // the same values where kept
+    const weft::SchwarzHierarchy h = weft::build_schwarz_hierarchy(flat.initial_positions, pattern);
+    weft::cpu::SchwarzPreconditioner<double> M;
+    M.build(h, pattern);
+    const std::vector<std::uint8_t> fixed(n, 0);
+    M.factor(restricted, fixed, [](std::size_t) { return M3{}; });
+    weft::cpu::Pcg<double> pcg;
+    pcg.resize(n);
+    std::vector<V3> x(n);
+    const auto r = pcg.solve(A, b, fixed, x, 1e-6, 20000, &M);
+    return r.converged ? r.iterations : -r.iterations;
+}
+
 std::vector<std::uint32_t> parse_parts(const std::string& list) {
     std::vector<std::uint32_t> out;
     std::stringstream in(list);
@@ -79,14 +141,19 @@ std::vector<std::uint32_t> parse_parts(const std::string& list) {
 int main(int argc, char** argv) {
     try {
         if (argc < 2) {
-            std::cerr << "usage: weft_partition_bench SCENE.toml [--set key=value ...] [--parts 2,4,8] [--json FILE]\n";
+            std::cerr << "usage: weft_partition_bench SCENE.toml [--set key=value ...] [--parts 2,4,8] [--cg] [--json FILE]\n";
             return 2;
         }
         std::vector<std::string> overrides;
         std::vector<std::uint32_t> counts{2, 4, 8};
         std::string json_path;
+        bool cg = false;
         for (int a = 2; a < argc; ++a) {
             const std::string arg = argv[a];
+            if (arg == "--cg") {
+                cg = true;
+                continue;
+            }
             if (a + 1 >= argc) throw weft::Error("'" + arg + "' needs a value");
             if (arg == "--set") overrides.emplace_back(argv[++a]);
             else if (arg == "--parts") counts = parse_parts(argv[++a]);
@@ -127,6 +194,26 @@ int main(int argc, char** argv) {
                         static_cast<unsigned long long>(r.quality.halo_vertices),
                         static_cast<unsigned long long>(r.quality.boundary_vertices), r.quality.imbalance,
                         12.0 * static_cast<double>(r.quality.halo_vertices) / 1024.0, r.build_ms);
+        if (cg) {
+            // The stiff system, the whole preconditioner, block-Jacobi, then each cut's.
+            const weft::cpu::BsrMatrix<double> A = stiff_laplacian(flat.pattern, 1e-3, 1.0);
+            std::mt19937 rng(11);
+            std::uniform_real_distribution<double> u(-1.0, 1.0);
+            std::vector<V3> b(flat.vertex_count);
+            for (V3& v : b) v = {u(rng), u(rng), u(rng)};
+            weft::cpu::Pcg<double> pcg;
+            pcg.resize(flat.vertex_count);
+            std::vector<V3> x(flat.vertex_count);
+            const auto jacobi = pcg.solve(A, b, std::vector<std::uint8_t>(flat.vertex_count, 0), x, 1e-6, 20000);
+            std::printf("\nCG iterations to 1e-6 (negative: not converged), m·I + k·L with k/m = 1000: block-Jacobi %d, "
+                        "the whole multilevel Schwarz preconditioner %d\n",
+                        jacobi.converged ? jacobi.iterations : -jacobi.iterations, schwarz_iterations(flat, A, flat.pattern, b));
+            std::printf("| parts | Schwarz built on each part's rows (no level crosses a cut) |\n|---|---|\n");
+            for (const std::uint32_t parts : counts) {
+                const auto part_of = weft::cut_order(hierarchy.order, work, parts, weft::SchwarzHierarchy::kDomainSize);
+                std::printf("| %u | %d |\n", parts, schwarz_iterations(flat, A, cut_pattern(flat.pattern, part_of), b));
+            }
+        }
         if (!json_path.empty()) {
             std::ofstream json(json_path);
             json << "{\"scene\": \"" << argv[1] << "\", \"vertices\": " << flat.vertex_count << ", \"rows\": [";
