@@ -18,7 +18,6 @@
 #include <iostream>
 #include <memory>
 #include <random>
-#include <sstream>
 #include <string>
 #include <vector>
 
@@ -26,6 +25,7 @@
 #include "multi/halo_exchange.h"
 #include "multi/part_matrix.h"
 #include "multi/part_pcg.h"
+#include "part_counts.h"
 #include "weft/backend/flat_model.h"
 #include "weft/backend/part_model.h"
 #include "weft/backend/schwarz_hierarchy.h"
@@ -220,19 +220,6 @@ private:
     std::unique_ptr<PartPcg> pcg_;
 };
 
-std::vector<std::uint32_t> parse_parts(const std::string& list) {
-    std::vector<std::uint32_t> out;
-    std::stringstream in(list);
-    std::string item;
-    while (std::getline(in, item, ',')) {
-        std::size_t used = 0;
-        const unsigned long v = std::stoul(item, &used);
-        if (used != item.size() || v == 0 || v > 64) throw weft::Error("--parts: '" + item + "' is not a part count in 1..64");
-        out.push_back(static_cast<std::uint32_t>(v));
-    }
-    return out;
-}
-
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -255,7 +242,7 @@ int main(int argc, char** argv) {
             }
             if (a + 1 >= argc) throw weft::Error("'" + arg + "' needs a value");
             if (arg == "--set") overrides.emplace_back(argv[++a]);
-            else if (arg == "--parts") counts = parse_parts(argv[++a]);
+            else if (arg == "--parts") counts = weft::bench::parse_part_counts(argv[++a], 64);
             else if (arg == "--repeats") repeats = std::max(1, std::stoi(argv[++a]));
             else if (arg == "--json") json_path = argv[++a];
             else throw weft::Error("unknown argument '" + arg + "'");

@@ -15,13 +15,13 @@
 #include <cstdio>
 #include <fstream>
 #include <iostream>
-#include <sstream>
 #include <string>
 #include <vector>
 
 #include "cpu/bsr_matrix.h"
 #include "cpu/pcg.h"
 #include "cpu/schwarz_preconditioner.h"
+#include "part_counts.h"
 #include "weft/backend/flat_model.h"
 #include "weft/backend/schwarz_hierarchy.h"
 #include "weft/backend/vertex_partition.h"
@@ -123,19 +123,6 @@ int schwarz_iterations(const weft::FlatModel& flat, const weft::cpu::BsrMatrix<d
     return r.converged ? r.iterations : -r.iterations;
 }
 
-std::vector<std::uint32_t> parse_parts(const std::string& list) {
-    std::vector<std::uint32_t> out;
-    std::stringstream in(list);
-    std::string item;
-    while (std::getline(in, item, ',')) {
-        std::size_t used = 0;
-        const unsigned long v = std::stoul(item, &used);
-        if (used != item.size() || v == 0 || v > 4096) throw weft::Error("--parts: '" + item + "' is not a part count in 1..4096");
-        out.push_back(static_cast<std::uint32_t>(v));
-    }
-    return out;
-}
-
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -156,7 +143,7 @@ int main(int argc, char** argv) {
             }
             if (a + 1 >= argc) throw weft::Error("'" + arg + "' needs a value");
             if (arg == "--set") overrides.emplace_back(argv[++a]);
-            else if (arg == "--parts") counts = parse_parts(argv[++a]);
+            else if (arg == "--parts") counts = weft::bench::parse_part_counts(argv[++a], 4096);
             else if (arg == "--json") json_path = argv[++a];
             else throw weft::Error("unknown argument '" + arg + "'");
         }

@@ -9,13 +9,13 @@
 #include <random>
 #include <vector>
 
+#include "preconditioner_partition.h"
 #include "gpu_test_util.h"
 #include "multi/halo_exchange.h"
 #include "multi/part_matrix.h"
 #include "multi/part_pcg.h"
 #include "weft/backend/flat_model.h"
 #include "weft/backend/part_model.h"
-#include "weft/backend/schwarz_hierarchy.h"
 #include "weft/backend/vertex_partition.h"
 #include "weft/fabric.h"
 #include "weft/mesh.h"
@@ -39,11 +39,7 @@ FlatModel two_cloths() {
     return flatten(world.model());
 }
 
-VertexPartition partition(const FlatModel& flat, std::uint32_t parts) {
-    const SchwarzHierarchy h = build_schwarz_hierarchy(flat.initial_positions, flat.pattern);
-    const std::vector<double> work = row_work(flat.pattern);
-    return build_partition(flat.pattern, cut_order(h.order, work, parts, SchwarzHierarchy::kDomainSize), parts, work);
-}
+VertexPartition partition(const FlatModel& flat, std::uint32_t parts) { return test::partition_along_preconditioner(flat, parts); }
 
 // Each part's local vector on its device: owned values from `x` (global SoA), ghosts set to NaN
 // so that a ghost the exchange missed shows.

@@ -6,9 +6,9 @@
 
 #include <set>
 
+#include "preconditioner_partition.h"
 #include "weft/backend/flat_model.h"
 #include "weft/backend/part_model.h"
-#include "weft/backend/schwarz_hierarchy.h"
 #include "weft/backend/vertex_partition.h"
 #include "weft/error.h"
 #include "weft/fabric.h"
@@ -31,11 +31,7 @@ FlatModel two_cloths() {
     return flatten(world.model());
 }
 
-VertexPartition partition(const FlatModel& flat, std::uint32_t parts) {
-    const SchwarzHierarchy h = build_schwarz_hierarchy(flat.initial_positions, flat.pattern);
-    const std::vector<double> work = row_work(flat.pattern);
-    return build_partition(flat.pattern, cut_order(h.order, work, parts, SchwarzHierarchy::kDomainSize), parts, work);
-}
+VertexPartition partition(const FlatModel& flat, std::uint32_t parts) { return test::partition_along_preconditioner(flat, parts); }
 
 // The element corner or block behind a gather entry, in global terms: (kind, global element, corner).
 struct Source {
