@@ -8,11 +8,13 @@
 #include <random>
 #include <set>
 
+#include "weft/backend/flat_model.h"
 #include "weft/backend/schwarz_hierarchy.h"
 #include "weft/backend/vertex_partition.h"
 #include "weft/error.h"
 #include "weft/fabric.h"
 #include "weft/mesh.h"
+#include "weft/world.h"
 
 namespace weft {
 namespace {
@@ -97,6 +99,42 @@ TEST(VertexPartition, CutsAlongThePreconditionerOrderAreConsistentAndBalanced) {
             // A spatially local cut: far fewer halo vertices than vertices.
             EXPECT_LT(vp.quality.halo_vertices, g.fabric->vertex_count() / 3);
         }
+    }
+}
+
+// What lets the preconditioner run across GPUs with the single-GPU result: with the cut along its
+// order, every level-1 node (a connected piece of one level-0 domain) has all its vertices in one
+// part, and every level-1 coupling block sums pattern slots of rows that the part owning the block's
+// row node owns. So each part forms its level-1 residual values and coupling blocks exactly as one GPU
+// would, an all-gather (not a reduction) gives every GPU the whole level 1, and the coarser levels
+// are computed redundantly with the same bits (docs/multi-gpu.md).
+TEST(VertexPartition, LevelOneOfThePreconditionerNeverStraddlesACut) {
+    World world;
+    world.add_cloth({.name = "a", .fabric = Fabric::cook(make_grid(1.0, 1.0, 40, 40))});
+    ClothDesc b{.name = "b", .fabric = Fabric::cook(make_grid(0.5, 0.5, 17, 17))};
+    b.transform.translation = {0.2, 0.1, 0.02};  // a second cloth over the first: interleaved in Morton order
+    world.add_cloth(b);
+    const FlatModel flat = flatten(world.model());
+    const SchwarzHierarchy h = build_schwarz_hierarchy(flat.initial_positions, flat.pattern);
+    ASSERT_GE(h.levels(), 2);
+    const std::vector<double> work = row_work(flat.pattern);
+    std::vector<std::uint32_t> slot_row(flat.pattern.block_count());
+    for (std::uint32_t i = 0; i < flat.vertex_count; ++i)
+        for (std::uint32_t s = flat.pattern.row_start[i]; s < flat.pattern.row_start[i + 1]; ++s) slot_row[s] = i;
+    for (const std::uint32_t parts : {2U, 3U, 8U}) {
+        const std::vector<std::uint32_t> part_of = cut_order(h.order, work, parts, SchwarzHierarchy::kDomainSize);
+        const SchwarzLevel& fine = h.level[0];
+        std::vector<std::uint32_t> node_part(h.nodes(1), parts);
+        for (std::uint32_t p = 0; p < h.nodes(0); ++p) {
+            std::uint32_t& owner = node_part[fine.parent[p]];
+            if (owner == parts) owner = part_of[h.order[p]];
+            ASSERT_EQ(owner, part_of[h.order[p]]) << "level-1 node " << fine.parent[p] << " straddles a cut, " << parts << " parts";
+        }
+        const SchwarzLevel& coarse = h.level[1];
+        for (std::size_t e = 0; e < coarse.entry_row.size(); ++e)
+            for (std::uint32_t k = coarse.source_start[e]; k < coarse.source_start[e + 1]; ++k)
+                ASSERT_EQ(part_of[slot_row[coarse.source[k]]], node_part[coarse.entry_row[e]])
+                    << "level-1 coupling " << e << " sums a slot of another part's row, " << parts << " parts";
     }
 }
 
