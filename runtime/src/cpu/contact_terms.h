@@ -55,18 +55,8 @@ public:
             params_[p] = {static_cast<T>(c.stiffness), static_cast<T>(c.thickness), static_cast<T>(c.friction),
                           T(1e-3)};
         }
-        // Incidence of cloth vertices, counting sort in pair order.
-        start_.assign(n_ + 1, 0);
-        for (const auto& ids : ids_)
-            for (std::uint32_t v : ids)
-                if (v < n_) ++start_[v + 1];
-        for (std::size_t i = 0; i < n_; ++i) start_[i + 1] += start_[i];
-        entry_.resize(start_[n_]);
-        std::vector<std::uint32_t>& fill = fill_;
-        fill.assign(start_.begin(), start_.end() - 1);
-        for (std::size_t p = 0; p < m; ++p)
-            for (std::uint32_t i = 0; i < 4; ++i)
-                if (ids_[p][i] < n_) entry_[fill[ids_[p][i]]++] = static_cast<std::uint32_t>(4 * p + i);
+        active_.assign(m, 1);
+        build_incidence();
         diagonal_.assign(n_, M3{});
     }
 
@@ -103,6 +93,18 @@ public:
                 physics::pair_contact_terms(step, f.force, f.dfdx, f.dfdv, d, rhs_[p], block_[p]);
             }
         });
+        if (offset_) {
+            // Offset contacts beyond their radius at this iterate add exactly zero (most of the pairs
+            // the bounds select): leave them out of the incidence, as the GPU does, so the CG pays
+            // only for the pairs in contact. The sums do not change.
+            for (std::size_t p = 0; p < ids_.size(); ++p) {
+                bool zero = rhs_[p] == V3{};
+                for (int r = 0; r < 3 && zero; ++r)
+                    for (int c = 0; c < 3 && zero; ++c) zero = block_[p].m[r][c] == T(0);
+                active_[p] = zero ? 0 : 1;
+            }
+            build_incidence();
+        }
         parallel_chunks(n_, [&](std::size_t lo, std::size_t hi) {
             for (std::size_t i = lo; i < hi; ++i) {
                 M3 acc{};
@@ -145,6 +147,7 @@ public:
     void multiply_add(const std::vector<V3>& x, std::vector<V3>& y) const {
         parallel_chunks(ids_.size(), [&](std::size_t lo, std::size_t hi) {
             for (std::size_t p = lo; p < hi; ++p) {
+                if (active_[p] == 0) continue;  // not in the incidence: its product is never read
                 V3 s{};
                 for (int i = 0; i < 4; ++i)
                     if (ids_[p][i] < n_) s += weight_[p][i] * x[ids_[p][i]];
@@ -162,10 +165,27 @@ public:
         return ids_.capacity() * sizeof(ids_[0]) + weight_.capacity() * sizeof(weight_[0]) +
                (normal_.capacity() + rhs_.capacity() + scratch_.capacity()) * sizeof(V3) +
                params_.capacity() * sizeof(params_[0]) + (block_.capacity() + diagonal_.capacity()) * sizeof(M3) +
-               (start_.capacity() + entry_.capacity() + fill_.capacity()) * sizeof(std::uint32_t) + edge_edge_.capacity();
+               (start_.capacity() + entry_.capacity() + fill_.capacity()) * sizeof(std::uint32_t) + edge_edge_.capacity() +
+               active_.capacity();
     }
 
 private:
+    /// Incidence of cloth vertices over the active pairs, counting sort in pair order.
+    void build_incidence() {
+        start_.assign(n_ + 1, 0);
+        for (std::size_t p = 0; p < ids_.size(); ++p)
+            if (active_[p] != 0)
+                for (std::uint32_t v : ids_[p])
+                    if (v < n_) ++start_[v + 1];
+        for (std::size_t i = 0; i < n_; ++i) start_[i + 1] += start_[i];
+        entry_.resize(start_[n_]);
+        fill_.assign(start_.begin(), start_.end() - 1);
+        for (std::size_t p = 0; p < ids_.size(); ++p)
+            if (active_[p] != 0)
+                for (std::uint32_t i = 0; i < 4; ++i)
+                    if (ids_[p][i] < n_) entry_[fill_[ids_[p][i]]++] = static_cast<std::uint32_t>(4 * p + i);
+    }
+
     /// One offset contact at the linearisation point: closest points of its two primitives there
     /// (vertex–face or edge–edge), hence this evaluation's weights, then the penalty of the distance.
     void evaluate_offset(const physics::ImplicitStep<T>& step, std::size_t p, const std::vector<V3>& x0,
@@ -200,6 +220,7 @@ private:
     std::size_t n_ = 0;
     bool offset_ = false;
     std::vector<std::uint8_t> edge_edge_;
+    std::vector<std::uint8_t> active_;  // per pair: 0 when its terms are exactly zero at this iterate (offset)
 
     std::vector<std::array<std::uint32_t, 4>> ids_;
     std::vector<std::array<T, 4>> weight_;
