@@ -16,6 +16,7 @@
 #include <fstream>
 #include <iostream>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "cpu/bsr_matrix.h"
@@ -181,6 +182,8 @@ int main(int argc, char** argv) {
                         static_cast<unsigned long long>(r.quality.halo_vertices),
                         static_cast<unsigned long long>(r.quality.boundary_vertices), r.quality.imbalance,
                         12.0 * static_cast<double>(r.quality.halo_vertices) / 1024.0, r.build_ms);
+        int jacobi_iterations = 0, whole_iterations = 0;
+        std::vector<std::pair<std::uint32_t, int>> per_part_iterations;
         if (cg) {
             // The stiff system, the whole preconditioner, block-Jacobi, then each cut's.
             const weft::cpu::BsrMatrix<double> A = stiff_laplacian(flat.pattern, 1e-3, 1.0);
@@ -192,13 +195,16 @@ int main(int argc, char** argv) {
             pcg.resize(flat.vertex_count);
             std::vector<V3> x(flat.vertex_count);
             const auto jacobi = pcg.solve(A, b, std::vector<std::uint8_t>(flat.vertex_count, 0), x, 1e-6, 20000);
+            jacobi_iterations = jacobi.converged ? jacobi.iterations : -jacobi.iterations;
+            whole_iterations = schwarz_iterations(flat, A, flat.pattern, b);
             std::printf("\nCG iterations to 1e-6 (negative: not converged), m·I + k·L with k/m = 1000: block-Jacobi %d, "
                         "the whole multilevel Schwarz preconditioner %d\n",
-                        jacobi.converged ? jacobi.iterations : -jacobi.iterations, schwarz_iterations(flat, A, flat.pattern, b));
+                        jacobi_iterations, whole_iterations);
             std::printf("| parts | Schwarz built on each part's rows (no level crosses a cut) |\n|---|---|\n");
             for (const std::uint32_t parts : counts) {
                 const auto part_of = weft::cut_order(hierarchy.order, work, parts, weft::SchwarzHierarchy::kDomainSize);
-                std::printf("| %u | %d |\n", parts, schwarz_iterations(flat, A, cut_pattern(flat.pattern, part_of), b));
+                per_part_iterations.emplace_back(parts, schwarz_iterations(flat, A, cut_pattern(flat.pattern, part_of), b));
+                std::printf("| %u | %d |\n", parts, per_part_iterations.back().second);
             }
         }
         if (!json_path.empty()) {
@@ -211,7 +217,15 @@ int main(int argc, char** argv) {
                      << ", \"boundary_vertices\": " << r.quality.boundary_vertices << ", \"imbalance\": " << r.quality.imbalance
                      << ", \"build_ms\": " << r.build_ms << "}";
             }
-            json << "]}\n";
+            json << "]";
+            if (cg) {
+                json << ", \"cg_iterations\": {\"block_jacobi\": " << jacobi_iterations << ", \"schwarz_whole\": " << whole_iterations
+                     << ", \"schwarz_per_part\": {";
+                for (std::size_t k = 0; k < per_part_iterations.size(); ++k)
+                    json << (k ? ", " : "") << "\"" << per_part_iterations[k].first << "\": " << per_part_iterations[k].second;
+                json << "}}";
+            }
+            json << "}\n";
             if (!json) throw weft::Error("cannot write '" + json_path + "'");
         }
         return 0;
