@@ -129,6 +129,21 @@ TEST(Session, PresetsApplyThroughTheTable) {
     EXPECT_EQ(s.hessian, HessianMode::Projected);
     session->apply_preset("solver", "fast");
     EXPECT_EQ(session->world().settings().solver.precision, Precision::Float);
+    // "piled" switches the contact mode, live, and every other solver preset switches it back.
+    session->apply_preset("solver", "piled");
+    EXPECT_EQ(session->world().settings().collision.mode, CollisionMode::Offset);
+    EXPECT_EQ(session->world().settings().solver.precision, Precision::Double);
+    session->world().settings().collision.check = true;
+    bool offset_ran = false;
+    for (int frame = 0; frame < 3; ++frame) {
+        const StepStats& stats = session->world().step();
+        ASSERT_FALSE(stats.non_finite);
+        ASSERT_EQ(stats.collision.remaining_intersections, 0) << "frame " << frame;
+        offset_ran = offset_ran || stats.collision.query_radius_max > 0.0;
+    }
+    EXPECT_TRUE(offset_ran) << "the offset bounds never ran after the preset";
+    session->apply_preset("solver", "balanced");
+    EXPECT_EQ(session->world().settings().collision.mode, CollisionMode::CcdZones);
 
     const Preset* denim = find_preset(material_presets(), "denim");
     ASSERT_NE(denim, nullptr);
@@ -142,7 +157,7 @@ TEST(Session, PresetsApplyThroughTheTable) {
     EXPECT_NE(session->message().find("re-cooking"), std::string::npos) << session->message();
 
     EXPECT_EQ(error_of([&] { session->apply_preset("solver", "slow"); }),
-              "unknown solver preset 'slow' (presets: fast, balanced, accurate)");
+              "unknown solver preset 'slow' (presets: fast, balanced, accurate, piled)");
     EXPECT_NE(error_of([&] { session->apply_preset(table, "velvet"); }).find("cotton, silk, denim, leather, rubber"),
               std::string::npos);
     EXPECT_NE(error_of([&] { session->apply_preset("nosuch", "silk"); }).find("no cloth 'nosuch'"), std::string::npos);
