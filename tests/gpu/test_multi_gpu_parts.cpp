@@ -78,24 +78,37 @@ void upload_owned(const std::vector<PartModel>& parts, const std::vector<int>& d
     }
 }
 
+// `count` parts of `flat` cut along the preconditioner's order, part p on devices[p]: each part's
+// model, its owned rows' matrix (blocks from the whole matrix's `blocks`) and a stream.
+struct Parts {
+    VertexPartition vp;
+    std::vector<PartModel> parts;
+    std::vector<std::unique_ptr<PartMatrix>> matrices;
+    std::vector<std::unique_ptr<test::Stream>> streams;
+    std::vector<cudaStream_t> raw;
+    Parts(const FlatModel& flat, const std::vector<float>& blocks, std::uint32_t count, const std::vector<int>& devices)
+        : vp(partition(flat, count)) {
+        for (std::uint32_t p = 0; p < count; ++p) {
+            parts.push_back(extract_part(flat, vp, p));
+            WEFT_CUDA_CHECK(cudaSetDevice(devices[p]));
+            matrices.push_back(std::make_unique<PartMatrix>(parts.back(), devices[p]));
+            matrices.back()->set_blocks(blocks);
+            streams.push_back(std::make_unique<test::Stream>());
+            raw.push_back(streams.back()->s);
+        }
+    }
+};
+
 // The product of every part's owned rows as the pipelined product runs it: the exchange begins, the
 // interior rows run while it travels, the boundary rows follow it; returns the global result (SoA) and checks every ghost.
 std::vector<float> product_by_parts(const FlatModel& flat, const std::vector<float>& blocks, const std::vector<float>& x,
                                     std::uint32_t count, const std::vector<int>& devices) {
     const std::size_t n = flat.vertex_count;
-    const VertexPartition vp = partition(flat, count);
-    std::vector<PartModel> parts;
-    std::vector<std::unique_ptr<PartMatrix>> matrices;
-    std::vector<std::unique_ptr<test::Stream>> streams;
-    std::vector<cudaStream_t> raw;
-    for (std::uint32_t p = 0; p < count; ++p) {
-        parts.push_back(extract_part(flat, vp, p));
-        WEFT_CUDA_CHECK(cudaSetDevice(devices[p]));
-        matrices.push_back(std::make_unique<PartMatrix>(parts.back(), devices[p]));
-        matrices.back()->set_blocks(blocks);
-        streams.push_back(std::make_unique<test::Stream>());
-        raw.push_back(streams.back()->s);
-    }
+    const Parts set(flat, blocks, count, devices);
+    const VertexPartition& vp = set.vp;
+    const std::vector<PartModel>& parts = set.parts;
+    const auto& matrices = set.matrices;
+    const std::vector<cudaStream_t>& raw = set.raw;
     LocalVectors v;
     upload_owned(parts, devices, x, n, v);
     HaloExchange halo(vp, devices, raw);
@@ -190,21 +203,12 @@ struct Solve {
 Solve solve_by_parts(const FlatModel& flat, const std::vector<float>& blocks, const std::vector<float>& b, std::uint32_t count,
                      const std::vector<int>& devices) {
     const std::size_t n = flat.vertex_count;
-    const VertexPartition vp = partition(flat, count);
-    std::vector<PartModel> parts;
-    std::vector<std::unique_ptr<PartMatrix>> matrices;
+    const Parts set(flat, blocks, count, devices);
+    const VertexPartition& vp = set.vp;
+    const std::vector<PartModel>& parts = set.parts;
     std::vector<const PartMatrix*> raw_matrices;
-    std::vector<std::unique_ptr<test::Stream>> streams;
-    std::vector<cudaStream_t> raw;
-    for (std::uint32_t p = 0; p < count; ++p) {
-        parts.push_back(extract_part(flat, vp, p));
-        WEFT_CUDA_CHECK(cudaSetDevice(devices[p]));
-        matrices.push_back(std::make_unique<PartMatrix>(parts.back(), devices[p]));
-        matrices.back()->set_blocks(blocks);
-        raw_matrices.push_back(matrices.back().get());
-        streams.push_back(std::make_unique<test::Stream>());
-        raw.push_back(streams.back()->s);
-    }
+    for (const auto& m : set.matrices) raw_matrices.push_back(m.get());
+    const std::vector<cudaStream_t>& raw = set.raw;
     LocalVectors rhs, x;
     upload_owned(parts, devices, b, n, rhs);
     upload_owned(parts, devices, std::vector<float>(3 * n, 0.0F), n, x);
