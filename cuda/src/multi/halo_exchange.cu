@@ -1,7 +1,10 @@
 // The halo exchange of the multi-GPU solve (multi/halo_exchange.h).
 #include "multi/halo_exchange.h"
 
+#include <mutex>
+#include <set>
 #include <string>
+#include <utility>
 
 #include "cuda_check.h"
 #include "kernels.h"
@@ -20,21 +23,22 @@ __global__ void push_kernel(const float* from, std::uint32_t from_stride, const 
     for (std::uint32_t c = 0; c < 3; ++c) to[c * to_stride + to_first + k] = from[c * from_stride + i];
 }
 
-/// Makes `device` able to write `peer`'s memory (idempotent).
+/// Makes `device` able to write `peer`'s memory, once per pair in the process: enabling a pair twice
+/// is an error the runtime reports (and compute-sanitizer flags), so the enabled pairs are kept.
 void enable_peer(int device, int peer) {
     if (device == peer) return;
+    static std::mutex mutex;
+    static std::set<std::pair<int, int>> enabled;
+    const std::lock_guard lock(mutex);
+    if (enabled.contains({device, peer})) return;
     int can = 0;
     WEFT_CUDA_CHECK(cudaDeviceCanAccessPeer(&can, device, peer));
     if (can == 0)
         throw Error("multi-GPU: device " + std::to_string(device) + " cannot access the memory of device " +
                     std::to_string(peer) + " (no peer access between them)");
     WEFT_CUDA_CHECK(cudaSetDevice(device));
-    const cudaError_t e = cudaDeviceEnablePeerAccess(peer, 0);
-    if (e == cudaErrorPeerAccessAlreadyEnabled) {
-        (void)cudaGetLastError();  // not an error here: clear it so that later checks do not see it
-        return;
-    }
-    WEFT_CUDA_CHECK(e);
+    WEFT_CUDA_CHECK(cudaDeviceEnablePeerAccess(peer, 0));
+    enabled.insert({device, peer});
 }
 
 }  // namespace
