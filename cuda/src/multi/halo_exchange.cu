@@ -1,13 +1,11 @@
 // The halo exchange of the multi-GPU solve (multi/halo_exchange.h).
 #include "multi/halo_exchange.h"
 
-#include <mutex>
-#include <set>
 #include <string>
-#include <utility>
 
 #include "cuda_check.h"
 #include "kernels.h"
+#include "multi/peer_access.h"
 #include "weft/error.h"
 
 namespace weft::cuda::multi {
@@ -21,24 +19,6 @@ __global__ void push_kernel(const float* from, std::uint32_t from_stride, const 
     if (k >= count) return;
     const std::uint32_t i = send[k];
     for (std::uint32_t c = 0; c < 3; ++c) to[c * to_stride + to_first + k] = from[c * from_stride + i];
-}
-
-/// Makes `device` able to write `peer`'s memory, once per pair in the process: enabling a pair twice
-/// is an error the runtime reports (and compute-sanitizer flags), so the enabled pairs are kept.
-void enable_peer(int device, int peer) {
-    if (device == peer) return;
-    static std::mutex mutex;
-    static std::set<std::pair<int, int>> enabled;
-    const std::lock_guard lock(mutex);
-    if (enabled.contains({device, peer})) return;
-    int can = 0;
-    WEFT_CUDA_CHECK(cudaDeviceCanAccessPeer(&can, device, peer));
-    if (can == 0)
-        throw Error("multi-GPU: device " + std::to_string(device) + " cannot access the memory of device " +
-                    std::to_string(peer) + " (no peer access between them)");
-    WEFT_CUDA_CHECK(cudaSetDevice(device));
-    WEFT_CUDA_CHECK(cudaDeviceEnablePeerAccess(peer, 0));
-    enabled.insert({device, peer});
 }
 
 }  // namespace
@@ -71,7 +51,7 @@ HaloExchange::HaloExchange(const VertexPartition& partition, std::span<const int
         for (std::uint32_t q = 0; q < parts; ++q) {
             const std::uint32_t count = part_[p].send_start[q + 1] - part_[p].send_start[q];
             if (count == 0 || part_[p].device == part_[q].device) continue;
-            enable_peer(part_[p].device, part_[q].device);
+            enable_peer_access(part_[p].device, part_[q].device);
             bytes_between_devices_ += 12ULL * count;
         }
     WEFT_CUDA_CHECK(cudaSetDevice(previous));

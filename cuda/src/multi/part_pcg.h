@@ -9,11 +9,14 @@
 ///   γ' = rᵀu,  δ = wᵀu,  β = γ'/γ,  α = γ' / (δ − β·γ'/α).
 ///
 /// In exact arithmetic it is the textbook PCG (s = A·p by induction). M is block-Jacobi (each owned
-/// row's inverse 3×3 diagonal block: local to its part). The loop is driven from the host: each
-/// iteration's partial sums come back (one synchronisation) and α, β go out as kernel arguments; the
-/// solver proper will run it as graphs with the reduction on the devices. The partial sums are
-/// deterministic within a part and added in part order, so a solve gives the same bits on every run
-/// for a given partition.
+/// row's inverse 3×3 diagonal block: local to its part).
+///
+/// The loop runs on the devices: each part sums its partials in a fixed order, stores its two sums
+/// into every part's gather buffer (peer stores), and every part adds the G pairs in part order and
+/// takes α, β and the convergence test itself, so all parts hold the same scalars and stop together
+/// with no host in the loop. Batches of iterations are captured once as a CUDA graph across the
+/// parts' devices and replayed; a stopped solve's remaining kernels return at once. The host reads
+/// the scalars between batches only. The same bits on every run for a given partition.
 
 #include <cuda_runtime_api.h>
 
@@ -34,10 +37,23 @@ struct PartPcgResult {
     bool converged = false;
 };
 
+/// The scalars of the loop, one copy per part (all parts compute the same values).
+struct PartPcgScalars {
+    double gamma = 0.0;     ///< rᵀu of the current iterate
+    double gamma_b = 0.0;   ///< bᵀM⁻¹b, the reference of the relative residual
+    double alpha = 0.0, beta = 0.0;
+    double tolerance2 = 0.0;  ///< squared relative tolerance
+    double relative = 0.0;    ///< sqrt(γ/γ_b)
+    int iterations = 0;
+    int max_iterations = 0;
+    int running = 0;          ///< 1 while the loop goes on
+    int converged = 0;
+};
+
 class PartPcg {
 public:
     /// Over the parts' matrices (part p on matrices[p]->device(), enqueuing on streams[p]) and their
-    /// halo exchange. Allocates the work vectors.
+    /// halo exchange. Allocates the work vectors; enables peer access between every two devices.
     PartPcg(std::span<const PartMatrix* const> matrices, HaloExchange& halo, std::span<const cudaStream_t> streams);
     ~PartPcg();
     PartPcg(const PartPcg&) = delete;
@@ -45,16 +61,26 @@ public:
 
     /// Solves A·x = b to sqrt(rᵀM⁻¹r / bᵀM⁻¹b) ≤ tolerance or `max_iterations`. b and x are each
     /// part's local vectors (stride local, owned entries read; x's ghosts are overwritten), on the
-    /// part's device; x holds the start and receives the solution.
-    PartPcgResult solve(std::span<const float* const> b, std::span<float* const> x, double tolerance, int max_iterations);
+    /// part's device; x holds the start and receives the solution. The iterations run in graphs of
+    /// `batch` (even) iterations, captured at the first solve for these vectors.
+    PartPcgResult solve(std::span<const float* const> b, std::span<float* const> x, double tolerance, int max_iterations,
+                        int batch = 16);
 
 private:
     struct Part;
-    /// Sums each part's two partials in part order (one synchronisation of every stream).
-    void reduce(double& first, double& second);
+    /// Enqueues one iteration on every part (update, exchange, product, reduction, scalars), its
+    /// reduction writing the gather buffers of `parity`.
+    void enqueue_iteration(std::span<float* const> x, int parity);
+    /// Each part's two partial sums into every part's gather buffer `parity`, then each part's
+    /// scalars from them (`first`: γ and γ_b of the start; otherwise γ' and δ of an iteration, or the
+    /// first α when `start_alpha`).
+    void enqueue_reduction(int parity, int mode);
 
     std::vector<std::unique_ptr<Part>> part_;
     HaloExchange& halo_;
+    cudaGraphExec_t graph_ = nullptr;
+    std::vector<float*> graph_x_;  // the vectors the graph was captured with
+    int graph_batch_ = 0;
 };
 
 }  // namespace weft::cuda::multi
