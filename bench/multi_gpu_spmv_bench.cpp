@@ -95,9 +95,9 @@ public:
             y_.push_back(dy);
         }
         halo_ = std::make_unique<HaloExchange>(vp_, devices_, streams_);
-        std::vector<const PartMatrix*> raw;
-        for (const auto& m : matrices_) raw.push_back(m.get());
-        pcg_ = std::make_unique<PartPcg>(raw, *halo_, streams_);
+        std::vector<weft::cuda::multi::PartSystem> systems;
+        for (std::size_t p = 0; p < matrices_.size(); ++p) systems.push_back(matrices_[p]->system(streams_[p]));
+        pcg_ = std::make_unique<PartPcg>(systems, *halo_);
     }
 
     /// Mean µs per iteration of the single-reduction CG run for `iterations` (tolerance 0; a multiple of

@@ -5,6 +5,8 @@
 #include <cstdio>
 #include <limits>
 
+#include "weft/backend/flat_model.h"
+#include "weft/backend/schwarz_hierarchy.h"
 #include "weft/error.h"
 
 namespace weft {
@@ -146,6 +148,12 @@ std::string describe(const PartitionQuality& quality, std::uint32_t parts) {
                   static_cast<unsigned long long>(quality.halo_vertices),
                   static_cast<unsigned long long>(quality.boundary_vertices), quality.imbalance);
     return line;
+}
+
+VertexPartition partition_along_preconditioner(const FlatModel& flat, std::uint32_t parts) {
+    const SchwarzHierarchy h = build_schwarz_hierarchy(flat.initial_positions, flat.pattern);
+    const std::vector<double> work = row_work(flat.pattern);
+    return build_partition(flat.pattern, cut_order(h.order, work, parts, SchwarzHierarchy::kDomainSize), parts, work);
 }
 
 }  // namespace weft

@@ -9,7 +9,6 @@
 #include <random>
 #include <vector>
 
-#include "preconditioner_partition.h"
 #include "gpu_test_util.h"
 #include "multi/halo_exchange.h"
 #include "multi/part_matrix.h"
@@ -39,7 +38,7 @@ FlatModel two_cloths() {
     return flatten(world.model());
 }
 
-VertexPartition partition(const FlatModel& flat, std::uint32_t parts) { return test::partition_along_preconditioner(flat, parts); }
+VertexPartition partition(const FlatModel& flat, std::uint32_t parts) { return partition_along_preconditioner(flat, parts); }
 
 // Each part's local vector on its device: owned values from `x` (global SoA), ghosts set to NaN
 // so that a ghost the exchange missed shows.
@@ -206,14 +205,14 @@ Solve solve_by_parts(const FlatModel& flat, const std::vector<float>& blocks, co
     const Parts set(flat, blocks, count, devices);
     const VertexPartition& vp = set.vp;
     const std::vector<PartModel>& parts = set.parts;
-    std::vector<const PartMatrix*> raw_matrices;
-    for (const auto& m : set.matrices) raw_matrices.push_back(m.get());
     const std::vector<cudaStream_t>& raw = set.raw;
+    std::vector<cuda::multi::PartSystem> systems;
+    for (std::size_t p = 0; p < set.matrices.size(); ++p) systems.push_back(set.matrices[p]->system(raw[p]));
     LocalVectors rhs, x;
     upload_owned(parts, devices, b, n, rhs);
     upload_owned(parts, devices, std::vector<float>(3 * n, 0.0F), n, x);
     HaloExchange halo(vp, devices, raw);
-    PartPcg pcg(raw_matrices, halo, raw);
+    PartPcg pcg(systems, halo);
     Solve out;
     out.result = pcg.solve(std::vector<const float*>(rhs.x.begin(), rhs.x.end()), x.x, 1e-5, 2000, batch);
     out.x.assign(3 * n, std::nanf(""));

@@ -6,7 +6,6 @@
 
 #include <set>
 
-#include "preconditioner_partition.h"
 #include "weft/backend/flat_model.h"
 #include "weft/backend/part_model.h"
 #include "weft/backend/vertex_partition.h"
@@ -31,7 +30,7 @@ FlatModel two_cloths() {
     return flatten(world.model());
 }
 
-VertexPartition partition(const FlatModel& flat, std::uint32_t parts) { return test::partition_along_preconditioner(flat, parts); }
+VertexPartition partition(const FlatModel& flat, std::uint32_t parts) { return partition_along_preconditioner(flat, parts); }
 
 // The element corner or block behind a gather entry, in global terms: (kind, global element, corner).
 struct Source {

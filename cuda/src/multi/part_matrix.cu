@@ -82,4 +82,17 @@ void PartMatrix::multiply(const float* x, float* y, std::uint32_t begin, std::ui
     WEFT_CUDA_CHECK_LAUNCH("part_multiply_kernel");
 }
 
+PartSystem PartMatrix::system(cudaStream_t stream) const {
+    PartSystem s;
+    s.device = device_;
+    s.stream = stream;
+    s.owned = owned_;
+    s.local = local_;
+    s.slice_start = slice_start_.get();
+    s.column = column_.get();
+    s.diagonal = diagonal_.get();
+    s.blocks = blocks_.get();
+    return s;
+}
+
 }  // namespace weft::cuda::multi

@@ -13,6 +13,7 @@
 #include <span>
 
 #include "device_array.h"
+#include "multi/part_system.h"
 #include "weft/backend/part_model.h"
 
 namespace weft::cuda::multi {
@@ -29,6 +30,8 @@ public:
     /// device must be current). x and y are local structure-of-arrays vectors of stride `local()`.
     void multiply(const float* x, float* y, std::uint32_t begin, std::uint32_t end, cudaStream_t stream) const;
 
+    /// The owned rows as the CG across parts reads them (no fixed rows; it inverts the diagonal).
+    [[nodiscard]] PartSystem system(cudaStream_t stream) const;
     /// The ELL blocks (9 floats each) and each owned row's diagonal position (device arrays).
     [[nodiscard]] const float* blocks() const { return blocks_.get(); }
     [[nodiscard]] const std::uint32_t* diagonal() const { return diagonal_.get(); }

@@ -62,11 +62,13 @@ __global__ void scalars_kernel(const double* gathered, unsigned parts, PartPcgSc
         second += gathered[2 * p + 1];
     }
     if (mode == kStart) {
+        // As the single-GPU start (pcg_control.cuh, start_solve): measured against the larger of
+        // bᵀM⁻¹b and the start's own residual.
         s->gamma = first;
-        s->gamma_b = second;
-        s->relative = second > 0.0 ? sqrt(fmax(first, 0.0) / second) : 0.0;
-        s->converged = !(second > 0.0) || first <= s->tolerance2 * second ? 1 : 0;
-        s->running = s->converged ? 0 : 1;
+        s->reference = fmax(second, first);
+        s->relative = s->reference > 0.0 ? sqrt(fmax(first, 0.0) / s->reference) : 0.0;
+        s->converged = !(s->reference > 0.0) || first <= s->tolerance2 * s->reference ? 1 : 0;
+        s->running = s->converged || s->max_iterations <= 0 ? 0 : 1;
         return;
     }
     if (mode == kFirstAlpha) {
@@ -80,8 +82,8 @@ __global__ void scalars_kernel(const double* gathered, unsigned parts, PartPcgSc
         return;
     }
     ++s->iterations;
-    s->relative = sqrt(fmax(first, 0.0) / s->gamma_b);
-    if (first <= s->tolerance2 * s->gamma_b) {
+    s->relative = sqrt(fmax(first, 0.0) / s->reference);
+    if (first <= s->tolerance2 * s->reference) {
         s->converged = 1;
         s->running = 0;
         return;
@@ -97,28 +99,65 @@ __global__ void scalars_kernel(const double* gathered, unsigned parts, PartPcgSc
     s->gamma = first;
 }
 
-__global__ void invert_diagonal_kernel(const float* blocks, const std::uint32_t* diagonal, float* precond, std::uint32_t owned) {
-    const std::uint32_t i = blockIdx.x * blockDim.x + threadIdx.x;
-    if (i >= owned) return;
-    store_block(precond, i, physics::inverse(load_block(blocks, diagonal[i])));
+/// Entry e of row i's preconditioner block at [e·local + i] (the single-GPU solver's layout).
+__device__ inline M3 load_precond(const float* precond, std::uint32_t i, std::uint32_t local) {
+    M3 m;
+    for (int e = 0; e < 9; ++e) m.m[e / 3][e % 3] = precond[e * local + i];
+    return m;
 }
 
-/// r = b − w (w = A·x), u = M⁻¹r, p = s = 0; partials (rᵀu, bᵀM⁻¹b).
-__global__ void start_kernel(const float* b, const float* w, const float* precond, float* r, float* u, float* p, float* s,
-                             std::uint32_t owned, std::uint32_t local, double* partials) {
+__device__ inline bool is_fixed(const PartSystem& a, std::uint32_t i) { return a.fixed != nullptr && a.fixed[i] != 0; }
+
+__global__ void invert_diagonal_kernel(PartSystem a, float* precond) {
+    const std::uint32_t i = blockIdx.x * blockDim.x + threadIdx.x;
+    if (i >= a.owned) return;
+    const M3 inverse = physics::inverse(load_block(a.blocks, a.diagonal[i]));
+    for (int e = 0; e < 9; ++e) precond[e * a.local + i] = inverse.m[e / 3][e % 3];
+}
+
+/// w = filter(A·x) over the owned rows (each row's blocks in the order of the single-GPU SpMV,
+/// pcg_kernels.cu); with `dot_with`, the partial wᵀ·dot_with into slot 1. `check`: nothing once the
+/// loop has stopped.
+__global__ void product_kernel(PartSystem a, const float* x, float* w, const float* dot_with, const PartPcgScalars* scalars,
+                               int check, double* partials) {
+    if (check != 0 && scalars->running == 0) return;
+    const std::uint32_t i = blockIdx.x * blockDim.x + threadIdx.x;
+    double value = 0.0;
+    if (i < a.owned) {
+        V3 acc{};
+        if (!is_fixed(a, i)) {
+            const std::uint32_t slice = i / kSliceRowsDevice;
+            const std::uint32_t first = a.slice_start[slice], width = (a.slice_start[slice + 1] - first) / kSliceRowsDevice;
+            for (std::uint32_t k = 0; k < width; ++k) {
+                const std::uint32_t pos = first + k * kSliceRowsDevice + i % kSliceRowsDevice;
+                acc += load_block(a.blocks, pos) * load3(x, a.column[pos], a.local);
+            }
+        }
+        store3(w, i, a.local, acc);
+        if (dot_with != nullptr) value = static_cast<double>(physics::dot(acc, load3(dot_with, i, a.local)));
+    }
+    if (dot_with != nullptr) block_partial(value, partials, 1);
+}
+
+/// r = filter(b − w) (w = A·x), u = M⁻¹r, p = s = 0; partials (rᵀu, bᵀM⁻¹b over the free rows).
+__global__ void start_kernel(PartSystem a, const float* precond, const float* b, const float* w, float* r, float* u, float* p,
+                             float* s, double* partials) {
     const std::uint32_t i = blockIdx.x * blockDim.x + threadIdx.x;
     double ru = 0.0, bb = 0.0;
-    if (i < owned) {
-        const M3 P = load_block(precond, i);
-        const V3 bi = load3(b, i, local);
-        const V3 ri = bi - load3(w, i, local);
-        const V3 ui = P * ri;
-        store3(r, i, local, ri);
-        store3(u, i, local, ui);
-        store3(p, i, local, V3{});
-        store3(s, i, local, V3{});
-        ru = static_cast<double>(physics::dot(ri, ui));
-        bb = static_cast<double>(physics::dot(bi, P * bi));
+    if (i < a.owned) {
+        V3 ri{}, ui{};
+        if (!is_fixed(a, i)) {
+            const M3 P = load_precond(precond, i, a.local);
+            const V3 bi = load3(b, i, a.local);
+            ri = bi - load3(w, i, a.local);
+            ui = P * ri;
+            ru = static_cast<double>(physics::dot(ri, ui));
+            bb = static_cast<double>(physics::dot(bi, P * bi));
+        }
+        store3(r, i, a.local, ri);
+        store3(u, i, a.local, ui);
+        store3(p, i, a.local, V3{});
+        store3(s, i, a.local, V3{});
     }
     block_partial(ru, partials, 0);
     __syncthreads();
@@ -126,20 +165,21 @@ __global__ void start_kernel(const float* b, const float* w, const float* precon
 }
 
 /// p ← u + βp, s ← w + βs, x ← x + αp, r ← r − αs, u ← M⁻¹r; partial rᵀu into slot 0.
-__global__ void update_kernel(const PartPcgScalars* scalars, float* x, float* r, float* u, const float* w, float* p, float* s,
-                              const float* precond, std::uint32_t owned, std::uint32_t local, double* partials) {
+__global__ void update_kernel(PartSystem a, const float* precond, const PartPcgScalars* scalars, float* x, float* r, float* u,
+                              const float* w, float* p, float* s, double* partials) {
     if (scalars->running == 0) return;
     const auto alpha = static_cast<float>(scalars->alpha), beta = static_cast<float>(scalars->beta);
     const std::uint32_t i = blockIdx.x * blockDim.x + threadIdx.x;
+    const std::uint32_t local = a.local;
     double ru = 0.0;
-    if (i < owned) {
+    if (i < a.owned) {
         const V3 pi = load3(u, i, local) + beta * load3(p, i, local);
         const V3 si = load3(w, i, local) + beta * load3(s, i, local);
         store3(p, i, local, pi);
         store3(s, i, local, si);
         store3(x, i, local, load3(x, i, local) + alpha * pi);
         const V3 ri = load3(r, i, local) - alpha * si;
-        const V3 ui = load_block(precond, i) * ri;
+        const V3 ui = load_precond(precond, i, local) * ri;
         store3(r, i, local, ri);
         store3(u, i, local, ui);
         ru = static_cast<double>(physics::dot(ri, ui));
@@ -147,26 +187,14 @@ __global__ void update_kernel(const PartPcgScalars* scalars, float* x, float* r,
     block_partial(ru, partials, 0);
 }
 
-/// Partial wᵀu into slot 1.
-__global__ void dot_kernel(const PartPcgScalars* scalars, const float* w, const float* u, std::uint32_t owned,
-                           std::uint32_t local, double* partials) {
-    if (scalars->running == 0) return;
-    const std::uint32_t i = blockIdx.x * blockDim.x + threadIdx.x;
-    double wu = 0.0;
-    if (i < owned) wu = static_cast<double>(physics::dot(load3(w, i, local), load3(u, i, local)));
-    block_partial(wu, partials, 1);
-}
-
 }  // namespace
 
 struct PartPcg::Part {
-    const PartMatrix* matrix = nullptr;
-    int device = 0;
-    cudaStream_t stream = nullptr;
-    std::uint32_t owned = 0, local = 0;
+    PartSystem system;
     unsigned blocks = 0;
     MemoryLedger ledger;
-    DeviceArray<float> r, u, w, p, s, precond;
+    DeviceArray<float> r, u, w, p, s, own_precond;
+    const float* precond = nullptr;       // the system's, or own_precond
     DeviceArray<double> partials;
     DeviceArray<double> gather;           // 2 parities × 2 sums × parts, written by every part
     DeviceArray<double*> targets[2];      // per parity: where this part's sums go, one pointer per part
@@ -175,37 +203,37 @@ struct PartPcg::Part {
     cudaEvent_t shared = nullptr;
 };
 
-PartPcg::PartPcg(std::span<const PartMatrix* const> matrices, HaloExchange& halo, std::span<const cudaStream_t> streams)
-    : halo_(halo) {
+PartPcg::PartPcg(std::span<const PartSystem> systems, HaloExchange& halo) : halo_(halo) {
     const std::size_t parts = halo.parts();
-    if (matrices.size() != parts || streams.size() != parts)
-        throw Error("PartPcg: " + std::to_string(matrices.size()) + " matrices and " + std::to_string(streams.size()) +
-                    " streams for " + std::to_string(parts) + " parts");
+    if (systems.size() != parts)
+        throw Error("PartPcg: " + std::to_string(systems.size()) + " systems for " + std::to_string(parts) + " parts");
     int previous = 0;
     WEFT_CUDA_CHECK(cudaGetDevice(&previous));
     for (std::size_t k = 0; k < parts; ++k) {
         auto part = std::make_unique<Part>();
-        part->matrix = matrices[k];
-        part->device = matrices[k]->device();
-        part->stream = streams[k];
-        part->owned = matrices[k]->owned();
-        part->local = matrices[k]->local();
-        if (part->local != halo.local_count(static_cast<std::uint32_t>(k)))
-            throw Error("PartPcg: part " + std::to_string(k) + " has " + std::to_string(part->local) +
-                        " local vertices in its matrix and " + std::to_string(halo.local_count(static_cast<std::uint32_t>(k))) +
-                        " in the exchange");
-        part->blocks = std::max(grid_for(part->owned), 1U);
-        WEFT_CUDA_CHECK(cudaSetDevice(part->device));
-        const std::size_t n3 = 3 * std::size_t{part->local};
+        part->system = systems[k];
+        const PartSystem& a = part->system;
+        if (a.local != halo.local_count(static_cast<std::uint32_t>(k)) || a.owned > a.local)
+            throw Error("PartPcg: part " + std::to_string(k) + " has " + std::to_string(a.owned) + " owned of " +
+                        std::to_string(a.local) + " local vertices in its system and " +
+                        std::to_string(halo.local_count(static_cast<std::uint32_t>(k))) + " in the exchange");
+        part->blocks = std::max(grid_for(a.owned), 1U);
+        WEFT_CUDA_CHECK(cudaSetDevice(a.device));
+        const std::size_t n3 = 3 * std::size_t{a.local};
         for (DeviceArray<float>* v : {&part->r, &part->u, &part->w, &part->p, &part->s}) {
             v->allocate(n3, part->ledger, "multi-GPU CG vectors");
-            v->zero(part->stream);  // ghost entries stay zero except u's, which only the exchange writes
+            v->zero(a.stream);  // ghost entries stay zero except u's, which only the exchange writes
         }
-        part->precond.allocate(9 * std::size_t{std::max(part->owned, 1U)}, part->ledger, "multi-GPU CG preconditioner");
+        if (a.precond == nullptr) {
+            part->own_precond.allocate(9 * std::size_t{std::max(a.local, 1U)}, part->ledger, "multi-GPU CG preconditioner");
+            part->precond = part->own_precond.get();
+        } else {
+            part->precond = a.precond;
+        }
         part->partials.allocate(2 * std::size_t{part->blocks}, part->ledger, "multi-GPU CG partial sums");
-        part->partials.zero(part->stream);
+        part->partials.zero(a.stream);
         part->gather.allocate(4 * parts, part->ledger, "multi-GPU CG partial sums");
-        part->gather.zero(part->stream);
+        part->gather.zero(a.stream);
         part->scalars.allocate(1, part->ledger, "multi-GPU CG scalars");
         part->host.allocate(1);
         WEFT_CUDA_CHECK(cudaEventCreateWithFlags(&part->shared, cudaEventDisableTiming));
@@ -213,19 +241,21 @@ PartPcg::PartPcg(std::span<const PartMatrix* const> matrices, HaloExchange& halo
     }
     // Every part stores its sums into every other part's gather buffer.
     for (std::size_t k = 0; k < parts; ++k)
-        for (std::size_t q = 0; q < parts; ++q) enable_peer_access(part_[k]->device, part_[q]->device);
+        for (std::size_t q = 0; q < parts; ++q) enable_peer_access(part_[k]->system.device, part_[q]->system.device);
     for (std::size_t k = 0; k < parts; ++k) {
         Part& part = *part_[k];
-        WEFT_CUDA_CHECK(cudaSetDevice(part.device));
+        WEFT_CUDA_CHECK(cudaSetDevice(part.system.device));
         for (int parity = 0; parity < 2; ++parity) {
             std::vector<double*> where(parts);
             for (std::size_t q = 0; q < parts; ++q) where[q] = part_[q]->gather.get() + 2 * parts * parity + 2 * k;
             part.targets[parity].upload(where, part.ledger, "multi-GPU CG partial sums");
         }
-        WEFT_CUDA_CHECK(cudaStreamSynchronize(part.stream));
+        WEFT_CUDA_CHECK(cudaStreamSynchronize(part.system.stream));
     }
     WEFT_CUDA_CHECK(cudaSetDevice(previous));
 }
+
+std::size_t PartPcg::memory_bytes(std::size_t p) const { return part_.at(p)->ledger.total(); }
 
 PartPcg::~PartPcg() {
     if (graph_ != nullptr) cudaGraphExecDestroy(graph_);
@@ -236,42 +266,46 @@ PartPcg::~PartPcg() {
 void PartPcg::enqueue_reduction(int parity, int mode) {
     const auto parts = static_cast<unsigned>(part_.size());
     for (auto& part : part_) {
-        WEFT_CUDA_CHECK(cudaSetDevice(part->device));
-        share_sums_kernel<<<1, kBlockSize, 0, part->stream>>>(part->partials.get(), part->blocks, part->targets[parity].get(),
-                                                              parts, part->scalars.get(), mode);
+        WEFT_CUDA_CHECK(cudaSetDevice(part->system.device));
+        share_sums_kernel<<<1, kBlockSize, 0, part->system.stream>>>(part->partials.get(), part->blocks,
+                                                                     part->targets[parity].get(), parts, part->scalars.get(), mode);
         WEFT_CUDA_CHECK_LAUNCH("share_sums_kernel");
-        WEFT_CUDA_CHECK(cudaEventRecord(part->shared, part->stream));
+        WEFT_CUDA_CHECK(cudaEventRecord(part->shared, part->system.stream));
     }
     for (std::size_t q = 0; q < part_.size(); ++q) {
         Part& part = *part_[q];
-        WEFT_CUDA_CHECK(cudaSetDevice(part.device));
+        WEFT_CUDA_CHECK(cudaSetDevice(part.system.device));
         for (std::size_t k = 0; k < part_.size(); ++k)
-            if (k != q) WEFT_CUDA_CHECK(cudaStreamWaitEvent(part.stream, part_[k]->shared, 0));
-        scalars_kernel<<<1, 1, 0, part.stream>>>(part.gather.get() + 2 * parts * parity, parts, part.scalars.get(), mode);
+            if (k != q) WEFT_CUDA_CHECK(cudaStreamWaitEvent(part.system.stream, part_[k]->shared, 0));
+        scalars_kernel<<<1, 1, 0, part.system.stream>>>(part.gather.get() + 2 * parts * parity, parts, part.scalars.get(), mode);
         WEFT_CUDA_CHECK_LAUNCH("scalars_kernel");
+    }
+}
+
+void PartPcg::enqueue_product(int check) {
+    std::vector<float*> u(part_.size());
+    for (std::size_t k = 0; k < part_.size(); ++k) u[k] = part_[k]->u.get();
+    halo_.exchange(u);
+    for (auto& part : part_) {
+        const PartSystem& a = part->system;
+        WEFT_CUDA_CHECK(cudaSetDevice(a.device));
+        product_kernel<<<part->blocks, kBlockSize, 0, a.stream>>>(a, part->u.get(), part->w.get(), part->u.get(),
+                                                                  part->scalars.get(), check, part->partials.get());
+        WEFT_CUDA_CHECK_LAUNCH("product_kernel");
     }
 }
 
 void PartPcg::enqueue_iteration(std::span<float* const> x, int parity) {
     for (std::size_t k = 0; k < part_.size(); ++k) {
         Part& part = *part_[k];
-        WEFT_CUDA_CHECK(cudaSetDevice(part.device));
-        update_kernel<<<part.blocks, kBlockSize, 0, part.stream>>>(part.scalars.get(), x[k], part.r.get(), part.u.get(),
-                                                                    part.w.get(), part.p.get(), part.s.get(),
-                                                                    part.precond.get(), part.owned, part.local,
-                                                                    part.partials.get());
+        const PartSystem& a = part.system;
+        WEFT_CUDA_CHECK(cudaSetDevice(a.device));
+        update_kernel<<<part.blocks, kBlockSize, 0, a.stream>>>(a, part.precond, part.scalars.get(), x[k], part.r.get(),
+                                                                part.u.get(), part.w.get(), part.p.get(), part.s.get(),
+                                                                part.partials.get());
         WEFT_CUDA_CHECK_LAUNCH("update_kernel");
     }
-    std::vector<float*> u(part_.size());
-    for (std::size_t k = 0; k < part_.size(); ++k) u[k] = part_[k]->u.get();
-    halo_.exchange(u);
-    for (auto& part : part_) {
-        WEFT_CUDA_CHECK(cudaSetDevice(part->device));
-        part->matrix->multiply(part->u.get(), part->w.get(), 0, part->owned, part->stream);
-        dot_kernel<<<part->blocks, kBlockSize, 0, part->stream>>>(part->scalars.get(), part->w.get(), part->u.get(), part->owned,
-                                                                   part->local, part->partials.get());
-        WEFT_CUDA_CHECK_LAUNCH("dot_kernel");
-    }
+    enqueue_product(1);
     enqueue_reduction(parity, kIteration);
 }
 
@@ -286,33 +320,28 @@ PartPcgResult PartPcg::solve(std::span<const float* const> b, std::span<float* c
     PartPcgScalars start;
     start.tolerance2 = tolerance * tolerance;
     start.max_iterations = max_iterations;
-    // The start, launched directly: r = b − A·x, u = M⁻¹r (γ, γ_b), then w = A·u (the first α).
+    // The start, launched directly: r = filter(b − A·x), u = M⁻¹r (γ and the reference), then
+    // w = A·u (the first α).
     halo_.exchange(x);
     for (std::size_t k = 0; k < part_.size(); ++k) {
         Part& part = *part_[k];
-        WEFT_CUDA_CHECK(cudaSetDevice(part.device));
+        const PartSystem& a = part.system;
+        WEFT_CUDA_CHECK(cudaSetDevice(a.device));
         *part.host.get() = start;
-        WEFT_CUDA_CHECK(cudaMemcpyAsync(part.scalars.get(), part.host.get(), sizeof start, cudaMemcpyHostToDevice, part.stream));
-        invert_diagonal_kernel<<<part.blocks, kBlockSize, 0, part.stream>>>(part.matrix->blocks(), part.matrix->diagonal(),
-                                                                             part.precond.get(), part.owned);
-        WEFT_CUDA_CHECK_LAUNCH("invert_diagonal_kernel");
-        part.matrix->multiply(x[k], part.w.get(), 0, part.owned, part.stream);
-        start_kernel<<<part.blocks, kBlockSize, 0, part.stream>>>(b[k], part.w.get(), part.precond.get(), part.r.get(),
-                                                                   part.u.get(), part.p.get(), part.s.get(), part.owned,
-                                                                   part.local, part.partials.get());
+        WEFT_CUDA_CHECK(cudaMemcpyAsync(part.scalars.get(), part.host.get(), sizeof start, cudaMemcpyHostToDevice, a.stream));
+        if (a.precond == nullptr) {
+            invert_diagonal_kernel<<<part.blocks, kBlockSize, 0, a.stream>>>(a, part.own_precond.get());
+            WEFT_CUDA_CHECK_LAUNCH("invert_diagonal_kernel");
+        }
+        product_kernel<<<part.blocks, kBlockSize, 0, a.stream>>>(a, x[k], part.w.get(), nullptr, part.scalars.get(), 0,
+                                                                 part.partials.get());
+        WEFT_CUDA_CHECK_LAUNCH("product_kernel");
+        start_kernel<<<part.blocks, kBlockSize, 0, a.stream>>>(a, part.precond, b[k], part.w.get(), part.r.get(), part.u.get(),
+                                                               part.p.get(), part.s.get(), part.partials.get());
         WEFT_CUDA_CHECK_LAUNCH("start_kernel");
     }
     enqueue_reduction(0, kStart);
-    std::vector<float*> u(part_.size());
-    for (std::size_t k = 0; k < part_.size(); ++k) u[k] = part_[k]->u.get();
-    halo_.exchange(u);
-    for (auto& part : part_) {
-        WEFT_CUDA_CHECK(cudaSetDevice(part->device));
-        part->matrix->multiply(part->u.get(), part->w.get(), 0, part->owned, part->stream);
-        dot_kernel<<<part->blocks, kBlockSize, 0, part->stream>>>(part->scalars.get(), part->w.get(), part->u.get(), part->owned,
-                                                                   part->local, part->partials.get());
-        WEFT_CUDA_CHECK_LAUNCH("dot_kernel");
-    }
+    enqueue_product(1);
     enqueue_reduction(1, kFirstAlpha);
 
     // The batches: captured once (part 0's stream forks to the others and joins them), replayed
@@ -324,31 +353,31 @@ PartPcgResult PartPcg::solve(std::span<const float* const> b, std::span<float* c
         graph_ = nullptr;
         std::vector<cudaEvent_t> fork(part_.size());
         for (std::size_t k = 0; k < part_.size(); ++k) {
-            WEFT_CUDA_CHECK(cudaSetDevice(part_[k]->device));
+            WEFT_CUDA_CHECK(cudaSetDevice(part_[k]->system.device));
             WEFT_CUDA_CHECK(cudaEventCreateWithFlags(&fork[k], cudaEventDisableTiming));
         }
-        WEFT_CUDA_CHECK(cudaSetDevice(origin.device));
-        WEFT_CUDA_CHECK(cudaStreamSynchronize(origin.stream));
-        WEFT_CUDA_CHECK(cudaStreamBeginCapture(origin.stream, cudaStreamCaptureModeGlobal));
-        WEFT_CUDA_CHECK(cudaEventRecord(fork[0], origin.stream));
+        WEFT_CUDA_CHECK(cudaSetDevice(origin.system.device));
+        WEFT_CUDA_CHECK(cudaStreamSynchronize(origin.system.stream));
+        WEFT_CUDA_CHECK(cudaStreamBeginCapture(origin.system.stream, cudaStreamCaptureModeGlobal));
+        WEFT_CUDA_CHECK(cudaEventRecord(fork[0], origin.system.stream));
         for (std::size_t k = 1; k < part_.size(); ++k) {
-            WEFT_CUDA_CHECK(cudaSetDevice(part_[k]->device));
-            WEFT_CUDA_CHECK(cudaStreamWaitEvent(part_[k]->stream, fork[0], 0));
+            WEFT_CUDA_CHECK(cudaSetDevice(part_[k]->system.device));
+            WEFT_CUDA_CHECK(cudaStreamWaitEvent(part_[k]->system.stream, fork[0], 0));
         }
         for (int it = 0; it < batch; ++it) enqueue_iteration(x, it % 2);
         for (std::size_t k = 1; k < part_.size(); ++k) {
-            WEFT_CUDA_CHECK(cudaSetDevice(part_[k]->device));
-            WEFT_CUDA_CHECK(cudaEventRecord(fork[k], part_[k]->stream));
-            WEFT_CUDA_CHECK(cudaSetDevice(origin.device));
-            WEFT_CUDA_CHECK(cudaStreamWaitEvent(origin.stream, fork[k], 0));
+            WEFT_CUDA_CHECK(cudaSetDevice(part_[k]->system.device));
+            WEFT_CUDA_CHECK(cudaEventRecord(fork[k], part_[k]->system.stream));
+            WEFT_CUDA_CHECK(cudaSetDevice(origin.system.device));
+            WEFT_CUDA_CHECK(cudaStreamWaitEvent(origin.system.stream, fork[k], 0));
         }
-        WEFT_CUDA_CHECK(cudaSetDevice(origin.device));
+        WEFT_CUDA_CHECK(cudaSetDevice(origin.system.device));
         cudaGraph_t graph = nullptr;
-        WEFT_CUDA_CHECK(cudaStreamEndCapture(origin.stream, &graph));
+        WEFT_CUDA_CHECK(cudaStreamEndCapture(origin.system.stream, &graph));
         WEFT_CUDA_CHECK(cudaGraphInstantiate(&graph_, graph, 0));
         WEFT_CUDA_CHECK(cudaGraphDestroy(graph));
         for (std::size_t k = 0; k < part_.size(); ++k) {
-            WEFT_CUDA_CHECK(cudaSetDevice(part_[k]->device));
+            WEFT_CUDA_CHECK(cudaSetDevice(part_[k]->system.device));
             WEFT_CUDA_CHECK(cudaEventDestroy(fork[k]));
         }
         graph_x_ = xs;
@@ -356,21 +385,23 @@ PartPcgResult PartPcg::solve(std::span<const float* const> b, std::span<float* c
     }
     // The graph starts on the origin's stream: the other parts' start work must be done first.
     for (std::size_t k = 1; k < part_.size(); ++k) {
-        WEFT_CUDA_CHECK(cudaSetDevice(part_[k]->device));
-        WEFT_CUDA_CHECK(cudaStreamSynchronize(part_[k]->stream));
+        WEFT_CUDA_CHECK(cudaSetDevice(part_[k]->system.device));
+        WEFT_CUDA_CHECK(cudaStreamSynchronize(part_[k]->system.stream));
     }
-    WEFT_CUDA_CHECK(cudaSetDevice(origin.device));
+    WEFT_CUDA_CHECK(cudaSetDevice(origin.system.device));
     const auto read_scalars = [&] {
         WEFT_CUDA_CHECK(cudaMemcpyAsync(origin.host.get(), origin.scalars.get(), sizeof(PartPcgScalars), cudaMemcpyDeviceToHost,
-                                        origin.stream));
-        WEFT_CUDA_CHECK(cudaStreamSynchronize(origin.stream));
+                                        origin.system.stream));
+        WEFT_CUDA_CHECK(cudaStreamSynchronize(origin.system.stream));
         return *origin.host.get();
     };
     PartPcgScalars s = read_scalars();
     while (s.running != 0) {
-        WEFT_CUDA_CHECK(cudaGraphLaunch(graph_, origin.stream));
+        WEFT_CUDA_CHECK(cudaGraphLaunch(graph_, origin.system.stream));
         s = read_scalars();
     }
+    // The ghosts of the solution get their owners' values (the caller's next use of x needs them).
+    halo_.exchange(x);
     WEFT_CUDA_CHECK(cudaSetDevice(previous));
     PartPcgResult result;
     result.iterations = s.iterations;

@@ -9,7 +9,10 @@
 ///   γ' = rᵀu,  δ = wᵀu,  β = γ'/γ,  α = γ' / (δ − β·γ'/α).
 ///
 /// In exact arithmetic it is the textbook PCG (s = A·p by induction). M is block-Jacobi (each owned
-/// row's inverse 3×3 diagonal block: local to its part).
+/// row's inverse 3×3 diagonal block: local to its part). Rows marked fixed (pinned vertices) are
+/// filtered as in the single-GPU solve: their residual and product are zero, so their unknowns keep
+/// their start values. Convergence is measured as on one GPU: rᵀM⁻¹r against the larger of
+/// bᵀM⁻¹b (free rows) and the start's r₀ᵀM⁻¹r₀.
 ///
 /// The loop runs on the devices: each part sums its partials in a fixed order, stores its two sums
 /// into every part's gather buffer (peer stores), and every part adds the G pairs in part order and
@@ -27,23 +30,23 @@
 
 #include "device_array.h"
 #include "multi/halo_exchange.h"
-#include "multi/part_matrix.h"
+#include "multi/part_system.h"
 
 namespace weft::cuda::multi {
 
 struct PartPcgResult {
     int iterations = 0;
-    double relative_residual = 0.0;  ///< sqrt(rᵀM⁻¹r / bᵀM⁻¹b) at the end
+    double relative_residual = 0.0;  ///< sqrt(rᵀM⁻¹r / reference) at the end
     bool converged = false;
 };
 
 /// The scalars of the loop, one copy per part (all parts compute the same values).
 struct PartPcgScalars {
     double gamma = 0.0;     ///< rᵀu of the current iterate
-    double gamma_b = 0.0;   ///< bᵀM⁻¹b, the reference of the relative residual
+    double reference = 0.0; ///< max(bᵀM⁻¹b, r₀ᵀM⁻¹r₀): what the residual is measured against
     double alpha = 0.0, beta = 0.0;
     double tolerance2 = 0.0;  ///< squared relative tolerance
-    double relative = 0.0;    ///< sqrt(γ/γ_b)
+    double relative = 0.0;    ///< sqrt(γ/reference)
     int iterations = 0;
     int max_iterations = 0;
     int running = 0;          ///< 1 while the loop goes on
@@ -52,28 +55,36 @@ struct PartPcgScalars {
 
 class PartPcg {
 public:
-    /// Over the parts' matrices (part p on matrices[p]->device(), enqueuing on streams[p]) and their
-    /// halo exchange. Allocates the work vectors; enables peer access between every two devices.
-    PartPcg(std::span<const PartMatrix* const> matrices, HaloExchange& halo, std::span<const cudaStream_t> streams);
+    /// Over the parts' systems (part p on systems[p].device, enqueuing on systems[p].stream, the
+    /// streams `halo` was made with) and their halo exchange. Allocates the work vectors; enables
+    /// peer access between every two devices. The systems' arrays must outlive the solver.
+    PartPcg(std::span<const PartSystem> systems, HaloExchange& halo);
     ~PartPcg();
     PartPcg(const PartPcg&) = delete;
     PartPcg& operator=(const PartPcg&) = delete;
 
-    /// Solves A·x = b to sqrt(rᵀM⁻¹r / bᵀM⁻¹b) ≤ tolerance or `max_iterations`. b and x are each
+    /// Solves A·x = b to sqrt(rᵀM⁻¹r / reference) ≤ tolerance or `max_iterations`. b and x are each
     /// part's local vectors (stride local, owned entries read; x's ghosts are overwritten), on the
-    /// part's device; x holds the start and receives the solution. The iterations run in graphs of
+    /// part's device; x holds the start and receives the solution, its ghosts included (exchanged at the
+    /// end, on the parts' streams). The iterations run in graphs of
     /// `batch` (even) iterations, captured at the first solve for these vectors.
     PartPcgResult solve(std::span<const float* const> b, std::span<float* const> x, double tolerance, int max_iterations,
                         int batch = 16);
 
+    /// Device memory the solver holds on part p's device, bytes.
+    [[nodiscard]] std::size_t memory_bytes(std::size_t p) const;
+
 private:
     struct Part;
+    /// Exchanges u, then w = filter(A·u) with the partial wᵀu on every part (`check`: nothing once
+    /// the loop has stopped).
+    void enqueue_product(int check);
     /// Enqueues one iteration on every part (update, exchange, product, reduction, scalars), its
     /// reduction writing the gather buffers of `parity`.
     void enqueue_iteration(std::span<float* const> x, int parity);
     /// Each part's two partial sums into every part's gather buffer `parity`, then each part's
-    /// scalars from them (`first`: γ and γ_b of the start; otherwise γ' and δ of an iteration, or the
-    /// first α when `start_alpha`).
+    /// scalars from them (`mode`: γ and the reference of the start, γ' and δ of an iteration, or the
+    /// first α).
     void enqueue_reduction(int parity, int mode);
 
     std::vector<std::unique_ptr<Part>> part_;

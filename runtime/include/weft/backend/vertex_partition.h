@@ -23,6 +23,8 @@
 
 namespace weft {
 
+struct FlatModel;
+
 /// One part of a VertexPartition. Vertex ids are global (the FlatModel's) unless said otherwise.
 struct PartitionPart {
     /// The vertices this part owns, interior first, each group in increasing global id.
@@ -76,6 +78,11 @@ struct VertexPartition {
 /// Deterministic. Throws weft::Error when the sizes disagree or a part id is out of range.
 [[nodiscard]] VertexPartition build_partition(const BlockPattern& pattern, std::span<const std::uint32_t> part_of,
                                               std::uint32_t parts, std::span<const double> work);
+
+/// The multi-GPU solver's partition of `flat` (docs/multi-gpu.md, "Partition"): its vertices cut
+/// along the multilevel Schwarz preconditioner's level-0 order into `parts` runs of whole level-0
+/// domains of nearly equal row work. Throws weft::Error as cut_order does.
+[[nodiscard]] VertexPartition partition_along_preconditioner(const FlatModel& flat, std::uint32_t parts);
 
 /// One line: parts, cut blocks, halo and boundary vertices, imbalance (for logs and benchmarks).
 [[nodiscard]] std::string describe(const PartitionQuality& quality, std::uint32_t parts);
