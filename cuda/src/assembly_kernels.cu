@@ -33,7 +33,7 @@ __global__ void assemble_rows_kernel(DeviceView d) {
     const std::uint32_t lane = threadIdx.x % 32;
     const std::uint32_t i = (blockIdx.x * blockDim.x + threadIdx.x) / 32;
     int active = 0;
-    if (i < d.n) {  // uniform over the warp
+    if (i < d.rows) {  // uniform over the warp
         const StepParams& sp = step_params(d);
         V3 vertex_rhs;
         M3 vertex_block;
@@ -112,7 +112,7 @@ __global__ void vertex_rows_kernel(DeviceView d) {
             store_block(d.blocks, pos, pos == diag ? block : M3{});
         }
     }
-    add_contacts(d, active);
+    add_contacts(d, i < d.rows ? active : 0);  // a ghost's contacts are its owner's to count
 }
 
 __global__ void triangle_pass_kernel(DeviceView d, std::uint32_t first, std::uint32_t last) {
@@ -142,7 +142,7 @@ __global__ void hinge_pass_kernel(DeviceView d, std::uint32_t first, std::uint32
 }  // namespace
 
 void launch_assemble_rows(const DeviceView& d, cudaStream_t stream) {
-    const std::uint64_t threads = 32ull * d.n;
+    const std::uint64_t threads = 32ull * d.rows;
     const auto blocks = static_cast<unsigned>((threads + kBlockSize - 1) / kBlockSize);
     assemble_rows_kernel<<<blocks, kBlockSize, 0, stream>>>(d);
     WEFT_CUDA_CHECK_LAUNCH("assemble_rows_kernel");

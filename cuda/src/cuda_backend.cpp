@@ -11,6 +11,7 @@
 #include "backend_access.h"
 #include "cuda_check.h"
 #include "device_solver.h"
+#include "multi/multi_gpu_backend.h"
 #include "shared_output.h"
 #include "weft/error.h"
 #include "weft/backend/flat_model.h"
@@ -47,9 +48,6 @@ public:
         if (options.device < 0 || options.device >= static_cast<int>(all.size()))
             throw Error("CUDA backend: device " + std::to_string(options.device) + " does not exist (" +
                         std::to_string(all.size()) + " CUDA device" + (all.size() == 1 ? "" : "s") + ")");
-        if (options.gpus > 1)
-            throw Error("CUDA backend: --gpus " + std::to_string(options.gpus) +
-                        " needs the multi-GPU solver, which is not built yet; use one GPU");
         info_ = all[static_cast<std::size_t>(options.device)];
         set_host_wait(info_.ordinal, options.host_wait);
         solver_ = std::make_unique<DeviceSolver>(info_.ordinal);
@@ -183,8 +181,12 @@ std::string unavailable_reason() {
 void register_cuda_backend() {
     static std::once_flag once;
     std::call_once(once, [] {
-        register_backend("cuda", "CUDA backend on one GPU, float: the whole substep on the device as a CUDA graph",
-                         [](const BackendOptions& o) { return std::make_unique<CudaBackend>(o); });
+        register_backend("cuda", "CUDA backend, float: the whole substep on one GPU as a CUDA graph, or one world across --gpus N",
+                         [](const BackendOptions& o) -> std::unique_ptr<Backend> {
+                             if (o.gpus < 1) throw Error("CUDA backend: --gpus " + std::to_string(o.gpus) + " (at least 1)");
+                             if (o.gpus > 1) return multi::make_multi_gpu_backend(o);
+                             return std::make_unique<CudaBackend>(o);
+                         });
     });
 }
 

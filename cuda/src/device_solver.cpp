@@ -284,7 +284,7 @@ void DeviceSolver::set_output(void* device_buffer, std::size_t stride, bool sync
     if (output_ != nullptr && view_.n > 0) {
         // Make the buffer valid at once, before the next substep.
         WEFT_CUDA_CHECK(cudaSetDevice(device_));
-        launch_write_output(view_, output_, output_stride_, active_stream());
+        launch_write_output(view_, output_, output_stride_, active_stream(), output_index_.get());
         if (synchronous) WEFT_CUDA_CHECK(cudaStreamSynchronize(active_stream()));
     }
 }

@@ -20,7 +20,9 @@
 #include "weft/backend/energy_audit.h"
 #include "weft/backend/flat_model.h"
 #include "weft/backend/model.h"
+#include "weft/backend/part_model.h"
 #include "weft/stats.h"
+#include "multi/part_system.h"
 
 namespace weft::cuda {
 
@@ -94,6 +96,36 @@ public:
     [[nodiscard]] std::vector<std::pair<std::string, std::size_t>> memory_breakdown() const;
     [[nodiscard]] int device() const { return device_; }
 
+    // ---- part mode: one part of the multi-GPU solver (multi/multi_solver.h, docs/multi-gpu.md) -----
+    // The solver holds a part's local model: it assembles the owned rows, and its ghosts (the other
+    // parts' vertices its rows read) hold their owners' values, which the multi-GPU solver keeps so by
+    // exchanging Δv after each solve. Every per-vertex kernel runs over the ghosts too, on the same
+    // values, so their state stays their owners' bits. The CG runs across the parts (multi/part_pcg.h),
+    // block-Jacobi; cloth collisions are not part of part mode yet.
+    /// Builds on part `part` of `whole` (both kept by reference: they must outlive the solver).
+    void build_part(const FlatModel& whole, const PartModel& part, const Model& model);
+    [[nodiscard]] bool part_mode() const { return part_ != nullptr; }
+    /// Stages the substep's parameters and enqueues its start (x0, v0, the pins' velocities).
+    void part_begin_substep(const Model& model, double t, double h);
+    /// Enqueues one Newton iteration's system: every row's forces and blocks, then the owned rows'
+    /// block-Jacobi inverse and Δv's start (`first_newton`: the warm start may apply).
+    void part_assemble(bool first_newton);
+    /// Enqueues v_k += Δv (Δv's ghosts exchanged by then).
+    void part_newton_update();
+    /// Enqueues x = x0 + h·v_k, v = v_k with the non-finite check (and this part's rollback).
+    void part_commit();
+    /// Waits for the part's work and returns its substep stats (non-finite count, collider contacts).
+    const DeviceStats& part_stats();
+    /// Rolls this part back to the substep's start (another part met a non-finite value).
+    void part_rollback();
+    /// The swept test of fast analytic colliders on this part's vertices (as in substep()), after
+    /// part_stats; true when it ran (it may have moved ghosts: exchange the state then).
+    bool part_sweep(StepStats& stats);
+    /// Writes the owned vertices' positions and normals at their global places in the output buffer.
+    void part_write_output();
+    /// The owned rows' system for the CG across parts.
+    [[nodiscard]] multi::PartSystem part_system() const;
+
     // For benchmarks: the arrays, the layout and the stream the solver uses.
     [[nodiscard]] const DeviceView& view() const { return view_; }
     [[nodiscard]] const DeviceLayout& layout() const { return layout_; }
@@ -151,6 +183,12 @@ private:
     cudaStream_t body_stream_ = nullptr;  // captures the CG loop body into the while node
     cudaStream_t user_stream_ = nullptr;
     const FlatModel* flat_ = nullptr;
+    // Part mode: the whole model, the part, each global vertex's local id (~0: not here) and the
+    // owned vertices' global ids on the device (the output's places).
+    const FlatModel* whole_ = nullptr;
+    const PartModel* part_ = nullptr;
+    std::vector<std::uint32_t> local_of_global_;
+    DeviceArray<std::uint32_t> output_index_;
     DeviceLayout layout_;
     MemoryLedger ledger_;
     DeviceView view_;

@@ -68,7 +68,12 @@ void DeviceSolver::fill_staging(const Model& model, double t, double h, unsigned
     p.cg_eps2 = w.solver.cg_tolerance * w.solver.cg_tolerance;
     p.grab_vertex = 0xFFFFFFFFu;
     if (model.grab && model.grab->cloth < model.cloths.size()) {
-        p.grab_vertex = flat_->cloth_vertex_offset[model.grab->cloth] + model.grab->vertex;
+        if (part_ == nullptr) {
+            p.grab_vertex = flat_->cloth_vertex_offset[model.grab->cloth] + model.grab->vertex;
+        } else {  // part mode: the grabbed vertex's local id, where it is local at all
+            const std::size_t global = whole_->cloth_vertex_offset[model.grab->cloth] + model.grab->vertex;
+            if (global < local_of_global_.size()) p.grab_vertex = local_of_global_[global];
+        }
         p.grab_target = to_float(model.grab->target);
         p.grab_stiffness = static_cast<float>(model.grab->stiffness);
         p.grab_damping = static_cast<float>(model.grab->damping);

@@ -115,6 +115,7 @@ void DeviceSolver::build(const FlatModel& flat, const Model& model) {
     DeviceView& d = view_;
     d = DeviceView{};
     d.n = static_cast<std::uint32_t>(n);
+    d.rows = part_ != nullptr ? part_->owned : d.n;
     d.triangles = static_cast<std::uint32_t>(nt);
     d.hinges = static_cast<std::uint32_t>(nh);
     d.pins = static_cast<std::uint32_t>(flat.pin_vertex.size());
@@ -154,7 +155,7 @@ void DeviceSolver::build(const FlatModel& flat, const Model& model) {
     d.partials = partials_.get();
     choose_assembly();
     choose_pcg_loop();
-    build_collisions(model);
+    if (part_ == nullptr) build_collisions(model);  // part mode: not across GPUs yet (docs/multi-gpu.md)
     WEFT_CUDA_CHECK(cudaDeviceSynchronize());
 }
 

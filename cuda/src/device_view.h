@@ -13,6 +13,9 @@ namespace weft::cuda {
 
 struct DeviceView {
     std::uint32_t n = 0, triangles = 0, hinges = 0, pins = 0, slices = 0;
+    /// Rows this device assembles and solves: n, or in part mode (the multi-GPU solver) the owned
+    /// vertices [0, rows); the others are ghosts whose values come from their owners.
+    std::uint32_t rows = 0;
     // Vertex state and solver vectors, 3n floats each.
     float *x = nullptr, *v = nullptr, *x0 = nullptr, *v0 = nullptr, *vk = nullptr, *wk = nullptr;
     float *b = nullptr, *dv = nullptr, *pin_velocity = nullptr;

@@ -39,7 +39,7 @@ __global__ void audit_vertex_kernel(DeviceView d, double* partials, std::uint32_
     const StepParams& sp = step_params(d);
     const std::uint32_t i = blockIdx.x * blockDim.x + threadIdx.x;
     double kinetic = 0.0, gravity = 0.0, contact = 0.0, collider_power = 0.0, grab_power = 0.0;
-    if (i < d.n) {
+    if (i < d.rows) {  // part mode: a ghost's energy is its owner's
         const float m = d.mass[i];
         const V3 x = position(d, i), v = velocity(d, i);
         kinetic = 0.5 * m * static_cast<double>(physics::dot(v, v));
@@ -90,7 +90,9 @@ __global__ void audit_triangle_kernel(DeviceView d, double* partials, std::uint3
     const StepParams& sp = step_params(d);
     const std::uint32_t t = blockIdx.x * blockDim.x + threadIdx.x;
     double energy = 0.0, wind_power = 0.0;
-    if (t < d.triangles) {
+    // Part mode: an element is the part's to count when the part owns its first corner (exactly one
+    // part does; on one GPU every row is owned).
+    if (t < d.triangles && d.triangle_vertices[3 * t] < d.rows) {
         V3 x[3];
         float dm_inv[2][2], area;
         triangle_state(d, t, x, dm_inv, area);
@@ -118,7 +120,7 @@ __global__ void audit_hinge_kernel(DeviceView d, double* partials) {
     const StepParams& sp = step_params(d);
     const std::uint32_t k = blockIdx.x * blockDim.x + threadIdx.x;
     double energy = 0.0;
-    if (k < d.hinges) {
+    if (k < d.hinges && d.hinge_vertices[4 * k] < d.rows) {
         const ClothParams& p = staged<ClothParams>(d, sp.cloth_offset)[d.hinge_cloth[k]];
         if (p.bending > 0.0f) {
             V3 x[4];

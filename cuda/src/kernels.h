@@ -34,8 +34,12 @@ void launch_commit(const DeviceView& d, cudaStream_t stream);
 /// the hits are added to DeviceStats::swept_hits. Launched after the commit, outside the graph,
 /// only in substeps where the host finds that some vertex may need it.
 void launch_sweep_colliders(const DeviceView& d, cudaStream_t stream);
-/// Writes position and area-weighted normal of every vertex to `out` (stride bytes apart).
-void launch_write_output(const DeviceView& d, void* out, std::size_t stride, cudaStream_t stream);
+/// Writes position and area-weighted normal of every solved row's vertex (d.rows) to `out`, vertex i
+/// at stride·i bytes, or at stride·index[i] with an index (part mode: the global vertex).
+void launch_write_output(const DeviceView& d, void* out, std::size_t stride, cudaStream_t stream,
+                         const std::uint32_t* index = nullptr);
+/// x = x0, v = v0, previous Δv = 0 whatever the stats say (part mode: another part met a non-finite value).
+void launch_rollback(const DeviceView& d, cudaStream_t stream);
 /// Stores `stamp` at `where` (8-byte aligned, device memory): the frame stamps of a shared slot.
 void launch_write_stamp(void* where, std::uint64_t stamp, cudaStream_t stream);
 

@@ -75,9 +75,9 @@ __global__ void commit_kernel(DeviceView d) {
 }
 
 // A NaN or Inf anywhere rolls the whole substep back, as on the CPU; the stats say so.
-__global__ void rollback_kernel(DeviceView d) {
+__global__ void rollback_kernel(DeviceView d, int always) {
     const std::uint32_t i = blockIdx.x * blockDim.x + threadIdx.x;
-    if (i >= 3 * d.n || d.stats->non_finite == 0) return;
+    if (i >= 3 * d.n || (always == 0 && d.stats->non_finite == 0)) return;
     d.x[i] = d.x0[i];
     d.v[i] = d.v0[i];
     d.dv_previous[i] = 0.0f;
@@ -106,12 +106,13 @@ __global__ void sweep_colliders_kernel(DeviceView d) {
     store3(d.x, i, d.n, x);
     store3(d.v, i, d.n, v);
     store3(d.dv_previous, i, d.n, v - load3(d.v0, i, d.n));  // the CPU's v − v0 after a sweep
-    atomicAdd(&d.stats->swept_hits, hits);  // integers, and only the few vertices hit: order-free
+    // Integers, and only the few vertices hit: order-free. A ghost's hits are its owner's to count.
+    if (i < d.rows) atomicAdd(&d.stats->swept_hits, hits);
 }
 
-__global__ void write_output_kernel(DeviceView d, unsigned char* out, std::size_t stride) {
+__global__ void write_output_kernel(DeviceView d, unsigned char* out, std::size_t stride, const std::uint32_t* index) {
     const std::uint32_t i = blockIdx.x * blockDim.x + threadIdx.x;
-    if (i >= d.n) return;
+    if (i >= d.rows) return;
     // Area-weighted vertex normal: the sum of the incident faces' cross products, in a fixed order.
     V3 normal{};
     for (std::uint32_t e = d.vertex_triangle_start[i]; e < d.vertex_triangle_start[i + 1]; ++e) {
@@ -123,7 +124,7 @@ __global__ void write_output_kernel(DeviceView d, unsigned char* out, std::size_
     }
     normal = physics::normalized(normal);
     const V3 x = load3(d.x, i, d.n);
-    float* o = reinterpret_cast<float*>(out + stride * i);
+    float* o = reinterpret_cast<float*>(out + stride * (index != nullptr ? index[i] : i));
     o[0] = x.x;
     o[1] = x.y;
     o[2] = x.z;
@@ -160,7 +161,12 @@ void launch_newton_update(const DeviceView& d, cudaStream_t stream) {
 void launch_commit(const DeviceView& d, cudaStream_t stream) {
     commit_kernel<<<grid_for(d.n), kBlockSize, 0, stream>>>(d);
     WEFT_CUDA_CHECK_LAUNCH("commit_kernel");
-    rollback_kernel<<<grid_for(3 * d.n), kBlockSize, 0, stream>>>(d);
+    rollback_kernel<<<grid_for(3 * d.n), kBlockSize, 0, stream>>>(d, 0);
+    WEFT_CUDA_CHECK_LAUNCH("rollback_kernel");
+}
+
+void launch_rollback(const DeviceView& d, cudaStream_t stream) {
+    rollback_kernel<<<grid_for(3 * d.n), kBlockSize, 0, stream>>>(d, 1);
     WEFT_CUDA_CHECK_LAUNCH("rollback_kernel");
 }
 
@@ -169,8 +175,8 @@ void launch_sweep_colliders(const DeviceView& d, cudaStream_t stream) {
     WEFT_CUDA_CHECK_LAUNCH("sweep_colliders_kernel");
 }
 
-void launch_write_output(const DeviceView& d, void* out, std::size_t stride, cudaStream_t stream) {
-    write_output_kernel<<<grid_for(d.n), kBlockSize, 0, stream>>>(d, static_cast<unsigned char*>(out), stride);
+void launch_write_output(const DeviceView& d, void* out, std::size_t stride, cudaStream_t stream, const std::uint32_t* index) {
+    write_output_kernel<<<grid_for(d.rows), kBlockSize, 0, stream>>>(d, static_cast<unsigned char*>(out), stride, index);
     WEFT_CUDA_CHECK_LAUNCH("write_output_kernel");
 }
 

@@ -147,6 +147,8 @@ bool apply_simulation_flag(std::string_view command, SimulationOptions& sim, std
         sim.backend = std::string(value);
     } else if (name == "--threads") {
         sim.threads = parse_int(command, name, value, 0, 4096);
+    } else if (name == "--gpus") {
+        sim.gpus = parse_int(command, name, value, 1, 64);
     } else if (name == "--host-wait") {
         try {
             sim.host_wait = parse_host_wait(value);
@@ -161,15 +163,15 @@ bool apply_simulation_flag(std::string_view command, SimulationOptions& sim, std
     return true;
 }
 
-constexpr FlagSpec kRunFlags[] = {{"--backend", true}, {"--threads", true}, {"--host-wait", true}, {"--set", true},   {"--frames", true},
+constexpr FlagSpec kRunFlags[] = {{"--backend", true}, {"--threads", true}, {"--host-wait", true}, {"--gpus", true}, {"--set", true},   {"--frames", true},
                                   {"--out", true},     {"--format", true},  {"--stats", true}, {"--quiet", false},
                                   {"--check", false},  {"--capture", true}, {"--size", true}};
 
-constexpr FlagSpec kViewFlags[] = {{"--backend", true}, {"--threads", true}, {"--host-wait", true},    {"--set", true},
+constexpr FlagSpec kViewFlags[] = {{"--backend", true}, {"--threads", true}, {"--host-wait", true}, {"--gpus", true},    {"--set", true},
                                    {"--frames", true},  {"--screenshot", true}, {"--size", true},
                                    {"--time-scale", true}, {"--validation", false}};
 
-constexpr FlagSpec kEditFlags[] = {{"--backend", true},    {"--threads", true}, {"--host-wait", true},    {"--set", true},
+constexpr FlagSpec kEditFlags[] = {{"--backend", true},    {"--threads", true}, {"--host-wait", true}, {"--gpus", true},    {"--set", true},
                                    {"--frames", true},     {"--screenshot", true}, {"--size", true},
                                    {"--time-scale", true}, {"--validation", false}, {"--script", true},
                                    {"--ui-scale", true}};
@@ -193,7 +195,7 @@ void parse_size(std::string_view cmd, std::string_view name, std::string_view va
     height = parse_int(cmd, name, value.substr(x + 1), 16, 8192);
 }
 
-constexpr FlagSpec kBenchFlags[] = {{"--backend", true}, {"--threads", true}, {"--host-wait", true}, {"--set", true},
+constexpr FlagSpec kBenchFlags[] = {{"--backend", true}, {"--threads", true}, {"--host-wait", true}, {"--gpus", true}, {"--set", true},
                                     {"--frames", true},  {"--warmup", true},  {"--json", true}};
 
 Invocation help_for(std::string_view topic) {
@@ -258,6 +260,17 @@ Invocation parse_bench(std::span<const std::string_view> args) {
     BenchOptions& bench = inv.bench;
     const auto positionals =
         FlagParser(cmd, args, kBenchFlags).parse([&](std::string_view name, std::string_view value) {
+            if (name == "--gpus") {  // a list here: each scene on each count
+                bench.gpu_counts.clear();
+                std::string_view rest = value;
+                for (;;) {
+                    const auto comma = rest.find(',');
+                    bench.gpu_counts.push_back(parse_int(cmd, name, rest.substr(0, comma), 1, 64));
+                    if (comma == std::string_view::npos) break;
+                    rest = rest.substr(comma + 1);
+                }
+                return;
+            }
             if (apply_simulation_flag(cmd, bench.sim, name, value)) return;
             if (name == "--frames") {
                 bench.frames = parse_int(cmd, name, value, 1, 100'000'000);

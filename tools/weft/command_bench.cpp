@@ -21,16 +21,19 @@ namespace {
 using json::JsonWriter;
 
 struct BenchResult {
+    int gpus = 1;
     RunContext context;
     RunSummary summary;
     double wall_seconds = 0.0;
 };
 
-BenchResult bench_scene(const std::string& scene, const BenchOptions& options, std::ostream& err) {
-    LoadedScene loaded = load_world(scene, options.sim);
+BenchResult bench_scene(const std::string& scene, const BenchOptions& options, int gpus, std::ostream& err) {
+    SimulationOptions sim = options.sim;
+    sim.gpus = gpus;
+    LoadedScene loaded = load_world(scene, sim);
     World& world = *loaded.world;
-    err << "bench " << loaded.desc.name << ": " << options.warmup << " warm-up + " << options.frames << " timed frames"
-        << std::endl;
+    err << "bench " << loaded.desc.name << (gpus > 1 ? " on " + std::to_string(gpus) + " GPUs" : std::string()) << ": "
+        << options.warmup << " warm-up + " << options.frames << " timed frames" << std::endl;
     for (int i = 0; i < options.warmup; ++i) world.step();
 
     std::vector<StepStats> stats;
@@ -38,6 +41,7 @@ BenchResult bench_scene(const std::string& scene, const BenchOptions& options, s
     const auto start = std::chrono::steady_clock::now();
     for (int i = 0; i < options.frames; ++i) stats.push_back(world.step());
     BenchResult result;
+    result.gpus = gpus;
     result.wall_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     result.context = describe_run(loaded.desc, world, options.sim.threads, options.sim.host_wait);
     result.summary = summarize(stats);
@@ -51,6 +55,7 @@ void write_bench_json(std::ofstream& stream, const std::filesystem::path& file, 
     for (const BenchResult& r : results) {
         json.begin_object();
         write_summary_fields(json, r.context, r.summary);
+        json.field("gpus", r.gpus);
         json.field("warmup_frames", options.warmup).field("timed_frames", options.frames);
         json.field("wall_seconds", r.wall_seconds);
         json.key("overrides").begin_array();
@@ -63,7 +68,7 @@ void write_bench_json(std::ofstream& stream, const std::filesystem::path& file, 
 }
 
 void print_bench_table(std::ostream& out, const std::vector<BenchResult>& results) {
-    std::vector<TextTable::Column> columns{{"scene", TextTable::Align::Left}, {"triangles"}, {"frames/s"}, {"step ms"}};
+    std::vector<TextTable::Column> columns{{"scene", TextTable::Align::Left}, {"GPUs"}, {"triangles"}, {"frames/s"}, {"step ms"}};
     for (const std::string_view stage : kStageNames) columns.push_back({std::string(stage)});
     columns.push_back({"CG it/step"});
     columns.push_back({"B/triangle"});
@@ -71,7 +76,7 @@ void print_bench_table(std::ostream& out, const std::vector<BenchResult>& result
     TextTable table(std::move(columns));
     for (const BenchResult& r : results) {
         const RunSummary& s = r.summary;
-        std::vector<std::string> row{r.context.scene, std::to_string(r.context.triangles), format_fixed(s.fps, 2),
+        std::vector<std::string> row{r.context.scene, std::to_string(r.gpus), std::to_string(r.context.triangles), format_fixed(s.fps, 2),
                                      format_fixed(s.step_ms.median, 3)};
         for (const Distribution& d : s.stage_ms) row.push_back(format_fixed(d.median, 3));
         row.push_back(format_fixed(s.cg_iterations.mean, 1));
@@ -101,7 +106,8 @@ int bench_command(const BenchOptions& options, std::ostream& out, std::ostream& 
     if (!options.json_file.empty()) json_stream = open_output_file(options.json_file, "bench results");
 
     std::vector<BenchResult> results;
-    for (const std::string& scene : options.scenes) results.push_back(bench_scene(scene, options, err));
+    for (const std::string& scene : options.scenes)
+        for (const int gpus : options.gpu_counts) results.push_back(bench_scene(scene, options, gpus, err));
     print_bench_table(out, results);
     if (!options.json_file.empty()) {
         write_bench_json(json_stream, options.json_file, options, results);

@@ -5,6 +5,7 @@
 
 #include "weft/backend/backend.h"
 #include "weft/backend_options.h"
+#include "weft/error.h"
 
 #include "scene_lookup.h"
 
@@ -40,7 +41,11 @@ LoadedScene load_world(std::string_view scene, const SimulationOptions& sim) {
     BackendOptions options;
     options.threads = sim.threads;
     options.host_wait = sim.host_wait;
+    options.gpus = sim.gpus;
     const std::string backend = resolve_backend(sim.backend);
+    if (sim.gpus > 1 && backend != "cuda")
+        throw Error("--gpus " + std::to_string(sim.gpus) + " splits the world across GPUs, which only the cuda backend does (this run "
+                    "uses '" + backend + "')");
     loaded.world = build_world(loaded.desc, backend, options);
     return loaded;
 }

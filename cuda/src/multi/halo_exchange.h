@@ -54,6 +54,8 @@ public:
     /// Bytes one exchange moves between different devices (float3 per ghost whose owner is on
     /// another device).
     [[nodiscard]] std::uint64_t bytes_between_devices() const { return bytes_between_devices_; }
+    /// Device memory of the send lists, bytes (all devices).
+    [[nodiscard]] std::size_t memory_bytes() const { return ledger_.total(); }
 
 private:
     struct Part {

@@ -1,0 +1,91 @@
+// The "cuda" backend on several GPUs (multi/multi_gpu_backend.h).
+#include "multi/multi_gpu_backend.h"
+
+#include <cstdlib>
+#include <string>
+#include <string_view>
+
+#include "multi/multi_solver.h"
+#include "weft/backend/flat_model.h"
+#include "weft/cuda/cuda_backend.h"
+#include "weft/error.h"
+
+namespace weft::cuda::multi {
+namespace {
+
+class MultiGpuBackend final : public Backend {
+public:
+    MultiGpuBackend(std::vector<int> devices, std::string description)
+        : solver_(std::move(devices)), description_(std::move(description)) {}
+
+    std::string_view name() const override { return "cuda"; }
+
+    std::string device_description() const override {
+        std::string out = description_ + ", float, " + std::to_string(solver_.parts()) + " parts, CG across parts";
+        if (flat_.vertex_count > 0) {
+            const PartitionQuality& q = solver_.partition().quality;
+            out += " (" + std::to_string(q.halo_vertices) + " ghost vertices, " + std::to_string(solver_.halo_bytes()) +
+                   " bytes between GPUs per exchange), block-Jacobi";
+        }
+        return out;
+    }
+
+    void build(const Model& model) override {
+        flat_ = flatten(model);
+        solver_.build(flat_, model);
+    }
+
+    void substep(const Model& model, double t, double h, StepStats& stats) override { solver_.substep(model, t, h, stats); }
+
+    void read_state(std::size_t cloth, std::span<Vec3d> x, std::span<Vec3d> v) const override {
+        const auto [first, count] = flat_.cloth_vertices(cloth, x.size(), v.size());
+        solver_.read_state(first, count, x.data(), v.data());
+    }
+
+    void write_state(std::size_t cloth, std::span<const Vec3d> x, std::span<const Vec3d> v) override {
+        const auto [first, count] = flat_.cloth_vertices(cloth, x.size(), v.size());
+        solver_.write_state(first, count, x.data(), v.data());
+    }
+
+    // Summed on the devices (energy_kernels.cu, each part counting what it owns): no state read back.
+    EnergyAudit energy_audit(const Model& model, double t, double h, bool with_wind) const override {
+        return solver_.energy_audit(model, t, h, with_wind);
+    }
+
+    std::size_t memory_bytes() const override { return solver_.memory_bytes(); }
+    std::vector<std::pair<std::string, std::size_t>> memory_breakdown() const override { return solver_.memory_breakdown(); }
+
+private:
+    mutable MultiSolver solver_;  // the audit enqueues work on the parts' streams
+    FlatModel flat_;
+    std::string description_;
+};
+
+}  // namespace
+
+std::unique_ptr<Backend> make_multi_gpu_backend(const BackendOptions& options) {
+    const std::vector<DeviceInfo> all = cuda::devices();
+    if (all.empty()) throw Error("CUDA backend: " + unavailable_reason());
+    const char* env = std::getenv(kPartsOnOneDeviceEnv);
+    const bool one_device = env != nullptr && std::string_view(env) == "1";
+    const int count = static_cast<int>(all.size());
+    if (options.device < 0 || options.device >= count)
+        throw Error("CUDA backend: device " + std::to_string(options.device) + " does not exist (" + std::to_string(count) +
+                    " CUDA device" + (count == 1 ? "" : "s") + ")");
+    if (!one_device && options.device + options.gpus > count)
+        throw Error("CUDA backend: --gpus " + std::to_string(options.gpus) + " from device " + std::to_string(options.device) +
+                    " needs " + std::to_string(options.device + options.gpus) + " CUDA devices; this host has " +
+                    std::to_string(count) + " (" + kPartsOnOneDeviceEnv + "=1 runs the parts on one GPU, for testing)");
+    std::vector<int> devices;
+    std::string description;
+    for (int p = 0; p < options.gpus; ++p) {
+        const int d = one_device ? options.device : options.device + p;
+        devices.push_back(d);
+        if (p == 0 || !one_device)
+            description += (p == 0 ? "" : " + ") + all[static_cast<std::size_t>(d)].name;
+    }
+    if (one_device) description += " (" + std::to_string(options.gpus) + " parts on one GPU: test mode)";
+    return std::make_unique<MultiGpuBackend>(std::move(devices), std::move(description));
+}
+
+}  // namespace weft::cuda::multi

@@ -1,0 +1,259 @@
+// One world stepped across several GPUs (multi/multi_solver.h): the substep's stages enqueued on
+// every part in turn, the CG across the parts between assembly and update.
+#include "multi/multi_solver.h"
+
+#include <algorithm>
+#include <chrono>
+#include <string>
+
+#include "cuda_check.h"
+#include "multi/peer_access.h"
+#include "weft/backend/timing.h"
+#include "weft/error.h"
+
+namespace weft::cuda::multi {
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+/// CG iterations per graph launch of the CG across parts (the host reads the scalars between
+/// launches): a multiple of 2, long enough that the host's look costs little per iteration.
+constexpr int kIterationsPerLaunch = 16;
+
+}  // namespace
+
+MultiSolver::MultiSolver(std::vector<int> devices) : devices_(std::move(devices)) {
+    if (devices_.empty()) throw Error("multi-GPU solver: no devices given");
+    int count = 0;
+    WEFT_CUDA_CHECK(cudaGetDeviceCount(&count));
+    for (const int d : devices_)
+        if (d < 0 || d >= count)
+            throw Error("multi-GPU solver: device " + std::to_string(d) + " does not exist (" + std::to_string(count) +
+                        " CUDA device" + (count == 1 ? "" : "s") + ")");
+}
+
+MultiSolver::~MultiSolver() {
+    // The CG and the exchange hold events and graphs on the parts' streams: release them first.
+    if (!devices_.empty()) cudaSetDevice(devices_.front());
+    for (cudaEvent_t e : events_) cudaEventDestroy(e);
+    pcg_.reset();
+    halo_.reset();
+    solvers_.clear();
+}
+
+void MultiSolver::build(const FlatModel& flat, const Model& model) {
+    if (needs_cloth_collisions(model))
+        throw Error("CUDA backend on " + std::to_string(devices_.size()) +
+                    " parts: cloth collisions (self-collision, mesh colliders) are not split across GPUs yet; switch "
+                    "them off or run on one GPU");
+    pcg_.reset();
+    halo_.reset();
+    solvers_.clear();
+    part_models_.clear();
+    flat_ = &flat;
+    const auto parts = static_cast<std::uint32_t>(devices_.size());
+    partition_ = partition_along_preconditioner(flat, parts);  // throws, naming the count, when too small
+    part_models_.reserve(parts);
+    for (std::uint32_t p = 0; p < parts; ++p) part_models_.push_back(extract_part(flat, partition_, p));
+    std::vector<cudaStream_t> streams;
+    std::vector<PartSystem> systems;
+    for (std::uint32_t p = 0; p < parts; ++p) {
+        auto solver = std::make_unique<DeviceSolver>(devices_[p]);
+        solver->build_part(flat, part_models_[p], model);
+        streams.push_back(solver->stream());
+        systems.push_back(solver->part_system());
+        solvers_.push_back(std::move(solver));
+    }
+    halo_ = std::make_unique<HaloExchange>(partition_, devices_, streams);
+    pcg_ = std::make_unique<PartPcg>(systems, *halo_);
+    has_output_ = false;
+}
+
+void MultiSolver::exchange_state() {
+    std::vector<float*> x, v, previous;
+    for (auto& s : solvers_) {
+        x.push_back(s->view().x);
+        v.push_back(s->view().v);
+        previous.push_back(s->view().dv_previous);
+    }
+    halo_->exchange(x);
+    halo_->exchange(v);
+    halo_->exchange(previous);
+}
+
+void MultiSolver::synchronize() const {
+    for (const auto& s : solvers_) {
+        WEFT_CUDA_CHECK(cudaSetDevice(s->device()));
+        WEFT_CUDA_CHECK(cudaStreamSynchronize(s->stream()));
+    }
+}
+
+void MultiSolver::mark(std::size_t k) {
+    // On the first part's stream: it waits for the others at every exchange and reduction, so its
+    // timeline brackets each stage of all parts.
+    DeviceSolver& first = *solvers_.front();
+    WEFT_CUDA_CHECK(cudaSetDevice(first.device()));
+    while (events_.size() <= k) {
+        cudaEvent_t e = nullptr;
+        WEFT_CUDA_CHECK(cudaEventCreate(&e));
+        events_.push_back(e);
+    }
+    WEFT_CUDA_CHECK(cudaEventRecord(events_[k], first.stream()));
+}
+
+double MultiSolver::elapsed_ms(std::size_t a, std::size_t b) const {
+    float ms = 0.0F;
+    WEFT_CUDA_CHECK(cudaEventElapsedTime(&ms, events_[a], events_[b]));
+    return static_cast<double>(ms);
+}
+
+void MultiSolver::substep(const Model& model, double t, double h, StepStats& stats) {
+    if (solvers_.empty() || flat_ == nullptr || flat_->vertex_count == 0) return;
+    if (needs_cloth_collisions(model))
+        throw Error("CUDA backend on " + std::to_string(devices_.size()) +
+                    " parts: cloth collisions were switched on; they are not split across GPUs yet");
+    const auto host_start = Clock::now();
+    std::size_t e = 0;
+    mark(e++);
+    for (auto& s : solvers_) s->part_begin_substep(model, t, h);
+    const double host_ms = ms_since(host_start);
+    mark(e++);
+    const SolverSettings& settings = model.settings.solver;
+    std::vector<const float*> b;
+    std::vector<float*> dv;
+    for (auto& s : solvers_) {
+        b.push_back(s->view().b);
+        dv.push_back(s->view().dv);
+    }
+    for (int it = 0; it < settings.newton_iterations; ++it) {
+        for (auto& s : solvers_) s->part_assemble(it == 0);
+        // The first part's stream waits for the others' assembly at the solve's first exchange.
+        mark(e++);
+        const PartPcgResult r = pcg_->solve(b, dv, settings.cg_tolerance, settings.cg_max_iterations, kIterationsPerLaunch);
+        mark(e++);
+        stats.cg_iterations += r.iterations;
+        stats.cg_iterations_max = std::max(stats.cg_iterations_max, r.iterations);
+        stats.cg_residual = std::max(stats.cg_residual, r.relative_residual);
+        if (!r.converged) ++stats.cg_not_converged;
+        ++stats.newton_iterations;
+        for (auto& s : solvers_) s->part_newton_update();
+        mark(e++);
+    }
+    for (auto& s : solvers_) s->part_commit();
+    mark(e++);
+
+    // Every part checks its own vertices (ghosts included) for NaN and Inf; one finding rolls every
+    // part back, as one GPU would.
+    int non_finite = 0, contacts = 0;
+    for (auto& s : solvers_) {
+        const DeviceStats& ds = s->part_stats();
+        non_finite += ds.non_finite;
+        contacts += ds.contacts;
+    }
+    stats.collider_contacts = contacts;
+    // Events: start, after the start of the substep, per Newton iteration (assembly, solve, update), end.
+    stats.ms(Stage::Kinematics) += host_ms + elapsed_ms(0, 1);
+    std::size_t k = 1;
+    for (int it = 0; it < settings.newton_iterations; ++it, k += 3) {
+        stats.ms(Stage::Forces) += elapsed_ms(k, k + 1);
+        stats.ms(Stage::Solve) += elapsed_ms(k + 1, k + 2);
+        stats.ms(Stage::Update) += elapsed_ms(k + 2, k + 3);
+    }
+    stats.ms(Stage::Update) += elapsed_ms(k, k + 1);
+    const auto after = Clock::now();
+    if (non_finite > 0) {
+        stats.non_finite = true;
+        for (auto& s : solvers_) s->part_rollback();
+    } else {
+        bool swept = false;
+        for (auto& s : solvers_) swept = s->part_sweep(stats) || swept;
+        if (swept) exchange_state();  // a ghost may have been carried along differently from its owner
+    }
+    if (has_output_) {
+        for (auto& s : solvers_) s->part_write_output();
+        synchronize();
+    }
+    stats.ms(Stage::Update) += ms_since(after);
+}
+
+void MultiSolver::read_state(std::size_t first, std::size_t count, Vec3d* x, Vec3d* v) const {
+    if (first + count > (flat_ != nullptr ? flat_->vertex_count : 0))
+        throw Error("multi-GPU solver: read_state of vertices [" + std::to_string(first) + ", " + std::to_string(first + count) +
+                    ") past the model");
+    for (std::size_t p = 0; p < solvers_.size(); ++p) {
+        const PartModel& pm = part_models_[p];
+        std::vector<Vec3d> px(pm.owned), pv(pm.owned);
+        solvers_[p]->read_state(0, pm.owned, px.data(), pv.data());
+        for (std::uint32_t i = 0; i < pm.owned; ++i) {
+            const std::size_t g = pm.global_vertex[i];
+            if (g < first || g >= first + count) continue;
+            x[g - first] = px[i];
+            v[g - first] = pv[i];
+        }
+    }
+}
+
+void MultiSolver::write_state(std::size_t first, std::size_t count, const Vec3d* x, const Vec3d* v) {
+    if (first + count > (flat_ != nullptr ? flat_->vertex_count : 0))
+        throw Error("multi-GPU solver: write_state of vertices [" + std::to_string(first) + ", " +
+                    std::to_string(first + count) + ") past the model");
+    for (std::size_t p = 0; p < solvers_.size(); ++p) {
+        const PartModel& pm = part_models_[p];
+        const std::size_t local = pm.model.vertex_count;
+        std::vector<Vec3d> px(local), pv(local);
+        solvers_[p]->read_state(0, local, px.data(), pv.data());
+        bool touched = false;
+        for (std::size_t i = 0; i < local; ++i) {
+            const std::size_t g = pm.global_vertex[i];
+            if (g < first || g >= first + count) continue;
+            px[i] = x[g - first];
+            pv[i] = v[g - first];
+            touched = true;
+        }
+        if (touched) solvers_[p]->write_state(0, local, px.data(), pv.data());
+    }
+}
+
+EnergyAudit MultiSolver::energy_audit(const Model& model, double t, double h, bool with_wind) {
+    EnergyAudit sum;
+    sum.with_wind = with_wind;
+    for (std::size_t p = 0; p < solvers_.size(); ++p) {
+        const EnergyAudit a = solvers_[p]->energy_audit(model, t, h, with_wind);
+        sum.bounded = sum.bounded && a.bounded;
+        sum.kinetic += a.kinetic;
+        sum.gravity += a.gravity;
+        sum.contact += a.contact;
+        sum.elastic += a.elastic;
+        sum.external_power += a.external_power;
+    }
+    return sum;
+}
+
+void MultiSolver::set_output(void* device_buffer, std::size_t stride) {
+    if (device_buffer != nullptr && stride < 6 * sizeof(float))
+        throw Error("CUDA backend: output stride " + std::to_string(stride) + " is smaller than one vertex (24 bytes)");
+    // The buffer lives on the first part's GPU; the others write into it through peer access.
+    for (auto& s : solvers_) enable_peer_access(s->device(), devices_.front());
+    for (auto& s : solvers_) s->set_output(device_buffer, stride, false);
+    has_output_ = device_buffer != nullptr;
+    synchronize();
+}
+
+std::size_t MultiSolver::memory_bytes() const {
+    std::size_t total = halo_ ? halo_->memory_bytes() : 0;
+    for (std::size_t p = 0; p < solvers_.size(); ++p) total += solvers_[p]->memory_bytes() + (pcg_ ? pcg_->memory_bytes(p) : 0);
+    return total;
+}
+
+std::vector<std::pair<std::string, std::size_t>> MultiSolver::memory_breakdown() const {
+    std::vector<std::pair<std::string, std::size_t>> out;
+    for (std::size_t p = 0; p < solvers_.size(); ++p) {
+        const std::string prefix = "part " + std::to_string(p) + " (GPU " + std::to_string(devices_[p]) + "): ";
+        for (const auto& [what, bytes] : solvers_[p]->memory_breakdown()) out.emplace_back(prefix + what, bytes);
+        if (pcg_) out.emplace_back(prefix + "CG across parts", pcg_->memory_bytes(p));
+    }
+    if (halo_) out.emplace_back("halo exchange", halo_->memory_bytes());
+    return out;
+}
+
+}  // namespace weft::cuda::multi

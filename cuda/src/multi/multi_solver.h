@@ -1,0 +1,84 @@
+#pragma once
+/// @file
+/// One world stepped across several GPUs (docs/multi-gpu.md): the vertices cut into parts along the
+/// preconditioner's order (weft/backend/vertex_partition.h), each part a DeviceSolver in part mode on
+/// its GPU holding its local model (owned vertices, then ghosts), the CG run across the parts with
+/// one reduction per iteration (multi/part_pcg.h), and Δv's ghosts exchanged after each solve
+/// (multi/halo_exchange.h), so that every part's ghosts always hold their owners' state.
+///
+/// Several parts may share one GPU: the test mode that checks the partition logic on any GPU host.
+
+#include <cstdint>
+#include <memory>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "device_solver.h"
+#include "multi/halo_exchange.h"
+#include "multi/part_pcg.h"
+#include "weft/backend/flat_model.h"
+#include "weft/backend/model.h"
+#include "weft/backend/part_model.h"
+#include "weft/backend/vertex_partition.h"
+#include "weft/stats.h"
+
+namespace weft::cuda::multi {
+
+class MultiSolver {
+public:
+    /// Part p on CUDA device `devices[p]` (one part per entry; entries may repeat). Throws
+    /// weft::Error for an empty list or a device that does not exist.
+    explicit MultiSolver(std::vector<int> devices);
+    ~MultiSolver();
+    MultiSolver(const MultiSolver&) = delete;
+    MultiSolver& operator=(const MultiSolver&) = delete;
+
+    /// Partitions `flat` (kept by reference; it must outlive the solver) and builds every part.
+    /// Throws weft::Error naming what is missing when the model needs a stage not built across GPUs
+    /// (cloth collisions: self-collision or mesh colliders), or when the cloth is too small to cut.
+    void build(const FlatModel& flat, const Model& model);
+    void substep(const Model& model, double t, double h, StepStats& stats);
+    /// Global vertices [first, first + count) of the flat model, from their owners.
+    void read_state(std::size_t first, std::size_t count, Vec3d* x, Vec3d* v) const;
+    /// Sets global vertices [first, first + count) on their owners and every ghost copy.
+    void write_state(std::size_t first, std::size_t count, const Vec3d* x, const Vec3d* v);
+    /// The energy guard's audit summed over the parts, each on its device (vertices by their owner,
+    /// elements by the owner of their first corner): a few numbers come back, not the state.
+    [[nodiscard]] EnergyAudit energy_audit(const Model& model, double t, double h, bool with_wind);
+    /// Every substep ends with each part writing its owned vertices' positions and normals into
+    /// `device_buffer` (on devices()[0]; the other GPUs write through peer access), vertex i at
+    /// stride·i bytes; the host waits for those writes.
+    void set_output(void* device_buffer, std::size_t stride);
+
+    [[nodiscard]] std::size_t parts() const { return devices_.size(); }
+    [[nodiscard]] const std::vector<int>& devices() const { return devices_; }
+    [[nodiscard]] const VertexPartition& partition() const { return partition_; }
+    [[nodiscard]] const DeviceSolver& part(std::size_t p) const { return *solvers_.at(p); }
+    /// Device memory of all parts, bytes.
+    [[nodiscard]] std::size_t memory_bytes() const;
+    /// Device memory per GPU ("GPU d: ...") and per purpose.
+    [[nodiscard]] std::vector<std::pair<std::string, std::size_t>> memory_breakdown() const;
+    /// Bytes crossing between devices per exchange of one float3 vector.
+    [[nodiscard]] std::uint64_t halo_bytes() const { return halo_ ? halo_->bytes_between_devices() : 0; }
+
+private:
+    /// Exchanges the ghosts of x, v and the previous Δv (after a sweep or a rollback changed them).
+    void exchange_state();
+    void synchronize() const;
+    /// Records stage event k on the first part's stream (created on first use).
+    void mark(std::size_t k);
+    [[nodiscard]] double elapsed_ms(std::size_t a, std::size_t b) const;
+
+    std::vector<int> devices_;
+    const FlatModel* flat_ = nullptr;
+    VertexPartition partition_;
+    std::vector<PartModel> part_models_;
+    std::vector<std::unique_ptr<DeviceSolver>> solvers_;
+    std::unique_ptr<HaloExchange> halo_;
+    std::unique_ptr<PartPcg> pcg_;
+    bool has_output_ = false;
+    std::vector<cudaEvent_t> events_;  // stage timing, on devices_.front()
+};
+
+}  // namespace weft::cuda::multi
