@@ -3,6 +3,7 @@
 // across the parts between them.
 #include <bit>
 #include <limits>
+#include <vector>
 
 #include "device_solver.h"
 #include "kernels.h"
@@ -20,9 +21,18 @@ void DeviceSolver::build_part(const FlatModel& whole, const PartModel& part, con
     for (std::size_t i = 0; i < part.global_vertex.size(); ++i) local_of_global_[part.global_vertex[i]] = static_cast<std::uint32_t>(i);
     build(part.model, model);
     WEFT_CUDA_CHECK(cudaSetDevice(device_));
+    // A ghost is fixed where its owner is (the part's pins are its owned ones): filters that read a
+    // neighbour's flag, such as the Schwarz couplings, then see what one GPU sees.
+    std::vector<std::uint8_t> fixed(part.global_vertex.size(), 0);
+    for (std::size_t i = 0; i < fixed.size(); ++i) {
+        const std::uint32_t g = part.global_vertex[i];
+        fixed[i] = g < whole.vertex_pin.size() && whole.vertex_pin[g] >= 0 ? 1 : 0;
+    }
+    if (!fixed.empty())
+        WEFT_CUDA_CHECK(cudaMemcpy(fixed_.get(), fixed.data(), fixed.size(), cudaMemcpyHostToDevice));
     const std::vector<std::uint32_t> owned(part.global_vertex.begin(), part.global_vertex.begin() + part.owned);
     output_index_.upload(owned, ledger_, "part output places");
-    schwarz_on_ = false;  // block-Jacobi across parts for now (docs/multi-gpu.md)
+    schwarz_on_ = false;  // block-Jacobi until part_use_schwarz
     pcg_loop_ = PcgLoop::PerKernel;
     persistent_grid_ = 0;
 }
@@ -31,6 +41,14 @@ void DeviceSolver::part_begin_substep(const Model& model, double t, double h) {
     WEFT_CUDA_CHECK(cudaSetDevice(device_));
     cudaStream_t stream = active_stream();
     fill_staging(model, t, h, host_staging_.get());
+    {
+        // Whether this substep refactors the Schwarz preconditioner, as in substep().
+        auto* sp = reinterpret_cast<StepParams*>(host_staging_.get());
+        const int k = model.settings.solver.preconditioner_refresh;
+        const long long index = substep_count_++;
+        sp->schwarz_refactor = !schwarz_factored_ || k <= 1 ? 1 : (index % k == 0 ? 2 : 0);
+        if (schwarz_on_) schwarz_factored_ = true;
+    }
     WEFT_CUDA_CHECK(cudaMemcpyAsync(staging_.get(), host_staging_.get(), host_staging_.size(), cudaMemcpyHostToDevice, stream));
     launch_begin_substep(view_, stream);
     launch_pin_velocities(view_, stream);
@@ -44,7 +62,29 @@ void DeviceSolver::part_assemble(bool first_newton) {
         launch_assemble_rows(view_, stream);
     else
         launch_assemble_colors(view_, layout_.triangle_colors, layout_.hinge_colors, stream);
-    launch_pcg_setup(view_, first_newton, false, stream);
+    launch_pcg_setup(view_, first_newton, schwarz_on_, stream);
+}
+
+void DeviceSolver::part_use_schwarz(bool on, const SchwarzHierarchy& whole) {
+    WEFT_CUDA_CHECK(cudaSetDevice(device_));
+    if (on && !schwarz_.built()) {
+        WEFT_CUDA_CHECK(cudaStreamSynchronize(active_stream()));
+        schwarz_.build_part(extract_part_schwarz(whole, *part_), part_->model.pattern, layout_.ell.slot_position, ledger_);
+        view_.mas = schwarz_.view();
+    }
+    if (on != schwarz_on_) schwarz_factored_ = false;
+    schwarz_on_ = on;
+}
+
+void DeviceSolver::part_factor_level1(int newton) {
+    WEFT_CUDA_CHECK(cudaSetDevice(device_));
+    launch_schwarz_couplings(view_, 1, 2, newton, active_stream());
+}
+
+void DeviceSolver::part_factor_rest(int newton) {
+    WEFT_CUDA_CHECK(cudaSetDevice(device_));
+    launch_schwarz_couplings(view_, 2, view_.mas.levels, newton, active_stream());
+    launch_schwarz_factor_domains(view_, newton, active_stream());
 }
 
 void DeviceSolver::part_newton_update() {
@@ -96,6 +136,11 @@ multi::PartSystem DeviceSolver::part_system() const {
     s.blocks = view_.blocks;
     s.fixed = view_.fixed;
     s.precond = view_.precond;
+    if (schwarz_on_) {
+        s.schwarz = &view_;
+        s.level1_begin = 3 * std::size_t{schwarz_.part().node_begin};
+        s.level1_end = 3 * std::size_t{schwarz_.part().node_end};
+    }
     return s;
 }
 

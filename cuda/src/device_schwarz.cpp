@@ -14,13 +14,27 @@ void DeviceSchwarz::release() {
     floats_ = {};
     view_ = SchwarzView{};
     hierarchy_ = SchwarzHierarchy{};
+    part_ = PartSchwarz{};
 }
 
 void DeviceSchwarz::build(const FlatModel& flat, const std::vector<std::uint32_t>& slot_position, MemoryLedger& ledger) {
     release();
     hierarchy_ = build_schwarz_hierarchy(flat.initial_positions, flat.pattern, kSchwarzMaxLevels);
+    upload(flat.pattern, slot_position, 0, ledger);
+}
+
+void DeviceSchwarz::build_part(PartSchwarz part, const BlockPattern& pattern, const std::vector<std::uint32_t>& slot_position,
+                               MemoryLedger& ledger) {
+    release();
+    part_ = std::move(part);
+    hierarchy_ = std::move(part_.levels);
+    part_.levels = SchwarzHierarchy{};
+    upload(pattern, slot_position, part_.entry_begin, ledger);
+}
+
+void DeviceSchwarz::upload(const BlockPattern& pattern, const std::vector<std::uint32_t>& slot_position,
+                           std::uint32_t level1_entry_begin, MemoryLedger& ledger) {
     const SchwarzHierarchy& h = hierarchy_;
-    const BlockPattern& pattern = flat.pattern;
 
     // Tables: appended to one host vector; offsets become pointers after the upload.
     std::vector<std::uint32_t> table;
@@ -31,7 +45,7 @@ void DeviceSchwarz::build(const FlatModel& flat, const std::vector<std::uint32_t
         return at;
     };
     std::vector<std::uint32_t> slot_row(pattern.column.size());
-    for (std::uint32_t i = 0; i < h.vertex_count; ++i)
+    for (std::uint32_t i = 0; i + 1 < pattern.row_start.size(); ++i)
         for (std::uint32_t s = pattern.row_start[i]; s < pattern.row_start[i + 1]; ++s) slot_row[s] = i;
     const std::size_t order_at = append(h.order), rank_at = append(h.rank), position_at = append(slot_position),
                       row_at = append(slot_row), column_at = append(pattern.column);
@@ -84,7 +98,9 @@ void DeviceSchwarz::build(const FlatModel& flat, const std::vector<std::uint32_t
         SchwarzLevelView& v = view_.level[l];
         v.nodes = level.nodes;
         v.domains = level.domains();
-        v.entries = static_cast<std::uint32_t>(level.entry_row.size());
+        // Computed here: every entry on one GPU, the part's own in part mode (source_start's runs).
+        v.entries = level.source_start.empty() ? 0 : static_cast<std::uint32_t>(level.source_start.size() - 1);
+        v.entry_begin = l == 1 ? level1_entry_begin : 0;
         v.parent = level.parent.empty() ? nullptr : base + o.parent;
         v.parent_start = level.parent_start.empty() ? nullptr : base + o.parent_start;
         v.source_start = base + o.source_start;

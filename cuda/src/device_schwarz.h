@@ -9,6 +9,7 @@
 
 #include "device_array.h"
 #include "weft/backend/flat_model.h"
+#include "weft/backend/part_schwarz.h"
 #include "weft/backend/schwarz_hierarchy.h"
 
 namespace weft::cuda {
@@ -18,7 +19,11 @@ inline constexpr std::uint32_t kSchwarzNodes = SchwarzHierarchy::kDomainSize;  /
 inline constexpr std::uint32_t kSchwarzDim = SchwarzHierarchy::kDomainDim;     // rows of a domain matrix
 
 struct SchwarzLevelView {
-    std::uint32_t nodes = 0, domains = 0, entries = 0;
+    std::uint32_t nodes = 0, domains = 0;
+    /// Coupling entries this device computes, [entry_begin, entry_begin + entries) of `coupling`
+    /// (all of them on one GPU; a part's own on several, docs/multi-gpu.md). source_start and source
+    /// are indexed from entry_begin.
+    std::uint32_t entries = 0, entry_begin = 0;
     const std::uint32_t* parent = nullptr;        ///< node → node of the next level (null on the last)
     const std::uint32_t* parent_start = nullptr;  ///< per domain, its first next-level node (domains + 1)
     const std::uint32_t* source_start = nullptr;  ///< level ≥ 1: entries + 1
@@ -49,13 +54,24 @@ public:
     /// Builds the hierarchy for `flat` and uploads it with the per-step arrays, charged to `ledger`.
     /// `slot_position` maps the flat pattern's slots to the solver's ELL positions.
     void build(const FlatModel& flat, const std::vector<std::uint32_t>& slot_position, MemoryLedger& ledger);
+    /// Part mode (the multi-GPU solver): uploads `part`'s share of the whole hierarchy for a part
+    /// whose local pattern is `pattern`, its slots at `slot_position`.
+    void build_part(PartSchwarz part, const BlockPattern& pattern, const std::vector<std::uint32_t>& slot_position,
+                    MemoryLedger& ledger);
+    /// Part mode: the floats of level 1's restricted residual and of its couplings that this part
+    /// computes (what the all-gathers send), and the whole arrays' sizes.
+    [[nodiscard]] const PartSchwarz& part() const { return part_; }
     void release();
     [[nodiscard]] bool built() const { return view_.levels > 0; }
     [[nodiscard]] const SchwarzView& view() const { return view_; }
     [[nodiscard]] const SchwarzHierarchy& hierarchy() const { return hierarchy_; }
 
 private:
+    void upload(const BlockPattern& pattern, const std::vector<std::uint32_t>& slot_position, std::uint32_t level1_entry_begin,
+                MemoryLedger& ledger);
+
     SchwarzHierarchy hierarchy_;
+    PartSchwarz part_;  // part mode only
     SchwarzView view_;
     DeviceArray<std::uint32_t> indices_;  // every table, one allocation
     DeviceArray<std::uint8_t> cells_;

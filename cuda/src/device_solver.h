@@ -108,8 +108,17 @@ public:
     /// Stages the substep's parameters and enqueues its start (x0, v0, the pins' velocities).
     void part_begin_substep(const Model& model, double t, double h);
     /// Enqueues one Newton iteration's system: every row's forces and blocks, then the owned rows'
-    /// block-Jacobi inverse and Δv's start (`first_newton`: the warm start may apply).
+    /// block-Jacobi inverse (with Schwarz: the diagonal blocks it aggregates) and Δv's start
+    /// (`first_newton`: the warm start may apply).
     void part_assemble(bool first_newton);
+    /// Switches the multilevel Schwarz preconditioner across the parts on or off; on builds this
+    /// part's share of `whole` (the hierarchy of the whole model) the first time.
+    void part_use_schwarz(bool on, const SchwarzHierarchy& whole);
+    /// Enqueues Newton iteration `newton`'s factorisation in the two pieces the parts' gather of
+    /// level 1's couplings goes between: this part's level-1 couplings, then the levels above and
+    /// every level's domain inverses.
+    void part_factor_level1(int newton);
+    void part_factor_rest(int newton);
     /// Enqueues v_k += Δv (Δv's ghosts exchanged by then).
     void part_newton_update();
     /// Enqueues x = x0 + h·v_k, v = v_k with the non-finite check (and this part's rollback).

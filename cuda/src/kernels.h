@@ -124,6 +124,11 @@ void launch_pcg_finish(const DeviceView& d, cudaStream_t stream);
 /// Newton iteration `newton`, the kernels do nothing when the staged StepParams::schwarz_refactor
 /// says this one reuses the last factors.
 void launch_schwarz_factor(const DeviceView& d, int newton, cudaStream_t stream);
+/// The factorisation in pieces, for the multi-GPU solver (whose parts gather level 1's couplings in
+/// between): the coupling blocks of levels [first_level, end_level) (level ≥ 1), then every level's
+/// domain inverses.
+void launch_schwarz_couplings(const DeviceView& d, int first_level, int end_level, int newton, cudaStream_t stream);
+void launch_schwarz_factor_domains(const DeviceView& d, int newton, cudaStream_t stream);
 /// What the apply reads: filter(b) (copied to r), r as it is, or r after the iteration's axpy pair
 /// (r −= αq, Δv += αc, done here for each vertex of a level-0 domain).
 enum class SchwarzInput { RightHandSide, Residual, Update };
@@ -135,6 +140,11 @@ enum class SchwarzOutput { Norm, Start, Iterate };
 /// once the loop has stopped.
 void launch_schwarz_apply(const DeviceView& d, SchwarzInput in, SchwarzOutput out, unsigned long long handle,
                           cudaStream_t stream);
+/// The apply in pieces, for the multi-GPU solver (whose parts gather level 1's restricted residual
+/// between them): level 0's domains with the restriction to level 1, and the coarser levels. With
+/// `running` (device memory) each kernel does nothing once it reads 0.
+void launch_schwarz_fine(const DeviceView& d, SchwarzInput in, const int* running, cudaStream_t stream);
+void launch_schwarz_coarse(const DeviceView& d, const int* running, cudaStream_t stream);
 
 // ---- the energy guard's audit (energy_kernels.cu) --------------------------------------------------
 /// The sums the audit returns, in this order (`sums` holds kEnergySums doubles).

@@ -48,7 +48,7 @@ __device__ inline void schwarz_fine_domain(const DeviceView& d, std::uint32_t do
     if (lane < kSchwarzNodes) {
         const std::uint32_t p = domain * kSchwarzNodes + lane;
         V3 r{};
-        if (p < d.n) {
+        if (p < level.nodes) {  // all vertices on one GPU, the owned ones of a part
             const std::uint32_t i = m.order[p];
             if (in == SchwarzInput::RightHandSide) {
                 r = d.fixed[i] ? V3{} : load3(d.b, i, d.n);

@@ -19,6 +19,9 @@
 //      and reduces rᵀz for CG's δ.
 #include <cuda_runtime.h>
 
+#include <algorithm>
+#include <cstddef>
+
 #include "cuda_check.h"
 #include "device_math.cuh"
 #include "pcg_control.cuh"
@@ -55,7 +58,7 @@ __global__ void schwarz_coupling_kernel(DeviceView d, int l, int newton) {
         const std::uint32_t src = level.source[k];
         acc += l == 1 ? fine_coupling(d, src) : load_block(d.mas.level[l - 1].coupling, src);
     }
-    store_block(level.coupling, e, acc);
+    store_block(level.coupling, level.entry_begin + e, acc);
 }
 
 __global__ void schwarz_factor_kernel(DeviceView d, int l, int newton) {
@@ -113,9 +116,9 @@ __global__ void schwarz_factor_kernel(DeviceView d, int l, int newton) {
     if (threadIdx.x == 0 && failed) atomicAdd(&d.stats->pivot_failures, 1);
 }
 
-__global__ void schwarz_fine_kernel(DeviceView d, SchwarzInput in) {
+__global__ void schwarz_fine_kernel(DeviceView d, SchwarzInput in, const int* running) {
     __shared__ float values[kSchwarzWarpsPerBlock][kDim];
-    if (in == SchwarzInput::Update && !d.control->running) return;
+    if (running != nullptr && *running == 0) return;
     const std::uint32_t warp = threadIdx.x / 32;
     const std::uint32_t domain = blockIdx.x * kSchwarzWarpsPerBlock + warp;
     if (domain >= d.mas.level[0].domains) return;
@@ -123,9 +126,9 @@ __global__ void schwarz_fine_kernel(DeviceView d, SchwarzInput in) {
     schwarz_fine_domain(d, domain, threadIdx.x % 32, values[warp], in, alpha);
 }
 
-__global__ void schwarz_coarse_kernel(DeviceView d, int l, int in_loop) {
+__global__ void schwarz_coarse_kernel(DeviceView d, int l, const int* running) {
     __shared__ float values[kSchwarzWarpsPerBlock][kDim];
-    if (in_loop && !d.control->running) return;
+    if (running != nullptr && *running == 0) return;
     const std::uint32_t warp = threadIdx.x / 32;
     const std::uint32_t domain = blockIdx.x * kSchwarzWarpsPerBlock + warp;
     if (domain >= d.mas.level[l].domains) return;
@@ -154,28 +157,50 @@ __global__ void schwarz_prolong_kernel(DeviceView d, SchwarzOutput out, unsigned
 
 }  // namespace
 
-void launch_schwarz_factor(const DeviceView& d, int newton, cudaStream_t stream) {
+void launch_schwarz_couplings(const DeviceView& d, int first_level, int end_level, int newton, cudaStream_t stream) {
     const SchwarzView& m = d.mas;
-    for (int l = 1; l < m.levels; ++l) {
+    for (int l = std::max(first_level, 1); l < std::min(end_level, m.levels); ++l) {
+        if (m.level[l].entries == 0) continue;
         schwarz_coupling_kernel<<<grid_for(m.level[l].entries), kBlockSize, 0, stream>>>(d, l, newton);
         WEFT_CUDA_CHECK_LAUNCH("schwarz_coupling_kernel");
     }
+}
+
+void launch_schwarz_factor_domains(const DeviceView& d, int newton, cudaStream_t stream) {
+    const SchwarzView& m = d.mas;
     for (int l = 0; l < m.levels; ++l) {
         schwarz_factor_kernel<<<m.level[l].domains, kBlockSize, 0, stream>>>(d, l, newton);
         WEFT_CUDA_CHECK_LAUNCH("schwarz_factor_kernel");
     }
 }
 
-void launch_schwarz_apply(const DeviceView& d, SchwarzInput in, SchwarzOutput out, unsigned long long handle,
-                          cudaStream_t stream) {
-    const SchwarzView& m = d.mas;
-    schwarz_fine_kernel<<<blocks_for(m.level[0].domains, kSchwarzWarpsPerBlock), kBlockSize, 0, stream>>>(d, in);
+void launch_schwarz_factor(const DeviceView& d, int newton, cudaStream_t stream) {
+    launch_schwarz_couplings(d, 1, d.mas.levels, newton, stream);
+    launch_schwarz_factor_domains(d, newton, stream);
+}
+
+void launch_schwarz_fine(const DeviceView& d, SchwarzInput in, const int* running, cudaStream_t stream) {
+    schwarz_fine_kernel<<<blocks_for(d.mas.level[0].domains, kSchwarzWarpsPerBlock), kBlockSize, 0, stream>>>(d, in, running);
     WEFT_CUDA_CHECK_LAUNCH("schwarz_fine_kernel");
-    const int in_loop = in == SchwarzInput::Update ? 1 : 0;
+}
+
+void launch_schwarz_coarse(const DeviceView& d, const int* running, cudaStream_t stream) {
+    const SchwarzView& m = d.mas;
     for (int l = 1; l < m.levels; ++l) {
-        schwarz_coarse_kernel<<<blocks_for(m.level[l].domains, kSchwarzWarpsPerBlock), kBlockSize, 0, stream>>>(d, l, in_loop);
+        schwarz_coarse_kernel<<<blocks_for(m.level[l].domains, kSchwarzWarpsPerBlock), kBlockSize, 0, stream>>>(d, l, running);
         WEFT_CUDA_CHECK_LAUNCH("schwarz_coarse_kernel");
     }
+}
+
+void launch_schwarz_apply(const DeviceView& d, SchwarzInput in, SchwarzOutput out, unsigned long long handle,
+                          cudaStream_t stream) {
+    // In the CG loop (Update) every kernel does nothing once the loop has stopped.
+    // (The flag's device address, computed without touching device memory.)
+    const int* running = in == SchwarzInput::Update
+                             ? reinterpret_cast<const int*>(reinterpret_cast<const char*>(d.control) + offsetof(PcgControl, running))
+                             : nullptr;
+    launch_schwarz_fine(d, in, running, stream);
+    launch_schwarz_coarse(d, running, stream);
     schwarz_prolong_kernel<<<grid_for(d.n), kBlockSize, 0, stream>>>(d, out, handle);
     WEFT_CUDA_CHECK_LAUNCH("schwarz_prolong_kernel");
 }

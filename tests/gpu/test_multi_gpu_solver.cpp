@@ -95,11 +95,15 @@ std::unique_ptr<World> make(const std::string& scene, const std::vector<std::str
 /// flag flaps and the drape's folds choose a side, so whole trajectories part at any rounding
 /// difference (measured: 1e-13 m after one step of drape, 0.1 m after 100), while one step's gap
 /// is what the parts' logic owns.
-double worst_step_gap(const std::string& scene, const std::vector<std::string>& overrides, int gpus, bool one_device,
-                      int steps) {
+struct StepGaps {
+    double worst = 0.0;  ///< the largest step gap over the step's largest move
+    long long iterations_one = 0, iterations_split = 0;  ///< CG iterations summed over the steps
+};
+
+StepGaps step_gaps(const std::string& scene, const std::vector<std::string>& overrides, int gpus, bool one_device, int steps) {
     auto one = make(scene, overrides, 1, false);
     auto split = make(scene, overrides, gpus, one_device);
-    double worst = 0.0;
+    StepGaps out;
     for (int s = 0; s < steps; ++s) {
         double moved = 0.0, gap = 0.0;
         std::vector<std::vector<Vec3d>> start(one->cloth_count());
@@ -111,6 +115,8 @@ double worst_step_gap(const std::string& scene, const std::vector<std::string>& 
         }
         const StepStats& a = one->step();
         const StepStats& b = split->step();
+        out.iterations_one += a.cg_iterations;
+        out.iterations_split += b.cg_iterations;
         EXPECT_FALSE(a.non_finite || b.non_finite) << scene << ", step " << s;
         EXPECT_EQ(a.cg_not_converged, 0) << scene << ", step " << s;
         EXPECT_EQ(b.cg_not_converged, 0) << scene << ", step " << s;
@@ -121,9 +127,9 @@ double worst_step_gap(const std::string& scene, const std::vector<std::string>& 
                 gap = std::max(gap, length(xa[i] - xb[i]));
             }
         }
-        if (moved > 0.0) worst = std::max(worst, gap / moved);
+        if (moved > 0.0) out.worst = std::max(out.worst, gap / moved);
     }
-    return worst;
+    return out;
 }
 
 /// One step's gap may be this share of the step's largest move. Both solves stop at a relative
@@ -137,11 +143,29 @@ TEST(MultiGpuSolver, PartsOnOneGpuFollowOneGpuStepByStepOver100Steps) {
     WEFT_REQUIRE_GPU();
     for (const char* scene : {"flag", "drape"}) {
         for (const int parts : {2, 3}) {
-            const double worst = worst_step_gap(scene, with({}), parts, true, 100);
+            const double worst = step_gaps(scene, with({}), parts, true, 100).worst;
             std::printf("[ multi    ] %s: %d parts on one GPU, 100 steps: worst step gap %.3g of the step's move\n", scene, parts,
                         worst);
             EXPECT_LT(worst, kStepTolerance) << scene << ", " << parts << " parts";
         }
+    }
+}
+
+// The multilevel Schwarz preconditioner across parts: level 1 gathered from every part, so it is the
+// one-GPU preconditioner and the CG needs as many iterations (within 10%: the two CG recurrences
+// round differently) and lands on the same step.
+TEST(MultiGpuSolver, SchwarzAcrossPartsKeepsTheOneGpuIterationCount) {
+    WEFT_REQUIRE_GPU();
+    const std::vector<std::string> mas{"solver.preconditioner=\"mas\"", "solver.cg_tolerance=1e-6",
+                                       "cloth.flag.mesh.grid.cells=[90,54]"};
+    for (const int parts : {2, 3}) {
+        const StepGaps g = step_gaps("flag", mas, parts, true, 30);
+        std::printf("[ multi    ] flag 91 × 55 with MAS, %d parts on one GPU, 30 steps: worst step gap %.3g of the move, "
+                    "CG iterations %lld (one GPU %lld)\n",
+                    parts, g.worst, g.iterations_split, g.iterations_one);
+        EXPECT_LT(g.worst, kStepTolerance) << parts << " parts";
+        EXPECT_LE(static_cast<double>(g.iterations_split), 1.1 * static_cast<double>(g.iterations_one)) << parts << " parts";
+        EXPECT_GE(static_cast<double>(g.iterations_split), 0.9 * static_cast<double>(g.iterations_one)) << parts << " parts";
     }
 }
 
@@ -181,8 +205,10 @@ TEST(MultiGpuSolver, TwoGpusGiveTheBitsOfTheSamePartsOnOneGpu) {
         EXPECT_TRUE(same_bits(one_device, two_devices)) << scene;
         EXPECT_FALSE(two_devices.non_finite) << scene;
     }
+    const std::vector<std::string> mas{"solver.preconditioner=\"mas\"", "cloth.flag.mesh.grid.cells=[90,54]"};
+    EXPECT_TRUE(same_bits(run("flag", mas, 2, 30, true), run("flag", mas, 2, 30, false))) << "flag with MAS";
     for (const char* scene : {"flag", "drape"}) {
-        const double worst = worst_step_gap(scene, with({}), 2, false, 100);
+        const double worst = step_gaps(scene, with({}), 2, false, 100).worst;
         std::printf("[ multi    ] %s: 2 parts on 2 GPUs, 100 steps: worst step gap %.3g of the step's move\n", scene, worst);
         EXPECT_LT(worst, kStepTolerance) << scene;
     }

@@ -37,6 +37,7 @@ MultiSolver::~MultiSolver() {
     if (!devices_.empty()) cudaSetDevice(devices_.front());
     for (cudaEvent_t e : events_) cudaEventDestroy(e);
     pcg_.reset();
+    level1_couplings_.reset();
     halo_.reset();
     solvers_.clear();
 }
@@ -47,12 +48,19 @@ void MultiSolver::build(const FlatModel& flat, const Model& model) {
                     " parts: cloth collisions (self-collision, mesh colliders) are not split across GPUs yet; switch "
                     "them off or run on one GPU");
     pcg_.reset();
+    level1_couplings_.reset();
     halo_.reset();
     solvers_.clear();
     part_models_.clear();
     flat_ = &flat;
     const auto parts = static_cast<std::uint32_t>(devices_.size());
-    partition_ = partition_along_preconditioner(flat, parts);  // throws, naming the count, when too small
+    hierarchy_ = build_schwarz_hierarchy(flat.initial_positions, flat.pattern, kSchwarzMaxLevels);
+    {
+        const std::vector<double> work = row_work(flat.pattern);
+        // Throws, naming the count, when there are fewer level-0 domains than parts.
+        partition_ = build_partition(flat.pattern, cut_order(hierarchy_.order, work, parts, SchwarzHierarchy::kDomainSize),
+                                     parts, work);
+    }
     part_models_.reserve(parts);
     for (std::uint32_t p = 0; p < parts; ++p) part_models_.push_back(extract_part(flat, partition_, p));
     std::vector<cudaStream_t> streams;
@@ -65,8 +73,43 @@ void MultiSolver::build(const FlatModel& flat, const Model& model) {
         solvers_.push_back(std::move(solver));
     }
     halo_ = std::make_unique<HaloExchange>(partition_, devices_, streams);
+    level1_couplings_ = std::make_unique<AllGather>(devices_, streams);
+    schwarz_ = false;
     pcg_ = std::make_unique<PartPcg>(systems, *halo_);
+    choose_preconditioner(model.settings.solver);
     has_output_ = false;
+}
+
+void MultiSolver::choose_preconditioner(const SolverSettings& settings) {
+    const bool schwarz = settings.preconditioner == Preconditioner::Schwarz ||
+                         (settings.preconditioner == Preconditioner::Auto && flat_->vertex_count >= kAutoSchwarzMinVertices);
+    if (schwarz == schwarz_ && pcg_) return;
+    synchronize();
+    pcg_.reset();
+    std::vector<PartSystem> systems;
+    for (auto& s : solvers_) {
+        s->part_use_schwarz(schwarz, hierarchy_);
+        systems.push_back(s->part_system());
+    }
+    schwarz_ = schwarz;
+    pcg_ = std::make_unique<PartPcg>(systems, *halo_);
+}
+
+void MultiSolver::factor_schwarz(int newton) {
+    // Each part's own level-1 couplings, gathered by every part, then the levels above and every
+    // level's domains on every part (docs/multi-gpu.md).
+    for (auto& s : solvers_) s->part_factor_level1(newton);
+    if (hierarchy_.levels() > 1) {
+        std::vector<float*> couplings;
+        std::vector<std::size_t> begin, end;
+        for (auto& s : solvers_) {
+            couplings.push_back(s->view().mas.level[1].coupling);
+            begin.push_back(9 * std::size_t{s->schwarz().part().entry_begin});
+            end.push_back(9 * std::size_t{s->schwarz().part().entry_end});
+        }
+        level1_couplings_->enqueue(couplings, begin, end);
+    }
+    for (auto& s : solvers_) s->part_factor_rest(newton);
 }
 
 void MultiSolver::exchange_state() {
@@ -112,6 +155,7 @@ void MultiSolver::substep(const Model& model, double t, double h, StepStats& sta
     if (needs_cloth_collisions(model))
         throw Error("CUDA backend on " + std::to_string(devices_.size()) +
                     " parts: cloth collisions were switched on; they are not split across GPUs yet");
+    choose_preconditioner(model.settings.solver);  // may change live
     const auto host_start = Clock::now();
     std::size_t e = 0;
     mark(e++);
@@ -127,7 +171,8 @@ void MultiSolver::substep(const Model& model, double t, double h, StepStats& sta
     }
     for (int it = 0; it < settings.newton_iterations; ++it) {
         for (auto& s : solvers_) s->part_assemble(it == 0);
-        // The first part's stream waits for the others' assembly at the solve's first exchange.
+        if (schwarz_) factor_schwarz(it);
+        // The first part's stream waits for the others' work at the solve's first exchange.
         mark(e++);
         const PartPcgResult r = pcg_->solve(b, dv, settings.cg_tolerance, settings.cg_max_iterations, kIterationsPerLaunch);
         mark(e++);

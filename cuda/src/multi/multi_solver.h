@@ -15,11 +15,13 @@
 #include <vector>
 
 #include "device_solver.h"
+#include "multi/all_gather.h"
 #include "multi/halo_exchange.h"
 #include "multi/part_pcg.h"
 #include "weft/backend/flat_model.h"
 #include "weft/backend/model.h"
 #include "weft/backend/part_model.h"
+#include "weft/backend/schwarz_hierarchy.h"
 #include "weft/backend/vertex_partition.h"
 #include "weft/stats.h"
 
@@ -61,11 +63,18 @@ public:
     [[nodiscard]] std::vector<std::pair<std::string, std::size_t>> memory_breakdown() const;
     /// Bytes crossing between devices per exchange of one float3 vector.
     [[nodiscard]] std::uint64_t halo_bytes() const { return halo_ ? halo_->bytes_between_devices() : 0; }
+    /// Whether the CG runs with the multilevel Schwarz preconditioner across the parts (else block-Jacobi).
+    [[nodiscard]] bool schwarz_active() const { return schwarz_; }
 
 private:
     /// Exchanges the ghosts of x, v and the previous Δv (after a sweep or a rollback changed them).
     void exchange_state();
     void synchronize() const;
+    /// The preconditioner `settings` asks for (Auto: Schwarz from kAutoSchwarzMinVertices vertices,
+    /// as on one GPU); switching builds the parts' Schwarz levels the first time and a new CG.
+    void choose_preconditioner(const SolverSettings& settings);
+    /// Enqueues Newton iteration `newton`'s Schwarz factorisation on every part.
+    void factor_schwarz(int newton);
     /// Records stage event k on the first part's stream (created on first use).
     void mark(std::size_t k);
     [[nodiscard]] double elapsed_ms(std::size_t a, std::size_t b) const;
@@ -77,6 +86,9 @@ private:
     std::vector<std::unique_ptr<DeviceSolver>> solvers_;
     std::unique_ptr<HaloExchange> halo_;
     std::unique_ptr<PartPcg> pcg_;
+    SchwarzHierarchy hierarchy_;                // the whole model's: the partition's order, the parts' levels
+    bool schwarz_ = false;
+    std::unique_ptr<AllGather> level1_couplings_;  // the Schwarz factorisation's level 1, every Newton iteration
     bool has_output_ = false;
     std::vector<cudaEvent_t> events_;  // stage timing, on devices_.front()
 };

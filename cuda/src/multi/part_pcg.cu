@@ -5,13 +5,16 @@
 #include <cub/block/block_reduce.cuh>
 
 #include <algorithm>
+#include <cstddef>
 #include <cmath>
 #include <string>
 
 #include "cuda_check.h"
 #include "device_math.cuh"
 #include "kernels.h"
+#include "multi/all_gather.h"
 #include "multi/peer_access.h"
+#include "schwarz_apply.cuh"
 #include "weft/error.h"
 
 namespace weft::cuda::multi {
@@ -106,6 +109,11 @@ __device__ inline M3 load_precond(const float* precond, std::uint32_t i, std::ui
     return m;
 }
 
+/// The device address of the loop's running flag (computed without touching device memory).
+const int* check_flag(const PartPcgScalars* scalars) {
+    return reinterpret_cast<const int*>(reinterpret_cast<const char*>(scalars) + offsetof(PartPcgScalars, running));
+}
+
 __device__ inline bool is_fixed(const PartSystem& a, std::uint32_t i) { return a.fixed != nullptr && a.fixed[i] != 0; }
 
 __global__ void invert_diagonal_kernel(PartSystem a, float* precond) {
@@ -140,33 +148,54 @@ __global__ void product_kernel(PartSystem a, const float* x, float* w, const flo
 }
 
 /// r = filter(b − w) (w = A·x), u = M⁻¹r, p = s = 0; partials (rᵀu, bᵀM⁻¹b over the free rows).
-__global__ void start_kernel(PartSystem a, const float* precond, const float* b, const float* w, float* r, float* u, float* p,
-                             float* s, double* partials) {
+/// `jacobi`: with block-Jacobi, u = M⁻¹r and both partials here; otherwise (Schwarz) r only, the
+/// apply follows.
+__global__ void start_kernel(PartSystem a, const float* precond, int jacobi, const float* b, const float* w, float* r, float* u,
+                             float* p, float* s, double* partials) {
     const std::uint32_t i = blockIdx.x * blockDim.x + threadIdx.x;
     double ru = 0.0, bb = 0.0;
     if (i < a.owned) {
         V3 ri{}, ui{};
         if (!is_fixed(a, i)) {
-            const M3 P = load_precond(precond, i, a.local);
             const V3 bi = load3(b, i, a.local);
             ri = bi - load3(w, i, a.local);
-            ui = P * ri;
-            ru = static_cast<double>(physics::dot(ri, ui));
-            bb = static_cast<double>(physics::dot(bi, P * bi));
+            if (jacobi != 0) {
+                const M3 P = load_precond(precond, i, a.local);
+                ui = P * ri;
+                ru = static_cast<double>(physics::dot(ri, ui));
+                bb = static_cast<double>(physics::dot(bi, P * bi));
+            }
         }
         store3(r, i, a.local, ri);
-        store3(u, i, a.local, ui);
+        if (jacobi != 0) store3(u, i, a.local, ui);
         store3(p, i, a.local, V3{});
         store3(s, i, a.local, V3{});
     }
+    if (jacobi == 0) return;
     block_partial(ru, partials, 0);
     __syncthreads();
     block_partial(bb, partials, 1);
 }
 
+/// u = z = M⁻¹r from the Schwarz levels (every level solved, schwarz_apply.cuh), with the partial
+/// rᵀz into slot `slot`. `check`: nothing once the loop has stopped.
+__global__ void prolong_kernel(DeviceView v, std::uint32_t owned, float* u, const PartPcgScalars* scalars, int check,
+                               double* partials, int slot) {
+    if (check != 0 && scalars->running == 0) return;
+    const std::uint32_t i = blockIdx.x * blockDim.x + threadIdx.x;
+    double value = 0.0;
+    if (i < owned) {
+        const V3 z = schwarz_correction(v, i);
+        store3(u, i, v.n, z);
+        value = static_cast<double>(physics::dot(load3(v.r, i, v.n), z));
+    }
+    block_partial(value, partials, slot);
+}
+
 /// p ← u + βp, s ← w + βs, x ← x + αp, r ← r − αs, u ← M⁻¹r; partial rᵀu into slot 0.
-__global__ void update_kernel(PartSystem a, const float* precond, const PartPcgScalars* scalars, float* x, float* r, float* u,
-                              const float* w, float* p, float* s, double* partials) {
+/// `jacobi` 0 (Schwarz): r only; the apply computes u and the partial.
+__global__ void update_kernel(PartSystem a, const float* precond, int jacobi, const PartPcgScalars* scalars, float* x, float* r,
+                              float* u, const float* w, float* p, float* s, double* partials) {
     if (scalars->running == 0) return;
     const auto alpha = static_cast<float>(scalars->alpha), beta = static_cast<float>(scalars->beta);
     const std::uint32_t i = blockIdx.x * blockDim.x + threadIdx.x;
@@ -179,18 +208,21 @@ __global__ void update_kernel(PartSystem a, const float* precond, const PartPcgS
         store3(s, i, local, si);
         store3(x, i, local, load3(x, i, local) + alpha * pi);
         const V3 ri = load3(r, i, local) - alpha * si;
-        const V3 ui = load_precond(precond, i, local) * ri;
         store3(r, i, local, ri);
-        store3(u, i, local, ui);
-        ru = static_cast<double>(physics::dot(ri, ui));
+        if (jacobi != 0) {
+            const V3 ui = load_precond(precond, i, local) * ri;
+            store3(u, i, local, ui);
+            ru = static_cast<double>(physics::dot(ri, ui));
+        }
     }
-    block_partial(ru, partials, 0);
+    if (jacobi != 0) block_partial(ru, partials, 0);
 }
 
 }  // namespace
 
 struct PartPcg::Part {
     PartSystem system;
+    DeviceView schwarz;                   // with the Schwarz preconditioner: the solver's view, r = this part's r
     unsigned blocks = 0;
     MemoryLedger ledger;
     DeviceArray<float> r, u, w, p, s, own_precond;
@@ -230,6 +262,10 @@ PartPcg::PartPcg(std::span<const PartSystem> systems, HaloExchange& halo) : halo
         } else {
             part->precond = a.precond;
         }
+        if (a.schwarz != nullptr) {
+            part->schwarz = *a.schwarz;
+            part->schwarz.r = part->r.get();
+        }
         part->partials.allocate(2 * std::size_t{part->blocks}, part->ledger, "multi-GPU CG partial sums");
         part->partials.zero(a.stream);
         part->gather.allocate(4 * parts, part->ledger, "multi-GPU CG partial sums");
@@ -238,6 +274,21 @@ PartPcg::PartPcg(std::span<const PartSystem> systems, HaloExchange& halo) : halo
         part->host.allocate(1);
         WEFT_CUDA_CHECK(cudaEventCreateWithFlags(&part->shared, cudaEventDisableTiming));
         part_.push_back(std::move(part));
+    }
+    const std::size_t with_schwarz = static_cast<std::size_t>(
+        std::count_if(systems.begin(), systems.end(), [](const PartSystem& a) { return a.schwarz != nullptr; }));
+    if (with_schwarz != 0 && with_schwarz != parts)
+        throw Error("PartPcg: " + std::to_string(with_schwarz) + " of " + std::to_string(parts) +
+                    " parts with the Schwarz preconditioner (all or none)");
+    schwarz_ = with_schwarz == parts;
+    if (schwarz_) {
+        std::vector<int> devices;
+        std::vector<cudaStream_t> streams;
+        for (const auto& part : part_) {
+            devices.push_back(part->system.device);
+            streams.push_back(part->system.stream);
+        }
+        level1_ = std::make_unique<AllGather>(devices, streams);
     }
     // Every part stores its sums into every other part's gather buffer.
     for (std::size_t k = 0; k < parts; ++k)
@@ -282,6 +333,32 @@ void PartPcg::enqueue_reduction(int parity, int mode) {
     }
 }
 
+void PartPcg::enqueue_schwarz(SchwarzInput in, int slot, int check) {
+    // Level 0 and the restriction on every part; level 1 gathered; the coarse levels on every part
+    // (each GPU all of them, the same bits); each part's owned rows of u with the partial rᵀu.
+    const auto running = [](const Part& part) {
+        return check_flag(part.scalars.get());
+    };
+    std::vector<float*> values;
+    std::vector<std::size_t> begin, end;
+    for (auto& part : part_) {
+        WEFT_CUDA_CHECK(cudaSetDevice(part->system.device));
+        launch_schwarz_fine(part->schwarz, in, check != 0 ? running(*part) : nullptr, part->system.stream);
+        values.push_back(part->schwarz.mas.level[1].values);
+        begin.push_back(part->system.level1_begin);
+        end.push_back(part->system.level1_end);
+    }
+    if (part_.front()->schwarz.mas.levels > 1) level1_->enqueue(values, begin, end);
+    for (auto& part : part_) {
+        const PartSystem& a = part->system;
+        WEFT_CUDA_CHECK(cudaSetDevice(a.device));
+        launch_schwarz_coarse(part->schwarz, check != 0 ? running(*part) : nullptr, a.stream);
+        prolong_kernel<<<part->blocks, kBlockSize, 0, a.stream>>>(part->schwarz, a.owned, part->u.get(), part->scalars.get(), check,
+                                                                  part->partials.get(), slot);
+        WEFT_CUDA_CHECK_LAUNCH("prolong_kernel");
+    }
+}
+
 void PartPcg::enqueue_product(int check) {
     std::vector<float*> u(part_.size());
     for (std::size_t k = 0; k < part_.size(); ++k) u[k] = part_[k]->u.get();
@@ -300,11 +377,12 @@ void PartPcg::enqueue_iteration(std::span<float* const> x, int parity) {
         Part& part = *part_[k];
         const PartSystem& a = part.system;
         WEFT_CUDA_CHECK(cudaSetDevice(a.device));
-        update_kernel<<<part.blocks, kBlockSize, 0, a.stream>>>(a, part.precond, part.scalars.get(), x[k], part.r.get(),
-                                                                part.u.get(), part.w.get(), part.p.get(), part.s.get(),
-                                                                part.partials.get());
+        update_kernel<<<part.blocks, kBlockSize, 0, a.stream>>>(a, part.precond, schwarz_ ? 0 : 1, part.scalars.get(), x[k],
+                                                                part.r.get(), part.u.get(), part.w.get(), part.p.get(),
+                                                                part.s.get(), part.partials.get());
         WEFT_CUDA_CHECK_LAUNCH("update_kernel");
     }
+    if (schwarz_) enqueue_schwarz(SchwarzInput::Residual, 0, 1);
     enqueue_product(1);
     enqueue_reduction(parity, kIteration);
 }
@@ -321,7 +399,11 @@ PartPcgResult PartPcg::solve(std::span<const float* const> b, std::span<float* c
     start.tolerance2 = tolerance * tolerance;
     start.max_iterations = max_iterations;
     // The start, launched directly: r = filter(b − A·x), u = M⁻¹r (γ and the reference), then
-    // w = A·u (the first α).
+    // w = A·u (the first α). With Schwarz, bᵀM⁻¹b comes from an apply to b first (as on one GPU).
+    if (schwarz_) {
+        for (std::size_t k = 0; k < part_.size(); ++k) part_[k]->schwarz.b = const_cast<float*>(b[k]);
+        enqueue_schwarz(SchwarzInput::RightHandSide, 1, 0);
+    }
     halo_.exchange(x);
     for (std::size_t k = 0; k < part_.size(); ++k) {
         Part& part = *part_[k];
@@ -336,10 +418,12 @@ PartPcgResult PartPcg::solve(std::span<const float* const> b, std::span<float* c
         product_kernel<<<part.blocks, kBlockSize, 0, a.stream>>>(a, x[k], part.w.get(), nullptr, part.scalars.get(), 0,
                                                                  part.partials.get());
         WEFT_CUDA_CHECK_LAUNCH("product_kernel");
-        start_kernel<<<part.blocks, kBlockSize, 0, a.stream>>>(a, part.precond, b[k], part.w.get(), part.r.get(), part.u.get(),
-                                                               part.p.get(), part.s.get(), part.partials.get());
+        start_kernel<<<part.blocks, kBlockSize, 0, a.stream>>>(a, part.precond, schwarz_ ? 0 : 1, b[k], part.w.get(),
+                                                               part.r.get(), part.u.get(), part.p.get(), part.s.get(),
+                                                               part.partials.get());
         WEFT_CUDA_CHECK_LAUNCH("start_kernel");
     }
+    if (schwarz_) enqueue_schwarz(SchwarzInput::Residual, 0, 0);  // u = M⁻¹r₀, rᵀu
     enqueue_reduction(0, kStart);
     enqueue_product(1);
     enqueue_reduction(1, kFirstAlpha);

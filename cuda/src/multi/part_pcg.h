@@ -9,7 +9,9 @@
 ///   γ' = rᵀu,  δ = wᵀu,  β = γ'/γ,  α = γ' / (δ − β·γ'/α).
 ///
 /// In exact arithmetic it is the textbook PCG (s = A·p by induction). M is block-Jacobi (each owned
-/// row's inverse 3×3 diagonal block: local to its part). Rows marked fixed (pinned vertices) are
+/// row's inverse 3×3 diagonal block: local to its part) or the multilevel Schwarz preconditioner
+/// across the parts (PartSystem::schwarz: level 1 gathered from every part at each apply, so it is
+/// the single-GPU preconditioner). Rows marked fixed (pinned vertices) are
 /// filtered as in the single-GPU solve: their residual and product are zero, so their unknowns keep
 /// their start values. Convergence is measured as on one GPU: rᵀM⁻¹r against the larger of
 /// bᵀM⁻¹b (free rows) and the start's r₀ᵀM⁻¹r₀.
@@ -29,6 +31,8 @@
 #include <vector>
 
 #include "device_array.h"
+#include "kernels.h"
+#include "multi/all_gather.h"
 #include "multi/halo_exchange.h"
 #include "multi/part_system.h"
 
@@ -79,6 +83,9 @@ private:
     /// Exchanges u, then w = filter(A·u) with the partial wᵀu on every part (`check`: nothing once
     /// the loop has stopped).
     void enqueue_product(int check);
+    /// u = M⁻¹r (`in`: r as it is, or filter(b) into r first) by the Schwarz levels across the
+    /// parts, with the partial rᵀu into `slot` (`check`: nothing once the loop has stopped).
+    void enqueue_schwarz(SchwarzInput in, int slot, int check);
     /// Enqueues one iteration on every part (update, exchange, product, reduction, scalars), its
     /// reduction writing the gather buffers of `parity`.
     void enqueue_iteration(std::span<float* const> x, int parity);
@@ -89,6 +96,8 @@ private:
 
     std::vector<std::unique_ptr<Part>> part_;
     HaloExchange& halo_;
+    bool schwarz_ = false;                 // the Schwarz preconditioner across the parts, else block-Jacobi
+    std::unique_ptr<AllGather> level1_;    // its level 1, gathered every apply
     cudaGraphExec_t graph_ = nullptr;
     std::vector<float*> graph_x_;  // the vectors the graph was captured with
     int graph_batch_ = 0;

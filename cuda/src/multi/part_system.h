@@ -7,7 +7,10 @@
 
 #include <cuda_runtime_api.h>
 
+#include <cstddef>
 #include <cstdint>
+
+#include "device_view.h"
 
 namespace weft::cuda::multi {
 
@@ -26,6 +29,12 @@ struct PartSystem {
     /// The block-Jacobi inverse, entry e of row i at [e·local + i]; null: the CG inverts the
     /// diagonal blocks itself at each solve.
     const float* precond = nullptr;
+    /// With the multilevel Schwarz preconditioner across the parts: the part's solver view, its
+    /// levels factored (mas.levels > 0; level 0 the part's, levels ≥ 1 whole, part_schwarz.h), and
+    /// the floats of level 1's restricted residual this part computes, [level1_begin, level1_end)
+    /// of mas.level[1].values, which the CG gathers from every part. Null: block-Jacobi.
+    const DeviceView* schwarz = nullptr;
+    std::size_t level1_begin = 0, level1_end = 0;
 };
 
 }  // namespace weft::cuda::multi
