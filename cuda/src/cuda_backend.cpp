@@ -183,7 +183,7 @@ void register_cuda_backend() {
     std::call_once(once, [] {
         register_backend("cuda", "CUDA backend, float: the whole substep on one GPU as a CUDA graph, or one world across --gpus N",
                          [](const BackendOptions& o) -> std::unique_ptr<Backend> {
-                             if (o.gpus < 1) throw Error("CUDA backend: --gpus " + std::to_string(o.gpus) + " (at least 1)");
+                             if (o.gpus < 0) throw Error("CUDA backend: --gpus " + std::to_string(o.gpus) + " (at least 1)");
                              if (o.gpus > 1) return multi::make_multi_gpu_backend(o);
                              return std::make_unique<CudaBackend>(o);
                          });

@@ -202,6 +202,10 @@ constexpr Parameter kTable[] = {
      .doc = "CPU worker threads, 0 = all cores (results do not depend on it); `--threads` and "
             "`BackendOptions::threads` take precedence when non-zero",
      .effect = E::Rebuild, .access = field<&WorldDesc::solver, &SolverSettings::threads>()},
+    {.section = "solver", .name = "gpus", .type = T::Integer, .range = R{1, 64},
+     .doc = "GPUs one world is split across on the cuda backend (the cpu backend ignores it); `--gpus` and "
+            "`BackendOptions::gpus` take precedence when non-zero",
+     .effect = E::Rebuild, .access = field<&WorldDesc::solver, &SolverSettings::gpus>()},
 
     // ---- [world]
     {.section = "world", .name = "gravity", .type = T::Vector, .unit = "m/s²", .range = R{0.0, 1000.0},

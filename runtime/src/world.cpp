@@ -35,6 +35,7 @@ World::World(const WorldDesc& desc, std::string_view backend, const BackendOptio
     model_->settings = desc;
     BackendOptions o = options;
     if (o.threads == 0) o.threads = desc.solver.threads;
+    if (o.gpus == 0) o.gpus = desc.solver.gpus;
     backend_ = create_backend(backend, o);
 }
 

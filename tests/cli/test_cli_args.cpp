@@ -106,6 +106,17 @@ TEST(CliArgs, HostWait) {
     }
 }
 
+TEST(CliArgs, Gpus) {
+    EXPECT_EQ(parse({"run", "flag"}).run.sim.gpus, 0);  // the scene's solver.gpus
+    EXPECT_EQ(parse({"run", "flag", "--gpus", "2"}).run.sim.gpus, 2);
+    EXPECT_EQ(parse({"view", "flag", "--gpus=4"}).view.sim.gpus, 4);
+    EXPECT_EQ(parse({"bench", "flag"}).bench.gpu_counts, (std::vector<int>{0}));
+    EXPECT_EQ(parse({"bench", "flag", "--gpus", "1,2"}).bench.gpu_counts, (std::vector<int>{1, 2}));
+    EXPECT_NE(error_of({"run", "flag", "--gpus", "0"}).find("--gpus"), std::string::npos);
+    EXPECT_NE(error_of({"bench", "flag", "--gpus", "1,,2"}).find("--gpus"), std::string::npos);
+    EXPECT_NE(error_of({"bench", "flag", "--gpus", "1,x"}).find("'x'"), std::string::npos);
+}
+
 TEST(CliArgs, FramesZeroWritesInitialStateOnly) { EXPECT_EQ(parse({"run", "flag", "--frames", "0"}).run.frames, 0); }
 
 TEST(CliArgs, DoubleDashEndsOptions) {

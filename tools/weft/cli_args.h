@@ -44,7 +44,7 @@ struct SimulationOptions {
     std::string backend = "auto";  ///< "auto": cuda when a GPU is present, else cpu
     int threads = 0;                     ///< 0 = all cores
     HostWait host_wait = HostWait::automatic;  ///< how the host waits for a GPU backend (--host-wait)
-    int gpus = 1;                        ///< GPUs one world is split across (--gpus; cuda backend)
+    int gpus = 0;                        ///< GPUs one world is split across (--gpus; cuda backend); 0: the scene's solver.gpus
     std::vector<std::string> overrides;  ///< "dotted.key=value", in command-line order
 };
 
@@ -69,7 +69,7 @@ struct BenchOptions {
     std::filesystem::path json_file;  ///< empty: print the table only
     int warmup = 10;
     int frames = 100;
-    std::vector<int> gpu_counts{1};  ///< --gpus 1,2: every scene on each count of GPUs
+    std::vector<int> gpu_counts{0};  ///< --gpus 1,2: every scene on each count of GPUs (0: the scene's solver.gpus)
 };
 
 /// `weft view`: the scene simulated live in a window (builds with the renderer only).

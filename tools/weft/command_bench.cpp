@@ -41,7 +41,7 @@ BenchResult bench_scene(const std::string& scene, const BenchOptions& options, i
     const auto start = std::chrono::steady_clock::now();
     for (int i = 0; i < options.frames; ++i) stats.push_back(world.step());
     BenchResult result;
-    result.gpus = gpus;
+    result.gpus = gpus > 0 ? gpus : loaded.desc.world.solver.gpus;
     result.wall_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     result.context = describe_run(loaded.desc, world, options.sim.threads, options.sim.host_wait);
     result.summary = summarize(stats);

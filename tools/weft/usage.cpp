@@ -35,7 +35,8 @@ Options:
   --threads N        CPU worker threads, 0 = all cores; results do not depend on it
   --host-wait MODE   how the host waits for the GPU: spin (lowest latency, keeps a core
                      busy), block (sleeps, frees the core), yield, auto (the driver's choice, default)
-  --gpus N           GPUs one world is split across (cuda backend; docs/multi-gpu.md); default 1
+  --gpus N           GPUs one world is split across (cuda backend; docs/multi-gpu.md); default: the
+                     scene's solver.gpus (1)
   --frames N         frames to simulate; default: the scene's 'frames'
   --out DIR          write a mesh per cloth per frame: DIR/frame_0000_<cloth>.ply (frame 0 = initial state)
   --format ply|obj   mesh format for --out; default ply
@@ -70,7 +71,8 @@ Options:
   --threads N        CPU worker threads, 0 = all cores
   --host-wait MODE   how the host waits for the GPU: spin (lowest latency, keeps a core
                      busy), block (sleeps, frees the core), yield, auto (the driver's choice, default)
-  --gpus LIST        GPU counts to run every scene on, e.g. 1,2 (cuda backend); default 1
+  --gpus LIST        GPU counts to run every scene on, e.g. 1,2 (cuda backend); default: the
+                     scene's solver.gpus (1)
   --set KEY=VALUE    override a scene key in every scene; repeatable
   -h, --help         this text
 )";
@@ -97,7 +99,8 @@ Options:
   --threads N        CPU worker threads, 0 = all cores
   --host-wait MODE   how the host waits for the GPU: spin (lowest latency, keeps a core
                      busy), block (sleeps, frees the core), yield, auto (the driver's choice, default)
-  --gpus N           GPUs one world is split across (cuda backend; docs/multi-gpu.md); default 1
+  --gpus N           GPUs one world is split across (cuda backend; docs/multi-gpu.md); default: the
+                     scene's solver.gpus (1)
   --set KEY=VALUE    override a scene key, as if written in the file; repeatable
   --frames N         quit after N displayed frames (scripted runs, tests)
   --screenshot FILE.png
@@ -133,7 +136,8 @@ Options:
   --threads N        CPU worker threads, 0 = all cores
   --host-wait MODE   how the host waits for the GPU: spin (lowest latency, keeps a core
                      busy), block (sleeps, frees the core), yield, auto (the driver's choice, default)
-  --gpus N           GPUs one world is split across (cuda backend; docs/multi-gpu.md); default 1
+  --gpus N           GPUs one world is split across (cuda backend; docs/multi-gpu.md); default: the
+                     scene's solver.gpus (1)
   --set KEY=VALUE    override a scene key, as if written in the file; repeatable
   --script FILE      run FILE's commands instead of waiting for a person, one step per
                      displayed frame (frame N, set KEY VALUE, expect KEY VALUE, pause, play,

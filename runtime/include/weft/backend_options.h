@@ -31,7 +31,7 @@ enum class HostWait {
 struct BackendOptions {
     int threads = 0;   ///< CPU threads, 0 = all
     int device = 0;    ///< first GPU
-    int gpus = 1;      ///< number of GPUs
+    int gpus = 0;      ///< GPUs one world is split across; 0 = the scene's `solver.gpus` (1 unless set)
     HostWait host_wait = HostWait::automatic;  ///< how the host waits for a GPU backend
 };
 

@@ -93,6 +93,9 @@ struct SolverSettings {
     EnergyGuard energy_guard = EnergyGuard::Report;
     double contact_stiffness = 0.0;  ///< N/m per vertex against colliders; 0 picks a stiffness from mass and dt
     int threads = 0;               ///< CPU worker threads; 0 = all cores. Results do not depend on it.
+    /// GPUs one world is split across on the cuda backend (docs/multi-gpu.md); `--gpus` and
+    /// BackendOptions::gpus take precedence when non-zero. The CPU backend ignores it.
+    int gpus = 1;
 };
 
 /// How the broad phase prunes pairs within one cloth (a speed knob that never changes the result).
