@@ -10,6 +10,7 @@
 #include <string>
 #include <vector>
 
+#include "cuda_check.h"
 #include "gpu_test_util.h"
 #include "multi/multi_gpu_backend.h"
 #include "weft/backend/backend.h"
@@ -262,6 +263,50 @@ TEST(MultiGpuSolver, EnergyAuditCountsEveryVertexAndElementOnce) {
         EXPECT_NEAR(device.contact, host.contact, 1e-5 * scale) << scene;
         EXPECT_NEAR(device.external_power, host.external_power, 1e-3 * host.external_power + 1e-6) << scene;
         EXPECT_EQ(device.bounded, host.bounded) << scene;
+    }
+}
+
+// The output for rendering: every part writes its owned vertices' positions and normals into one
+// buffer on the first GPU (peer writes from the others), no copy through the host; with the CG's
+// batches launched directly as well (WEFT_CUDA_GRAPHS=0's path), the same state.
+TEST(MultiGpuSolver, EveryPartWritesItsSliceOfTheOutputBuffer) {
+    WEFT_REQUIRE_GPU();
+    for (const bool one_device : {true, false}) {
+        if (!one_device && cuda::devices().size() < 2) continue;
+        const int parts = one_device ? 3 : 2;
+        auto world = make("flag", with({}), parts, one_device);
+        auto graphless = make("flag", with({}), parts, one_device);
+        cuda::CudaBackendApi* api = cuda::as_cuda(world->backend());
+        ASSERT_NE(api, nullptr);
+        cuda::as_cuda(graphless->backend())->set_use_graph(false);
+        (void)world->step();  // builds
+        (void)graphless->step();
+        const std::size_t n = api->vertex_count();
+        WEFT_CUDA_CHECK(cudaSetDevice(0));
+        void* buffer = nullptr;
+        WEFT_CUDA_CHECK(cudaMalloc(&buffer, n * sizeof(cuda::OutputVertex)));
+        WEFT_CUDA_CHECK(cudaMemset(buffer, 0xFF, n * sizeof(cuda::OutputVertex)));  // NaN until written
+        api->set_output(buffer, sizeof(cuda::OutputVertex));
+        for (int s = 0; s < 3; ++s) {
+            (void)world->step();
+            (void)graphless->step();
+        }
+        std::vector<cuda::OutputVertex> out(n);
+        WEFT_CUDA_CHECK(cudaMemcpy(out.data(), buffer, n * sizeof(cuda::OutputVertex), cudaMemcpyDeviceToHost));
+        api->set_output(nullptr, sizeof(cuda::OutputVertex));
+        WEFT_CUDA_CHECK(cudaFree(buffer));
+        const std::vector<Vec3d> x = world->positions(0);
+        ASSERT_EQ(x.size(), n);
+        for (std::size_t i = 0; i < n; ++i) {
+            EXPECT_EQ(out[i].position[0], static_cast<float>(x[i].x)) << i;
+            EXPECT_EQ(out[i].position[1], static_cast<float>(x[i].y)) << i;
+            EXPECT_EQ(out[i].position[2], static_cast<float>(x[i].z)) << i;
+            const Vec3d normal{out[i].normal[0], out[i].normal[1], out[i].normal[2]};
+            const double norm = math::length(normal);
+            EXPECT_NEAR(norm, 1.0, 1e-5) << i;
+        }
+        EXPECT_EQ(graphless->positions(0), x) << "graphs or not: the same kernels, the same bits";
+        EXPECT_FALSE(cuda::as_cuda(graphless->backend())->graph_active());
     }
 }
 

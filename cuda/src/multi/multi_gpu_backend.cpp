@@ -13,7 +13,7 @@
 namespace weft::cuda::multi {
 namespace {
 
-class MultiGpuBackend final : public Backend {
+class MultiGpuBackend final : public Backend, public CudaBackendApi {
 public:
     MultiGpuBackend(std::vector<int> devices, std::string description)
         : solver_(std::move(devices)), description_(std::move(description)) {}
@@ -55,6 +55,18 @@ public:
     std::size_t memory_bytes() const override { return solver_.memory_bytes(); }
     std::vector<std::pair<std::string, std::size_t>> memory_breakdown() const override { return solver_.memory_breakdown(); }
 
+    // ---- CudaBackendApi ---------------------------------------------------------------------------
+    void set_stream(CUstream_st* stream) override { solver_.set_stream(stream); }
+    CUstream_st* stream() const override { return solver_.stream(); }
+    // Each part writes its owned vertices into the buffer on the first GPU (peer writes).
+    void set_output(void* device_buffer, std::size_t stride) override { solver_.set_output(device_buffer, stride); }
+    std::size_t vertex_count() const override { return flat_.vertex_count; }
+    void set_use_graph(bool enabled) override { solver_.set_use_graph(enabled); }
+    bool graph_active() const override { return solver_.graph_active(); }
+    void set_assembly(AssemblyStrategy strategy) override { solver_.set_assembly(strategy); }
+    // The CG across parts has one form (batches of iterations across the devices): nothing to choose.
+    void set_pcg_loop(PcgLoop /*loop*/) override {}
+
 private:
     mutable MultiSolver solver_;  // the audit enqueues work on the parts' streams
     FlatModel flat_;
@@ -85,7 +97,11 @@ std::unique_ptr<Backend> make_multi_gpu_backend(const BackendOptions& options) {
             description += (p == 0 ? "" : " + ") + all[static_cast<std::size_t>(d)].name;
     }
     if (one_device) description += " (" + std::to_string(options.gpus) + " parts on one GPU: test mode)";
-    return std::make_unique<MultiGpuBackend>(std::move(devices), std::move(description));
+    auto backend = std::make_unique<MultiGpuBackend>(std::move(devices), std::move(description));
+    // WEFT_CUDA_GRAPHS=0: the same kernels without graphs, as on one GPU.
+    if (const char* graphs = std::getenv("WEFT_CUDA_GRAPHS"); graphs != nullptr && std::string_view(graphs) == "0")
+        backend->set_use_graph(false);
+    return backend;
 }
 
 }  // namespace weft::cuda::multi

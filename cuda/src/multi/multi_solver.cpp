@@ -36,6 +36,8 @@ MultiSolver::~MultiSolver() {
     // The CG and the exchange hold events and graphs on the parts' streams: release them first.
     if (!devices_.empty()) cudaSetDevice(devices_.front());
     for (cudaEvent_t e : events_) cudaEventDestroy(e);
+    if (user_event_ != nullptr) cudaEventDestroy(user_event_);
+    for (cudaEvent_t e : part_done_) cudaEventDestroy(e);
     pcg_.reset();
     level1_couplings_.reset();
     halo_.reset();
@@ -67,6 +69,7 @@ void MultiSolver::build(const FlatModel& flat, const Model& model) {
     std::vector<PartSystem> systems;
     for (std::uint32_t p = 0; p < parts; ++p) {
         auto solver = std::make_unique<DeviceSolver>(devices_[p]);
+        solver->set_assembly(assembly_);
         solver->build_part(flat, part_models_[p], model);
         streams.push_back(solver->stream());
         systems.push_back(solver->part_system());
@@ -93,6 +96,7 @@ void MultiSolver::choose_preconditioner(const SolverSettings& settings) {
     }
     schwarz_ = schwarz;
     pcg_ = std::make_unique<PartPcg>(systems, *halo_);
+    pcg_->set_use_graph(use_graph_);
 }
 
 void MultiSolver::factor_schwarz(int newton) {
@@ -156,6 +160,17 @@ void MultiSolver::substep(const Model& model, double t, double h, StepStats& sta
         throw Error("CUDA backend on " + std::to_string(devices_.size()) +
                     " parts: cloth collisions were switched on; they are not split across GPUs yet");
     choose_preconditioner(model.settings.solver);  // may change live
+    if (user_stream_ != nullptr) {
+        // After the outside stream's work so far.
+        int device = 0;
+        WEFT_CUDA_CHECK(cudaGetDevice(&device));
+        WEFT_CUDA_CHECK(cudaEventRecord(user_event_, user_stream_));
+        for (auto& s : solvers_) {
+            WEFT_CUDA_CHECK(cudaSetDevice(s->device()));
+            WEFT_CUDA_CHECK(cudaStreamWaitEvent(s->stream(), user_event_, 0));
+        }
+        WEFT_CUDA_CHECK(cudaSetDevice(device));
+    }
     const auto host_start = Clock::now();
     std::size_t e = 0;
     mark(e++);
@@ -218,7 +233,45 @@ void MultiSolver::substep(const Model& model, double t, double h, StepStats& sta
         for (auto& s : solvers_) s->part_write_output();
         synchronize();
     }
+    if (user_stream_ != nullptr) {
+        // The outside stream's later work after the substep's.
+        for (std::size_t p = 0; p < solvers_.size(); ++p) {
+            WEFT_CUDA_CHECK(cudaSetDevice(solvers_[p]->device()));
+            WEFT_CUDA_CHECK(cudaEventRecord(part_done_[p], solvers_[p]->stream()));
+            WEFT_CUDA_CHECK(cudaStreamWaitEvent(user_stream_, part_done_[p], 0));
+        }
+    }
     stats.ms(Stage::Update) += ms_since(after);
+}
+
+void MultiSolver::set_stream(cudaStream_t stream) {
+    synchronize();
+    if (user_event_ == nullptr && stream != nullptr) {
+        // The event lives on the stream's device; the parts' on theirs.
+        WEFT_CUDA_CHECK(cudaEventCreateWithFlags(&user_event_, cudaEventDisableTiming));
+        for (const int d : devices_) {
+            WEFT_CUDA_CHECK(cudaSetDevice(d));
+            cudaEvent_t e = nullptr;
+            WEFT_CUDA_CHECK(cudaEventCreateWithFlags(&e, cudaEventDisableTiming));
+            part_done_.push_back(e);
+        }
+    }
+    user_stream_ = stream;
+}
+
+cudaStream_t MultiSolver::stream() const {
+    if (user_stream_ != nullptr) return user_stream_;
+    return solvers_.empty() ? nullptr : solvers_.front()->stream();
+}
+
+void MultiSolver::set_use_graph(bool enabled) {
+    use_graph_ = enabled;
+    if (pcg_) pcg_->set_use_graph(enabled);
+}
+
+void MultiSolver::set_assembly(AssemblyStrategy strategy) {
+    assembly_ = strategy;
+    for (auto& s : solvers_) s->set_assembly(strategy);
 }
 
 void MultiSolver::read_state(std::size_t first, std::size_t count, Vec3d* x, Vec3d* v) const {

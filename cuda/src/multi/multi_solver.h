@@ -53,6 +53,16 @@ public:
     /// stride·i bytes; the host waits for those writes.
     void set_output(void* device_buffer, std::size_t stride);
 
+    /// Orders every substep after the work enqueued so far on `stream` and makes `stream` wait for
+    /// the substep (nullptr: no outside stream). The parts keep their own streams.
+    void set_stream(cudaStream_t stream);
+    /// The outside stream, or the first part's.
+    [[nodiscard]] cudaStream_t stream() const;
+    /// CG iterations as multi-device graphs (default) or launched one by one: the same results.
+    void set_use_graph(bool enabled);
+    [[nodiscard]] bool graph_active() const { return use_graph_; }
+    void set_assembly(AssemblyStrategy strategy);
+
     [[nodiscard]] std::size_t parts() const { return devices_.size(); }
     [[nodiscard]] const std::vector<int>& devices() const { return devices_; }
     [[nodiscard]] const VertexPartition& partition() const { return partition_; }
@@ -91,6 +101,11 @@ private:
     std::unique_ptr<AllGather> level1_couplings_;  // the Schwarz factorisation's level 1, every Newton iteration
     bool has_output_ = false;
     std::vector<cudaEvent_t> events_;  // stage timing, on devices_.front()
+    cudaStream_t user_stream_ = nullptr;
+    cudaEvent_t user_event_ = nullptr;  // on the outside stream's device
+    std::vector<cudaEvent_t> part_done_;  // per part: its substep's end, for the outside stream
+    bool use_graph_ = true;
+    AssemblyStrategy assembly_ = AssemblyStrategy::Auto;
 };
 
 }  // namespace weft::cuda::multi

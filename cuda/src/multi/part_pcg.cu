@@ -432,7 +432,7 @@ PartPcgResult PartPcg::solve(std::span<const float* const> b, std::span<float* c
     // until the scalars say stop.
     Part& origin = *part_[0];
     const std::vector<float*> xs(x.begin(), x.end());
-    if (graph_ == nullptr || graph_x_ != xs || graph_batch_ != batch) {
+    if (use_graph_ && (graph_ == nullptr || graph_x_ != xs || graph_batch_ != batch)) {
         if (graph_ != nullptr) WEFT_CUDA_CHECK(cudaGraphExecDestroy(graph_));
         graph_ = nullptr;
         std::vector<cudaEvent_t> fork(part_.size());
@@ -481,7 +481,17 @@ PartPcgResult PartPcg::solve(std::span<const float* const> b, std::span<float* c
     };
     PartPcgScalars s = read_scalars();
     while (s.running != 0) {
-        WEFT_CUDA_CHECK(cudaGraphLaunch(graph_, origin.system.stream));
+        if (use_graph_) {
+            WEFT_CUDA_CHECK(cudaGraphLaunch(graph_, origin.system.stream));
+        } else {
+            for (int it = 0; it < batch; ++it) enqueue_iteration(x, it % 2);
+            // The origin's read below must follow every part's batch.
+            for (std::size_t k = 1; k < part_.size(); ++k) {
+                WEFT_CUDA_CHECK(cudaSetDevice(part_[k]->system.device));
+                WEFT_CUDA_CHECK(cudaStreamSynchronize(part_[k]->system.stream));
+            }
+            WEFT_CUDA_CHECK(cudaSetDevice(origin.system.device));
+        }
         s = read_scalars();
     }
     // The ghosts of the solution get their owners' values (the caller's next use of x needs them).

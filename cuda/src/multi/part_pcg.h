@@ -75,6 +75,9 @@ public:
     PartPcgResult solve(std::span<const float* const> b, std::span<float* const> x, double tolerance, int max_iterations,
                         int batch = 16);
 
+    /// Batches of iterations as one multi-device CUDA graph each (default), or launched directly (the
+    /// same kernels and results: for tools that cannot follow graphs).
+    void set_use_graph(bool enabled) { use_graph_ = enabled; }
     /// Device memory the solver holds on part p's device, bytes.
     [[nodiscard]] std::size_t memory_bytes(std::size_t p) const;
 
@@ -101,6 +104,7 @@ private:
     cudaGraphExec_t graph_ = nullptr;
     std::vector<float*> graph_x_;  // the vectors the graph was captured with
     int graph_batch_ = 0;
+    bool use_graph_ = true;
 };
 
 }  // namespace weft::cuda::multi
