@@ -40,16 +40,8 @@ void DeviceSolver::build_part(const FlatModel& whole, const PartModel& part, con
 void DeviceSolver::part_begin_substep(const Model& model, double t, double h) {
     WEFT_CUDA_CHECK(cudaSetDevice(device_));
     cudaStream_t stream = active_stream();
-    fill_staging(model, t, h, host_staging_.get());
-    {
-        // Whether this substep refactors the Schwarz preconditioner, as in substep().
-        auto* sp = reinterpret_cast<StepParams*>(host_staging_.get());
-        const int k = model.settings.solver.preconditioner_refresh;
-        const long long index = substep_count_++;
-        sp->schwarz_refactor = !schwarz_factored_ || k <= 1 ? 1 : (index % k == 0 ? 2 : 0);
-        if (schwarz_on_) schwarz_factored_ = true;
-    }
-    WEFT_CUDA_CHECK(cudaMemcpyAsync(staging_.get(), host_staging_.get(), host_staging_.size(), cudaMemcpyHostToDevice, stream));
+    stage_substep(model, t, h, stream);
+    if (schwarz_on_) schwarz_factored_ = true;
     launch_begin_substep(view_, stream);
     launch_pin_velocities(view_, stream);
 }

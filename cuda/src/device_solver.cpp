@@ -102,15 +102,7 @@ void DeviceSolver::substep(const Model& model, double t, double h, StepStats& st
     WEFT_CUDA_CHECK(cudaSetDevice(device_));
     const auto host_start = Clock::now();
     cudaStream_t stream = active_stream();
-    fill_staging(model, t, h, host_staging_.get());
-    {
-        // Whether this substep refactors the Schwarz preconditioner (SolverSettings::preconditioner_refresh).
-        auto* sp = reinterpret_cast<StepParams*>(host_staging_.get());
-        const int k = model.settings.solver.preconditioner_refresh;
-        const long long index = substep_count_++;
-        sp->schwarz_refactor = !schwarz_factored_ || k <= 1 ? 1 : (index % k == 0 ? 2 : 0);
-    }
-    WEFT_CUDA_CHECK(cudaMemcpyAsync(staging_.get(), host_staging_.get(), host_staging_.size(), cudaMemcpyHostToDevice, stream));
+    stage_substep(model, t, h, stream);
     const double host_ms = ms_since(host_start);
 
     // Collision detection before the solve, outside the graph on the same stream (it reads overflow
@@ -195,6 +187,16 @@ void DeviceSolver::substep(const Model& model, double t, double h, StepStats& st
         launch_write_output(view_, output_, output_stride_, stream);
         if (output_synchronous_) WEFT_CUDA_CHECK(cudaStreamSynchronize(stream));
     }
+}
+
+void DeviceSolver::stage_substep(const Model& model, double t, double h, cudaStream_t stream) {
+    fill_staging(model, t, h, host_staging_.get());
+    // Whether this substep refactors the Schwarz preconditioner (SolverSettings::preconditioner_refresh).
+    auto* sp = reinterpret_cast<StepParams*>(host_staging_.get());
+    const int k = model.settings.solver.preconditioner_refresh;
+    const long long index = substep_count_++;
+    sp->schwarz_refactor = !schwarz_factored_ || k <= 1 ? 1 : (index % k == 0 ? 2 : 0);
+    WEFT_CUDA_CHECK(cudaMemcpyAsync(staging_.get(), host_staging_.get(), host_staging_.size(), cudaMemcpyHostToDevice, stream));
 }
 
 bool DeviceSolver::sweep_needed(float largest_move) const {

@@ -160,6 +160,9 @@ private:
     void record_contact_evaluation(cudaStream_t stream);
     /// Offset contact: the truncation after a Newton update (when `offset_model_` is set).
     void record_truncation(cudaStream_t stream);
+    /// Fills the substep's parameter block (with whether it refactors the Schwarz preconditioner) and
+    /// enqueues its upload on `stream`.
+    void stage_substep(const Model& model, double t, double h, cudaStream_t stream);
     /// Lays out the per-substep parameter block for `model` and allocates it (host and device).
     void layout_staging(const Model& model);
     /// Writes the parameters of the substep from `t` to `t + h` into the host block.

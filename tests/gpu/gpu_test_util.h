@@ -14,6 +14,7 @@
 #include "cuda_check.h"
 #include "weft/cuda/cuda_backend.h"
 #include "weft/scene.h"
+#include "weft/world.h"
 
 /// Registers the "cuda" backend, then skips the current test (with the CUDA runtime's reason) when
 /// no device is present. Use it first thing in every test that touches the GPU.
@@ -43,6 +44,15 @@ inline std::filesystem::path scene_file(const std::string& name) {
 inline std::unique_ptr<World> make_world(const std::string& scene, const std::string& backend,
                                          const std::vector<std::string>& overrides = {}) {
     return build_world(load_scene(scene_file(scene), overrides), backend);
+}
+
+/// Grabs cloth 0's last vertex (away from the flag's pole, whose vertex 0 is pinned) and pulls it
+/// 10 cm along +x, then takes one step: a world with the grab spring working on it.
+inline void grab_last_vertex_and_step(World& world) {
+    const auto x = world.positions(0);
+    const auto v = static_cast<std::uint32_t>(x.size() - 1);
+    world.set_grab(VertexGrab{.cloth = 0, .vertex = v, .target = x[v] + Vec3d{0.1, 0.0, 0.0}, .stiffness = 50.0, .damping = 0.1});
+    (void)world.step();
 }
 
 }  // namespace weft::test

@@ -30,14 +30,7 @@ TEST(CudaEnergyAudit, DeviceSumsMatchTheHostAudit) {
         const auto world = make_world(scene, "cuda");
         const int frames = scene == "drape" ? 20 : 10;  // the drape touches the ball from frame 13
         for (int f = 0; f < frames; ++f) (void)world->step();
-        if (scene == "flag") {
-            // A grabbed vertex away from the pole (vertex 0 is pinned there), pulled 10 cm.
-            const auto x = world->positions(0);
-            const auto v = static_cast<std::uint32_t>(x.size() - 1);
-            world->set_grab(VertexGrab{.cloth = 0, .vertex = v, .target = x[v] + Vec3d{0.1, 0.0, 0.0}, .stiffness = 50.0,
-                                       .damping = 0.1});
-            (void)world->step();
-        }
+        if (scene == "flag") test::grab_last_vertex_and_step(*world);  // the grab's power in the audit
         const Model& model = world->model();
         const double t = world->time(), h = model.settings.solver.dt / model.settings.solver.substeps;
         Backend& backend = world->backend();

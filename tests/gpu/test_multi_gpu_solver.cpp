@@ -36,12 +36,18 @@ void parts_on_one_device(bool on) {
         unsetenv(cuda::multi::kPartsOnOneDeviceEnv);
 }
 
-Trajectory run(const std::string& scene, const std::vector<std::string>& overrides, int gpus, int steps, bool one_device = true) {
+/// The world of shipped scene `scene` with `overrides` on `gpus` parts (all on one device, or one a device).
+std::unique_ptr<World> make(const std::string& scene, const std::vector<std::string>& overrides, int gpus, bool one_device) {
     parts_on_one_device(one_device);
     BackendOptions options;
     options.gpus = gpus;
     auto world = build_world(load_scene(test::scene_file(scene), overrides), "cuda", options);
     parts_on_one_device(false);
+    return world;
+}
+
+Trajectory run(const std::string& scene, const std::vector<std::string>& overrides, int gpus, int steps, bool one_device = true) {
+    auto world = make(scene, overrides, gpus, one_device);
     Trajectory out;
     for (int s = 0; s < steps; ++s) {
         out.last = world->step();
@@ -81,14 +87,6 @@ std::vector<std::string> with(std::vector<std::string> overrides) {
     return overrides;
 }
 
-std::unique_ptr<World> make(const std::string& scene, const std::vector<std::string>& overrides, int gpus, bool one_device) {
-    parts_on_one_device(one_device);
-    BackendOptions options;
-    options.gpus = gpus;
-    auto world = build_world(load_scene(test::scene_file(scene), overrides), "cuda", options);
-    parts_on_one_device(false);
-    return world;
-}
 
 /// The worst, over `steps` steps, of the gap between one step on one GPU and the same step on
 /// `gpus` parts from the same state, relative to how far the step moved the cloth. Both worlds
@@ -240,13 +238,7 @@ TEST(MultiGpuSolver, EnergyAuditCountsEveryVertexAndElementOnce) {
     for (const char* scene : {"hanging", "drape", "flag"}) {
         auto world = make(scene, {}, 3, true);
         for (int f = 0; f < 15; ++f) (void)world->step();
-        if (std::string(scene) == "flag") {
-            const auto x = world->positions(0);
-            const auto v = static_cast<std::uint32_t>(x.size() - 1);
-            world->set_grab(VertexGrab{.cloth = 0, .vertex = v, .target = x[v] + Vec3d{0.1, 0.0, 0.0}, .stiffness = 50.0,
-                                       .damping = 0.1});
-            (void)world->step();
-        }
+        if (std::string(scene) == "flag") test::grab_last_vertex_and_step(*world);  // the grab's power in the audit
         const Model& model = world->model();
         const double t = world->time(), h = model.settings.solver.dt / model.settings.solver.substeps;
         Backend& backend = world->backend();
