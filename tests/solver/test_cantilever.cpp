@@ -1,14 +1,11 @@
-// Cantilever under its own weight against the heavy elastica, solved independently here.
-//
-// A strip of length L, width b, areal density ρ and plate bending stiffness D is clamped
-// horizontally at s = 0. With θ(s) the angle below the horizontal, w = ρ·b·g the weight per length
-// and EI = D·b, the moment balance of an inextensible rod (Euler's elastica under self-weight) is
-//     EI·θ''(s) = −w·(L − s)·cos θ(s),   θ(0) = 0,   θ'(L) = 0,
-// and the tip deflection is δ = ∫₀ᴸ sin θ ds. The test solves it by shooting on θ'(0) with RK4.
+// Cantilever under its own weight against the heavy elastica (tests/common/heavy_elastica.h): a
+// strip of length L, width b, areal density ρ and plate bending stiffness D clamped horizontally,
+// w = ρ·b·g the weight per length and EI = D·b, so q = w/EI = ρ·g/D.
 #include <gtest/gtest.h>
 
 #include <cmath>
 
+#include "heavy_elastica.h"
 #include "weft/mesh.h"
 #include "weft/world.h"
 
@@ -17,40 +14,9 @@ namespace {
 
 struct ElasticaResult {
     double tip_deflection;
-    double tip_angle;
 };
 
-// Integrates θ'' = −q (L − s) cos θ from s = 0 with θ(0) = 0, θ'(0) = κ0; returns θ'(L) and δ.
-std::pair<double, double> shoot(double q, double L, double kappa0, int steps) {
-    const double ds = L / steps;
-    double s = 0.0, theta = 0.0, kappa = kappa0, y = 0.0;
-    auto f = [&](double ss, double th, double k) {
-        return std::array<double, 3>{k, -q * (L - ss) * std::cos(th), std::sin(th)};
-    };
-    for (int i = 0; i < steps; ++i) {
-        const auto k1 = f(s, theta, kappa);
-        const auto k2 = f(s + ds / 2, theta + ds / 2 * k1[0], kappa + ds / 2 * k1[1]);
-        const auto k3 = f(s + ds / 2, theta + ds / 2 * k2[0], kappa + ds / 2 * k2[1]);
-        const auto k4 = f(s + ds, theta + ds * k3[0], kappa + ds * k3[1]);
-        theta += ds / 6 * (k1[0] + 2 * k2[0] + 2 * k3[0] + k4[0]);
-        kappa += ds / 6 * (k1[1] + 2 * k2[1] + 2 * k3[1] + k4[1]);
-        y += ds / 6 * (k1[2] + 2 * k2[2] + 2 * k3[2] + k4[2]);
-        s += ds;
-    }
-    return {kappa, y};
-}
-
-ElasticaResult heavy_elastica(double q, double L) {
-    // θ'(L) is monotone in κ0 over [0, qL²/2] (the linear-beam root curvature bounds it): bisect.
-    double lo = 0.0, hi = q * L * L / 2.0 * 1.0001;
-    for (int i = 0; i < 200; ++i) {
-        const double mid = 0.5 * (lo + hi);
-        (shoot(q, L, mid, 4000).first > 0.0 ? hi : lo) = mid;
-    }
-    const auto [kL, deflection] = shoot(q, L, 0.5 * (lo + hi), 4000);
-    (void)kL;
-    return {deflection, 0.0};
-}
+ElasticaResult heavy_elastica(double q, double L) { return {test::heavy_elastica_deflection(q, L)}; }
 
 TEST(Elastica, ReducesToTheLinearBeamForSmallLoads) {
     // Sanity of the reference itself: δ → qL⁴/8 as the load vanishes.
