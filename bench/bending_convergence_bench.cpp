@@ -34,8 +34,21 @@ struct Row {
     int cells_along = 0, cells_across = 0;
     double aspect = 0.0;  // the cells' actual length over width
     double deflection = 0.0, reference = 0.0, error = 0.0;
+    /// At mid-length: the centreline's curvature along the strip and the cross-section's curvature
+    /// across it (1/m, from the sagitta of its middle over the chord between its edges): a strip
+    /// curling across as it bends (anticlastic curvature) shows a ratio away from 0.
+    double curvature_along = 0.0, curvature_across = 0.0;
     double seconds = 0.0;
 };
+
+weft::Vec3d point(const std::vector<weft::Vec3d>& x, int nx, int i, int j) { return x[static_cast<std::size_t>(j * nx + i)]; }
+
+/// Menger curvature of three points (1/m).
+double menger(const weft::Vec3d& a, const weft::Vec3d& b, const weft::Vec3d& c) {
+    const double ab = weft::math::length(b - a), bc = weft::math::length(c - b), ca = weft::math::length(a - c);
+    const double area2 = weft::math::length(weft::math::cross(b - a, c - a));  // twice the triangle's area
+    return ab * bc * ca > 0.0 ? 2.0 * area2 / (ab * bc * ca) : 0.0;
+}
 
 std::vector<double> parse_list(const std::string& flag, const std::string& value) {
     std::vector<double> out;
@@ -90,6 +103,20 @@ Row simulate(double load, int cells_along, double aspect) {
     double tip = 0.0;
     for (int j = 0; j <= row.cells_across; ++j) tip += x[static_cast<std::size_t>(j * nx + cells_along)].y;
     row.deflection = -tip / (row.cells_across + 1);
+    // The shape at mid-length.
+    const int mid = cells_along / 2, step = std::max(1, cells_along / 8);
+    const auto centre = [&](int i) {
+        weft::Vec3d sum{};
+        for (int j = 0; j <= row.cells_across; ++j) sum = sum + point(x, nx, i, j);
+        return sum * (1.0 / (row.cells_across + 1));
+    };
+    row.curvature_along = menger(centre(mid - step), centre(mid), centre(mid + step));
+    const weft::Vec3d edge0 = point(x, nx, mid, 0), edge1 = point(x, nx, mid, row.cells_across);
+    weft::Vec3d middle = (point(x, nx, mid, row.cells_across / 2) + point(x, nx, mid, (row.cells_across + 1) / 2)) * 0.5;
+    const weft::Vec3d chord = edge1 - edge0;
+    const double chord_length = weft::math::length(chord);
+    const double sagitta = weft::math::length(weft::math::cross(middle - edge0, chord)) / chord_length;
+    row.curvature_across = 8.0 * sagitta / (chord_length * chord_length);
     // The clamp ends at the second column: the free length is L − dx.
     row.reference = weft::test::heavy_elastica_deflection(load / (kLength * kLength * kLength), kLength - dx);
     row.error = (row.deflection - row.reference) / row.reference;
@@ -118,14 +145,16 @@ int main(int argc, char** argv) {
                 throw weft::Error("unknown option '" + flag + "' (--cells, --aspect, --load, --json)");
         }
         std::vector<Row> rows;
-        std::printf("| load ρgL³/D | cells along × across | cell aspect | tip deflection m | heavy elastica m | error | s |\n");
-        std::printf("|---|---|---|---|---|---|---|\n");
+        std::printf("| load ρgL³/D | cells along × across | cell aspect | tip deflection m | heavy elastica m | error | "
+                    "curvature across / along at mid-length | s |\n");
+        std::printf("|---|---|---|---|---|---|---|---|\n");
         for (const double load : loads)
             for (const double aspect : aspects)
                 for (const double n : cells) {
                     const Row r = simulate(load, static_cast<int>(n), aspect);
-                    std::printf("| %.2g | %d × %d | %.2f | %.5f | %.5f | %+.2f%% | %.1f |\n", r.load, r.cells_along, r.cells_across,
-                                r.aspect, r.deflection, r.reference, 100.0 * r.error, r.seconds);
+                    std::printf("| %.2g | %d × %d | %.2f | %.5f | %.5f | %+.2f%% | %.3f | %.1f |\n", r.load, r.cells_along,
+                                r.cells_across, r.aspect, r.deflection, r.reference, 100.0 * r.error,
+                                r.curvature_along > 0.0 ? r.curvature_across / r.curvature_along : 0.0, r.seconds);
                     std::fflush(stdout);
                     rows.push_back(r);
                 }
@@ -137,7 +166,8 @@ int main(int argc, char** argv) {
                 const Row& r = rows[k];
                 out << "  {\"load\": " << r.load << ", \"cells_along\": " << r.cells_along << ", \"cells_across\": " << r.cells_across
                     << ", \"aspect\": " << r.aspect << ", \"deflection_m\": " << r.deflection << ", \"elastica_m\": " << r.reference
-                    << ", \"error\": " << r.error << ", \"seconds\": " << r.seconds << "}" << (k + 1 < rows.size() ? "," : "") << "\n";
+                    << ", \"error\": " << r.error << ", \"curvature_along\": " << r.curvature_along
+                    << ", \"curvature_across\": " << r.curvature_across << ", \"seconds\": " << r.seconds << "}" << (k + 1 < rows.size() ? "," : "") << "\n";
             }
             out << "]\n";
             if (!out) throw weft::Error("--json: cannot write " + json);
