@@ -16,13 +16,8 @@
 # e.g. "--set collision.max_query_radius=2") and TAG (appended to the run names).
 set -uo pipefail
 
-if [[ $# -lt 2 ]]; then
-    echo "usage: $0 BUILD_DIR OUT_DIR [twist|layers|sphere|flag ...]" >&2
-    exit 2
-fi
-BUILD=$(cd "$1" && pwd) || { echo "$0: no build directory '$1'" >&2; exit 2; }
-mkdir -p "$2" || exit 2
-OUT=$(cd "$2" && pwd)
+source "$(dirname "$0")/common/bench_dirs.sh"
+bench_dirs more "[twist|layers|sphere|flag ...]" "$@"
 shift 2
 CASES=("$@")
 [[ ${#CASES[@]} -gt 0 ]] || CASES=(twist layers sphere flag)

@@ -23,13 +23,8 @@
 # then prints a summary (summary.txt). Exit status: the number of stages that failed (0: all ran).
 set -uo pipefail
 
-if [[ $# -ne 2 ]]; then
-    echo "usage: $0 BUILD_DIR OUT_DIR" >&2
-    exit 2
-fi
-BUILD=$(cd "$1" && pwd) || { echo "$0: no build directory '$1'" >&2; exit 2; }
-mkdir -p "$2" || exit 2
-OUT=$(cd "$2" && pwd)
+source "$(dirname "$0")/common/bench_dirs.sh"
+bench_dirs exact "" "$@"
 WEFT="$BUILD/bin/weft"
 KERNELS="$BUILD/bin/weft_cuda_bench"
 for exe in "$WEFT" "$KERNELS"; do

@@ -12,13 +12,8 @@
 # Exit status: the number of runs that failed.
 set -uo pipefail
 
-if [[ $# -ne 2 ]]; then
-    echo "usage: $0 BUILD_DIR OUT_DIR" >&2
-    exit 2
-fi
-BUILD=$(cd "$1" && pwd) || { echo "$0: no build directory '$1'" >&2; exit 2; }
-mkdir -p "$2" || exit 2
-OUT=$(cd "$2" && pwd)
+source "$(dirname "$0")/common/bench_dirs.sh"
+bench_dirs exact "" "$@"
 WEFT="$BUILD/bin/weft"
 [[ -x "$WEFT" ]] || { echo "$0: $WEFT not found (build first)" >&2; exit 2; }
 

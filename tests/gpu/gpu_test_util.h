@@ -6,6 +6,7 @@
 #include <cuda_runtime_api.h>
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <filesystem>
 #include <memory>
 #include <string>
@@ -15,6 +16,8 @@
 #include "weft/cuda/cuda_backend.h"
 #include "weft/scene.h"
 #include "weft/world.h"
+#include "weft/backend/backend.h"
+#include "weft/backend/energy_audit.h"
 
 /// Registers the "cuda" backend, then skips the current test (with the CUDA runtime's reason) when
 /// no device is present. Use it first thing in every test that touches the GPU.
@@ -53,6 +56,23 @@ inline void grab_last_vertex_and_step(World& world) {
     const auto v = static_cast<std::uint32_t>(x.size() - 1);
     world.set_grab(VertexGrab{.cloth = 0, .vertex = v, .target = x[v] + Vec3d{0.1, 0.0, 0.0}, .stiffness = 50.0, .damping = 0.1});
     (void)world.step();
+}
+
+/// The energy guard's audit of `world`'s backend at its current time, summed where the backend sums
+/// it (on the device) and by the host's reference over the state read back, with the wind's power.
+struct AuditPair {
+    EnergyAudit device, host;
+    double scale = 0.0;  ///< |K| + |G| + |U| + C of the host's: what a difference is measured against
+};
+inline AuditPair audit_device_and_host(World& world) {
+    const Model& model = world.model();
+    const double t = world.time(), h = model.settings.solver.dt / model.settings.solver.substeps;
+    Backend& backend = world.backend();
+    AuditPair a;
+    a.device = backend.energy_audit(model, t, h, true);
+    a.host = backend.Backend::energy_audit(model, t, h, true);
+    a.scale = std::abs(a.host.kinetic) + std::abs(a.host.gravity) + std::abs(a.host.elastic) + a.host.contact;
+    return a;
 }
 
 }  // namespace weft::test

@@ -31,13 +31,8 @@ TEST(CudaEnergyAudit, DeviceSumsMatchTheHostAudit) {
         const int frames = scene == "drape" ? 20 : 10;  // the drape touches the ball from frame 13
         for (int f = 0; f < frames; ++f) (void)world->step();
         if (scene == "flag") test::grab_last_vertex_and_step(*world);  // the grab's power in the audit
-        const Model& model = world->model();
-        const double t = world->time(), h = model.settings.solver.dt / model.settings.solver.substeps;
-        Backend& backend = world->backend();
         // With the wind's power (the flag's wind and gusts; nothing on the others).
-        const EnergyAudit device = backend.energy_audit(model, t, h, true);
-        const EnergyAudit host = backend.Backend::energy_audit(model, t, h, true);
-        const double scale = std::abs(host.kinetic) + std::abs(host.gravity) + std::abs(host.elastic) + host.contact;
+        const auto [device, host, scale] = test::audit_device_and_host(*world);
         std::printf("[ audit    ] %s: device K %.6e G %.6e U %.6e C %.3e P %.3e | host K %.6e G %.6e U %.6e C %.3e P %.3e\n",
                     scene.c_str(), device.kinetic, device.gravity, device.elastic, device.contact, device.external_power,
                     host.kinetic, host.gravity, host.elastic, host.contact, host.external_power);

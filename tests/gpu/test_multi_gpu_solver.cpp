@@ -239,12 +239,7 @@ TEST(MultiGpuSolver, EnergyAuditCountsEveryVertexAndElementOnce) {
         auto world = make(scene, {}, 3, true);
         for (int f = 0; f < 15; ++f) (void)world->step();
         if (std::string(scene) == "flag") test::grab_last_vertex_and_step(*world);  // the grab's power in the audit
-        const Model& model = world->model();
-        const double t = world->time(), h = model.settings.solver.dt / model.settings.solver.substeps;
-        Backend& backend = world->backend();
-        const EnergyAudit device = backend.energy_audit(model, t, h, true);
-        const EnergyAudit host = backend.Backend::energy_audit(model, t, h, true);
-        const double scale = std::abs(host.kinetic) + std::abs(host.gravity) + std::abs(host.elastic) + host.contact;
+        const auto [device, host, scale] = test::audit_device_and_host(*world);
         std::printf("[ multi    ] %s audit on 3 parts: K %.6e G %.6e U %.6e C %.3e P %.3e | host K %.6e G %.6e U %.6e C %.3e P %.3e\n",
                     scene, device.kinetic, device.gravity, device.elastic, device.contact, device.external_power, host.kinetic,
                     host.gravity, host.elastic, host.contact, host.external_power);
