@@ -263,9 +263,13 @@ struct GpuPairs {
     gpu::GpuBroadPhaseCounters counters;
 };
 
-GpuPairs run_gpu(gpu::GpuBroadPhase& bp, const DeviceScene& d, cudaStream_t stream, double cell = 0.0) {
+GpuPairs run_gpu(gpu::GpuBroadPhase& bp, const DeviceScene& d, cudaStream_t stream, double cell = 0.0,
+                 std::uint32_t share_index = 0, std::uint32_t share_count = 1) {
     GpuPairs out;
-    out.counters = bp.find(d.input(cell), stream);
+    gpu::GpuBroadPhaseInput in = d.input(cell);
+    in.share_index = share_index;
+    in.share_count = share_count;
+    out.counters = bp.find(in, stream);
     bp.download(out.keys, stream);
     const gpu::PairEncoding enc = bp.pairs().encoding;
     for (std::uint64_t k : out.keys) {
@@ -527,6 +531,51 @@ TEST(CollisionGpu, SameBitsOnEveryRunAndAfterOverflow) {
     (void)run_gpu(tiny, d, stream.s);
     EXPECT_EQ(tiny.memory_bytes(), bytes);
     EXPECT_EQ(tiny.reruns(), reruns);
+}
+
+// Across GPUs each GPU enumerates a share of the pair slots: the shares are disjoint and together
+// are the whole list, with their tested slots adding up to the whole's (with culling, which cuts
+// runs out of the rows, and with oversized primitives, shared out one by one).
+TEST(CollisionGpu, SharesOfThePairsMakeUpTheWholeList) {
+    WEFT_REQUIRE_GPU();
+    Scene sheet = twisted_sheet(100, 1.5, 0.03, 0.004, 43);
+    random_patches(sheet, 7, 5, 0.3);
+    Scene soup = random_soup(7, 8, 1000, 0.2, 0.01);  // with 2 cm cells most bounds are oversized
+    soup.thickness = 0.05;
+    struct Case {
+        const Scene* scene;
+        double cell;
+        const char* what;
+    };
+    Stream stream;
+    for (const Case& c : {Case{&sheet, 0.0, "twisted sheet, patches"}, Case{&soup, 0.02, "soup, oversized bounds"}}) {
+        DeviceScene d(*c.scene);
+        gpu::GpuBroadPhase bp;
+        const GpuPairs whole = run_gpu(bp, d, stream.s, c.cell);
+        ASSERT_GT(whole.keys.size(), 100U) << c.what;
+        for (const std::uint32_t count : {2U, 3U, 8U}) {
+            std::vector<std::uint64_t> joined;
+            unsigned long long tested = 0;
+            for (std::uint32_t index = 0; index < count; ++index) {
+                const GpuPairs share = run_gpu(bp, d, stream.s, c.cell, index, count);
+                joined.insert(joined.end(), share.keys.begin(), share.keys.end());
+                tested += share.counters.tested_pairs;
+                EXPECT_LT(share.keys.size(), whole.keys.size()) << c.what << ": share " << index << " of " << count;
+            }
+            std::sort(joined.begin(), joined.end());
+            EXPECT_TRUE(std::adjacent_find(joined.begin(), joined.end()) == joined.end()) << c.what << ": a pair in two shares";
+            EXPECT_TRUE(joined == whole.keys) << c.what << ": " << count << " shares";
+            EXPECT_EQ(tested, whole.counters.tested_pairs) << c.what << ": " << count << " shares";
+        }
+        std::printf("shares: %s: %zu pairs (%u oversized primitives) split 2, 3 and 8 ways\n", c.what, whole.keys.size(),
+                    whole.counters.oversized);
+    }
+    DeviceScene d(sheet);
+    gpu::GpuBroadPhaseInput bad = d.input();
+    bad.share_index = 2;
+    bad.share_count = 2;
+    gpu::GpuBroadPhase bp;
+    EXPECT_THROW((void)bp.find(bad, stream.s), Error);
 }
 
 TEST(CollisionGpu, InputErrorsAreReported) {

@@ -75,6 +75,7 @@ struct Params {
     std::uint32_t entry_capacity, pair_capacity;
     std::uint32_t key_sort_bits;
     PairEncoding enc;
+    std::uint32_t share_index, share_count;  // GpuBroadPhaseInput::share_*
 };
 
 // ---- small device helpers ------------------------------------------------------------------------
@@ -565,12 +566,15 @@ __global__ void __launch_bounds__(kThreads) pairs_kernel(Params p, const unsigne
                                                          const uint4* row_info, unsigned long long* out) {
     const Grid g = p.block->grid;
     const std::uint32_t cap = p.entry_capacity;
-    const unsigned long long total = row_offset[cap];
+    // This call's share of the slots: [first, total), with `total` the end of the share.
+    const unsigned long long all = row_offset[cap];
+    const unsigned long long first = all * p.share_index / p.share_count;
+    const unsigned long long total = all * (p.share_index + 1) / p.share_count;
     const unsigned lane = threadIdx.x & 31U;
     const unsigned long long warp = (static_cast<unsigned long long>(blockIdx.x) * blockDim.x + threadIdx.x) >> 5;
     const unsigned long long warps = (static_cast<unsigned long long>(gridDim.x) * blockDim.x) >> 5;
     const std::uint32_t edge0 = p.n, tri0 = p.n + p.ne;
-    for (unsigned long long base = warp * kChunk; base < total; base += warps * kChunk) {
+    for (unsigned long long base = first + warp * kChunk; base < total; base += warps * kChunk) {
         // The row of this lane's first slot: the last row whose offset is ≤ the slot.
         std::uint32_t r = 0;
         {
@@ -633,6 +637,8 @@ __global__ void oversized_kernel(Params p, unsigned long long* out) {
     unsigned long long tested = 0;
     for (std::uint32_t o = 0; o < count; ++o) {
         const std::uint32_t a = p.oversized[o];
+        // The share by primitive id, not by place in the list: the list's order is the atomics'.
+        if (a % p.share_count != p.share_index) continue;
         if (a < edge0) {
             for (std::uint32_t i = tid; i < p.nt; i += stride) {
                 const std::uint32_t t = tri0 + i;
@@ -670,7 +676,8 @@ __global__ void pad_pairs_kernel(Params p, unsigned long long* keys) {
 
 __global__ void finish_kernel(Params p, const unsigned long long* row_offset) {
     GpuBroadPhaseCounters& c = p.block->counters;
-    c.tested_pairs += row_offset[p.entry_capacity];
+    const unsigned long long all = row_offset[p.entry_capacity];
+    c.tested_pairs += all * (p.share_index + 1) / p.share_count - all * p.share_index / p.share_count;  // this share's slots
     c.ee_pairs = c.pairs - c.vf_pairs;
     if (c.pairs > p.pair_capacity) c.overflow |= kOverflowPairs;
 }
@@ -821,6 +828,8 @@ void GpuBroadPhase::enqueue(const GpuBroadPhaseInput& in, cudaStream_t stream) {
     if (in.stride != 0 && in.stride < in.vertex_count)
         throw Error("GPU broad phase: component stride " + std::to_string(in.stride) + " below the vertex count " +
                     std::to_string(in.vertex_count));
+    if (in.share_count == 0 || in.share_index >= in.share_count)
+        throw Error("GPU broad phase: share " + std::to_string(in.share_index) + " of " + std::to_string(in.share_count));
     const bool cull = in.vertex_patch != nullptr || in.edge_patch != nullptr || in.triangle_patch != nullptr;
     if (cull && ((in.vertex_count > 0 && in.vertex_patch == nullptr) || (in.edge_count > 0 && in.edge_patch == nullptr) ||
                  (in.triangle_count > 0 && in.triangle_patch == nullptr)))
@@ -866,6 +875,8 @@ void GpuBroadPhase::enqueue(const GpuBroadPhaseInput& in, cudaStream_t stream) {
     p.pair_capacity = static_cast<std::uint32_t>(pair_capacity_);
     p.key_sort_bits = static_cast<std::uint32_t>(key_sort_bits_);
     p.enc = encoding_;
+    p.share_index = in.share_index;
+    p.share_count = in.share_count;
     void* temp = temp_.get();
     // A fresh size for each CUB call (the argument is in/out).
     struct Scratch {

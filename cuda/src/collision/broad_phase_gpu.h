@@ -97,6 +97,14 @@ struct GpuBroadPhaseInput {
     /// Hash cell edge, m; 0 picks the median extent (longest axis) of the edges' bounds, computed on
     /// the device (as the CPU does, but from the float bounds: any size gives the same pairs).
     double cell_size = 0.0;
+    /// Which share of the pairs to enumerate (multi-GPU detection, docs/multi-gpu.md): the workload
+    /// table's pair slots are cut into `share_count` equal ranges and this call tests range
+    /// `share_index`, and the oversized primitives whose id is share_index modulo share_count.
+    /// Every pair is in exactly one share, so the shares' lists together are the whole list.
+    /// Everything before the pair stage (the hash) is built whole by every share. Default: one
+    /// share, the whole list.
+    std::uint32_t share_index = 0;
+    std::uint32_t share_count = 1;
 };
 
 /// Counters of one call, as the device leaves them (`read_back`).
