@@ -32,6 +32,12 @@ __device__ inline std::uint32_t thread_stride() { return gridDim.x * blockDim.x;
 
 // ---- incidence: a counting sort of (vertex, 4·pair + corner) by vertex, stable ------------------------
 
+/// The solver row of a pair's vertex v: v itself on one GPU, the part's row (or ~0) in part mode.
+__device__ inline std::uint32_t contact_row(const ContactView& c, std::uint32_t v) {
+    if (c.row_of == nullptr) return v;
+    return v < c.cloth_vertices ? c.row_of[v] : 0xFFFFFFFFu;
+}
+
 /// Histogram of the cloth corners (integer atomics: the counts do not depend on the order). Also
 /// reports the substep's pair count in the stats.
 __global__ void contact_count_kernel(DeviceView d) {
@@ -40,7 +46,7 @@ __global__ void contact_count_kernel(DeviceView d) {
     if (first_thread() == 0) d.stats->proximity_contacts = static_cast<int>(m);
     for (std::uint32_t e = first_thread(); e < 4 * m; e += thread_stride()) {
         const DeviceContact& pair = c.list[e >> 2];
-        const std::uint32_t v = pair.vertex[e & 3u];
+        const std::uint32_t v = contact_row(c, pair.vertex[e & 3u]);
         if (v < d.n && (pair.pair & kInactiveContactBit) == 0) atomicAdd(&c.fill[v], 1u);
     }
 }
@@ -53,7 +59,7 @@ __global__ void contact_scatter_kernel(DeviceView d) {
     const std::uint32_t corners = 4 * contact_count(c);
     for (std::uint32_t e = first_thread(); e < corners; e += thread_stride()) {
         const DeviceContact& pair = c.list[e >> 2];
-        const std::uint32_t v = pair.vertex[e & 3u];
+        const std::uint32_t v = contact_row(c, pair.vertex[e & 3u]);
         if (v >= d.n || (pair.pair & kInactiveContactBit) != 0) continue;
         const std::uint32_t slot = c.start[v] + atomicSub(&c.fill[v], 1u) - 1u;
         c.entries[slot] = e;

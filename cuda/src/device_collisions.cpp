@@ -260,6 +260,8 @@ std::size_t DeviceCollisions::detect(const Model& model, double t, double h, con
 
     const double thickness = geometry_.gap(settings);
     collision::GpuBroadPhaseInput in = broad_phase_input(thickness);
+    in.share_index = share_index_;
+    in.share_count = share_count_;
     stats.ms(Stage::BroadPhase) += ms_since(clock);
     clock = Clock::now();
     if (settings.cull_contacts) cull(model, in, stream);  // CollisionSettings::cull_contacts says why
@@ -353,6 +355,10 @@ std::size_t DeviceCollisions::redetect(const Model& model, double h, const float
     ++redetections_;
     ++stats.collision.redetections;
     return detect_offset(model, h, stream, stats);
+}
+
+const DeviceContact* DeviceCollisions::contacts() const {
+    return reinterpret_cast<const DeviceContact*>(proximity_.contacts());  // the same layout (asserted above)
 }
 
 void DeviceCollisions::publish(const ContactInputs& list, cudaStream_t stream, StepStats& stats) {

@@ -71,6 +71,16 @@ public:
     /// `dv_previous` (the last substep's velocity change) sharpens the offset mode's predicted moves.
     std::size_t detect(const Model& model, double t, double h, const float* x, const float* v, const float* dv_previous,
                        cudaStream_t stream, StepStats& stats);
+    /// Across GPUs: this object's `detect` finds share `index` of `count` of the proximity pairs
+    /// (GpuBroadPhaseInput::share_index), so that each GPU narrows down its own share. The impact
+    /// zones always cover every pair. Default: one share (the whole list).
+    void set_share(std::uint32_t index, std::uint32_t count) {
+        share_index_ = index;
+        share_count_ = count;
+    }
+    /// The contacts the last `detect` found (device, `detect`'s count of them), in the solver's layout.
+    [[nodiscard]] const DeviceContact* contacts() const;
+
     /// Enqueues the copy of the contacts, their count and the kinematic arrays into `list` (capacity
     /// ≥ the count `detect` returned, kinematic capacity ≥ kinematic_count()).
     void publish(const ContactInputs& list, cudaStream_t stream, StepStats& stats);
@@ -112,9 +122,11 @@ public:
     /// `memory_bytes` by purpose, each name prefixed "collisions: ".
     [[nodiscard]] std::vector<std::pair<std::string, std::size_t>> memory_breakdown() const;
 
-private:
-    /// Adds to `stats` the buffer growths (grow-and-rerun passes) since the last call.
+    /// Adds to `stats` the buffer growths (grow-and-rerun passes) since the last call (`publish`
+    /// calls it; a share that is not published calls it itself).
     void count_buffer_growths(StepStats& stats);
+
+private:
 
     /// The broad-phase input over `x0c` → `x1c` with bounds grown by `thickness` (m).
     [[nodiscard]] collision::GpuBroadPhaseInput broad_phase_input(double thickness) const;
@@ -132,6 +144,7 @@ private:
     std::uint32_t vertices_ = 0;        // n + kinematic: the component stride of the position arrays
     std::uint32_t triangle_count_ = 0, edge_count_ = 0;
     bool trace_zones_ = false;
+    std::uint32_t share_index_ = 0, share_count_ = 1;  // set_share
 
     MemoryLedger ledger_;
     DeviceArray<float> positions_;  // x0 then x1, SoA with stride vertices_

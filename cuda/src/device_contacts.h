@@ -76,6 +76,12 @@ struct ContactView {
     std::uint32_t* start = nullptr;
     std::uint32_t* fill = nullptr;
     std::uint32_t* entries = nullptr;  ///< 4·capacity
+    /// Part mode (the multi-GPU solver): the list names the whole model's vertices (cloth vertices
+    /// below `cloth_vertices`, kinematic ones after), and `row_of` maps a whole cloth vertex to this
+    /// part's row (~0 where another part owns it); the incidence covers the part's rows. Null on one
+    /// GPU, where the list's cloth vertices are the solver's rows.
+    const std::uint32_t* row_of = nullptr;
+    std::uint32_t cloth_vertices = 0;
     // Per pair, written at each Newton iteration (SoA, stride capacity): C = −h·D − h²·K (9 floats,
     // row-major), its right-hand side h·F + h²·K·Σ w_j (v_k − w_k)_j (3), and the product
     // C·Σ_j w_j x_j of the current SpMV (3).

@@ -2,10 +2,12 @@
 // stages enqueued one by one by the multi-GPU solver (multi/multi_solver.cpp), which runs the CG
 // across the parts between them.
 #include <bit>
+#include <algorithm>
 #include <limits>
 #include <vector>
 
 #include "device_solver.h"
+#include "multi/part_contacts.h"
 #include "kernels.h"
 #include "weft/error.h"
 
@@ -32,6 +34,12 @@ void DeviceSolver::build_part(const FlatModel& whole, const PartModel& part, con
         WEFT_CUDA_CHECK(cudaMemcpy(fixed_.get(), fixed.data(), fixed.size(), cudaMemcpyHostToDevice));
     const std::vector<std::uint32_t> owned(part.global_vertex.begin(), part.global_vertex.begin() + part.owned);
     output_index_.upload(owned, ledger_, "part output places");
+    global_index_.upload(part.global_vertex, ledger_, "part vertex ids");
+    if (needs_cloth_collisions(model)) {
+        std::vector<std::uint32_t> row_of(whole.vertex_count, std::numeric_limits<std::uint32_t>::max());
+        for (std::uint32_t i = 0; i < part.owned; ++i) row_of[part.global_vertex[i]] = i;
+        row_of_.upload(row_of, ledger_, "part contact rows");
+    }
     schwarz_on_ = false;  // block-Jacobi until part_use_schwarz
     pcg_loop_ = PcgLoop::PerKernel;
     persistent_grid_ = 0;
@@ -54,6 +62,15 @@ void DeviceSolver::part_assemble(bool first_newton) {
         launch_assemble_rows(view_, stream);
     else
         launch_assemble_colors(view_, layout_.triangle_colors, layout_.hinge_colors, stream);
+    if (view_.contacts.capacity > 0) {
+        // The pairs read their vertices from the whole-size copies, in the whole model's numbering.
+        DeviceView whole = view_;
+        whole.n = contact_whole_;
+        whole.x0 = const_cast<float*>(contact_x0_);
+        whole.wk = const_cast<float*>(contact_wk_);
+        whole.vk = const_cast<float*>(contact_vk_);
+        launch_contact_evaluate(whole, stream);
+    }
     launch_pcg_setup(view_, first_newton, schwarz_on_, stream);
 }
 
@@ -77,6 +94,64 @@ void DeviceSolver::part_factor_rest(int newton) {
     WEFT_CUDA_CHECK(cudaSetDevice(device_));
     launch_schwarz_couplings(view_, 2, view_.mas.levels, newton, active_stream());
     launch_schwarz_factor_domains(view_, newton, active_stream());
+}
+
+void DeviceSolver::part_set_contact_copies(const float* x0, const float* wk, const float* vk, std::uint32_t whole) {
+    contact_x0_ = x0;
+    contact_wk_ = wk;
+    contact_vk_ = vk;
+    contact_whole_ = whole;
+}
+
+bool DeviceSolver::part_receive_contacts(std::span<const multi::ContactShare> shares, const ContactInputs& kinematic_from,
+                                         cudaEvent_t ready, std::size_t kinematic) {
+    WEFT_CUDA_CHECK(cudaSetDevice(device_));
+    cudaStream_t stream = active_stream();
+    std::size_t total = 0, largest = 0;
+    for (const multi::ContactShare& share : shares) {
+        total += share.count;
+        largest = std::max(largest, share.count);
+    }
+    const bool grew = contacts_.reserve(std::max<std::size_t>(total, 1), kinematic, view_.n, stream);
+    if (grew) contacts_resized();
+    view_.contacts.row_of = row_of_.get();
+    view_.contacts.cloth_vertices = contact_whole_;
+    ContactInputs to = contacts_.inputs();
+    // Only the contacts at this part's rows, each share's after the last's: each part evaluates
+    // and multiplies its share of the contacts.
+    const std::size_t scratch = multi::part_contact_selection_bytes(largest);
+    if (contact_selection_.bytes() < scratch || selected_count_.size() == 0) {
+        WEFT_CUDA_CHECK(cudaStreamSynchronize(stream));
+        contact_selection_.allocate(scratch + scratch / 4, ledger_, "part contact selection");
+        ledger_.set("part contact selection", contact_selection_.bytes());  // grown: replaced, not added
+        if (selected_count_.size() == 0) {
+            selected_count_.allocate(1, ledger_, "part contact selection");
+            selected_host_.allocate(1);
+        }
+    }
+    std::size_t placed = 0;
+    for (const multi::ContactShare& share : shares) {
+        if (share.count == 0) continue;
+        multi::launch_select_part_contacts(share.list, share.count, row_of_.get(), contact_whole_, to.list + placed,
+                                           selected_count_.get(), contact_selection_.get(), contact_selection_.bytes(), stream);
+        WEFT_CUDA_CHECK(cudaMemcpyAsync(selected_host_.get(), selected_count_.get(), sizeof(std::uint32_t),
+                                        cudaMemcpyDeviceToHost, stream));
+        WEFT_CUDA_CHECK(cudaStreamSynchronize(stream));
+        placed += selected_host_[0];
+    }
+    selected_host_[0] = static_cast<std::uint32_t>(placed);
+    WEFT_CUDA_CHECK(cudaMemcpyAsync(to.count, selected_host_.get(), sizeof(std::uint32_t), cudaMemcpyHostToDevice, stream));
+    WEFT_CUDA_CHECK(cudaStreamWaitEvent(stream, ready, 0));
+    for (int c = 0; c < 3 && kinematic > 0; ++c) {
+        WEFT_CUDA_CHECK(cudaMemcpyAsync(to.kinematic_x1 + std::size_t(c) * to.kinematic_capacity,
+                                        kinematic_from.kinematic_x1 + std::size_t(c) * kinematic_from.kinematic_capacity,
+                                        kinematic * sizeof(float), cudaMemcpyDefault, stream));
+        WEFT_CUDA_CHECK(cudaMemcpyAsync(to.kinematic_v + std::size_t(c) * to.kinematic_capacity,
+                                        kinematic_from.kinematic_v + std::size_t(c) * kinematic_from.kinematic_capacity,
+                                        kinematic * sizeof(float), cudaMemcpyDefault, stream));
+    }
+    launch_contact_incidence(view_, contacts_.scan_storage(), contacts_.scan_storage_bytes(), stream);
+    return grew;
 }
 
 void DeviceSolver::part_newton_update() {
@@ -128,6 +203,7 @@ multi::PartSystem DeviceSolver::part_system() const {
     s.blocks = view_.blocks;
     s.fixed = view_.fixed;
     s.precond = view_.precond;
+    s.contacts = view_.contacts;
     if (schwarz_on_) {
         s.schwarz = &view_;
         s.level1_begin = 3 * std::size_t{schwarz_.part().node_begin};

@@ -22,6 +22,7 @@
 #include "weft/backend/model.h"
 #include "weft/backend/part_model.h"
 #include "weft/stats.h"
+#include "multi/part_contacts.h"
 #include "multi/part_system.h"
 
 namespace weft::cuda {
@@ -134,6 +135,22 @@ public:
     void part_write_output();
     /// The owned rows' system for the CG across parts.
     [[nodiscard]] multi::PartSystem part_system() const;
+    // Contacts across GPUs (docs/multi-gpu.md, "Collisions"): the substep's whole contact list,
+    // found on the first GPU, copied here; this part gathers the pairs at its own rows, evaluating
+    // them from the whole-size copies of x₀, w_k and v_k (multi/contact_mirror.h).
+    /// The copies the contact evaluation reads (device memory on this part's GPU, SoA with stride
+    /// `whole`), set once.
+    void part_set_contact_copies(const float* x0, const float* wk, const float* vk, std::uint32_t whole);
+    /// This part's contacts: from every GPU's share (complete: their detections have returned), in
+    /// share order, those at a row this part owns (multi/part_contacts.h); after `ready` (an event
+    /// on `kinematic_from`'s producer) the `kinematic` kinematic vertices of `kinematic_from`; then
+    /// the incidence of this part's rows. Peer reads; waits for its stream (the selected counts).
+    /// Grows the list first when needed (returns true then: the part's system changed, the CG
+    /// across parts must be made again).
+    bool part_receive_contacts(std::span<const multi::ContactShare> shares, const ContactInputs& kinematic_from,
+                               cudaEvent_t ready, std::size_t kinematic);
+    /// The whole model's id of every local vertex (device memory), owned first.
+    [[nodiscard]] const std::uint32_t* part_global_ids() const { return global_index_.get(); }
 
     // For benchmarks: the arrays, the layout and the stream the solver uses.
     [[nodiscard]] const DeviceView& view() const { return view_; }
@@ -201,6 +218,15 @@ private:
     const PartModel* part_ = nullptr;
     std::vector<std::uint32_t> local_of_global_;
     DeviceArray<std::uint32_t> output_index_;
+    DeviceArray<std::uint32_t> global_index_;  // every local vertex's whole id
+    DeviceArray<std::uint32_t> row_of_;        // whole vertex → owned row or ~0 (the contact incidence)
+    const float* contact_x0_ = nullptr;        // whole-size copies the contact evaluation reads
+    const float* contact_wk_ = nullptr;
+    const float* contact_vk_ = nullptr;
+    std::uint32_t contact_whole_ = 0;
+    DeviceArray<unsigned char> contact_selection_;  // scratch of the part's contact selection
+    DeviceArray<std::uint32_t> selected_count_;      // one share's selected count
+    PinnedArray<std::uint32_t> selected_host_;      // the same, read back (the next share's place)
     DeviceLayout layout_;
     MemoryLedger ledger_;
     DeviceView view_;

@@ -155,7 +155,7 @@ void DeviceSolver::build(const FlatModel& flat, const Model& model) {
     d.partials = partials_.get();
     choose_assembly();
     choose_pcg_loop();
-    if (part_ == nullptr) build_collisions(model);  // part mode: not across GPUs yet (docs/multi-gpu.md)
+    if (part_ == nullptr) build_collisions(model);  // part mode: the MultiSolver detects (docs/multi-gpu.md)
     WEFT_CUDA_CHECK(cudaDeviceSynchronize());
 }
 

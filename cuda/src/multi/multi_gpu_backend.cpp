@@ -53,6 +53,7 @@ public:
     }
 
     std::size_t memory_bytes() const override { return solver_.memory_bytes(); }
+    MultiSolver& solver() { return solver_; }
     std::vector<std::pair<std::string, std::size_t>> memory_breakdown() const override { return solver_.memory_breakdown(); }
 
     // ---- CudaBackendApi ---------------------------------------------------------------------------
@@ -74,6 +75,11 @@ private:
 };
 
 }  // namespace
+
+MultiSolver* multi_solver(Backend& backend) {
+    auto* b = dynamic_cast<MultiGpuBackend*>(&backend);
+    return b != nullptr ? &b->solver() : nullptr;
+}
 
 std::unique_ptr<Backend> make_multi_gpu_backend(const BackendOptions& options) {
     const std::vector<DeviceInfo> all = cuda::devices();

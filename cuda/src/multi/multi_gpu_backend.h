@@ -17,4 +17,8 @@ inline constexpr const char* kPartsOnOneDeviceEnv = "WEFT_MULTI_GPU_ONE_DEVICE";
 /// mode). Throws weft::Error when the host has fewer GPUs than asked for, saying how many it has.
 [[nodiscard]] std::unique_ptr<Backend> make_multi_gpu_backend(const BackendOptions& options);
 
+class MultiSolver;
+/// The MultiSolver behind a backend made here, or nullptr (tests and benchmarks; not public API).
+MultiSolver* multi_solver(Backend& backend);
+
 }  // namespace weft::cuda::multi

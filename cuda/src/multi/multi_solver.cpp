@@ -4,10 +4,13 @@
 
 #include <algorithm>
 #include <chrono>
+#include <exception>
+#include <future>
 #include <string>
 
 #include "cuda_check.h"
 #include "multi/peer_access.h"
+#include "multi/whole_state.h"
 #include "weft/backend/timing.h"
 #include "weft/error.h"
 
@@ -37,20 +40,38 @@ MultiSolver::~MultiSolver() {
     if (!devices_.empty()) cudaSetDevice(devices_.front());
     for (cudaEvent_t e : events_) cudaEventDestroy(e);
     if (user_event_ != nullptr) cudaEventDestroy(user_event_);
+    if (leader_event_ != nullptr) cudaEventDestroy(leader_event_);
+    for (cudaEvent_t e : part_event_) cudaEventDestroy(e);
     for (cudaEvent_t e : part_done_) cudaEventDestroy(e);
     pcg_.reset();
     level1_couplings_.reset();
+    mirror_.reset();
+    for (std::size_t p = 0; p < collisions_.size(); ++p) {
+        cudaSetDevice(devices_[p]);
+        collisions_[p].reset();
+        whole_[p] = {};
+    }
     halo_.reset();
     solvers_.clear();
 }
 
 void MultiSolver::build(const FlatModel& flat, const Model& model) {
-    if (needs_cloth_collisions(model))
+    if (needs_cloth_collisions(model) && model.settings.collision.mode == CollisionMode::Offset)
         throw Error("CUDA backend on " + std::to_string(devices_.size()) +
-                    " parts: cloth collisions (self-collision, mesh colliders) are not split across GPUs yet; switch "
-                    "them off or run on one GPU");
+                    " parts: offset contact (collision.mode = \"offset\") is not split across GPUs yet; use "
+                    "\"ccd_zones\" or one GPU");
     pcg_.reset();
     level1_couplings_.reset();
+    mirror_.reset();
+    for (std::size_t p = 0; p < collisions_.size(); ++p) {
+        WEFT_CUDA_CHECK(cudaSetDevice(devices_[p]));
+        collisions_[p].reset();
+        whole_[p] = {};
+    }
+    collisions_.clear();
+    whole_.clear();
+    WEFT_CUDA_CHECK(cudaSetDevice(devices_.front()));
+    leader_contacts_.release();
     halo_.reset();
     solvers_.clear();
     part_models_.clear();
@@ -77,8 +98,43 @@ void MultiSolver::build(const FlatModel& flat, const Model& model) {
     }
     halo_ = std::make_unique<HaloExchange>(partition_, devices_, streams);
     level1_couplings_ = std::make_unique<AllGather>(devices_, streams);
+    if (needs_cloth_collisions(model)) {
+        // The collision stages on every GPU over the whole model, each detecting its share of the
+        // pairs; the whole-size copies the contacts read on every GPU.
+        collisions_.resize(parts);
+        whole_.resize(parts);
+        for (std::uint32_t p = 0; p < parts; ++p) {
+            WEFT_CUDA_CHECK(cudaSetDevice(devices_[p]));
+            collisions_[p] = std::make_unique<DeviceCollisions>();
+            collisions_[p]->build(flat, model);
+            collisions_[p]->set_share(p, parts);
+            whole_[p].allocate(4 * 3 * flat.vertex_count, ledger_, "whole state for the collision stages");
+        }
+        WEFT_CUDA_CHECK(cudaSetDevice(devices_.front()));
+        if (leader_event_ == nullptr) WEFT_CUDA_CHECK(cudaEventCreateWithFlags(&leader_event_, cudaEventDisableTiming));
+        if (part_event_.empty())
+            for (const int d : devices_) {
+                WEFT_CUDA_CHECK(cudaSetDevice(d));
+                cudaEvent_t e = nullptr;
+                WEFT_CUDA_CHECK(cudaEventCreateWithFlags(&e, cudaEventDisableTiming));
+                part_event_.push_back(e);
+            }
+        std::vector<const std::uint32_t*> global;
+        std::vector<std::uint32_t> owned;
+        for (std::uint32_t p = 0; p < parts; ++p) {
+            global.push_back(solvers_[p]->part_global_ids());
+            owned.push_back(part_models_[p].owned);
+        }
+        const auto n = static_cast<std::uint32_t>(flat.vertex_count);
+        mirror_ = std::make_unique<ContactMirror>(devices_, streams, global, owned, n);
+        for (std::uint32_t p = 0; p < parts; ++p)
+            solvers_[p]->part_set_contact_copies(mirror_->copy(p, ContactMirror::kX0), mirror_->copy(p, ContactMirror::kWk),
+                                                 mirror_->copy(p, ContactMirror::kVk), n);
+        for (const int a : devices_)
+            for (const int b : devices_) enable_peer_access(a, b);
+    }
     schwarz_ = false;
-    pcg_ = std::make_unique<PartPcg>(systems, *halo_);
+    pcg_.reset();
     choose_preconditioner(model.settings.solver);
     has_output_ = false;
 }
@@ -88,15 +144,130 @@ void MultiSolver::choose_preconditioner(const SolverSettings& settings) {
                          (settings.preconditioner == Preconditioner::Auto && flat_->vertex_count >= kAutoSchwarzMinVertices);
     if (schwarz == schwarz_ && pcg_) return;
     synchronize();
+    for (auto& s : solvers_) s->part_use_schwarz(schwarz, hierarchy_);
+    schwarz_ = schwarz;
+    make_cg();
+}
+
+void MultiSolver::make_cg() {
+    synchronize();
     pcg_.reset();
     std::vector<PartSystem> systems;
-    for (auto& s : solvers_) {
-        s->part_use_schwarz(schwarz, hierarchy_);
-        systems.push_back(s->part_system());
-    }
-    schwarz_ = schwarz;
+    for (auto& s : solvers_) systems.push_back(s->part_system());
     pcg_ = std::make_unique<PartPcg>(systems, *halo_);
     pcg_->set_use_graph(use_graph_);
+    pcg_->set_contact_mirror(mirror_.get());
+}
+
+float* MultiSolver::whole(std::size_t part, WholeArray a) const {
+    return whole_.at(part).get() + static_cast<std::size_t>(a) * 3 * flat_->vertex_count;
+}
+
+void MultiSolver::collect_whole(std::initializer_list<WholeArray> arrays, std::size_t targets) {
+    const auto n = static_cast<std::uint32_t>(flat_->vertex_count);
+    for (std::size_t p = 0; p < solvers_.size(); ++p) {
+        DeviceSolver& s = *solvers_[p];
+        const DeviceView& v = s.view();
+        WEFT_CUDA_CHECK(cudaSetDevice(s.device()));
+        for (std::size_t q = 0; q < targets; ++q)
+            for (const WholeArray a : arrays) {
+                const float* from = a == kWholeX ? v.x : a == kWholeV ? v.v : a == kWholeV0 ? v.v0 : v.dv_previous;
+                launch_owned_to_whole(from, v.n, v.rows, s.part_global_ids(), whole(q, a), n, s.stream());
+            }
+        WEFT_CUDA_CHECK(cudaEventRecord(part_event_[p], s.stream()));
+    }
+    for (std::size_t q = 0; q < targets; ++q) {
+        DeviceSolver& target = *solvers_[q];
+        WEFT_CUDA_CHECK(cudaSetDevice(target.device()));
+        for (cudaEvent_t e : part_event_) WEFT_CUDA_CHECK(cudaStreamWaitEvent(target.stream(), e, 0));
+    }
+}
+
+void MultiSolver::spread_whole() {
+    const auto n = static_cast<std::uint32_t>(flat_->vertex_count);
+    DeviceSolver& leader = *solvers_.front();
+    WEFT_CUDA_CHECK(cudaSetDevice(leader.device()));
+    WEFT_CUDA_CHECK(cudaEventRecord(leader_event_, leader.stream()));
+    for (auto& sp : solvers_) {
+        DeviceSolver& s = *sp;
+        const DeviceView& v = s.view();
+        WEFT_CUDA_CHECK(cudaSetDevice(s.device()));
+        WEFT_CUDA_CHECK(cudaStreamWaitEvent(s.stream(), leader_event_, 0));
+        launch_whole_to_local(whole(0, kWholeX), n, s.part_global_ids(), v.x, v.n, s.stream());
+        launch_whole_to_local(whole(0, kWholeV), n, s.part_global_ids(), v.v, v.n, s.stream());
+        launch_whole_to_local(whole(0, kWholePrevious), n, s.part_global_ids(), v.dv_previous, v.n, s.stream());
+    }
+}
+
+void MultiSolver::detect_contacts(const Model& model, double t, double h, StepStats& stats) {
+    // The detection reads x and v (the offset mode's Δv is not split across GPUs).
+    const std::size_t parts = solvers_.size();
+    collect_whole({kWholeX, kWholeV}, parts);
+    // Every GPU its share at once: one host thread a GPU (each detection waits for its device).
+    std::vector<StepStats> share_stats(parts);
+    std::vector<std::size_t> found(parts, 0);
+    const auto detect_share = [&](std::size_t p) {
+        DeviceSolver& s = *solvers_[p];
+        WEFT_CUDA_CHECK(cudaSetDevice(s.device()));
+        found[p] = collisions_[p]->detect(model, t, h, whole(p, kWholeX), whole(p, kWholeV), whole(p, kWholePrevious),
+                                          s.stream(), share_stats[p]);
+        if (p > 0) collisions_[p]->count_buffer_growths(share_stats[p]);
+    };
+    std::vector<std::future<void>> others;
+    for (std::size_t p = 1; p < parts; ++p) others.push_back(std::async(std::launch::async, detect_share, p));
+    std::exception_ptr failure;
+    try {
+        detect_share(0);
+    } catch (...) {
+        failure = std::current_exception();
+    }
+    for (auto& f : others) {
+        try {
+            f.get();
+        } catch (...) {
+            if (!failure) failure = std::current_exception();
+        }
+    }
+    if (failure) std::rethrow_exception(failure);
+    // The shares ran side by side: each stage took the longest share's time; the counts add up.
+    std::size_t contacts = 0;
+    for (std::size_t p = 0; p < parts; ++p) {
+        const StepStats& a = share_stats[p];
+        stats.collision.candidate_pairs += a.collision.candidate_pairs;
+        stats.collision.buffer_growths += a.collision.buffer_growths;
+        contacts += found[p];
+    }
+    for (const Stage stage : {Stage::BroadPhase, Stage::Culling, Stage::NarrowPhase}) {
+        double longest = 0.0;
+        for (const StepStats& a : share_stats) longest = std::max(longest, a.ms(stage));
+        stats.ms(stage) += longest;
+    }
+    stats.collision.contacts = static_cast<int>(contacts);
+
+    DeviceSolver& leader = *solvers_.front();
+    WEFT_CUDA_CHECK(cudaSetDevice(leader.device()));
+    const std::size_t kinematic = collisions_[0]->kinematic_count();
+    leader_contacts_.reserve(std::max<std::size_t>(found[0], 1), kinematic, static_cast<std::uint32_t>(flat_->vertex_count),
+                             leader.stream());
+    collisions_[0]->publish(leader_contacts_.inputs(), leader.stream(), stats);
+    WEFT_CUDA_CHECK(cudaEventRecord(leader_event_, leader.stream()));
+    std::vector<ContactShare> shares;
+    for (std::size_t p = 0; p < parts; ++p) shares.push_back({collisions_[p]->contacts(), found[p]});
+    bool grew = false;
+    for (auto& s : solvers_) grew = s->part_receive_contacts(shares, leader_contacts_.inputs(), leader_event_, kinematic) || grew;
+    std::vector<const std::uint32_t*> start;
+    for (auto& s : solvers_) start.push_back(s->view().contacts.start);
+    mirror_->list_contact_vertices(start);
+    if (grew || !pcg_) make_cg();  // the parts' contact arrays moved: the CG's systems and graphs with them
+}
+
+void MultiSolver::resolve_contacts(const Model& model, double h, bool swept, StepStats& stats) {
+    collect_whole({kWholeX, kWholeV, kWholeV0, kWholePrevious}, 1);
+    DeviceSolver& leader = *solvers_.front();
+    WEFT_CUDA_CHECK(cudaSetDevice(leader.device()));
+    const bool changed = collisions_[0]->resolve(model, h, whole(0, kWholeX), whole(0, kWholeV), whole(0, kWholeV0),
+                                                 whole(0, kWholePrevious), swept, leader.stream(), stats);
+    if (changed) spread_whole();
 }
 
 void MultiSolver::factor_schwarz(int newton) {
@@ -148,6 +319,10 @@ void MultiSolver::mark(std::size_t k) {
     WEFT_CUDA_CHECK(cudaEventRecord(events_[k], first.stream()));
 }
 
+double MultiSolver::detection_ms(const StepStats& stats) {
+    return stats.ms(Stage::BroadPhase) + stats.ms(Stage::Culling) + stats.ms(Stage::NarrowPhase) + stats.ms(Stage::Ccd);
+}
+
 double MultiSolver::elapsed_ms(std::size_t a, std::size_t b) const {
     float ms = 0.0F;
     WEFT_CUDA_CHECK(cudaEventElapsedTime(&ms, events_[a], events_[b]));
@@ -156,9 +331,17 @@ double MultiSolver::elapsed_ms(std::size_t a, std::size_t b) const {
 
 void MultiSolver::substep(const Model& model, double t, double h, StepStats& stats) {
     if (solvers_.empty() || flat_ == nullptr || flat_->vertex_count == 0) return;
-    if (needs_cloth_collisions(model))
+    const bool colliding = !collisions_.empty();
+    if (needs_cloth_collisions(model) != colliding || (colliding && model.settings.collision.mode == CollisionMode::Offset))
         throw Error("CUDA backend on " + std::to_string(devices_.size()) +
-                    " parts: cloth collisions were switched on; they are not split across GPUs yet");
+                    " parts: the cloth collisions were switched on or off, or to offset contact, after the build; across "
+                    "GPUs that takes a new world");
+    if (colliding && collisions_.front()->stale(model)) {
+        for (std::size_t p = 0; p < collisions_.size(); ++p) {  // self-collision toggled live
+            WEFT_CUDA_CHECK(cudaSetDevice(devices_[p]));
+            collisions_[p]->build(*flat_, model);
+        }
+    }
     choose_preconditioner(model.settings.solver);  // may change live
     if (user_stream_ != nullptr) {
         // After the outside stream's work so far.
@@ -171,9 +354,13 @@ void MultiSolver::substep(const Model& model, double t, double h, StepStats& sta
         }
         WEFT_CUDA_CHECK(cudaSetDevice(device));
     }
-    const auto host_start = Clock::now();
     std::size_t e = 0;
     mark(e++);
+    // The detection times its own stages (and waits for them): the first stage is what it leaves.
+    const double detection_before = detection_ms(stats);
+    if (colliding) detect_contacts(model, t, h, stats);
+    const double detection = detection_ms(stats) - detection_before;
+    const auto host_start = Clock::now();
     for (auto& s : solvers_) s->part_begin_substep(model, t, h);
     const double host_ms = ms_since(host_start);
     mark(e++);
@@ -185,6 +372,20 @@ void MultiSolver::substep(const Model& model, double t, double h, StepStats& sta
         dv.push_back(s->view().dv);
     }
     for (int it = 0; it < settings.newton_iterations; ++it) {
+        if (colliding) {
+            // The linearisation point of every contact vertex, on every GPU.
+            std::vector<const float*> x0, wk, vk;
+            std::vector<std::uint32_t> stride;
+            for (auto& s : solvers_) {
+                x0.push_back(s->view().x0);
+                wk.push_back(s->view().wk);
+                vk.push_back(s->view().vk);
+                stride.push_back(s->view().n);
+            }
+            mirror_->push(ContactMirror::kX0, x0, stride);
+            mirror_->push(ContactMirror::kWk, wk, stride);
+            mirror_->push(ContactMirror::kVk, vk, stride);
+        }
         for (auto& s : solvers_) s->part_assemble(it == 0);
         if (schwarz_) factor_schwarz(it);
         // The first part's stream waits for the others' work at the solve's first exchange.
@@ -212,7 +413,7 @@ void MultiSolver::substep(const Model& model, double t, double h, StepStats& sta
     }
     stats.collider_contacts = contacts;
     // Events: start, after the start of the substep, per Newton iteration (assembly, solve, update), end.
-    stats.ms(Stage::Kinematics) += host_ms + elapsed_ms(0, 1);
+    stats.ms(Stage::Kinematics) += host_ms + std::max(0.0, elapsed_ms(0, 1) - detection);
     std::size_t k = 1;
     for (int it = 0; it < settings.newton_iterations; ++it, k += 3) {
         stats.ms(Stage::Forces) += elapsed_ms(k, k + 1);
@@ -225,9 +426,11 @@ void MultiSolver::substep(const Model& model, double t, double h, StepStats& sta
         stats.non_finite = true;
         for (auto& s : solvers_) s->part_rollback();
     } else {
+        const int hits_before = stats.collision.swept_collider_hits;
         bool swept = false;
         for (auto& s : solvers_) swept = s->part_sweep(stats) || swept;
         if (swept) exchange_state();  // a ghost may have been carried along differently from its owner
+        if (colliding) resolve_contacts(model, h, stats.collision.swept_collider_hits > hits_before, stats);
     }
     if (has_output_) {
         for (auto& s : solvers_) s->part_write_output();
@@ -338,7 +541,9 @@ void MultiSolver::set_output(void* device_buffer, std::size_t stride) {
 }
 
 std::size_t MultiSolver::memory_bytes() const {
-    std::size_t total = halo_ ? halo_->memory_bytes() : 0;
+    std::size_t total = (halo_ ? halo_->memory_bytes() : 0) + ledger_.total() + (mirror_ ? mirror_->memory_bytes() : 0) +
+                        leader_contacts_.bytes();
+    for (const auto& c : collisions_) total += c->memory_bytes();
     for (std::size_t p = 0; p < solvers_.size(); ++p) total += solvers_[p]->memory_bytes() + (pcg_ ? pcg_->memory_bytes(p) : 0);
     return total;
 }
@@ -351,6 +556,14 @@ std::vector<std::pair<std::string, std::size_t>> MultiSolver::memory_breakdown()
         if (pcg_) out.emplace_back(prefix + "CG across parts", pcg_->memory_bytes(p));
     }
     if (halo_) out.emplace_back("halo exchange", halo_->memory_bytes());
+    if (!collisions_.empty()) {
+        for (std::size_t p = 0; p < collisions_.size(); ++p)
+            out.emplace_back("GPU " + std::to_string(devices_[p]) + ": cloth collisions (its share of the pairs" +
+                                 (p == 0 ? ", the impact zones)" : ")"),
+                             collisions_[p]->memory_bytes());
+        out.emplace_back("whole state (every GPU) and the first GPU's published contacts", ledger_.total() + leader_contacts_.bytes());
+        out.emplace_back("contact mirrors (every GPU)", mirror_->memory_bytes());
+    }
     return out;
 }
 

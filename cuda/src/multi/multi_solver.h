@@ -9,13 +9,17 @@
 /// Several parts may share one GPU: the test mode that checks the partition logic on any GPU host.
 
 #include <cstdint>
+#include <initializer_list>
 #include <memory>
 #include <string>
 #include <utility>
 #include <vector>
 
 #include "device_solver.h"
+#include "device_collisions.h"
+#include "device_contacts.h"
 #include "multi/all_gather.h"
+#include "multi/contact_mirror.h"
 #include "multi/halo_exchange.h"
 #include "multi/part_pcg.h"
 #include "weft/backend/flat_model.h"
@@ -85,8 +89,29 @@ private:
     void choose_preconditioner(const SolverSettings& settings);
     /// Enqueues Newton iteration `newton`'s Schwarz factorisation on every part.
     void factor_schwarz(int newton);
+    /// A new CG across the parts for their current systems (preconditioner or contact list changed).
+    void make_cg();
+    // ---- cloth collisions across GPUs (docs/multi-gpu.md, "Collisions") ---------------------------
+    /// Whole arrays on every GPU: x, v, v0 and the previous Δv, 3 × vertices each.
+    enum WholeArray : int { kWholeX = 0, kWholeV = 1, kWholeV0 = 2, kWholePrevious = 3 };
+    [[nodiscard]] float* whole(std::size_t part, WholeArray a) const;
+    /// Every part's owned values of `arrays` into the whole arrays of the first `targets` parts'
+    /// GPUs (peer stores); those parts' streams wait.
+    void collect_whole(std::initializer_list<WholeArray> arrays, std::size_t targets);
+    /// Every part's local vertices (owned and ghosts) of x, v and the previous Δv from the first
+    /// GPU's whole arrays.
+    void spread_whole();
+    /// Before the solve: every GPU hashes the whole state and narrows down its share of the pairs
+    /// (concurrently, one host thread a GPU); each part takes the contacts at its rows from every
+    /// share, then builds its incidence and contact vertices.
+    void detect_contacts(const Model& model, double t, double h, StepStats& stats);
+    /// After the solve: CCD and the impact zones on the first GPU; the vertices they moved back to
+    /// the parts. `swept`: a fast collider carried vertices in this substep.
+    void resolve_contacts(const Model& model, double h, bool swept, StepStats& stats);
     /// Records stage event k on the first part's stream (created on first use).
     void mark(std::size_t k);
+    /// The collision detection's stage times in `stats` so far, ms (its stages record themselves).
+    [[nodiscard]] static double detection_ms(const StepStats& stats);
     [[nodiscard]] double elapsed_ms(std::size_t a, std::size_t b) const;
 
     std::vector<int> devices_;
@@ -99,6 +124,15 @@ private:
     SchwarzHierarchy hierarchy_;                // the whole model's: the partition's order, the parts' levels
     bool schwarz_ = false;
     std::unique_ptr<AllGather> level1_couplings_;  // the Schwarz factorisation's level 1, every Newton iteration
+    // Per part, on its GPU, over the whole model: its share of the detection (the first also runs
+    // the impact zones), and the whole arrays.
+    std::vector<std::unique_ptr<DeviceCollisions>> collisions_;
+    DeviceContacts leader_contacts_;  // the first GPU's share, published: the kinematic arrays
+    std::vector<DeviceArray<float>> whole_;
+    MemoryLedger ledger_;                            // what the solver holds beside the parts
+    std::unique_ptr<ContactMirror> mirror_;
+    cudaEvent_t leader_event_ = nullptr;             // on the first GPU
+    std::vector<cudaEvent_t> part_event_;            // per part, on its GPU
     bool has_output_ = false;
     std::vector<cudaEvent_t> events_;  // stage timing, on devices_.front()
     cudaStream_t user_stream_ = nullptr;

@@ -14,6 +14,8 @@
 #include "kernels.h"
 #include "multi/all_gather.h"
 #include "multi/peer_access.h"
+#include "contact_terms.cuh"
+#include "multi/contact_mirror.h"
 #include "schwarz_apply.cuh"
 #include "weft/error.h"
 
@@ -140,11 +142,24 @@ __global__ void product_kernel(PartSystem a, const float* x, float* w, const flo
                 const std::uint32_t pos = first + k * kSliceRowsDevice + i % kSliceRowsDevice;
                 acc += load_block(a.blocks, pos) * load3(x, a.column[pos], a.local);
             }
+            // The contacts at this row, as the single-GPU SpMV gathers them (the pair pass before).
+            if (a.contacts.capacity > 0 && contact_count(a.contacts) > 0)
+                acc = contact_gather(a.contacts, i, a.contacts.product, acc);
         }
         store3(w, i, a.local, acc);
         if (dot_with != nullptr) value = static_cast<double>(physics::dot(acc, load3(dot_with, i, a.local)));
     }
     if (dot_with != nullptr) block_partial(value, partials, 1);
+}
+
+/// The pair pass of the contact product over the whole list, reading the vector's whole-size copy
+/// (every part computes every pair: the gather takes those at its rows).
+__global__ void pair_pass_kernel(ContactView c, const float* copy, std::uint32_t whole, const PartPcgScalars* scalars,
+                                 int check) {
+    if (check != 0 && scalars->running == 0) return;
+    const std::uint32_t m = contact_count(c);
+    for (std::uint32_t p = blockIdx.x * blockDim.x + threadIdx.x; p < m; p += gridDim.x * blockDim.x)
+        contact_pair_product(c, p, copy, whole);
 }
 
 /// r = filter(b − w) (w = A·x), u = M⁻¹r, p = s = 0; partials (rᵀu, bᵀM⁻¹b over the free rows).
@@ -359,10 +374,28 @@ void PartPcg::enqueue_schwarz(SchwarzInput in, int slot, int check) {
     }
 }
 
+void PartPcg::enqueue_contacts(std::span<float* const> x, int check) {
+    if (contacts_ == nullptr) return;
+    std::vector<const float*> from(x.begin(), x.end());
+    std::vector<std::uint32_t> stride;
+    for (auto& part : part_) stride.push_back(part->system.local);
+    contacts_->push(ContactMirror::kCg, from, stride);
+    for (std::size_t k = 0; k < part_.size(); ++k) {
+        const PartSystem& a = part_[k]->system;
+        if (a.contacts.capacity == 0) continue;
+        WEFT_CUDA_CHECK(cudaSetDevice(a.device));
+        const unsigned blocks = std::max(1u, std::min(1024u, grid_for(a.contacts.capacity)));
+        pair_pass_kernel<<<blocks, kBlockSize, 0, a.stream>>>(a.contacts, contacts_->copy(k, ContactMirror::kCg),
+                                                              contacts_->whole(), part_[k]->scalars.get(), check);
+        WEFT_CUDA_CHECK_LAUNCH("pair_pass_kernel");
+    }
+}
+
 void PartPcg::enqueue_product(int check) {
     std::vector<float*> u(part_.size());
     for (std::size_t k = 0; k < part_.size(); ++k) u[k] = part_[k]->u.get();
     halo_.exchange(u);
+    enqueue_contacts(u, check);
     for (auto& part : part_) {
         const PartSystem& a = part->system;
         WEFT_CUDA_CHECK(cudaSetDevice(a.device));
@@ -405,6 +438,7 @@ PartPcgResult PartPcg::solve(std::span<const float* const> b, std::span<float* c
         enqueue_schwarz(SchwarzInput::RightHandSide, 1, 0);
     }
     halo_.exchange(x);
+    enqueue_contacts(x, 0);
     for (std::size_t k = 0; k < part_.size(); ++k) {
         Part& part = *part_[k];
         const PartSystem& a = part.system;

@@ -33,6 +33,7 @@
 #include "device_array.h"
 #include "kernels.h"
 #include "multi/all_gather.h"
+#include "multi/contact_mirror.h"
 #include "multi/halo_exchange.h"
 #include "multi/part_system.h"
 
@@ -75,6 +76,10 @@ public:
     PartPcgResult solve(std::span<const float* const> b, std::span<float* const> x, double tolerance, int max_iterations,
                         int batch = 16);
 
+    /// Proximity contacts across the parts (PartSystem::contacts): before each product the vector's
+    /// values at every part's contact vertices go into `mirror`'s whole-size copies, which the pair
+    /// pass reads. Null: no contacts. Set before the first solve (the graphs hold it).
+    void set_contact_mirror(ContactMirror* mirror) { contacts_ = mirror; }
     /// Batches of iterations as one multi-device CUDA graph each (default), or launched directly (the
     /// same kernels and results: for tools that cannot follow graphs).
     void set_use_graph(bool enabled) { use_graph_ = enabled; }
@@ -86,6 +91,9 @@ private:
     /// Exchanges u, then w = filter(A·u) with the partial wᵀu on every part (`check`: nothing once
     /// the loop has stopped).
     void enqueue_product(int check);
+    /// The contacts' share of a product of `x` (one local vector per part): its values at the
+    /// contact vertices into the whole-size copies, then every part's pair pass.
+    void enqueue_contacts(std::span<float* const> x, int check);
     /// u = M⁻¹r (`in`: r as it is, or filter(b) into r first) by the Schwarz levels across the
     /// parts, with the partial rᵀu into `slot` (`check`: nothing once the loop has stopped).
     void enqueue_schwarz(SchwarzInput in, int slot, int check);
@@ -105,6 +113,7 @@ private:
     std::vector<float*> graph_x_;  // the vectors the graph was captured with
     int graph_batch_ = 0;
     bool use_graph_ = true;
+    ContactMirror* contacts_ = nullptr;
 };
 
 }  // namespace weft::cuda::multi

@@ -35,6 +35,10 @@ struct PartSystem {
     /// of mas.level[1].values, which the CG gathers from every part. Null: block-Jacobi.
     const DeviceView* schwarz = nullptr;
     std::size_t level1_begin = 0, level1_end = 0;
+    /// Proximity contacts at the owned rows (capacity 0: none): the whole contact list, this part's
+    /// incidence; the pairs read the CG's vector from the whole-size copy the CG keeps filled
+    /// (PartPcg::set_contact_mirror).
+    ContactView contacts;
 };
 
 }  // namespace weft::cuda::multi

@@ -1,0 +1,52 @@
+// A part's share of the contact list (multi/part_contacts.h).
+#include "multi/part_contacts.h"
+
+#include <cub/device/device_select.cuh>
+
+#include <limits>
+#include <string>
+
+#include "cuda_check.h"
+#include "weft/error.h"
+
+namespace weft::cuda::multi {
+namespace {
+
+/// True for a contact with a cloth vertex this part owns.
+struct TouchesOwnedRow {
+    const std::uint32_t* row_of;
+    std::uint32_t cloth_vertices;
+    __device__ bool operator()(const DeviceContact& c) const {
+        for (int j = 0; j < 4; ++j) {
+            const std::uint32_t v = c.vertex[j];
+            if (v < cloth_vertices && row_of[v] != std::numeric_limits<std::uint32_t>::max()) return true;
+        }
+        return false;
+    }
+};
+
+}  // namespace
+
+std::size_t part_contact_selection_bytes(std::size_t count) {
+    std::size_t bytes = 0;
+    WEFT_CUDA_CHECK(cub::DeviceSelect::If(nullptr, bytes, static_cast<const DeviceContact*>(nullptr),
+                                          static_cast<DeviceContact*>(nullptr), static_cast<std::uint32_t*>(nullptr),
+                                          static_cast<int>(count), TouchesOwnedRow{nullptr, 0}));
+    return bytes;
+}
+
+void launch_select_part_contacts(const DeviceContact* from, std::size_t count, const std::uint32_t* row_of,
+                                 std::uint32_t cloth_vertices, DeviceContact* to, std::uint32_t* to_count, void* scratch,
+                                 std::size_t scratch_bytes, cudaStream_t stream) {
+    if (count > static_cast<std::size_t>(std::numeric_limits<int>::max()))
+        throw Error("launch_select_part_contacts: " + std::to_string(count) + " contacts exceed the selection's int range");
+    if (count == 0) {
+        WEFT_CUDA_CHECK(cudaMemsetAsync(to_count, 0, sizeof(std::uint32_t), stream));
+        return;
+    }
+    std::size_t bytes = scratch_bytes;
+    WEFT_CUDA_CHECK(cub::DeviceSelect::If(scratch, bytes, from, to, to_count, static_cast<int>(count),
+                                          TouchesOwnedRow{row_of, cloth_vertices}, stream));
+}
+
+}  // namespace weft::cuda::multi
