@@ -5,6 +5,7 @@
 #include <string>
 
 #include "cuda_check.h"
+#include "contact_terms.cuh"
 #include "kernels.h"
 #include "multi/peer_access.h"
 #include "weft/error.h"
@@ -18,6 +19,30 @@ __global__ void list_kernel(const std::uint32_t* start, std::uint32_t owned, std
     const std::uint32_t i = blockIdx.x * blockDim.x + threadIdx.x;
     if (i >= owned || start[i + 1] == start[i]) return;
     list[atomicAdd(&list[owned], 1u)] = i;
+}
+
+/// named[v] = 1 for every cloth vertex of this part's contacts that another part owns.
+__global__ void name_kernel(ContactView c, std::uint8_t* named) {
+    const std::uint32_t m = contact_count(c);
+    for (std::uint32_t p = blockIdx.x * blockDim.x + threadIdx.x; p < m; p += gridDim.x * blockDim.x)
+        for (int j = 0; j < 4; ++j) {
+            const std::uint32_t v = c.list[p].vertex[j];
+            if (v < c.cloth_vertices && c.row_of[v] == ~0U) named[v] = 1;
+        }
+}
+
+/// The owned rows in a contact that some other part's contacts name (`others`: their flags, read
+/// across NVLink), appended in any order; the count lives after the list.
+__global__ void across_kernel(const std::uint32_t* start, std::uint32_t owned, const std::uint32_t* global,
+                              const std::uint8_t* const* others, std::uint32_t other_count, std::uint32_t* across) {
+    const std::uint32_t i = blockIdx.x * blockDim.x + threadIdx.x;
+    if (i >= owned || start[i + 1] == start[i]) return;
+    const std::uint32_t g = global[i];
+    for (std::uint32_t q = 0; q < other_count; ++q)
+        if (others[q][g] != 0) {
+            across[atomicAdd(&across[owned], 1u)] = i;
+            return;
+        }
 }
 
 __global__ void push_kernel(const float* from, std::uint32_t stride, const std::uint32_t* list, std::uint32_t owned,
@@ -56,9 +81,25 @@ ContactMirror::ContactMirror(std::span<const int> devices, std::span<const cudaS
         part.copies.zero(part.stream);
         part.list.allocate(std::size_t{part.owned} + 1, ledger_, "contact mirrors");
         part.list.zero(part.stream);
+        part.across.allocate(std::size_t{part.owned} + 1, ledger_, "contact mirrors");
+        part.across.zero(part.stream);
+        part.named.allocate(whole, ledger_, "contact mirrors");
+        part.named.zero(part.stream);
+        WEFT_CUDA_CHECK(cudaEventCreateWithFlags(&part.marked, cudaEventDisableTiming));
     }
     for (const Part& a : part_)
         for (const Part& b : part_) enable_peer_access(a.device, b.device);
+    for (std::size_t p = 0; p < parts; ++p) {
+        std::vector<const std::uint8_t*> others;
+        for (std::size_t q = 0; q < parts; ++q)
+            if (q != p) others.push_back(part_[q].named.get());
+        WEFT_CUDA_CHECK(cudaSetDevice(part_[p].device));
+        part_[p].others.upload(others, ledger_, "contact mirrors");
+    }
+    for (const Part& part : part_) {
+        WEFT_CUDA_CHECK(cudaSetDevice(part.device));
+        WEFT_CUDA_CHECK(cudaStreamSynchronize(part.stream));  // the zeroed lists before the first use
+    }
     WEFT_CUDA_CHECK(cudaSetDevice(previous));
 }
 
@@ -66,6 +107,7 @@ ContactMirror::~ContactMirror() {
     for (Part& part : part_) {
         if (part.ready != nullptr) cudaEventDestroy(part.ready);
         if (part.pushed != nullptr) cudaEventDestroy(part.pushed);
+        if (part.marked != nullptr) cudaEventDestroy(part.marked);
         if (part.side != nullptr) cudaStreamDestroy(part.side);
     }
 }
@@ -74,24 +116,61 @@ float* ContactMirror::copy(std::size_t p, Vector which) const {
     return part_.at(p).copies.get() + static_cast<std::size_t>(which) * 3 * whole_;
 }
 
-void ContactMirror::list_contact_vertices(std::span<const std::uint32_t* const> start) {
-    if (start.size() != part_.size())
-        throw Error("ContactMirror::list_contact_vertices: " + std::to_string(start.size()) + " incidences for " +
+void ContactMirror::list_contact_vertices(std::span<const ContactView> contacts) {
+    if (contacts.size() != part_.size())
+        throw Error("ContactMirror::list_contact_vertices: " + std::to_string(contacts.size()) + " contact lists for " +
                     std::to_string(part_.size()) + " parts");
     int previous = 0;
     WEFT_CUDA_CHECK(cudaGetDevice(&previous));
+    // The vertices each part's contacts name on other parts.
+    for (std::size_t p = 0; p < part_.size(); ++p) {
+        Part& part = part_[p];
+        const ContactView& c = contacts[p];
+        WEFT_CUDA_CHECK(cudaSetDevice(part.device));
+        part.named.zero(part.stream);
+        if (c.capacity > 0) {
+            const unsigned blocks = std::max(1u, std::min(1024u, grid_for(c.capacity)));
+            name_kernel<<<blocks, kBlockSize, 0, part.stream>>>(c, part.named.get());
+            WEFT_CUDA_CHECK_LAUNCH("contact mirror name_kernel");
+        }
+        WEFT_CUDA_CHECK(cudaEventRecord(part.marked, part.stream));
+    }
     for (std::size_t p = 0; p < part_.size(); ++p) {
         Part& part = part_[p];
         WEFT_CUDA_CHECK(cudaSetDevice(part.device));
+        for (const Part& other : part_) WEFT_CUDA_CHECK(cudaStreamWaitEvent(part.stream, other.marked, 0));
         WEFT_CUDA_CHECK(cudaMemsetAsync(part.list.get() + part.owned, 0, sizeof(std::uint32_t), part.stream));
+        WEFT_CUDA_CHECK(cudaMemsetAsync(part.across.get() + part.owned, 0, sizeof(std::uint32_t), part.stream));
         if (part.owned == 0) continue;
-        list_kernel<<<grid_for(part.owned), kBlockSize, 0, part.stream>>>(start[p], part.owned, part.list.get());
+        list_kernel<<<grid_for(part.owned), kBlockSize, 0, part.stream>>>(contacts[p].start, part.owned, part.list.get());
         WEFT_CUDA_CHECK_LAUNCH("contact mirror list_kernel");
+        across_kernel<<<grid_for(part.owned), kBlockSize, 0, part.stream>>>(
+            contacts[p].start, part.owned, part.global, part.others.get(), static_cast<std::uint32_t>(part_.size() - 1),
+            part.across.get());
+        WEFT_CUDA_CHECK_LAUNCH("contact mirror across_kernel");
+    }
+    // A part's flags are rewritten at the next call: not before every part has read them.
+    for (Part& part : part_) {
+        WEFT_CUDA_CHECK(cudaSetDevice(part.device));
+        WEFT_CUDA_CHECK(cudaEventRecord(part.marked, part.stream));
+    }
+    for (Part& part : part_) {
+        WEFT_CUDA_CHECK(cudaSetDevice(part.device));
+        for (const Part& other : part_) WEFT_CUDA_CHECK(cudaStreamWaitEvent(part.stream, other.marked, 0));
     }
     WEFT_CUDA_CHECK(cudaSetDevice(previous));
 }
 
 void ContactMirror::push(Vector which, std::span<const float* const> vectors, std::span<const std::uint32_t> stride) {
+    enqueue_push(which, vectors, stride, false);
+}
+
+void ContactMirror::push_across(Vector which, std::span<const float* const> vectors, std::span<const std::uint32_t> stride) {
+    enqueue_push(which, vectors, stride, true);
+}
+
+void ContactMirror::enqueue_push(Vector which, std::span<const float* const> vectors, std::span<const std::uint32_t> stride,
+                                 bool across) {
     const std::size_t parts = part_.size();
     if (vectors.size() != parts || stride.size() != parts)
         throw Error("ContactMirror::push: " + std::to_string(vectors.size()) + " vectors for " + std::to_string(parts) + " parts");
@@ -106,8 +185,10 @@ void ContactMirror::push(Vector which, std::span<const float* const> vectors, st
         WEFT_CUDA_CHECK(cudaSetDevice(from.device));
         for (const Part& to : part_) WEFT_CUDA_CHECK(cudaStreamWaitEvent(from.side, to.ready, 0));
         const unsigned blocks = std::max(1u, std::min(1024u, grid_for(from.owned)));
+        const std::uint32_t* rows = across ? from.across.get() : from.list.get();
         for (std::size_t q = 0; q < parts; ++q) {
-            push_kernel<<<blocks, kBlockSize, 0, from.side>>>(vectors[p], stride[p], from.list.get(), from.owned, from.global,
+            if (across && q == p) continue;
+            push_kernel<<<blocks, kBlockSize, 0, from.side>>>(vectors[p], stride[p], rows, from.owned, from.global,
                                                              copy(q, which), whole_);
             WEFT_CUDA_CHECK_LAUNCH("contact mirror push_kernel");
         }

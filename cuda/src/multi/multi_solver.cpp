@@ -255,9 +255,9 @@ void MultiSolver::detect_contacts(const Model& model, double t, double h, StepSt
     for (std::size_t p = 0; p < parts; ++p) shares.push_back({collisions_[p]->contacts(), found[p]});
     bool grew = false;
     for (auto& s : solvers_) grew = s->part_receive_contacts(shares, leader_contacts_.inputs(), leader_event_, kinematic) || grew;
-    std::vector<const std::uint32_t*> start;
-    for (auto& s : solvers_) start.push_back(s->view().contacts.start);
-    mirror_->list_contact_vertices(start);
+    std::vector<ContactView> lists;
+    for (auto& s : solvers_) lists.push_back(s->view().contacts);
+    mirror_->list_contact_vertices(lists);
     if (grew || !pcg_) make_cg();  // the parts' contact arrays moved: the CG's systems and graphs with them
 }
 

@@ -152,14 +152,30 @@ __global__ void product_kernel(PartSystem a, const float* x, float* w, const flo
     if (dot_with != nullptr) block_partial(value, partials, 1);
 }
 
-/// The pair pass of the contact product over the whole list, reading the vector's whole-size copy
-/// (every part computes every pair: the gather takes those at its rows).
-__global__ void pair_pass_kernel(ContactView c, const float* copy, std::uint32_t whole, const PartPcgScalars* scalars,
+/// The pair pass of the contact product over this part's contacts (those at its rows): a vertex the
+/// part owns is read from its own vector `x` (stride `local`), another part's from the whole-size
+/// copy its owner pushed (multi/contact_mirror.h). The same values as one GPU's pass reads, in the
+/// same order: contact_pair_product's sum.
+__global__ void pair_pass_kernel(ContactView c, const float* x, std::uint32_t local, const float* copy, const PartPcgScalars* scalars,
                                  int check) {
     if (check != 0 && scalars->running == 0) return;
     const std::uint32_t m = contact_count(c);
-    for (std::uint32_t p = blockIdx.x * blockDim.x + threadIdx.x; p < m; p += gridDim.x * blockDim.x)
-        contact_pair_product(c, p, copy, whole);
+    const std::uint32_t whole = c.cloth_vertices;
+    for (std::uint32_t p = blockIdx.x * blockDim.x + threadIdx.x; p < m; p += gridDim.x * blockDim.x) {
+        if ((c.list[p].pair & kInactiveContactBit) != 0) continue;  // not in the incidence
+        const uint4 ids = reinterpret_cast<const uint4*>(c.list)[4 * p];
+        const float4 w = reinterpret_cast<const float4*>(c.list)[4 * p + 1];
+        const std::uint32_t id[4] = {ids.x, ids.y, ids.z, ids.w};
+        const float weight[4] = {w.x, w.y, w.z, w.w};
+        V3 sum{};
+        for (int j = 0; j < 4; ++j) {
+            const std::uint32_t v = id[j];
+            if (v >= whole) continue;  // a kinematic vertex: no unknown
+            const std::uint32_t row = c.row_of[v];
+            sum += weight[j] * (row != ~0U ? load3(x, row, local) : load3(copy, v, whole));
+        }
+        store3(c.product, p, c.capacity, load_contact_block(c, p) * sum);
+    }
 }
 
 /// r = filter(b − w) (w = A·x), u = M⁻¹r, p = s = 0; partials (rᵀu, bᵀM⁻¹b over the free rows).
@@ -379,14 +395,14 @@ void PartPcg::enqueue_contacts(std::span<float* const> x, int check) {
     std::vector<const float*> from(x.begin(), x.end());
     std::vector<std::uint32_t> stride;
     for (auto& part : part_) stride.push_back(part->system.local);
-    contacts_->push(ContactMirror::kCg, from, stride);
+    contacts_->push_across(ContactMirror::kCg, from, stride);
     for (std::size_t k = 0; k < part_.size(); ++k) {
         const PartSystem& a = part_[k]->system;
         if (a.contacts.capacity == 0) continue;
         WEFT_CUDA_CHECK(cudaSetDevice(a.device));
         const unsigned blocks = std::max(1u, std::min(1024u, grid_for(a.contacts.capacity)));
-        pair_pass_kernel<<<blocks, kBlockSize, 0, a.stream>>>(a.contacts, contacts_->copy(k, ContactMirror::kCg),
-                                                              contacts_->whole(), part_[k]->scalars.get(), check);
+        pair_pass_kernel<<<blocks, kBlockSize, 0, a.stream>>>(a.contacts, x[k], a.local, contacts_->copy(k, ContactMirror::kCg),
+                                                              part_[k]->scalars.get(), check);
         WEFT_CUDA_CHECK_LAUNCH("pair_pass_kernel");
     }
 }
