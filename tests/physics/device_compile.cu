@@ -12,6 +12,7 @@
 #include "weft/physics/offset_contact.h"
 #include "weft/physics/pair_contact.h"
 #include "weft/physics/proximity.h"
+#include "weft/physics/shell_bending.h"
 #include "weft/physics/swept_collider.h"
 
 namespace weft::physics {
@@ -48,6 +49,16 @@ __device__ void exercise(DeviceProbe<T>& p) {
     for (int k = 0; k < 4; ++k)
         p.scalar[1] += bending_evaluate(T(1e-3), w, rest, p.x, g4, h4, static_cast<HessianKind>(k));
     dihedral_angle_derivatives(p.x, g4, h4);
+    // bending from a shape operator per triangle
+    ShellBendingRest<T> sr;
+    (void)shell_bending_rest(p.x[0], p.x[1], p.x[2], sr);
+    const bool present[3] = {true, true, false};
+    const Vec3<T> stencil[3][4] = {{p.x[0], p.x[1], p.x[2], p.x[3]}, {p.x[1], p.x[2], p.x[0], p.x[3]},
+                                   {p.x[2], p.x[0], p.x[1], p.x[3]}};
+    const T shell_rest[3] = {T(0), T(0.1), T(0)};
+    const ShellBendingTerms<T> st = shell_bending_evaluate(T(1e-3), sr, present, stencil, shell_rest);
+    p.scalar[1] += st.energy + shell_bending_coupling(T(1e-3), sr, 0, 1);
+    p.vec[4] = st.dtheta[0][0];
     // contact
     const ContactParams<T> cp{T(1e4), T(0.01), T(0.3), T(0.01)};
     for (int k = 0; k < 4; ++k) p.contact[k] = collider_contact(p.shape, cp, p.x[0], p.v[0], static_cast<HessianKind>(k));

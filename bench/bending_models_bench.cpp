@@ -1,0 +1,468 @@
+// Which discrete bending energy converges? The clamped strip of weft_bending_bench, solved to static
+// equilibrium outside the simulator (Newton on the total energy, a banded Cholesky, double) for
+// candidate bending energies, against the exact heavy elastica. Measures the candidates before one
+// of them replaces the solver's model (issue 22):
+//
+//   hinge  the solver's model today: ½·D·Σ_e w_e·θ_e² over interior edges, w_e = |e|²/(A₀+A₁)
+//          (weft/physics/bending.h's hinge_weight);
+//   face   a shape operator per triangle from its three edges' dihedral angles,
+//          S_f = Σ_i θ_i·|e_i|/(2·A_f)·t_i t_iᵀ (t_i the unit in-plane normal of edge i at rest), and
+//          the plate energy ½·D·Σ_f A_f·|S_f|²_F (Poisson 0). A cylinder of curvature κ bent about
+//          any direction gives S_f = κ·n nᵀ on every triangle of a regular grid, so the energy is the
+//          plate's whatever the bend's direction; the cost is a stencil of six vertices (a triangle
+//          and its three neighbours' far corners) instead of the hinge's four.
+//
+// It also prints each energy of a cylinder bent about the grid's axes and its diagonal, over the
+// plate's ½·D·κ²·area (1 is exact).
+//
+//   weft_bending_models_bench [--cells 12,24,48] [--aspect 0.5,1,2] [--load 0.5,2,6.6] [--json FILE]
+#include <algorithm>
+#include <array>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <fstream>
+#include <functional>
+#include <map>
+#include <numbers>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "heavy_elastica.h"
+#include "weft/error.h"
+#include "weft/physics/bending.h"
+#include "weft/physics/membrane.h"
+#include "weft/physics/shell_bending.h"
+
+namespace {
+
+using weft::physics::HessianKind;
+using V3 = weft::physics::Vec3<double>;
+using M3 = weft::physics::Mat3<double>;
+
+constexpr double kLength = 0.3, kWidth = 0.04, kDensity = 0.2, kGravity = 9.81, kStretch = 1e6;
+
+enum class Model { Hinge, Face };
+const char* name(Model m) { return m == Model::Hinge ? "hinge" : "face"; }
+
+/// A grid strip, vertex (i, j) at index i·(ny + 1) + j (numbered across first, so that the stiffness
+/// matrix is banded), cells split along alternating diagonals as weft::make_grid does.
+struct Strip {
+    int nx = 0, ny = 0;  // cells along, across
+    std::vector<V3> rest;
+    std::vector<std::array<std::uint32_t, 3>> triangles;
+    [[nodiscard]] std::uint32_t id(int i, int j) const { return static_cast<std::uint32_t>(i * (ny + 1) + j); }
+};
+
+Strip make_strip(int nx, int ny, double length, double width) {
+    Strip s;
+    s.nx = nx;
+    s.ny = ny;
+    for (int i = 0; i <= nx; ++i)
+        for (int j = 0; j <= ny; ++j) s.rest.push_back({length * i / nx, 0.0, width * j / ny});
+    for (int i = 0; i < nx; ++i)
+        for (int j = 0; j < ny; ++j) {
+            // Oriented so that the normal points up (+y): (x along, z across) has x × z = −y, so the
+            // corners go a, c, d … (counter-clockwise seen from above).
+            const std::uint32_t a = s.id(i, j), b = s.id(i + 1, j), c = s.id(i, j + 1), d = s.id(i + 1, j + 1);
+            if (((i + j) & 1) == 0) {
+                s.triangles.push_back({a, d, b});
+                s.triangles.push_back({a, c, d});
+            } else {
+                s.triangles.push_back({a, c, b});
+                s.triangles.push_back({b, c, d});
+            }
+        }
+    return s;
+}
+
+/// Interior edges as hinges (x0, x1 the edge as it runs in the first triangle, x2 its far corner, x3
+/// the other triangle's), and per triangle the hinge of each of its edges (−1 on the boundary).
+struct Topology {
+    std::vector<std::array<std::uint32_t, 4>> hinges;
+    std::vector<std::array<int, 3>> face_hinges;
+};
+
+Topology build_topology(const Strip& s) {
+    Topology t;
+    std::map<std::pair<std::uint32_t, std::uint32_t>, std::pair<std::size_t, int>> first;  // edge → (triangle, corner)
+    t.face_hinges.assign(s.triangles.size(), {-1, -1, -1});
+    for (std::size_t f = 0; f < s.triangles.size(); ++f)
+        for (int k = 0; k < 3; ++k) {
+            const std::uint32_t u = s.triangles[f][k], v = s.triangles[f][(k + 1) % 3];
+            const auto key = std::minmax(u, v);
+            const auto it = first.find(key);
+            if (it == first.end()) {
+                first[key] = {f, k};
+                continue;
+            }
+            const auto [g, kg] = it->second;
+            const std::uint32_t x0 = s.triangles[g][kg], x1 = s.triangles[g][(kg + 1) % 3];
+            t.hinges.push_back({x0, x1, s.triangles[g][(kg + 2) % 3], s.triangles[f][(k + 2) % 3]});
+            t.face_hinges[g][kg] = static_cast<int>(t.hinges.size() - 1);
+            t.face_hinges[f][k] = static_cast<int>(t.hinges.size() - 1);
+        }
+    return t;
+}
+
+/// Rest data of the face model (weft/physics/shell_bending.h), per triangle.
+std::vector<weft::physics::ShellBendingRest<double>> face_rest(const Strip& s) {
+    std::vector<weft::physics::ShellBendingRest<double>> out(s.triangles.size());
+    for (std::size_t f = 0; f < s.triangles.size(); ++f)
+        (void)weft::physics::shell_bending_rest(s.rest[s.triangles[f][0]], s.rest[s.triangles[f][1]], s.rest[s.triangles[f][2]],
+                                                out[f]);
+    return out;
+}
+
+/// The bending energy of `x` (rest flat) and, when asked, its gradient and a positive semi-definite
+/// Hessian (Gauss–Newton: the angles' second derivatives dropped), added into `grad` and `hess`.
+struct Bending {
+    Model model;
+    double stiffness;
+    const Strip* strip;
+    Topology topo;
+    std::vector<double> hinge_weight;
+    std::vector<weft::physics::ShellBendingRest<double>> faces;
+
+    double evaluate(const std::vector<V3>& x, std::vector<V3>* grad,
+                    const std::function<void(std::uint32_t, std::uint32_t, const M3&)>* add) const {
+        const std::size_t nh = topo.hinges.size();
+        std::vector<double> theta(nh, 0.0);
+        std::vector<std::array<V3, 4>> dtheta(nh);
+        for (std::size_t h = 0; h < nh; ++h) {
+            V3 p[4];
+            for (int a = 0; a < 4; ++a) p[a] = x[topo.hinges[h][a]];
+            theta[h] = weft::physics::dihedral_angle(p);
+            V3 d[4];
+            (void)weft::physics::dihedral_angle_derivatives<double>(p, d, nullptr);
+            for (int a = 0; a < 4; ++a) dtheta[h][a] = d[a];
+        }
+        double energy = 0.0;
+        // ∂E/∂θ_h, and the Gauss–Newton couplings Σ K_hk ∇θ_h ∇θ_kᵀ.
+        std::vector<double> de(nh, 0.0);
+        std::vector<std::pair<std::pair<int, int>, double>> couplings;
+        if (model == Model::Hinge) {
+            for (std::size_t h = 0; h < nh; ++h) {
+                const double k = stiffness * hinge_weight[h];
+                energy += 0.5 * k * theta[h] * theta[h];
+                de[h] = k * theta[h];
+                couplings.push_back({{static_cast<int>(h), static_cast<int>(h)}, k});
+            }
+        } else {
+            // Through the shared physics (weft/physics/shell_bending.h): each triangle's ∂E/∂θ of its
+            // hinges and its Gauss–Newton couplings.
+            for (std::size_t f = 0; f < faces.size(); ++f) {
+                const auto& fh = topo.face_hinges[f];
+                bool present[3];
+                V3 p[3][4];
+                const double rest_angle[3] = {0.0, 0.0, 0.0};
+                for (int k = 0; k < 3; ++k) {
+                    present[k] = fh[k] >= 0;
+                    for (int a = 0; a < 4; ++a) p[k][a] = present[k] ? x[topo.hinges[fh[k]][a]] : V3{};
+                }
+                const auto t = weft::physics::shell_bending_evaluate(stiffness, faces[f], present, p, rest_angle);
+                energy += t.energy;
+                for (int k = 0; k < 3; ++k) {
+                    if (!t.active[k]) continue;
+                    de[fh[k]] += t.force_angle[k];
+                    for (int l = 0; l < 3; ++l)
+                        if (t.active[l])
+                            couplings.push_back({{fh[k], fh[l]}, weft::physics::shell_bending_coupling(stiffness, faces[f], k, l)});
+                }
+            }
+        }
+        if (grad != nullptr)
+            for (std::size_t h = 0; h < nh; ++h)
+                for (int a = 0; a < 4; ++a) (*grad)[topo.hinges[h][a]] += de[h] * dtheta[h][a];
+        if (add != nullptr)
+            for (const auto& [hk, k] : couplings)
+                for (int a = 0; a < 4; ++a)
+                    for (int b = 0; b < 4; ++b)
+                        (*add)(topo.hinges[hk.first][a], topo.hinges[hk.second][b],
+                               k * M3::outer(dtheta[hk.first][a], dtheta[hk.second][b]));
+        return energy;
+    }
+};
+
+/// A symmetric banded matrix over 3 dofs a vertex and its Cholesky factorisation in place.
+struct Banded {
+    std::size_t n = 0, band = 0;  // dofs, half-bandwidth
+    std::vector<double> a;        // row r, column c ≥ r − band: a[r·(band + 1) + (c − r + band)] for c ≤ r
+    void reset(std::size_t dofs, std::size_t half) {
+        n = dofs;
+        band = half;
+        a.assign(n * (band + 1), 0.0);
+    }
+    double& at(std::size_t r, std::size_t c) { return a[r * (band + 1) + (c + band - r)]; }  // c ≤ r
+    void add(std::size_t r, std::size_t c, double v) {
+        if (c > r) return;  // the lower triangle holds the matrix
+        if (r - c > band) throw weft::Error("banded matrix: entry outside the band");
+        at(r, c) += v;
+    }
+    bool factor() {
+        for (std::size_t j = 0; j < n; ++j) {
+            const std::size_t lo = j > band ? j - band : 0;
+            double d = at(j, j);
+            for (std::size_t k = lo; k < j; ++k) d -= at(j, k) * at(j, k);
+            if (!(d > 0.0)) return false;
+            d = std::sqrt(d);
+            at(j, j) = d;
+            for (std::size_t i = j + 1; i < std::min(n, j + band + 1); ++i) {
+                const std::size_t lo_i = i > band ? i - band : 0;
+                double s = at(i, j);
+                for (std::size_t k = std::max(lo, lo_i); k < j; ++k) s -= at(i, k) * at(j, k);
+                at(i, j) = s / d;
+            }
+        }
+        return true;
+    }
+    void solve(std::vector<double>& b) {
+        for (std::size_t i = 0; i < n; ++i) {
+            const std::size_t lo = i > band ? i - band : 0;
+            for (std::size_t k = lo; k < i; ++k) b[i] -= at(i, k) * b[k];
+            b[i] /= at(i, i);
+        }
+        for (std::size_t i = n; i-- > 0;) {
+            for (std::size_t k = i + 1; k < std::min(n, i + band + 1); ++k) b[i] -= at(k, i) * b[k];
+            b[i] /= at(i, i);
+        }
+    }
+};
+
+struct Row {
+    Model model = Model::Hinge;
+    double load = 0.0, aspect = 0.0;
+    int cells_along = 0, cells_across = 0;
+    double deflection = 0.0, reference = 0.0, error = 0.0, seconds = 0.0;
+    /// Against the elastica of free length L − dx/2: a hinge at the clamp's second column stands for
+    /// the curvature of the half cell on either side of it, so the continuum clamp sits half a cell in.
+    double reference_mid = 0.0, error_mid = 0.0;
+    int newton = 0;
+    double residual = 0.0;  ///< the largest free-vertex force left, over one vertex's weight
+};
+
+/// The strip clamped by its first two columns, at rest under its weight: Newton with a backtracking
+/// line search on the total energy, the weight ramped in over five stages.
+Row solve(Model model, double load, int cells_along, double aspect) {
+    Row row;
+    row.model = model;
+    row.load = load;
+    row.cells_along = cells_along;
+    const double dx = kLength / cells_along;
+    row.cells_across = std::max(2, static_cast<int>(std::lround(kWidth / (dx / aspect))));
+    row.aspect = dx / (kWidth / row.cells_across);
+    const auto start = std::chrono::steady_clock::now();
+    const Strip s = make_strip(cells_along, row.cells_across, kLength, kWidth);
+    Bending bending{model, kDensity * kGravity * kLength * kLength * kLength / load, &s, build_topology(s), {}, {}};
+    for (const auto& h : bending.topo.hinges) {
+        V3 p[4];
+        for (int a = 0; a < 4; ++a) p[a] = s.rest[h[a]];
+        bending.hinge_weight.push_back(weft::physics::hinge_weight(p));
+    }
+    bending.faces = face_rest(s);
+    const auto material = weft::physics::membrane_material(kStretch, 0.0);
+    std::vector<std::array<std::array<double, 2>, 2>> dm(s.triangles.size());
+    std::vector<double> area(s.triangles.size());
+    std::vector<double> mass(s.rest.size(), 0.0);
+    for (std::size_t f = 0; f < s.triangles.size(); ++f) {
+        double d[2][2];
+        (void)weft::physics::membrane_rest(s.rest[s.triangles[f][0]], s.rest[s.triangles[f][1]], s.rest[s.triangles[f][2]], d,
+                                           area[f]);
+        dm[f] = {{{d[0][0], d[0][1]}, {d[1][0], d[1][1]}}};
+        for (int k = 0; k < 3; ++k) mass[s.triangles[f][k]] += kDensity * area[f] / 3.0;
+    }
+    const std::size_t nv = s.rest.size();
+    // Free vertices: every column but the first two; dof 3·(v − pinned) + c.
+    const std::size_t pinned = 2 * static_cast<std::size_t>(row.cells_across + 1);
+    const std::size_t dofs = 3 * (nv - pinned);
+    // Half-bandwidth: the widest coupling (the face model's far corners are two rows apart).
+    std::size_t span = 0;
+    for (const auto& h : bending.topo.hinges)
+        for (int a = 0; a < 4; ++a)
+            for (int b = 0; b < 4; ++b) span = std::max<std::size_t>(span, h[a] > h[b] ? h[a] - h[b] : h[b] - h[a]);
+    if (model == Model::Face) span = std::max<std::size_t>(span, 4 * static_cast<std::size_t>(row.cells_across + 1) + 4);
+    Banded hess;
+
+    std::vector<V3> x = s.rest;
+    double gravity = 0.0;
+    const auto total = [&](const std::vector<V3>& p, std::vector<V3>* grad, Banded* h) {
+        double e = 0.0;
+        std::function<void(std::uint32_t, std::uint32_t, const M3&)> add = [&](std::uint32_t a, std::uint32_t b, const M3& m) {
+            if (a < pinned || b < pinned) return;
+            for (int r = 0; r < 3; ++r)
+                for (int c = 0; c < 3; ++c)
+                    h->add(3 * (a - pinned) + static_cast<std::size_t>(r), 3 * (b - pinned) + static_cast<std::size_t>(c), m.m[r][c]);
+        };
+        for (std::size_t f = 0; f < s.triangles.size(); ++f) {
+            const V3 q[3] = {p[s.triangles[f][0]], p[s.triangles[f][1]], p[s.triangles[f][2]]};
+            const double d[2][2] = {{dm[f][0][0], dm[f][0][1]}, {dm[f][1][0], dm[f][1][1]}};
+            V3 g[3];
+            M3 hh[3][3];
+            e += weft::physics::membrane_evaluate(d, area[f], material, q, g, h != nullptr ? hh : nullptr, HessianKind::Fast);
+            for (int a = 0; a < 3; ++a) {
+                if (grad != nullptr) (*grad)[s.triangles[f][a]] += g[a];
+                if (h != nullptr)
+                    for (int b = 0; b < 3; ++b) add(s.triangles[f][a], s.triangles[f][b], hh[a][b]);
+            }
+        }
+        e += bending.evaluate(p, grad, h != nullptr ? &add : nullptr);
+        for (std::size_t v = 0; v < nv; ++v) {
+            e += mass[v] * gravity * p[v].y;
+            if (grad != nullptr) (*grad)[v].y += mass[v] * gravity;
+        }
+        return e;
+    };
+    const double vertex_weight = kDensity * kGravity * kLength * kWidth / static_cast<double>(nv);
+    for (int stage = 1; stage <= 5; ++stage) {
+        gravity = kGravity * stage / 5.0;
+        for (int it = 0; it < 200; ++it) {
+            std::vector<V3> grad(nv);
+            hess.reset(dofs, 3 * span + 2);
+            const double e0 = total(x, &grad, &hess);
+            std::vector<double> g(dofs);
+            double largest = 0.0;
+            for (std::size_t v = pinned; v < nv; ++v)
+                for (int c = 0; c < 3; ++c) {
+                    g[3 * (v - pinned) + static_cast<std::size_t>(c)] = -grad[v][c];
+                    largest = std::max(largest, std::abs(grad[v][c]));
+                }
+            row.residual = largest / vertex_weight;
+            if (largest < 1e-6 * vertex_weight) break;  // the tip deflection to far below 0.1%
+            double diag = 0.0;
+            for (std::size_t r = 0; r < dofs; ++r) diag = std::max(diag, hess.at(r, r));
+            for (std::size_t r = 0; r < dofs; ++r) hess.at(r, r) += 1e-14 * diag;
+            if (!hess.factor()) throw weft::Error(std::string(name(model)) + ": the Hessian is not positive definite");
+            hess.solve(g);
+            double step = 1.0;
+            std::vector<V3> trial(nv);
+            for (int ls = 0; ls < 40; ++ls, step *= 0.5) {
+                trial = x;
+                for (std::size_t v = pinned; v < nv; ++v)
+                    for (int c = 0; c < 3; ++c) trial[v][c] += step * g[3 * (v - pinned) + static_cast<std::size_t>(c)];
+                if (total(trial, nullptr, nullptr) <= e0) break;
+            }
+            x = trial;
+            ++row.newton;
+        }
+    }
+    double tip = 0.0;
+    for (int j = 0; j <= row.cells_across; ++j) tip += x[s.id(cells_along, j)].y;
+    row.deflection = -tip / (row.cells_across + 1);
+    row.reference = weft::test::heavy_elastica_deflection(load / (kLength * kLength * kLength), kLength - dx);
+    row.error = (row.deflection - row.reference) / row.reference;
+    row.reference_mid = weft::test::heavy_elastica_deflection(load / (kLength * kLength * kLength), kLength - 0.5 * dx);
+    row.error_mid = (row.deflection - row.reference_mid) / row.reference_mid;
+    row.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    return row;
+}
+
+/// Each model's energy of a 40 × 40 sheet bent into a cylinder of curvature κ about direction
+/// `angle` (radians from the grid's x axis), over the plate's ½·D·κ²·area.
+double cylinder_ratio(Model model, double angle) {
+    const int n = 40;
+    const double size = 0.4, kappa = 2.0, stiffness = 1.0;
+    const Strip s = make_strip(n, n, size, size);
+    Bending bending{model, stiffness, &s, build_topology(s), {}, {}};
+    for (const auto& h : bending.topo.hinges) {
+        V3 p[4];
+        for (int a = 0; a < 4; ++a) p[a] = s.rest[h[a]];
+        bending.hinge_weight.push_back(weft::physics::hinge_weight(p));
+    }
+    bending.faces = face_rest(s);
+    // The cylinder's axis runs along (cos a, 0, sin a); the sheet wraps about it, away from +y.
+    const V3 axis{std::cos(angle), 0.0, std::sin(angle)}, across{-std::sin(angle), 0.0, std::cos(angle)};
+    std::vector<V3> x(s.rest.size());
+    const V3 centre{0.5 * size, 0.0, 0.5 * size};
+    for (std::size_t v = 0; v < x.size(); ++v) {
+        const V3 d = s.rest[v] - centre;
+        const double along = weft::physics::dot(d, axis), u = weft::physics::dot(d, across);
+        const double phi = kappa * u;
+        x[v] = centre + along * axis + (std::sin(phi) / kappa) * across + V3{0.0, (1.0 - std::cos(phi)) / kappa, 0.0};
+    }
+    const double e = bending.evaluate(x, nullptr, nullptr);
+    return e / (0.5 * stiffness * kappa * kappa * size * size);
+}
+
+std::vector<double> parse_list(const std::string& flag, const std::string& value) {
+    std::vector<double> out;
+    std::size_t at = 0;
+    while (at <= value.size()) {
+        const std::size_t comma = value.find(',', at);
+        const std::string item = value.substr(at, comma == std::string::npos ? std::string::npos : comma - at);
+        try {
+            std::size_t used = 0;
+            out.push_back(std::stod(item, &used));
+            if (used != item.size() || !(out.back() > 0.0)) throw std::invalid_argument(item);
+        } catch (const std::exception&) {
+            throw weft::Error(flag + ": '" + item + "' is not a positive number (e.g. " + flag + " 1,2)");
+        }
+        if (comma == std::string::npos) break;
+        at = comma + 1;
+    }
+    return out;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+    try {
+        std::vector<double> cells{12, 24, 48}, aspects{0.5, 1.0, 2.0}, loads{0.5, 2.0, 6.6};
+        std::string json;
+        for (int i = 1; i < argc; ++i) {
+            const std::string flag = argv[i];
+            if (i + 1 >= argc) throw weft::Error(flag + " needs a value");
+            const std::string value = argv[++i];
+            if (flag == "--cells")
+                cells = parse_list(flag, value);
+            else if (flag == "--aspect")
+                aspects = parse_list(flag, value);
+            else if (flag == "--load")
+                loads = parse_list(flag, value);
+            else if (flag == "--json")
+                json = value;
+            else
+                throw weft::Error("unknown option '" + flag + "' (--cells, --aspect, --load, --json)");
+        }
+        std::printf("cylinder energy over the plate's ½·D·κ²·area (40 × 40 cells), bent about the grid's x axis / z axis / "
+                    "diagonal:\n");
+        for (const Model m : {Model::Hinge, Model::Face})
+            std::printf("  %-5s %.3f / %.3f / %.3f\n", name(m), cylinder_ratio(m, 0.0), cylinder_ratio(m, std::numbers::pi / 2.0),
+                        cylinder_ratio(m, std::numbers::pi / 4.0));
+        std::printf("\n| model | load ρgL³/D | cells along × across | cell aspect | tip deflection m | heavy elastica m (L − dx) | "
+                    "error | error against L − dx/2 | Newton steps | force left / vertex weight | s |\n"
+                    "|---|---|---|---|---|---|---|---|---|---|---|\n");
+        std::vector<Row> rows;
+        for (const double load : loads)
+            for (const double aspect : aspects)
+                for (const double n : cells)
+                    for (const Model m : {Model::Hinge, Model::Face}) {
+                        const Row r = solve(m, load, static_cast<int>(n), aspect);
+                        std::printf("| %s | %.2g | %d × %d | %.2f | %.5f | %.5f | %+.2f%% | %+.2f%% | %d | %.1e | %.1f |\n",
+                                    name(r.model), r.load, r.cells_along, r.cells_across, r.aspect, r.deflection, r.reference,
+                                    100.0 * r.error, 100.0 * r.error_mid, r.newton, r.residual, r.seconds);
+                        std::fflush(stdout);
+                        rows.push_back(r);
+                    }
+        if (!json.empty()) {
+            std::ofstream out(json);
+            if (!out) throw weft::Error("--json: cannot write " + json);
+            out << "[\n";
+            for (std::size_t k = 0; k < rows.size(); ++k) {
+                const Row& r = rows[k];
+                out << "  {\"model\": \"" << name(r.model) << "\", \"load\": " << r.load << ", \"cells_along\": " << r.cells_along
+                    << ", \"cells_across\": " << r.cells_across << ", \"aspect\": " << r.aspect << ", \"deflection_m\": " << r.deflection
+                    << ", \"elastica_m\": " << r.reference << ", \"error\": " << r.error << ", \"elastica_half_cell_m\": " << r.reference_mid
+                    << ", \"error_half_cell\": " << r.error_mid << ", \"newton\": " << r.newton
+                    << ", \"seconds\": " << r.seconds << "}" << (k + 1 < rows.size() ? "," : "") << "\n";
+            }
+            out << "]\n";
+            if (!out) throw weft::Error("--json: cannot write " + json);
+            std::printf("results: %s\n", json.c_str());
+        }
+    } catch (const std::exception& e) {
+        std::fprintf(stderr, "weft_bending_models_bench: %s\n", e.what());
+        return 1;
+    }
+    return 0;
+}
