@@ -21,6 +21,7 @@
 #include <vector>
 
 #include "heavy_elastica.h"
+#include "strip_sweep_args.h"
 #include "weft/error.h"
 #include "weft/mesh.h"
 #include "weft/world.h"
@@ -50,24 +51,6 @@ double menger(const weft::Vec3d& a, const weft::Vec3d& b, const weft::Vec3d& c) 
     return ab * bc * ca > 0.0 ? 2.0 * area2 / (ab * bc * ca) : 0.0;
 }
 
-std::vector<double> parse_list(const std::string& flag, const std::string& value) {
-    std::vector<double> out;
-    std::size_t at = 0;
-    while (at <= value.size()) {
-        const std::size_t comma = value.find(',', at);
-        const std::string item = value.substr(at, comma == std::string::npos ? std::string::npos : comma - at);
-        try {
-            std::size_t used = 0;
-            out.push_back(std::stod(item, &used));
-            if (used != item.size() || !(out.back() > 0.0)) throw std::invalid_argument(item);
-        } catch (const std::exception&) {
-            throw weft::Error(flag + ": '" + item + "' is not a positive number (e.g. " + flag + " 1,2)");
-        }
-        if (comma == std::string::npos) break;
-        at = comma + 1;
-    }
-    return out;
-}
 
 /// The strip at rest; returns its mean tip deflection (m).
 Row simulate(double load, int cells_along, double aspect) {
@@ -127,23 +110,11 @@ Row simulate(double load, int cells_along, double aspect) {
 
 int main(int argc, char** argv) {
     try {
-        std::vector<double> cells{12, 24, 48}, aspects{0.5, 1.0, 2.0}, loads{0.5, 2.0, 6.6};
-        std::string json;
-        for (int i = 1; i < argc; ++i) {
-            const std::string flag = argv[i];
-            if (i + 1 >= argc) throw weft::Error(flag + " needs a value");
-            const std::string value = argv[++i];
-            if (flag == "--cells")
-                cells = parse_list(flag, value);
-            else if (flag == "--aspect")
-                aspects = parse_list(flag, value);
-            else if (flag == "--load")
-                loads = parse_list(flag, value);
-            else if (flag == "--json")
-                json = value;
-            else
-                throw weft::Error("unknown option '" + flag + "' (--cells, --aspect, --load, --json)");
-        }
+        const weft::bench::StripSweep sweep = weft::bench::parse_strip_sweep(argc, argv);
+        const std::vector<double>& cells = sweep.cells;
+        const std::vector<double>& aspects = sweep.aspects;
+        const std::vector<double>& loads = sweep.loads;
+        const std::string& json = sweep.json;
         std::vector<Row> rows;
         std::printf("| load ρgL³/D | cells along × across | cell aspect | tip deflection m | heavy elastica m | error | "
                     "curvature across / along at mid-length | s |\n");

@@ -5,7 +5,7 @@
 //
 //   hinge  the solver's model today: ½·D·Σ_e w_e·θ_e² over interior edges, w_e = |e|²/(A₀+A₁)
 //          (weft/physics/bending.h's hinge_weight);
-//   face   a shape operator per triangle from its three edges' dihedral angles,
+//   shell  (solver.bending = "shell") a shape operator per triangle from its three edges' angles,
 //          S_f = Σ_i θ_i·|e_i|/(2·A_f)·t_i t_iᵀ (t_i the unit in-plane normal of edge i at rest), and
 //          the plate energy ½·D·Σ_f A_f·|S_f|²_F (Poisson 0). A cylinder of curvature κ bent about
 //          any direction gives S_f = κ·n nᵀ on every triangle of a regular grid, so the energy is the
@@ -30,6 +30,7 @@
 #include <vector>
 
 #include "heavy_elastica.h"
+#include "strip_sweep_args.h"
 #include "weft/error.h"
 #include "weft/physics/bending.h"
 #include "weft/physics/membrane.h"
@@ -43,17 +44,71 @@ using M3 = weft::physics::Mat3<double>;
 
 constexpr double kLength = 0.3, kWidth = 0.04, kDensity = 0.2, kGravity = 9.81, kStretch = 1e6;
 
-enum class Model { Hinge, Face };
-const char* name(Model m) { return m == Model::Hinge ? "hinge" : "face"; }
+enum class Model { Hinge, Shell };
+const char* name(Model m) { return m == Model::Hinge ? "hinge" : "shell"; }
 
 /// A grid strip, vertex (i, j) at index i·(ny + 1) + j (numbered across first, so that the stiffness
-/// matrix is banded), cells split along alternating diagonals as weft::make_grid does.
+/// matrix is banded), cells split along alternating diagonals as weft::make_grid does. The clamp: the
+/// first `pinned` vertices (two columns); the tip: the vertices of the last column.
 struct Strip {
     int nx = 0, ny = 0;  // cells along, across
     std::vector<V3> rest;
     std::vector<std::array<std::uint32_t, 3>> triangles;
+    std::size_t pinned = 0;
+    std::vector<std::uint32_t> tip;
+    double column_step = 0.0;  ///< m between the two clamped columns
     [[nodiscard]] std::uint32_t id(int i, int j) const { return static_cast<std::uint32_t>(i * (ny + 1) + j); }
 };
+
+/// The strip meshed with its rows at 45°: the lattice points (p·sx, q·sz) with p + q even, each
+/// diamond around an odd point split into two triangles (along its x diagonal and its z diagonal in
+/// alternation), the diamonds cut by the strip's edges into half diamonds. `columns` (even) lattice
+/// columns along; sz chosen so that an even number of rows spans the width and sz ≈ sx. Numbered by
+/// column, then row; the first two columns are the clamp.
+Strip make_diagonal_strip(int columns, double length, double width) {
+    Strip s;
+    const double sx = length / columns;
+    int rows = std::max(2, static_cast<int>(std::lround(width / sx)));
+    if (rows % 2 != 0) ++rows;
+    const double sz = width / rows;
+    std::vector<std::int64_t> index(static_cast<std::size_t>((columns + 1) * (rows + 1)), -1);
+    const auto at = [&](int p, int q) -> std::int64_t& { return index[static_cast<std::size_t>(p * (rows + 1) + q)]; };
+    for (int p = 0; p <= columns; ++p)
+        for (int q = 0; q <= rows; ++q)
+            if ((p + q) % 2 == 0) {
+                at(p, q) = static_cast<std::int64_t>(s.rest.size());
+                s.rest.push_back({p * sx, 0.0, q * sz});
+                if (p == columns) s.tip.push_back(static_cast<std::uint32_t>(at(p, q)));
+                if (p <= 1) s.pinned = s.rest.size();
+            }
+    const auto id = [&](int p, int q) { return static_cast<std::uint32_t>(at(p, q)); };
+    const auto inside = [&](int p, int q) { return p >= 0 && p <= columns && q >= 0 && q <= rows; };
+    // Oriented with the normal up (+y), as make_strip: counter-clockwise seen from +y is (x, z) → (z, x)…
+    const auto add = [&](std::uint32_t a, std::uint32_t b, std::uint32_t c) {
+        const V3 n = weft::physics::cross(s.rest[b] - s.rest[a], s.rest[c] - s.rest[a]);
+        if (n.y > 0.0) s.triangles.push_back({a, b, c}); else s.triangles.push_back({a, c, b});
+    };
+    for (int p = 0; p <= columns; ++p)
+        for (int q = 0; q <= rows; ++q) {
+            if ((p + q) % 2 == 0) continue;  // diamonds sit around the odd points
+            const bool left = inside(p - 1, q), right = inside(p + 1, q), down = inside(p, q - 1), up = inside(p, q + 1);
+            if (left && right && down && up) {
+                if (((p + q) / 2) % 2 == 0) {  // along the x diagonal
+                    add(id(p - 1, q), id(p + 1, q), id(p, q + 1));
+                    add(id(p + 1, q), id(p - 1, q), id(p, q - 1));
+                } else {  // along the z diagonal
+                    add(id(p, q - 1), id(p, q + 1), id(p - 1, q));
+                    add(id(p, q + 1), id(p, q - 1), id(p + 1, q));
+                }
+            } else if (left && right) {
+                add(id(p - 1, q), id(p + 1, q), id(p, down ? q - 1 : q + 1));  // cut by a long edge
+            } else if (down && up) {
+                add(id(p, q - 1), id(p, q + 1), id(p + (left ? -1 : 1), q));  // cut by the clamped or free end
+            }
+        }
+    s.column_step = sx;
+    return s;
+}
 
 Strip make_strip(int nx, int ny, double length, double width) {
     Strip s;
@@ -61,6 +116,9 @@ Strip make_strip(int nx, int ny, double length, double width) {
     s.ny = ny;
     for (int i = 0; i <= nx; ++i)
         for (int j = 0; j <= ny; ++j) s.rest.push_back({length * i / nx, 0.0, width * j / ny});
+    s.pinned = 2 * static_cast<std::size_t>(ny + 1);
+    for (int j = 0; j <= ny; ++j) s.tip.push_back(s.id(nx, j));
+    s.column_step = length / nx;
     for (int i = 0; i < nx; ++i)
         for (int j = 0; j < ny; ++j) {
             // Oriented so that the normal points up (+y): (x along, z across) has x × z = −y, so the
@@ -106,7 +164,7 @@ Topology build_topology(const Strip& s) {
     return t;
 }
 
-/// Rest data of the face model (weft/physics/shell_bending.h), per triangle.
+/// Rest data of the shell model (weft/physics/shell_bending.h), per triangle.
 std::vector<weft::physics::ShellBendingRest<double>> face_rest(const Strip& s) {
     std::vector<weft::physics::ShellBendingRest<double>> out(s.triangles.size());
     for (std::size_t f = 0; f < s.triangles.size(); ++f)
@@ -244,16 +302,21 @@ struct Row {
 
 /// The strip clamped by its first two columns, at rest under its weight: Newton with a backtracking
 /// line search on the total energy, the weight ramped in over five stages.
-Row solve(Model model, double load, int cells_along, double aspect) {
+Row solve(Model model, double load, int cells_along, double aspect, bool diagonal = false) {
     Row row;
     row.model = model;
     row.load = load;
     row.cells_along = cells_along;
-    const double dx = kLength / cells_along;
+    double dx = kLength / cells_along;
     row.cells_across = std::max(2, static_cast<int>(std::lround(kWidth / (dx / aspect))));
     row.aspect = dx / (kWidth / row.cells_across);
     const auto start = std::chrono::steady_clock::now();
-    const Strip s = make_strip(cells_along, row.cells_across, kLength, kWidth);
+    const Strip s = diagonal ? make_diagonal_strip(cells_along, kLength, kWidth) : make_strip(cells_along, row.cells_across, kLength, kWidth);
+    dx = s.column_step;
+    if (diagonal) {
+        row.cells_across = -1;  // rows at 45°: printed as such
+        row.aspect = 1.0;
+    }
     Bending bending{model, kDensity * kGravity * kLength * kLength * kLength / load, &s, build_topology(s), {}, {}};
     for (const auto& h : bending.topo.hinges) {
         V3 p[4];
@@ -274,14 +337,16 @@ Row solve(Model model, double load, int cells_along, double aspect) {
     }
     const std::size_t nv = s.rest.size();
     // Free vertices: every column but the first two; dof 3·(v − pinned) + c.
-    const std::size_t pinned = 2 * static_cast<std::size_t>(row.cells_across + 1);
+    const std::size_t pinned = s.pinned;
     const std::size_t dofs = 3 * (nv - pinned);
-    // Half-bandwidth: the widest coupling (the face model's far corners are two rows apart).
+    // Half-bandwidth: the widest coupling (the shell model's far corners are two rows apart).
     std::size_t span = 0;
     for (const auto& h : bending.topo.hinges)
         for (int a = 0; a < 4; ++a)
             for (int b = 0; b < 4; ++b) span = std::max<std::size_t>(span, h[a] > h[b] ? h[a] - h[b] : h[b] - h[a]);
-    if (model == Model::Face) span = std::max<std::size_t>(span, 4 * static_cast<std::size_t>(row.cells_across + 1) + 4);
+    // The shell model couples the far corners of a triangle's hinges, which share its corners: at
+    // most two hinge spans apart.
+    if (model == Model::Shell) span = 2 * span;
     Banded hess;
 
     std::vector<V3> x = s.rest;
@@ -347,8 +412,8 @@ Row solve(Model model, double load, int cells_along, double aspect) {
         }
     }
     double tip = 0.0;
-    for (int j = 0; j <= row.cells_across; ++j) tip += x[s.id(cells_along, j)].y;
-    row.deflection = -tip / (row.cells_across + 1);
+    for (const std::uint32_t v : s.tip) tip += x[v].y;
+    row.deflection = -tip / static_cast<double>(s.tip.size());
     row.reference = weft::test::heavy_elastica_deflection(load / (kLength * kLength * kLength), kLength - dx);
     row.error = (row.deflection - row.reference) / row.reference;
     row.reference_mid = weft::test::heavy_elastica_deflection(load / (kLength * kLength * kLength), kLength - 0.5 * dx);
@@ -384,73 +449,55 @@ double cylinder_ratio(Model model, double angle) {
     return e / (0.5 * stiffness * kappa * kappa * size * size);
 }
 
-std::vector<double> parse_list(const std::string& flag, const std::string& value) {
-    std::vector<double> out;
-    std::size_t at = 0;
-    while (at <= value.size()) {
-        const std::size_t comma = value.find(',', at);
-        const std::string item = value.substr(at, comma == std::string::npos ? std::string::npos : comma - at);
-        try {
-            std::size_t used = 0;
-            out.push_back(std::stod(item, &used));
-            if (used != item.size() || !(out.back() > 0.0)) throw std::invalid_argument(item);
-        } catch (const std::exception&) {
-            throw weft::Error(flag + ": '" + item + "' is not a positive number (e.g. " + flag + " 1,2)");
-        }
-        if (comma == std::string::npos) break;
-        at = comma + 1;
-    }
-    return out;
-}
 
 }  // namespace
 
 int main(int argc, char** argv) {
     try {
-        std::vector<double> cells{12, 24, 48}, aspects{0.5, 1.0, 2.0}, loads{0.5, 2.0, 6.6};
-        std::string json;
-        for (int i = 1; i < argc; ++i) {
-            const std::string flag = argv[i];
-            if (i + 1 >= argc) throw weft::Error(flag + " needs a value");
-            const std::string value = argv[++i];
-            if (flag == "--cells")
-                cells = parse_list(flag, value);
-            else if (flag == "--aspect")
-                aspects = parse_list(flag, value);
-            else if (flag == "--load")
-                loads = parse_list(flag, value);
-            else if (flag == "--json")
-                json = value;
-            else
-                throw weft::Error("unknown option '" + flag + "' (--cells, --aspect, --load, --json)");
-        }
+        const weft::bench::StripSweep sweep = weft::bench::parse_strip_sweep(argc, argv);
+        const std::vector<double>& cells = sweep.cells;
+        const std::vector<double>& aspects = sweep.aspects;
+        const std::vector<double>& loads = sweep.loads;
+        const std::string& json = sweep.json;
         std::printf("cylinder energy over the plate's ½·D·κ²·area (40 × 40 cells), bent about the grid's x axis / z axis / "
                     "diagonal:\n");
-        for (const Model m : {Model::Hinge, Model::Face})
+        for (const Model m : {Model::Hinge, Model::Shell})
             std::printf("  %-5s %.3f / %.3f / %.3f\n", name(m), cylinder_ratio(m, 0.0), cylinder_ratio(m, std::numbers::pi / 2.0),
                         cylinder_ratio(m, std::numbers::pi / 4.0));
         std::printf("\n| model | load ρgL³/D | cells along × across | cell aspect | tip deflection m | heavy elastica m (L − dx) | "
                     "error | error against L − dx/2 | Newton steps | force left / vertex weight | s |\n"
                     "|---|---|---|---|---|---|---|---|---|---|---|\n");
         std::vector<Row> rows;
-        for (const double load : loads)
+        const auto print = [](const Row& r) {
+            const std::string mesh = r.cells_across < 0 ? std::to_string(r.cells_along) + " columns, rows at 45°"
+                                                        : std::to_string(r.cells_along) + " × " + std::to_string(r.cells_across);
+            std::printf("| %s | %.2g | %s | %.2f | %.5f | %.5f | %+.2f%% | %+.2f%% | %d | %.1e | %.1f |\n", name(r.model), r.load,
+                        mesh.c_str(), r.aspect, r.deflection, r.reference, 100.0 * r.error, 100.0 * r.error_mid, r.newton, r.residual,
+                        r.seconds);
+            std::fflush(stdout);
+        };
+        for (const double load : loads) {
             for (const double aspect : aspects)
                 for (const double n : cells)
-                    for (const Model m : {Model::Hinge, Model::Face}) {
-                        const Row r = solve(m, load, static_cast<int>(n), aspect);
-                        std::printf("| %s | %.2g | %d × %d | %.2f | %.5f | %.5f | %+.2f%% | %+.2f%% | %d | %.1e | %.1f |\n",
-                                    name(r.model), r.load, r.cells_along, r.cells_across, r.aspect, r.deflection, r.reference,
-                                    100.0 * r.error, 100.0 * r.error_mid, r.newton, r.residual, r.seconds);
-                        std::fflush(stdout);
-                        rows.push_back(r);
+                    for (const Model m : {Model::Hinge, Model::Shell}) {
+                        rows.push_back(solve(m, load, static_cast<int>(n), aspect));
+                        print(rows.back());
                     }
+            // The same strip meshed with its rows at 45° (an even number of lattice columns).
+            for (const double n : cells)
+                for (const Model m : {Model::Hinge, Model::Shell}) {
+                    rows.push_back(solve(m, load, 2 * (static_cast<int>(n) / 2), 1.0, true));
+                    print(rows.back());
+                }
+        }
         if (!json.empty()) {
             std::ofstream out(json);
             if (!out) throw weft::Error("--json: cannot write " + json);
             out << "[\n";
             for (std::size_t k = 0; k < rows.size(); ++k) {
                 const Row& r = rows[k];
-                out << "  {\"model\": \"" << name(r.model) << "\", \"load\": " << r.load << ", \"cells_along\": " << r.cells_along
+                out << "  {\"model\": \"" << name(r.model) << "\", \"mesh\": \"" << (r.cells_across < 0 ? "rows at 45 degrees" : "grid")
+                    << "\", \"load\": " << r.load << ", \"cells_along\": " << r.cells_along
                     << ", \"cells_across\": " << r.cells_across << ", \"aspect\": " << r.aspect << ", \"deflection_m\": " << r.deflection
                     << ", \"elastica_m\": " << r.reference << ", \"error\": " << r.error << ", \"elastica_half_cell_m\": " << r.reference_mid
                     << ", \"error_half_cell\": " << r.error_mid << ", \"newton\": " << r.newton

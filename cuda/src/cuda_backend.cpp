@@ -92,12 +92,14 @@ public:
     // (device_collisions.h; impact zones on the host for now); self-collision switched on or off live
     // rebuilds them at the next substep.
     void build(const Model& model) override {
+        require_device_support(model.settings.solver);
         flat_ = flatten(model);
         solver_->build(flat_, model);
     }
 
     // Fast analytic colliders are swept per vertex after the solve, in the device solver as on the CPU.
     void substep(const Model& model, double t, double h, StepStats& stats) override {
+        require_device_support(model.settings.solver);
         solver_->substep(model, t, h, stats);
     }
 

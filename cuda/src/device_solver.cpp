@@ -49,6 +49,12 @@ std::vector<std::pair<std::string, std::size_t>> DeviceSolver::memory_breakdown(
     return parts;
 }
 
+void require_device_support(const SolverSettings& settings) {
+    if (settings.bending == BendingModel::Shell)
+        throw Error("cuda backend: solver.bending = \"shell\" (the bending model per triangle) runs on the cpu backend only "
+                    "so far; use solver.bending = \"hinge\" or --backend cpu");
+}
+
 void DeviceSolver::choose_pcg_loop() {
     // Measured on an H200 (docs/results.md, solve ms per frame): one cooperative launch per solve is
     // 1.6× faster than a kernel per step up to 40K vertices and 1.2× at 100K; from 216K vertices on

@@ -27,6 +27,10 @@
 
 namespace weft::cuda {
 
+/// Throws weft::Error when `settings` asks for what the CUDA backend does not do yet: the bending
+/// model per triangle (SolverSettings::bending = Shell, CPU backend only so far).
+void require_device_support(const SolverSettings& settings);
+
 class DeviceSolver {
 public:
     /// Binds to CUDA device `device` and creates its streams; throws weft::Error if it cannot.

@@ -11,6 +11,7 @@
 #include "weft/backend/material_terms.h"
 #include "weft/physics/aerodynamics.h"
 #include "weft/physics/bending.h"
+#include "shell_bending_energy.h"
 #include "weft/physics/collider_contact.h"
 #include "weft/physics/implicit_terms.h"
 #include "weft/physics/membrane.h"
@@ -144,7 +145,18 @@ EnergyAudit host_energy_audit(const Model& model, std::span<const std::vector<Ve
         });
         for (const Parts& part : parts) add(a, pin_power, part);
 
-        if (p.bending > 0.0) {
+        if (p.bending > 0.0 && w.solver.bending == BendingModel::Shell) {
+            // The model per triangle (shell_bending_energy.h).
+            parts.assign(chunk_count(f.triangle_count()), Parts{});
+            parallel_chunks(f.triangle_count(), [&](std::size_t lo, std::size_t hi) {
+                Parts& out = parts[lo / kParallelChunk];
+                for (std::size_t tri = lo; tri < hi; ++tri)
+                    out.elastic += shell_bending_triangle(f, tri, p.bending, xc, [&](std::uint32_t vertex, const Vec3d& grad) {
+                        if (any_moving_pin && moving_pin[vertex]) out.pin_power += physics::dot(grad, vc[vertex]);
+                    });
+            });
+            for (const Parts& part : parts) add(a, pin_power, part);
+        } else if (p.bending > 0.0) {
             parts.assign(chunk_count(f.hinges().size()), Parts{});
             parallel_chunks(f.hinges().size(), [&](std::size_t lo, std::size_t hi) {
                 Parts& out = parts[lo / kParallelChunk];

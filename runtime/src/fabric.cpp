@@ -126,13 +126,13 @@ std::shared_ptr<const Fabric> Fabric::cook(const MeshData& mesh, const FabricDes
 
     // 4. Hinges over interior manifold edges. Each triangle contributes its three directed edges;
     //    an edge with two triangles becomes a hinge, one with more is non-manifold (no hinge, reported).
-    struct EdgeUse { std::uint32_t tri; std::uint32_t from, to, opposite; };
+    struct EdgeUse { std::uint32_t tri; std::uint32_t from, to, opposite; int corner; };
     std::unordered_map<std::uint64_t, std::vector<EdgeUse>> edges;
     edges.reserve(nt * 2);
     for (std::uint32_t t = 0; t < nt; ++t) {
         const auto& v = f.triangles_[t].v;
         for (int k = 0; k < 3; ++k)
-            edges[edge_key(v[k], v[(k + 1) % 3])].push_back({t, v[k], v[(k + 1) % 3], v[(k + 2) % 3]});
+            edges[edge_key(v[k], v[(k + 1) % 3])].push_back({t, v[k], v[(k + 1) % 3], v[(k + 2) % 3], k});
     }
     // Deterministic order: sort the interior edges by key.
     std::vector<std::uint64_t> keys;
@@ -140,6 +140,7 @@ std::shared_ptr<const Fabric> Fabric::cook(const MeshData& mesh, const FabricDes
     for (const auto& [key, uses] : edges) keys.push_back(key);
     std::sort(keys.begin(), keys.end());
     std::size_t flipped = 0;
+    f.triangle_hinges_.assign(nt, TriangleHinges{});
     for (std::uint64_t key : keys) {
         const auto& uses = edges[key];
         if (uses.size() > 2) {
@@ -158,6 +159,7 @@ std::shared_ptr<const Fabric> Fabric::cook(const MeshData& mesh, const FabricDes
         h.weight = physics::hinge_weight(x);
         h.rest_angle = desc.flat_rest_bending ? 0.0 : physics::dihedral_angle(x);
         if (!std::isfinite(h.weight) || !std::isfinite(h.rest_angle)) continue;
+        for (const EdgeUse& use : uses) f.triangle_hinges_[use.tri].edge[use.corner] = static_cast<std::int32_t>(f.hinges_.size());
         f.hinges_.push_back(h);
     }
     if (report.non_manifold_edges > 0)
@@ -213,7 +215,7 @@ std::shared_ptr<const Fabric> Fabric::cook(const MeshData& mesh, const FabricDes
 std::size_t Fabric::memory_bytes() const {
     return rest_positions_.capacity() * sizeof(Vec3d) + triangles_.capacity() * sizeof(Triangle) +
            triangle_rest_.capacity() * sizeof(TriangleRest) + hinges_.capacity() * sizeof(Hinge) +
-           masses_.capacity() * sizeof(double) +
+           triangle_hinges_.capacity() * sizeof(TriangleHinges) + masses_.capacity() * sizeof(double) +
            (pattern_.row_start.capacity() + pattern_.column.capacity() + pattern_.diagonal.capacity() +
             pattern_.triangle_slots.capacity() + pattern_.hinge_slots.capacity()) *
                sizeof(std::uint32_t);

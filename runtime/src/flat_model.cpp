@@ -61,6 +61,8 @@ FlatModel flatten(const Model& model) {
     f.triangle_cloth.reserve(nt);
     f.hinges.reserve(nh);
     f.hinge_cloth.reserve(nh);
+    f.triangle_hinges.reserve(nt);
+    f.shell_rest.reserve(nt);
     BlockPattern& p = f.pattern;
     p.row_start.reserve(nv + 1);
     p.row_start.push_back(0);
@@ -87,6 +89,18 @@ FlatModel flatten(const Model& model) {
             f.triangles.push_back(tri);
             f.triangle_rest.push_back(fab.triangle_rest()[t]);
             f.triangle_cloth.push_back(static_cast<std::uint32_t>(c));
+        }
+        const std::int32_t ho = static_cast<std::int32_t>(f.cloth_hinge_offset[c]);
+        for (std::size_t t = 0; t < fab.triangle_count(); ++t) {
+            TriangleHinges th = fab.triangle_hinges()[t];
+            for (std::int32_t& e : th.edge)
+                if (e >= 0) e += ho;
+            f.triangle_hinges.push_back(th);
+            const auto& v = fab.triangles()[t].v;
+            physics::ShellBendingRest<double> rest;
+            (void)physics::shell_bending_rest(fab.rest_positions()[v[0]], fab.rest_positions()[v[1]], fab.rest_positions()[v[2]],
+                                              rest);  // zero for a degenerate triangle: it bends nothing
+            f.shell_rest.push_back(rest);
         }
         for (const Hinge& h0 : fab.hinges()) {
             Hinge h = h0;
@@ -129,7 +143,8 @@ std::size_t FlatModel::memory_bytes() const {
            (initial_positions.capacity() + initial_velocities.capacity() + pin_local.capacity()) * sizeof(Vec3d) +
            mass.capacity() * sizeof(double) + u32(vertex_cloth) + triangles.capacity() * sizeof(Triangle) +
            triangle_rest.capacity() * sizeof(TriangleRest) + u32(triangle_cloth) + hinges.capacity() * sizeof(Hinge) +
-           u32(hinge_cloth) + u32(pattern.row_start) + u32(pattern.column) + u32(pattern.diagonal) +
+           u32(hinge_cloth) + triangle_hinges.capacity() * sizeof(TriangleHinges) +
+           shell_rest.capacity() * sizeof(physics::ShellBendingRest<double>) + u32(pattern.row_start) + u32(pattern.column) + u32(pattern.diagonal) +
            u32(pattern.triangle_slots) + u32(pattern.hinge_slots) + u32(vertex_force_start) +
            u32(vertex_force_index) + u32(slot_block_start) + u32(slot_block_index) + u32(pin_vertex) +
            pin_motion.capacity() * sizeof(int) + vertex_pin.capacity() * sizeof(std::int32_t);

@@ -117,6 +117,8 @@ constexpr std::string_view kPrecisionNames[] = {"float", "double"};
 constexpr std::array kPrecisions{Precision::Float, Precision::Double};
 constexpr std::string_view kHessianNames[] = {"fast", "projected"};
 constexpr std::array kHessians{HessianMode::Fast, HessianMode::Projected};
+constexpr std::string_view kBendingNames[] = {"hinge", "shell"};
+constexpr std::array kBendings{BendingModel::Hinge, BendingModel::Shell};
 constexpr std::string_view kPreconditionerNames[] = {"jacobi", "mas", "auto"};
 constexpr std::array kPreconditioners{Preconditioner::Jacobi, Preconditioner::Schwarz, Preconditioner::Auto};
 constexpr std::string_view kEnergyGuardNames[] = {"off", "report", "retry"};
@@ -179,6 +181,12 @@ constexpr Parameter kTable[] = {
      .doc = "`fast`: cheap PSD approximation; `projected`: exact element Hessians clamped to PSD", .label = "Hessian",
      .panel = "solver", .choices = kHessianNames,
      .access = choice_field<kHessians, &WorldDesc::solver, &SolverSettings::hessian>()},
+    {.section = "solver", .name = "bending", .type = T::Choice,
+     .doc = "`hinge`: one term per interior edge (every backend; too soft by an amount that depends on the cells' "
+            "shape); `shell`: a shape operator per triangle, converged within 0.5% on a clamped strip at any cell "
+            "shape (cpu backend only so far)",
+     .label = "bending model", .panel = "solver", .effect = E::Rebuild, .choices = kBendingNames,
+     .access = choice_field<kBendings, &WorldDesc::solver, &SolverSettings::bending>()},
     {.section = "solver", .name = "preconditioner", .type = T::Choice,
      .doc = "`jacobi`: 3×3 block-Jacobi; `mas`: multilevel additive Schwarz, several times fewer CG iterations on "
             "fine or stiff cloth at a higher cost per iteration; `auto`: mas from 100K vertices on the cuda backend and "

@@ -518,6 +518,21 @@ TEST(CudaBackend, MissingDeviceIsAnErrorNamingIt) {
     }
 }
 
+// The bending model per triangle is the CPU backend's only so far: the cuda backend refuses it by
+// name rather than running the hinge model in its place.
+TEST(CudaBackend, TheBendingModelPerTriangleIsRefusedByName) {
+    WEFT_REQUIRE_GPU();
+    try {
+        const auto world = make_world("hanging", "cuda", {"solver.bending=\"shell\""});
+        (void)world->step();
+        ADD_FAILURE() << "solver.bending = \"shell\" ran on the cuda backend";
+    } catch (const Error& e) {
+        const std::string message = e.what();
+        EXPECT_NE(message.find("solver.bending"), std::string::npos) << message;
+        EXPECT_NE(message.find("cpu"), std::string::npos) << message;
+    }
+}
+
 TEST(CudaBackend, DeviceMemoryIsAtMostOneKilobytePerTriangle) {
     WEFT_REQUIRE_GPU();
     // The target for the single-GPU solver: ≤ 1 KB of device memory per triangle, measured on

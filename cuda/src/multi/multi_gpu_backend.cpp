@@ -31,11 +31,15 @@ public:
     }
 
     void build(const Model& model) override {
+        require_device_support(model.settings.solver);
         flat_ = flatten(model);
         solver_.build(flat_, model);
     }
 
-    void substep(const Model& model, double t, double h, StepStats& stats) override { solver_.substep(model, t, h, stats); }
+    void substep(const Model& model, double t, double h, StepStats& stats) override {
+        require_device_support(model.settings.solver);
+        solver_.substep(model, t, h, stats);
+    }
 
     void read_state(std::size_t cloth, std::span<Vec3d> x, std::span<Vec3d> v) const override {
         const auto [first, count] = flat_.cloth_vertices(cloth, x.size(), v.size());

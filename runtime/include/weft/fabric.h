@@ -44,6 +44,13 @@ struct Hinge {
     double weight = 0.0;      ///< |e|²/(A₀+A₁), 1 (E = ½·k_b·w·(θ−θ̄)²; calibrated in tests/physics so k_b is the plate stiffness)
 };
 
+/// The hinges across a triangle's three edges: `edge[k]` for the edge from corner k to corner k+1
+/// (mod 3), −1 where the edge is on the boundary, non-manifold or has no hinge. What a bending model
+/// per triangle reads (weft/physics/shell_bending.h).
+struct TriangleHinges {
+    std::int32_t edge[3]{-1, -1, -1};
+};
+
 /// Fixed block-sparse (BSR) pattern of the implicit system of one fabric: one block row per
 /// vertex, columns sorted, diagonal included. Internal-force Jacobians scatter into it through
 /// precomputed slot maps so that assembly needs no search and no atomics on the CPU.
@@ -80,6 +87,8 @@ public:
     [[nodiscard]] std::span<const Triangle> triangles() const { return triangles_; }
     [[nodiscard]] std::span<const TriangleRest> triangle_rest() const { return triangle_rest_; }
     [[nodiscard]] std::span<const Hinge> hinges() const { return hinges_; }
+    /// Per triangle, the hinges across its edges (indices into `hinges()`).
+    [[nodiscard]] std::span<const TriangleHinges> triangle_hinges() const { return triangle_hinges_; }
     /// Lumped vertex masses, kg: a third of the density × area of each adjacent triangle.
     [[nodiscard]] std::span<const double> masses() const { return masses_; }
     [[nodiscard]] const BlockPattern& pattern() const { return pattern_; }
@@ -97,6 +106,7 @@ private:
     std::vector<Triangle> triangles_;
     std::vector<TriangleRest> triangle_rest_;
     std::vector<Hinge> hinges_;
+    std::vector<TriangleHinges> triangle_hinges_;
     std::vector<double> masses_;
     BlockPattern pattern_;
     CookReport report_;

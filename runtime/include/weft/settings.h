@@ -32,6 +32,19 @@ enum class HessianMode : std::uint8_t {
     Projected,
 };
 
+/// The discrete bending energy (an accuracy knob; docs/methods.md, docs/results.md "Bending
+/// convergence").
+enum class BendingModel : std::uint8_t {
+    /// One term per interior edge, ½·D·w·(θ − θ̄)² (Grinspun et al. 2003): a four-vertex stencil,
+    /// on every backend. Too soft by 13–70% on a clamped strip, by an amount that depends on the
+    /// cells' shape and does not shrink with refinement on square cells.
+    Hinge,
+    /// A shape operator per triangle from its three edges' angles and the plate energy
+    /// ½·D·A·|S − S̄|² (weft/physics/shell_bending.h): within 0.5% of the heavy elastica from 12
+    /// cells along a clamped strip, whatever the cells' shape. CPU backend only so far.
+    Shell,
+};
+
 /// The preconditioner of the CG solve (a speed knob: both reach the same answer at the tolerance).
 enum class Preconditioner : std::uint8_t {
     /// Block-Jacobi: the inverse of each vertex's 3×3 diagonal block. Cheapest per iteration; the
@@ -83,6 +96,7 @@ struct SolverSettings {
     bool cg_warm_start = true;
     Precision precision = Precision::Double;  ///< CPU backend scalar; double is the reference
     HessianMode hessian = HessianMode::Fast;
+    BendingModel bending = BendingModel::Hinge;
     Preconditioner preconditioner = Preconditioner::Auto;
     /// Schwarz preconditioner only: substeps between its factorisations. 1 refactors in every Newton
     /// iteration; k > 1 only in the first Newton iteration of every k-th substep, the others reusing

@@ -53,6 +53,20 @@ void CpuSolver<T>::build(const FlatModel& flat, const Model& model) {
     hinge_rest_.resize(flat.hinge_count());
     for (std::size_t k = 0; k < flat.hinge_count(); ++k)
         hinge_rest_[k] = {static_cast<T>(flat.hinges[k].weight), static_cast<T>(flat.hinges[k].rest_angle)};
+    shell_rest_.resize(flat.triangle_count());
+    hinge_faces_.assign(flat.hinge_count(), {-1, -1});
+    for (std::size_t t = 0; t < flat.triangle_count(); ++t) {
+        const physics::ShellBendingRest<double>& r = flat.shell_rest[t];
+        shell_rest_[t].area = static_cast<T>(r.area);
+        for (int a = 0; a < 3; ++a)
+            for (int b = 0; b < 3; ++b) shell_rest_[t].m[a][b] = static_cast<T>(r.m[a][b]);
+        for (const std::int32_t k : flat.triangle_hinges[t].edge)
+            if (k >= 0) {
+                auto& faces = hinge_faces_[static_cast<std::size_t>(k)];
+                (faces[0] < 0 ? faces[0] : faces[1]) = static_cast<std::int32_t>(t);
+            }
+    }
+    shell_faces_.clear();  // allocated on the first substep that asks for the model
     element_rhs_.assign(3 * flat.triangle_count() + 4 * flat.hinge_count(), V3{});
     element_blocks_.assign(9 * flat.triangle_count() + 16 * flat.hinge_count(), M3{});
     vertex_rhs_.assign(n_, V3{});
@@ -76,6 +90,7 @@ template <typename T>
 void CpuSolver<T>::prepare_parameters(const Model& model, double t, double h) {
     const WorldDesc& w = model.settings;
     hessian_ = w.solver.hessian == HessianMode::Projected ? physics::HessianKind::Projected : physics::HessianKind::Fast;
+    bending_ = w.solver.bending;
     gravity_ = to<T>(w.gravity);
     wind_.active = w.wind.active();
     wind_.velocity = to<T>(w.wind.velocity);
@@ -146,6 +161,10 @@ void CpuSolver<T>::evaluate_elements(const Model& model, double /*t*/, T h) {
         }
     });
     const std::size_t nh = f.hinge_count();
+    if (bending_ == BendingModel::Shell) {
+        evaluate_shell_bending(h);
+        return;
+    }
     parallel_chunks(nh, [&](std::size_t lo, std::size_t hi) {
         for (std::size_t k = lo; k < hi; ++k) {
             const auto& hv = f.hinges[k].v;
@@ -162,6 +181,45 @@ void CpuSolver<T>::evaluate_elements(const Model& model, double /*t*/, T h) {
                 for (int a = 0; a < 4; ++a) out.rhs[a] = V3{};
                 for (int a = 0; a < 16; ++a) out.block[a] = M3{};
             }
+        }
+    });
+}
+
+template <typename T>
+void CpuSolver<T>::evaluate_shell_bending(T h) {
+    // cpu/shell_bending_terms.h: pass 1 per triangle, pass 2 into each hinge's element slots.
+    const FlatModel& f = *flat_;
+    const std::size_t nt = f.triangle_count(), nh = f.hinge_count();
+    x_lin_.resize(n_);
+    d_lin_.resize(n_);
+    shell_faces_.resize(nt);
+    parallel_chunks(n_, [&](std::size_t lo, std::size_t hi) {
+        for (std::size_t i = lo; i < hi; ++i) {
+            x_lin_[i] = x0_[i] + h * wk_[i];
+            d_lin_[i] = vk_[i] - wk_[i];
+        }
+    });
+    const auto hinge_at = [&](std::int32_t k) -> const Hinge& { return f.hinges[static_cast<std::size_t>(k)]; };
+    const auto rest_angle_at = [&](std::int32_t k) { return hinge_rest_[static_cast<std::size_t>(k)].rest_angle; };
+    parallel_chunks(nt, [&](std::size_t lo, std::size_t hi) {
+        for (std::size_t t = lo; t < hi; ++t) {
+            const ClothParams& p = cloth_params_[f.triangle_cloth[t]];
+            shell_faces_[t] = p.bending > T(0) ? shell_face_terms<T>(h, p.bending, p.damping_stiffness, shell_rest_[t],
+                                                                     f.triangle_hinges[t], hinge_at, rest_angle_at,
+                                                                     x_lin_.data(), vk_.data(), d_lin_.data())
+                                               : ShellFaceTerms<T>{};
+        }
+    });
+    parallel_chunks(nh, [&](std::size_t lo, std::size_t hi) {
+        for (std::size_t k = lo; k < hi; ++k) {
+            V3* rhs = &element_rhs_[3 * nt + 4 * k];
+            M3* block = &element_blocks_[9 * nt + 16 * k];
+            for (int a = 0; a < 4; ++a) rhs[a] = V3{};
+            for (int a = 0; a < 16; ++a) block[a] = M3{};
+            for (const std::int32_t face : hinge_faces_[k])
+                if (face >= 0)
+                    shell_hinge_slots<T>(static_cast<std::int32_t>(k), shell_faces_[static_cast<std::size_t>(face)], hinge_at, rhs,
+                                         block);
         }
     });
 }
@@ -382,7 +440,9 @@ std::size_t CpuSolver<T>::memory_bytes() const {
                              dv_.capacity() + pin_velocity_.capacity();
     return vec3 * sizeof(V3) + (element_blocks_.capacity() + vertex_blocks_.capacity() + A_.blocks.capacity()) * sizeof(M3) +
            mass_.capacity() * sizeof(T) + triangle_rest_.capacity() * sizeof(TriangleRestT) +
-           hinge_rest_.capacity() * sizeof(HingeRestT) + fixed_.capacity() + contacts_.capacity() * sizeof(int) +
+           hinge_rest_.capacity() * sizeof(HingeRestT) + shell_rest_.capacity() * sizeof(physics::ShellBendingRest<T>) +
+           hinge_faces_.capacity() * sizeof(hinge_faces_[0]) + shell_faces_.capacity() * sizeof(ShellFaceTerms<T>) +
+           (x_lin_.capacity() + d_lin_.capacity()) * sizeof(V3) + fixed_.capacity() + contacts_.capacity() * sizeof(int) +
            pcg_.memory_bytes() + schwarz_.memory_bytes() + collisions_.memory_bytes();
 }
 

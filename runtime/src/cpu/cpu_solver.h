@@ -1,6 +1,7 @@
 #pragma once
 // The CPU implementation of one implicit substep (docs/architecture.md, "the step in detail").
 
+#include <array>
 #include <cstdint>
 #include <span>
 #include <vector>
@@ -9,6 +10,7 @@
 #include "cpu/cpu_collisions.h"
 #include "cpu/pcg.h"
 #include "cpu/schwarz_preconditioner.h"
+#include "cpu/shell_bending_terms.h"
 #include "weft/backend/schwarz_hierarchy.h"
 #include "weft/backend/flat_model.h"
 #include "weft/backend/material_terms.h"
@@ -66,6 +68,8 @@ private:
 
     void prepare_parameters(const Model& model, double t, double h);
     void evaluate_elements(const Model& model, double t, T h);
+    /// The bending model per triangle into the hinges' element slots (SolverSettings::bending = Shell).
+    void evaluate_shell_bending(T h);
     int evaluate_vertices(const Model& model, T h);
     void assemble();
     int sweep_fast_colliders(T h);
@@ -80,6 +84,14 @@ private:
     std::vector<T> mass_;
     std::vector<TriangleRestT> triangle_rest_;
     std::vector<HingeRestT> hinge_rest_;
+    // The bending model per triangle (SolverSettings::bending = Shell; cpu/shell_bending_terms.h):
+    // its rest data, each hinge's (up to) two triangles, pass 1's output per triangle, and the
+    // linearisation point and v_k − w_k per vertex that pass 1 reads.
+    BendingModel bending_ = BendingModel::Hinge;
+    std::vector<physics::ShellBendingRest<T>> shell_rest_;
+    std::vector<std::array<std::int32_t, 2>> hinge_faces_;
+    std::vector<ShellFaceTerms<T>> shell_faces_;
+    std::vector<V3> x_lin_, d_lin_;
     // Per-element outputs gathered per vertex / per BSR slot in fixed order (deterministic).
     std::vector<V3> element_rhs_;
     std::vector<M3> element_blocks_;

@@ -2,6 +2,7 @@
 
 #include "weft/physics/bending.h"
 #include "weft/physics/membrane.h"
+#include "shell_bending_energy.h"
 
 namespace weft::cpu {
 
@@ -20,6 +21,11 @@ EnergyBreakdown cloth_energy(const ClothDesc& cloth, const WorldDesc& world, std
         const TriangleRest& r = f.triangle_rest()[t];
         e.membrane += physics::membrane_evaluate<double>(r.dm_inv, r.area, mat, xs, nullptr, nullptr,
                                                          physics::HessianKind::None);
+    }
+    if (world.solver.bending == BendingModel::Shell) {
+        for (std::size_t t = 0; t < f.triangle_count(); ++t)
+            e.bending += shell_bending_triangle(f, t, cloth.material.bending_stiffness, x, [](std::uint32_t, const Vec3d&) {});
+        return e;
     }
     for (const Hinge& h : f.hinges()) {
         const Vec3d xs[4] = {x[h.v[0]], x[h.v[1]], x[h.v[2]], x[h.v[3]]};

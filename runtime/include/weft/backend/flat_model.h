@@ -11,6 +11,7 @@
 
 #include "weft/fabric.h"
 #include "weft/backend/model.h"
+#include "weft/physics/shell_bending.h"
 
 namespace weft {
 
@@ -28,6 +29,10 @@ struct FlatModel {
     std::vector<std::uint32_t> triangle_cloth;
     std::vector<Hinge> hinges;                         ///< global vertex indices
     std::vector<std::uint32_t> hinge_cloth;
+    /// Per triangle, the global hinges across its edges (Fabric::triangle_hinges), and the rest data
+    /// of the bending model per triangle (SolverSettings::bending = Shell; weft/physics/shell_bending.h).
+    std::vector<TriangleHinges> triangle_hinges;
+    std::vector<physics::ShellBendingRest<double>> shell_rest;
     BlockPattern pattern;                              ///< global; slot maps index global triangles/hinges
 
     /// Element force entries: triangle t, corner a → 3t + a; hinge k, corner a → 3T + 4k + a.
