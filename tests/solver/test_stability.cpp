@@ -2,8 +2,12 @@
 // of their ranges (and the nastiest corners together). No NaN, no runaway energy.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
+#include <cstdio>
+#include <string>
 
+#include "stability_matrix.h"
 #include "weft/mesh.h"
 #include "weft/world.h"
 
@@ -67,6 +71,37 @@ INSTANTIATE_TEST_SUITE_P(
                       Case{"stiff_heavy_tiny_step", 1e7, 1e-8, 2.0, 1.0 / 10000},
                       Case{"soft_light_tiny_step", 1e1, 1e-2, 0.01, 1.0 / 10000}),
     [](const ::testing::TestParamInfo<Case>& param_info) { return std::string(param_info.param.name); });
+
+// The small stability matrix (tests/common/stability_matrix.h; the full one is
+// bench/stability_matrix_bench.cpp): the one-at-a-time extremes of every dimension, with both
+// bending models, on the CPU backend. Every cell must be stable or refused with a message, except the
+// known failures listed here, which the next work on issue 22 removes (each is reported when it runs,
+// and when it starts to pass).
+TEST(StabilityMatrix, EveryExtremeIsStableOrRefused) {
+    // Measured on the development machine: a 5 m/s ball hitting the sheet puts 45 J into a 0.2 kg
+    // sheet in one substep (the penalty contact of a fast collider); 2.5 mm cells at 1/60 s gain
+    // 6–10 mJ in one or two substeps.
+    const std::string known_failures[] = {"ball 5 m/s", "cells 2.5 mm"};
+    int checked = 0;
+    for (const test::StabilityCase& c : test::stability_cases(false))
+        for (const BendingModel m : {BendingModel::Hinge, BendingModel::Shell}) {
+            const test::StabilityResult r = test::run_stability_case(c, "cpu", m);
+            const bool ok = r.outcome == test::StabilityOutcome::Stable || r.outcome == test::StabilityOutcome::Refused;
+            const bool known = std::find(std::begin(known_failures), std::end(known_failures), c.name) != std::end(known_failures);
+            const char* model = m == BendingModel::Hinge ? "hinge" : "shell";
+            if (r.outcome == test::StabilityOutcome::Refused) {
+                EXPECT_FALSE(r.detail.empty()) << c.name << ": refused without a message";
+            }
+            if (known) {
+                std::printf("[ known    ] %s, %s bending: %s%s%s\n", c.name.c_str(), model, test::outcome_name(r.outcome),
+                            r.detail.empty() ? "" : ": ", ok ? " (passes now: take it off the known failures)" : r.detail.c_str());
+                continue;
+            }
+            ++checked;
+            EXPECT_TRUE(ok) << c.name << ", " << model << " bending: " << test::outcome_name(r.outcome) << ": " << r.detail;
+        }
+    EXPECT_GE(checked, 20);
+}
 
 }  // namespace
 }  // namespace weft

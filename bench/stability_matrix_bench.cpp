@@ -1,0 +1,111 @@
+// The stability matrix (issue 22; tests/common/stability_matrix.h): every case on the asked backends
+// and both bending models, each either stable or refused with a message, or failing by name. Markdown
+// table on stdout, JSON with --json; exit status 0 whatever the outcomes (it measures; the test
+// asserts).
+//
+//   weft_stability_bench [--backends cpu,cuda] [--small] [--json FILE]
+#include <cstdio>
+#include <fstream>
+#include <string>
+#include <vector>
+
+#include "stability_matrix.h"
+#include "weft/error.h"
+#if WEFT_HAVE_CUDA_BACKEND
+#include "weft/cuda/cuda_backend.h"
+#endif
+
+namespace {
+
+std::vector<std::string> split(const std::string& value) {
+    std::vector<std::string> out;
+    std::size_t at = 0;
+    while (at <= value.size()) {
+        const std::size_t comma = value.find(',', at);
+        out.push_back(value.substr(at, comma == std::string::npos ? std::string::npos : comma - at));
+        if (comma == std::string::npos) break;
+        at = comma + 1;
+    }
+    return out;
+}
+
+std::string escaped(const std::string& s) {
+    std::string out;
+    for (const char c : s) {
+        if (c == '"' || c == '\\') out += '\\';
+        out += c == '\n' ? ' ' : c;
+    }
+    return out;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+    using namespace weft;
+    try {
+#if WEFT_HAVE_CUDA_BACKEND
+        cuda::register_cuda_backend();
+#endif
+        std::vector<std::string> backends{"cpu"};
+        bool small = false;
+        std::string json;
+        for (int i = 1; i < argc; ++i) {
+            const std::string flag = argv[i];
+            if (flag == "--small") {
+                small = true;
+                continue;
+            }
+            if (i + 1 >= argc) throw Error(flag + " needs a value");
+            const std::string value = argv[++i];
+            if (flag == "--backends")
+                backends = split(value);
+            else if (flag == "--json")
+                json = value;
+            else
+                throw Error("unknown option '" + flag + "' (--backends, --small, --json)");
+        }
+        struct Row {
+            test::StabilityCase c;
+            std::string backend, model;
+            test::StabilityResult r;
+        };
+        std::vector<Row> rows;
+        std::printf("| case | backend | bending | outcome | steps | substeps gaining energy | deepest in the ball, mm | s | detail |\n");
+        std::printf("|---|---|---|---|---|---|---|---|---|\n");
+        int failing = 0, total = 0;
+        for (const test::StabilityCase& c : test::stability_cases(!small))
+            for (const std::string& backend : backends)
+                for (const BendingModel m : {BendingModel::Hinge, BendingModel::Shell}) {
+                    const test::StabilityResult r = test::run_stability_case(c, backend, m);
+                    const char* model = m == BendingModel::Hinge ? "hinge" : "shell";
+                    std::printf("| %s | %s | %s | %s | %d | %d | %.2f | %.2f | %s |\n", c.name.c_str(), backend.c_str(), model,
+                                test::outcome_name(r.outcome), r.steps, r.energy_gained, 1000.0 * r.deepest, r.seconds,
+                                r.detail.c_str());
+                    std::fflush(stdout);
+                    ++total;
+                    if (r.outcome != test::StabilityOutcome::Stable && r.outcome != test::StabilityOutcome::Refused) ++failing;
+                    rows.push_back({c, backend, model, r});
+                }
+        std::printf("\n%d of %d cells stable or refused\n", total - failing, total);
+        if (!json.empty()) {
+            std::ofstream out(json);
+            if (!out) throw Error("--json: cannot write " + json);
+            out << "[\n";
+            for (std::size_t k = 0; k < rows.size(); ++k) {
+                const Row& w = rows[k];
+                out << "  {\"case\": \"" << escaped(w.c.name) << "\", \"backend\": \"" << w.backend << "\", \"bending\": \"" << w.model
+                    << "\", \"outcome\": \"" << test::outcome_name(w.r.outcome) << "\", \"steps\": " << w.r.steps
+                    << ", \"energy_gained_substeps\": " << w.r.energy_gained << ", \"deepest_m\": " << w.r.deepest
+                    << ", \"seconds\": " << w.r.seconds << ", \"detail\": \"" << escaped(w.r.detail) << "\"}"
+                    << (k + 1 < rows.size() ? "," : "") << "\n";
+            }
+            out << "]\n";
+            if (!out) throw Error("--json: cannot write " + json);
+            std::printf("results: %s\n", json.c_str());
+        }
+    } catch (const std::exception& e) {
+        std::fprintf(stderr, "weft_stability_bench: %s\n", e.what());
+        return 1;
+    }
+    return 0;
+}
