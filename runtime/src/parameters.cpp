@@ -200,7 +200,8 @@ constexpr Parameter kTable[] = {
      .access = field<&WorldDesc::solver, &SolverSettings::preconditioner_refresh>()},
     {.section = "solver", .name = "energy_guard", .type = T::Choice,
      .doc = "check every substep for energy gained beyond the external work (an inexact solve): `off`; `report`: "
-            "count it in the stats; `retry`: also redo the substep once with the CG tolerance / 100 and the cap × 4",
+            "count it in the stats; `retry`: also redo the substep once with the CG tolerance / 100, the cap × 4 and 4× the Newton "
+            "iterations, keeping the better of the two",
      .label = "energy guard", .panel = "solver", .choices = kEnergyGuardNames,
      .access = choice_field<kEnergyGuards, &WorldDesc::solver, &SolverSettings::energy_guard>()},
     {.section = "solver", .name = "contact_stiffness", .type = T::Real, .unit = "N/m", .range = R{0.0, 1e12},

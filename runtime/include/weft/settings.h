@@ -79,7 +79,8 @@ enum class EnergyGuard : std::uint8_t {
     /// `StepStats::energy_gained` (the state is kept as solved).
     Report,
     /// As Report, and redo a substep that gained energy once from its start with the CG tolerance
-    /// divided by 100 and the iteration cap multiplied by 4.
+    /// divided by 100, the iteration cap multiplied by 4 and four times the Newton iterations (at most
+    /// 50), keeping whichever attempt gained less.
     Retry,
 };
 
