@@ -201,7 +201,7 @@ constexpr Parameter kTable[] = {
     {.section = "solver", .name = "energy_guard", .type = T::Choice,
      .doc = "check every substep for energy gained beyond the external work (an inexact solve): `off`; `report`: "
             "count it in the stats; `retry`: also redo the substep once with the CG tolerance / 100, the cap × 4 and 4× the Newton "
-            "iterations, keeping the better of the two",
+            "iterations (then as four quarter substeps if it still gains), keeping the attempt that gained least",
      .label = "energy guard", .panel = "solver", .choices = kEnergyGuardNames,
      .access = choice_field<kEnergyGuards, &WorldDesc::solver, &SolverSettings::energy_guard>()},
     {.section = "solver", .name = "contact_stiffness", .type = T::Real, .unit = "N/m", .range = R{0.0, 1e12},

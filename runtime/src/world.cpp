@@ -212,10 +212,10 @@ void World::guarded_substep(double h, bool retry, EnergyAudit& audit) {
     // analytic collider that carried vertices along (they take its velocity), and impact zones
     // (their projections move vertices by geometry alone, and can stretch the cloth: on `layers`
     // they put 25 J of strain into four sheets that fell with 2 J). Returns whether it is judged.
-    const auto attempt = [&](EnergyAudit& end) {
+    const auto attempt = [&](EnergyAudit& end, int pieces = 1) {
         const int swept = stats_.collision.swept_collider_hits;
         const int zones = stats_.collision.impact_zones;
-        backend_->substep(*model_, time_, h, stats_);
+        for (int k = 0; k < pieces; ++k) backend_->substep(*model_, time_ + h * k / pieces, h / pieces, stats_);
         end = backend_->energy_audit(*model_, time_ + h, h, model_->settings.wind.active());
         return audit.bounded && end.bounded && stats_.collision.swept_collider_hits == swept &&
                stats_.collision.impact_zones == zones;
@@ -230,16 +230,24 @@ void World::guarded_substep(double h, bool retry, EnergyAudit& audit) {
     double excess = judge(end);
     if (excess > 0.0 && retry) {
         ++stats_.energy_retries;
-        // The first attempt's end, kept in case the redo does worse (a Newton iteration from a poor
-        // linearisation can: the stiff, light sheet of the stability matrix).
-        std::vector<std::vector<Vec3d>> first_x(cloths), first_v(cloths);
-        for (std::size_t c = 0; c < cloths; ++c) {
-            first_x[c].resize(guard_x_[c].size());
-            first_v[c].resize(guard_x_[c].size());
-            backend_->read_state(c, first_x[c], first_v[c]);
-            backend_->write_state(c, guard_x_[c], guard_v_[c]);
-        }
-        const EnergyAudit first_end = end;
+        // The redos (below) can do worse than the attempt before them (plain Newton from a poor
+        // linearisation can diverge): the attempt that gained least is kept, its state saved as the
+        // best so far before the next redo starts from the substep's start.
+        std::vector<std::vector<Vec3d>> best_x(cloths), best_v(cloths);
+        EnergyAudit best_end = end;
+        double best = excess;
+        const auto save_best = [&] {
+            for (std::size_t c = 0; c < cloths; ++c) {
+                best_x[c].resize(guard_x_[c].size());
+                best_v[c].resize(guard_x_[c].size());
+                backend_->read_state(c, best_x[c], best_v[c]);
+            }
+        };
+        const auto restart = [&] {
+            for (std::size_t c = 0; c < cloths; ++c) backend_->write_state(c, guard_x_[c], guard_v_[c]);
+        };
+        save_best();
+        restart();
         SolverSettings& solver = model_->settings.solver;
         const double tolerance = solver.cg_tolerance;
         const int cap = solver.cg_max_iterations;
@@ -248,11 +256,23 @@ void World::guarded_substep(double h, bool retry, EnergyAudit& audit) {
         // changed. More Newton iterations: a gain that is not the CG's stopping point is the
         // linearisation's (one Baraff–Witkin step of a stiff sheet over a long step, a fast
         // collider's penalty): measured on the stability matrix, they cure the moving ball and the
-        // 2.5 mm cells where the tighter CG alone cured nothing.
+        // 2.5 mm cells where the tighter CG alone cured nothing. Where they do not either, the
+        // substep is redone once more as four quarter substeps.
         solver.cg_tolerance = std::max(1e-12, tolerance / 100.0);
         solver.cg_max_iterations = static_cast<int>(std::min<long>(100'000, 4L * cap));
         solver.newton_iterations = std::min(50, 4 * newton);
-        const bool judged = attempt(end);
+        bool judged = attempt(end);
+        double current = judged ? judge(end) : 0.0;
+        if (judged && current > 0.0) {
+            if (current < best) {
+                best = current;
+                best_end = end;
+                save_best();
+            }
+            restart();
+            judged = attempt(end, 4);
+            current = judged ? judge(end) : 0.0;
+        }
         solver.cg_tolerance = tolerance;
         solver.cg_max_iterations = cap;
         solver.newton_iterations = newton;
@@ -261,14 +281,12 @@ void World::guarded_substep(double h, bool retry, EnergyAudit& audit) {
             audit = end;
             return;
         }
-        const double redone = judge(end);
-        if (redone > excess) {
-            // The redo gained more: keep the first attempt.
-            for (std::size_t c = 0; c < cloths; ++c) backend_->write_state(c, first_x[c], first_v[c]);
-            end = first_end;
-        } else {
-            excess = redone;
+        if (current > best) {
+            for (std::size_t c = 0; c < cloths; ++c) backend_->write_state(c, best_x[c], best_v[c]);
+            end = best_end;
+            current = best;
         }
+        excess = current;
     }
     if (excess > 0.0) {
         ++stats_.energy_gained;

@@ -80,7 +80,8 @@ enum class EnergyGuard : std::uint8_t {
     Report,
     /// As Report, and redo a substep that gained energy once from its start with the CG tolerance
     /// divided by 100, the iteration cap multiplied by 4 and four times the Newton iterations (at most
-    /// 50), keeping whichever attempt gained less.
+    /// 50); if that still gains, once more as four quarter substeps; keeps the attempt that gained
+    /// least.
     Retry,
 };
 
