@@ -111,17 +111,13 @@ Row simulate(double load, int cells_along, double aspect) {
 int main(int argc, char** argv) {
     try {
         const weft::bench::StripSweep sweep = weft::bench::parse_strip_sweep(argc, argv);
-        const std::vector<double>& cells = sweep.cells;
-        const std::vector<double>& aspects = sweep.aspects;
-        const std::vector<double>& loads = sweep.loads;
-        const std::string& json = sweep.json;
         std::vector<Row> rows;
         std::printf("| load ρgL³/D | cells along × across | cell aspect | tip deflection m | heavy elastica m | error | "
                     "curvature across / along at mid-length | s |\n");
         std::printf("|---|---|---|---|---|---|---|---|\n");
-        for (const double load : loads)
-            for (const double aspect : aspects)
-                for (const double n : cells) {
+        for (const double load : sweep.loads)
+            for (const double aspect : sweep.aspects)
+                for (const double n : sweep.cells) {
                     const Row r = simulate(load, static_cast<int>(n), aspect);
                     std::printf("| %.2g | %d × %d | %.2f | %.5f | %.5f | %+.2f%% | %.3f | %.1f |\n", r.load, r.cells_along,
                                 r.cells_across, r.aspect, r.deflection, r.reference, 100.0 * r.error,
@@ -129,9 +125,9 @@ int main(int argc, char** argv) {
                     std::fflush(stdout);
                     rows.push_back(r);
                 }
-        if (!json.empty()) {
-            std::ofstream out(json);
-            if (!out) throw weft::Error("--json: cannot write " + json);
+        if (!sweep.json.empty()) {
+            std::ofstream out(sweep.json);
+            if (!out) throw weft::Error("--json: cannot write " + sweep.json);
             out << "[\n";
             for (std::size_t k = 0; k < rows.size(); ++k) {
                 const Row& r = rows[k];
@@ -141,8 +137,8 @@ int main(int argc, char** argv) {
                     << ", \"curvature_across\": " << r.curvature_across << ", \"seconds\": " << r.seconds << "}" << (k + 1 < rows.size() ? "," : "") << "\n";
             }
             out << "]\n";
-            if (!out) throw weft::Error("--json: cannot write " + json);
-            std::printf("results: %s\n", json.c_str());
+            if (!out) throw weft::Error("--json: cannot write " + sweep.json);
+            std::printf("results: %s\n", sweep.json.c_str());
         }
     } catch (const std::exception& e) {
         std::fprintf(stderr, "weft_bending_bench: %s\n", e.what());

@@ -455,11 +455,7 @@ double cylinder_ratio(Model model, double angle) {
 int main(int argc, char** argv) {
     try {
         const weft::bench::StripSweep sweep = weft::bench::parse_strip_sweep(argc, argv);
-        const std::vector<double>& cells = sweep.cells;
-        const std::vector<double>& aspects = sweep.aspects;
-        const std::vector<double>& loads = sweep.loads;
-        const std::string& json = sweep.json;
-        std::printf("cylinder energy over the plate's ½·D·κ²·area (40 × 40 cells), bent about the grid's x axis / z axis / "
+        std::printf("cylinder energy over the plate's ½·D·κ²·area (40 × 40 sweep.cells), bent about the grid's x axis / z axis / "
                     "diagonal:\n");
         for (const Model m : {Model::Hinge, Model::Shell})
             std::printf("  %-5s %.3f / %.3f / %.3f\n", name(m), cylinder_ratio(m, 0.0), cylinder_ratio(m, std::numbers::pi / 2.0),
@@ -476,23 +472,23 @@ int main(int argc, char** argv) {
                         r.seconds);
             std::fflush(stdout);
         };
-        for (const double load : loads) {
-            for (const double aspect : aspects)
-                for (const double n : cells)
+        for (const double load : sweep.loads) {
+            for (const double aspect : sweep.aspects)
+                for (const double n : sweep.cells)
                     for (const Model m : {Model::Hinge, Model::Shell}) {
                         rows.push_back(solve(m, load, static_cast<int>(n), aspect));
                         print(rows.back());
                     }
             // The same strip meshed with its rows at 45° (an even number of lattice columns).
-            for (const double n : cells)
+            for (const double n : sweep.cells)
                 for (const Model m : {Model::Hinge, Model::Shell}) {
                     rows.push_back(solve(m, load, 2 * (static_cast<int>(n) / 2), 1.0, true));
                     print(rows.back());
                 }
         }
-        if (!json.empty()) {
-            std::ofstream out(json);
-            if (!out) throw weft::Error("--json: cannot write " + json);
+        if (!sweep.json.empty()) {
+            std::ofstream out(sweep.json);
+            if (!out) throw weft::Error("--json: cannot write " + sweep.json);
             out << "[\n";
             for (std::size_t k = 0; k < rows.size(); ++k) {
                 const Row& r = rows[k];
@@ -504,8 +500,8 @@ int main(int argc, char** argv) {
                     << ", \"seconds\": " << r.seconds << "}" << (k + 1 < rows.size() ? "," : "") << "\n";
             }
             out << "]\n";
-            if (!out) throw weft::Error("--json: cannot write " + json);
-            std::printf("results: %s\n", json.c_str());
+            if (!out) throw weft::Error("--json: cannot write " + sweep.json);
+            std::printf("results: %s\n", sweep.json.c_str());
         }
     } catch (const std::exception& e) {
         std::fprintf(stderr, "weft_bending_models_bench: %s\n", e.what());
