@@ -23,6 +23,9 @@
 #include "weft/error.h"
 #include "weft/scene.h"
 #include "weft/world.h"
+#if WEFT_HAVE_ASSETS
+#include "weft/assets/assimp_loader.h"
+#endif
 #if WEFT_HAVE_CUDA_BACKEND
 #include "weft/cuda/cuda_backend.h"
 #endif
@@ -181,6 +184,9 @@ std::string escaped(const std::string& s) {
 
 int main(int argc, char** argv) {
     try {
+#if WEFT_HAVE_ASSETS
+        weft::assets::install_mesh_loader();
+#endif
 #if WEFT_HAVE_CUDA_BACKEND
         weft::cuda::register_cuda_backend();
 #endif
