@@ -10,10 +10,8 @@
 #include <vector>
 
 #include "stability_matrix.h"
+#include "optional_backends.h"
 #include "weft/error.h"
-#if WEFT_HAVE_CUDA_BACKEND
-#include "weft/cuda/cuda_backend.h"
-#endif
 
 namespace {
 
@@ -43,9 +41,7 @@ std::string escaped(const std::string& s) {
 int main(int argc, char** argv) {
     using namespace weft;
     try {
-#if WEFT_HAVE_CUDA_BACKEND
-        cuda::register_cuda_backend();
-#endif
+        weft::bench::install_optional_backends();
         std::vector<std::string> backends{"cpu"};
         bool small = false;
         std::string json;

@@ -20,15 +20,10 @@
 #include <vector>
 
 #include "scene_lookup.h"
+#include "optional_backends.h"
 #include "weft/error.h"
 #include "weft/scene.h"
 #include "weft/world.h"
-#if WEFT_HAVE_ASSETS
-#include "weft/assets/assimp_loader.h"
-#endif
-#if WEFT_HAVE_CUDA_BACKEND
-#include "weft/cuda/cuda_backend.h"
-#endif
 
 namespace {
 
@@ -184,12 +179,7 @@ std::string escaped(const std::string& s) {
 
 int main(int argc, char** argv) {
     try {
-#if WEFT_HAVE_ASSETS
-        weft::assets::install_mesh_loader();
-#endif
-#if WEFT_HAVE_CUDA_BACKEND
-        weft::cuda::register_cuda_backend();
-#endif
+        weft::bench::install_optional_backends();
         std::string scene_name, backend = "cpu", json, plot;
         int frames = 60;
         std::vector<std::string> base;
