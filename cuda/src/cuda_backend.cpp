@@ -122,7 +122,7 @@ public:
 
     std::unique_ptr<SharedOutput> share_output(std::span<const SharedSlotHandle> slots, const DeviceUuid& device,
                                                std::string& why) override {
-        return make_shared_output(*solver_, info_, slots, device, why);
+        return make_shared_output(output_source(*solver_), info_, slots, device, why);
     }
 
     void set_stream(CUstream_st* stream) override { solver_->set_stream(stream); }

@@ -139,6 +139,7 @@ bool DeviceSolver::part_receive_contacts(std::span<const multi::ContactShare> sh
         WEFT_CUDA_CHECK(cudaStreamSynchronize(stream));
         placed += selected_host_[0];
     }
+    part_contact_count_ = placed;
     selected_host_[0] = static_cast<std::uint32_t>(placed);
     WEFT_CUDA_CHECK(cudaMemcpyAsync(to.count, selected_host_.get(), sizeof(std::uint32_t), cudaMemcpyHostToDevice, stream));
     WEFT_CUDA_CHECK(cudaStreamWaitEvent(stream, ready, 0));

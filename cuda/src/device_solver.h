@@ -154,6 +154,8 @@ public:
     bool part_receive_contacts(std::span<const multi::ContactShare> shares, const ContactInputs& kinematic_from,
                                cudaEvent_t ready, std::size_t kinematic);
     /// The whole model's id of every local vertex (device memory), owned first.
+    /// The contacts the last part_receive_contacts kept (those at this part's rows).
+    [[nodiscard]] std::size_t part_contact_count() const { return part_contact_count_; }
     [[nodiscard]] const std::uint32_t* part_global_ids() const { return global_index_.get(); }
 
     // For benchmarks: the arrays, the layout and the stream the solver uses.
@@ -220,6 +222,7 @@ private:
     // owned vertices' global ids on the device (the output's places).
     const FlatModel* whole_ = nullptr;
     const PartModel* part_ = nullptr;
+    std::size_t part_contact_count_ = 0;  // part_receive_contacts' selection
     std::vector<std::uint32_t> local_of_global_;
     DeviceArray<std::uint32_t> output_index_;
     DeviceArray<std::uint32_t> global_index_;  // every local vertex's whole id

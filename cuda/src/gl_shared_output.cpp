@@ -24,7 +24,6 @@
 #include "weft/error.h"
 
 #include "cuda_check.h"
-#include "device_solver.h"
 #include "kernels.h"
 
 namespace weft::cuda {
@@ -32,8 +31,8 @@ namespace {
 
 class GlSharedOutput final : public SharedOutput {
 public:
-    GlSharedOutput(DeviceSolver& solver, int device, std::span<const SharedSlotHandle> slots)
-        : solver_(solver), device_(device), vertices_(solver.vertex_count()) {
+    GlSharedOutput(std::unique_ptr<OutputSource> source, int device, std::span<const SharedSlotHandle> slots)
+        : source_(std::move(source)), device_(device), vertices_(source_->vertex_count()) {
         WEFT_CUDA_CHECK(cudaSetDevice(device));
         try {
             for (const SharedSlotHandle& s : slots) {
@@ -47,7 +46,7 @@ public:
             // solver's stream (non-blocking: the legacy stream's memset would not be ordered).
             for (std::size_t s = 0; s < resources_.size(); ++s) {
                 void* pointer = map(static_cast<int>(s));
-                WEFT_CUDA_CHECK(cudaMemsetAsync(pointer, 0, slots[s].gl_buffer.size, solver_.stream()));
+                WEFT_CUDA_CHECK(cudaMemsetAsync(pointer, 0, slots[s].gl_buffer.size, source_->stream()));
                 unmap(static_cast<int>(s));
             }
         } catch (...) {
@@ -58,8 +57,8 @@ public:
 
     ~GlSharedOutput() override {
         if (bound_ >= 0) {
-            solver_.set_output(nullptr, sizeof(OutputVertex), false);
-            (void)cudaGraphicsUnmapResources(1, &resources_[static_cast<std::size_t>(bound_)], solver_.stream());
+            source_->bind(nullptr, sizeof(OutputVertex));
+            (void)cudaGraphicsUnmapResources(1, &resources_[static_cast<std::size_t>(bound_)], source_->stream());
         }
         release();
     }
@@ -70,23 +69,23 @@ public:
         if (slot < 0 || slot >= slots())
             throw Error("CUDA shared output (OpenGL): slot " + std::to_string(slot) + " of " + std::to_string(slots()));
         if (bound_ >= 0) throw Error("CUDA shared output (OpenGL): begin_frame() twice without end_frame()");
-        if (solver_.vertex_count() != vertices_)
-            throw Error("CUDA shared output (OpenGL): the world has " + std::to_string(solver_.vertex_count()) +
+        if (source_->vertex_count() != vertices_)
+            throw Error("CUDA shared output (OpenGL): the world has " + std::to_string(source_->vertex_count()) +
                         " vertices, the slots were shared for " + std::to_string(vertices_) + " (share them again)");
         WEFT_CUDA_CHECK(cudaSetDevice(device_));
         // The mapped address may differ from one mapping to the next: it is taken each frame.
         mapped_ = static_cast<unsigned char*>(map(slot));
         bound_ = slot;
         stamp_ = stamp;
-        launch_write_stamp(mapped_ + vertices_ * sizeof(OutputVertex), stamp, solver_.stream());
-        solver_.set_output(mapped_, sizeof(OutputVertex), false);  // writes the state now
+        launch_write_stamp(mapped_ + vertices_ * sizeof(OutputVertex), stamp, source_->stream());
+        source_->bind(mapped_, sizeof(OutputVertex));  // writes the state now
     }
 
     void end_frame(std::uint64_t /*signal_value*/) override {
         if (bound_ < 0) throw Error("CUDA shared output (OpenGL): end_frame() without begin_frame()");
         WEFT_CUDA_CHECK(cudaSetDevice(device_));
-        launch_write_stamp(mapped_ + vertices_ * sizeof(OutputVertex) + sizeof(std::uint64_t), stamp_, solver_.stream());
-        solver_.set_output(nullptr, sizeof(OutputVertex), false);
+        launch_write_stamp(mapped_ + vertices_ * sizeof(OutputVertex) + sizeof(std::uint64_t), stamp_, source_->stream());
+        source_->bind(nullptr, sizeof(OutputVertex));
         const int slot = std::exchange(bound_, -1);
         mapped_ = nullptr;
         unmap(slot);
@@ -95,13 +94,13 @@ public:
 private:
     void* map(int slot) {
         cudaGraphicsResource_t& resource = resources_[static_cast<std::size_t>(slot)];
-        WEFT_CUDA_CHECK(cudaGraphicsMapResources(1, &resource, solver_.stream()));
+        WEFT_CUDA_CHECK(cudaGraphicsMapResources(1, &resource, source_->stream()));
         void* pointer = nullptr;
         std::size_t bytes = 0;
         WEFT_CUDA_CHECK(cudaGraphicsResourceGetMappedPointer(&pointer, &bytes, resource));
         const std::size_t needed = vertices_ * sizeof(OutputVertex) + kSlotStampBytes;
         if (bytes < needed) {
-            (void)cudaGraphicsUnmapResources(1, &resource, solver_.stream());
+            (void)cudaGraphicsUnmapResources(1, &resource, source_->stream());
             throw Error("CUDA shared output (OpenGL): slot " + std::to_string(slot) + " maps " + std::to_string(bytes) +
                         " bytes, the world needs " + std::to_string(needed));
         }
@@ -109,7 +108,7 @@ private:
     }
 
     void unmap(int slot) {
-        WEFT_CUDA_CHECK(cudaGraphicsUnmapResources(1, &resources_[static_cast<std::size_t>(slot)], solver_.stream()));
+        WEFT_CUDA_CHECK(cudaGraphicsUnmapResources(1, &resources_[static_cast<std::size_t>(slot)], source_->stream()));
     }
 
     void release() noexcept {
@@ -117,7 +116,7 @@ private:
         resources_.clear();
     }
 
-    DeviceSolver& solver_;
+    std::unique_ptr<OutputSource> source_;
     int device_ = 0;
     std::size_t vertices_ = 0;  ///< the world's vertex count when shared: the stamps follow them
     std::vector<cudaGraphicsResource_t> resources_;
@@ -128,7 +127,7 @@ private:
 
 }  // namespace
 
-std::unique_ptr<SharedOutput> make_gl_shared_output(DeviceSolver& solver, const DeviceInfo& device,
+std::unique_ptr<SharedOutput> make_gl_shared_output(std::unique_ptr<OutputSource> source, const DeviceInfo& device,
                                                     std::span<const SharedSlotHandle> slots, std::string& why) {
     // The GL context current on this thread must live on the backend's GPU (a Mesa context, or one
     // on another GPU, has no CUDA device or another one).
@@ -149,7 +148,7 @@ std::unique_ptr<SharedOutput> make_gl_shared_output(DeviceSolver& solver, const 
               std::to_string(device.ordinal) + ")";
         return nullptr;
     }
-    return std::make_unique<GlSharedOutput>(solver, device.ordinal, slots);
+    return std::make_unique<GlSharedOutput>(std::move(source), device.ordinal, slots);
 }
 
 }  // namespace weft::cuda

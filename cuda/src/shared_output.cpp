@@ -16,15 +16,38 @@
 #include "cuda_check.h"
 #include "device_solver.h"
 #include "kernels.h"
+#include "multi/multi_solver.h"
 
 namespace weft::cuda {
 namespace {
 
+class SolverOutput final : public OutputSource {
+public:
+    explicit SolverOutput(DeviceSolver& solver) : solver_(solver) {}
+    std::size_t vertex_count() const override { return solver_.vertex_count(); }
+    cudaStream_t stream() const override { return solver_.stream(); }
+    void bind(void* buffer, std::size_t stride) override { solver_.set_output(buffer, stride, false); }
+
+private:
+    DeviceSolver& solver_;
+};
+
+class MultiSolverOutput final : public OutputSource {
+public:
+    explicit MultiSolverOutput(multi::MultiSolver& solver) : solver_(solver) {}
+    std::size_t vertex_count() const override { return solver_.vertex_count(); }
+    cudaStream_t stream() const override { return solver_.stream(); }
+    void bind(void* buffer, std::size_t stride) override { solver_.set_output(buffer, stride, false); }
+
+private:
+    multi::MultiSolver& solver_;
+};
+
 /// The Vulkan kind (SlotApi::vulkan_fd): imported fds, ordered by the slots' timelines.
 class CudaSharedOutput final : public SharedOutput {
 public:
-    CudaSharedOutput(DeviceSolver& solver, int device, std::span<const SharedSlotHandle> slots)
-        : solver_(solver), device_(device), vertices_(solver.vertex_count()) {
+    CudaSharedOutput(std::unique_ptr<OutputSource> source, int device, std::span<const SharedSlotHandle> slots)
+        : source_(std::move(source)), device_(device), vertices_(source_->vertex_count()) {
         for (std::size_t s = 0; s < slots.size(); ++s) {
             try {
                 Slot slot;
@@ -38,7 +61,7 @@ public:
                 // (the first draw from each slot then read zeros where CUDA had written).
                 WEFT_CUDA_CHECK(cudaSetDevice(device));
                 WEFT_CUDA_CHECK(
-                    cudaMemsetAsync(slot.buffer->device_pointer(), 0, slot.buffer->size(), solver.stream()));
+                    cudaMemsetAsync(slot.buffer->device_pointer(), 0, slot.buffer->size(), source_->stream()));
                 slots_.push_back(std::move(slot));
             } catch (...) {
                 close_slot_handles(slots.subspan(s + 1));
@@ -48,7 +71,7 @@ public:
     }
 
     ~CudaSharedOutput() override {
-        if (bound_ >= 0) solver_.set_output(nullptr, sizeof(OutputVertex), false);
+        if (bound_ >= 0) source_->bind(nullptr, sizeof(OutputVertex));
     }
 
     int slots() const override { return static_cast<int>(slots_.size()); }
@@ -59,15 +82,15 @@ public:
         if (bound_ >= 0) throw Error("CUDA shared output: begin_frame() twice without end_frame()");
         // The stamps sit after the vertices: a world rebuilt with another vertex count since the
         // slots were shared would write them where the reader does not look.
-        if (solver_.vertex_count() != vertices_)
-            throw Error("CUDA shared output: the world has " + std::to_string(solver_.vertex_count()) +
+        if (source_->vertex_count() != vertices_)
+            throw Error("CUDA shared output: the world has " + std::to_string(source_->vertex_count()) +
                         " vertices, the slots were shared for " + std::to_string(vertices_) + " (share them again)");
         const Slot& s = slots_[static_cast<std::size_t>(slot)];
         WEFT_CUDA_CHECK(cudaSetDevice(device_));
-        cudaStream_t stream = solver_.stream();
+        cudaStream_t stream = source_->stream();
         if (wait_value > 0) s.timeline->wait(wait_value, stream);
         launch_write_stamp(stamp_at(s, 0), stamp, stream);
-        solver_.set_output(s.buffer->device_pointer(), sizeof(OutputVertex), false);  // writes the state now
+        source_->bind(s.buffer->device_pointer(), sizeof(OutputVertex));  // writes the state now
         bound_ = slot;
         stamp_ = stamp;
     }
@@ -76,10 +99,10 @@ public:
         if (bound_ < 0) throw Error("CUDA shared output: end_frame() without begin_frame()");
         const Slot& s = slots_[static_cast<std::size_t>(bound_)];
         WEFT_CUDA_CHECK(cudaSetDevice(device_));
-        cudaStream_t stream = solver_.stream();
+        cudaStream_t stream = source_->stream();
         launch_write_stamp(stamp_at(s, 1), stamp_, stream);
         s.timeline->signal(signal_value, stream);
-        solver_.set_output(nullptr, sizeof(OutputVertex), false);
+        source_->bind(nullptr, sizeof(OutputVertex));
         bound_ = -1;
     }
 
@@ -94,7 +117,7 @@ private:
                static_cast<std::size_t>(which) * sizeof(std::uint64_t);
     }
 
-    DeviceSolver& solver_;
+    std::unique_ptr<OutputSource> source_;
     int device_ = 0;
     std::size_t vertices_ = 0;  ///< the world's vertex count when shared: the stamps follow them
     std::vector<Slot> slots_;
@@ -104,7 +127,13 @@ private:
 
 }  // namespace
 
-std::unique_ptr<SharedOutput> make_shared_output(DeviceSolver& solver, const DeviceInfo& device,
+std::unique_ptr<OutputSource> output_source(DeviceSolver& solver) { return std::make_unique<SolverOutput>(solver); }
+
+std::unique_ptr<OutputSource> output_source(multi::MultiSolver& solver) {
+    return std::make_unique<MultiSolverOutput>(solver);
+}
+
+std::unique_ptr<SharedOutput> make_shared_output(std::unique_ptr<OutputSource> source, const DeviceInfo& device,
                                                  std::span<const SharedSlotHandle> slots, const DeviceUuid& uuid,
                                                  std::string& why) {
     const auto refuse = [&](std::string reason) -> std::unique_ptr<SharedOutput> {
@@ -119,18 +148,18 @@ std::unique_ptr<SharedOutput> make_shared_output(DeviceSolver& solver, const Dev
     if (api == SlotApi::vulkan_fd && !std::equal(uuid.begin(), uuid.end(), std::begin(device.uuid)))
         return refuse("the renderer's GPU is not the CUDA backend's (" + device.name + ", device " +
                       std::to_string(device.ordinal) + ")");
-    if (solver.vertex_count() == 0) return refuse("the world is not built yet (World::share_output builds it)");
-    const std::uint64_t needed = solver.vertex_count() * sizeof(OutputVertex) + kSlotStampBytes;
+    if (source->vertex_count() == 0) return refuse("the world is not built yet (World::share_output builds it)");
+    const std::uint64_t needed = source->vertex_count() * sizeof(OutputVertex) + kSlotStampBytes;
     for (const SharedSlotHandle& s : slots)
         if (slot_bytes(s) < needed)
             return refuse("a shared slot holds " + std::to_string(slot_bytes(s)) + " bytes, the world needs " +
                           std::to_string(needed));
-    if (api == SlotApi::opengl_buffer) return make_gl_shared_output(solver, device, slots, why);
-    return std::make_unique<CudaSharedOutput>(solver, device.ordinal, slots);
+    if (api == SlotApi::opengl_buffer) return make_gl_shared_output(std::move(source), device, slots, why);
+    return std::make_unique<CudaSharedOutput>(std::move(source), device.ordinal, slots);
 }
 
 #ifndef WEFT_CUDA_OPENGL
-std::unique_ptr<SharedOutput> make_gl_shared_output(DeviceSolver& /*solver*/, const DeviceInfo& /*device*/,
+std::unique_ptr<SharedOutput> make_gl_shared_output(std::unique_ptr<OutputSource> /*source*/, const DeviceInfo& /*device*/,
                                                     std::span<const SharedSlotHandle> /*slots*/, std::string& why) {
     why = "this build of the CUDA backend has no OpenGL interop (GL/gl.h was not found)";
     return nullptr;

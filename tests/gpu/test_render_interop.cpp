@@ -16,12 +16,14 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstdlib>
 #include <cstdio>
 #include <cstring>
 #include <filesystem>
 #include <optional>
 
 #include "gpu_test_util.h"
+#include "multi/multi_gpu_backend.h"
 #include "weft/error.h"
 #include "weft/frame_loop.h"
 #include "weft/render/cloth_feed.h"
@@ -55,13 +57,14 @@ struct Rig {
     render::RenderScene scene;
 };
 
-// The flag on the cuda backend, drawn by renderer `name`; nullopt (with `why`) without one.
-std::optional<Rig> make_rig(const std::string& name, std::string& why) {
+// The flag on the cuda backend (with `overrides`), drawn by renderer `name`; nullopt (with `why`)
+// without one.
+std::optional<Rig> make_rig(const std::string& name, std::string& why, const std::vector<std::string>& overrides = {}) {
     Rig r;
     r.renderer = make_renderer(name, why);
     if (!r.renderer) return std::nullopt;
     const auto file = std::filesystem::path(WEFT_SOURCE_DIR) / "assets" / "scenes" / "flag.toml";
-    r.desc = load_scene(file, {});
+    r.desc = load_scene(file, overrides);
     r.world = build_world(r.desc, "cuda");
     r.scene = render::make_render_scene(*r.world, r.desc.camera);
     r.renderer->load(r.scene);
@@ -199,6 +202,47 @@ TEST_P(RenderInterop, ThousandOverlappedFramesDrawWholeStatesOnly) {
     wrong.stamp += 2;
     EXPECT_FALSE(feed.check(wrong, rig->renderer->transfer()));
     EXPECT_EQ(feed.torn_frames(), 1);
+}
+
+// One world across two GPUs (two parts on one GPU where the host has one: the test mode): every part
+// writes its owned vertices into a buffer on the first GPU, which copies it into the slot; the
+// renderer draws the solver's state with no cloth byte through the host.
+TEST_P(RenderInterop, AWorldAcrossGpusWritesTheSlotsToo) {
+    WEFT_REQUIRE_GPU();
+    const bool one_device = cuda::devices().size() < 2;
+    if (one_device) setenv(cuda::multi::kPartsOnOneDeviceEnv, "1", 1);
+    std::string why;
+    std::optional<Rig> rig;
+    try {
+        rig = make_rig(GetParam(), why, {"solver.gpus=2"});
+    } catch (...) {
+        unsetenv(cuda::multi::kPartsOnOneDeviceEnv);
+        throw;
+    }
+    unsetenv(cuda::multi::kPartsOnOneDeviceEnv);
+    if (!rig) GTEST_SKIP() << "no " << GetParam() << " renderer: " << why;
+    render::ClothFeed feed(*rig->world, *rig->renderer, rig->scene);
+    ASSERT_TRUE(feed.zero_copy()) << feed.fallback_reason();
+    std::printf("[ interop  ] %s, %s\n", feed.describe().c_str(), rig->world->device_description().c_str());
+    render::RenderFrame last;
+    for (int k = 1; k <= 20; ++k) {
+        last = feed.simulate([&] { (void)rig->world->step(); });
+        EXPECT_EQ(last.cloth_slot, (k - 1) % 2);
+        (void)rig->renderer->draw(last);
+        ASSERT_EQ(rig->renderer->transfer().path, "interop") << "frame " << k;
+        ASSERT_EQ(rig->renderer->transfer().bytes_uploaded, 0U) << "frame " << k;
+        ASSERT_TRUE(feed.check(last, rig->renderer->transfer())) << "frame " << k;
+    }
+    const std::vector<render::RenderVertex> slot = rig->renderer->read_cloth(last.cloth_slot);
+    std::vector<render::RenderVertex> host;
+    render::cloth_vertices(*rig->world, rig->scene, host);
+    ASSERT_EQ(slot.size(), host.size());
+    const Difference d = compare(slot, host);
+    std::printf("[ interop  ] %zu vertices from 2 parts: positions within %.3g m, normals within %.3g of the host's\n",
+                host.size(), d.position, d.normal);
+    EXPECT_TRUE(d.positions_identical) << "every part's vertices, each where the renderer reads it";
+    EXPECT_LT(d.normal, 1e-4);
+    EXPECT_EQ(rig->renderer->validation_messages(), 0);
 }
 
 // The same feed with zero-copy off takes the host path on the same GPU and draws the same picture.

@@ -35,7 +35,7 @@ RunSummary summarize(std::span<const StepStats> frames) {
     RunSummary s;
     s.frames = frames.size();
     std::array<std::vector<double>, kStageCount> stage;
-    std::vector<double> step, cg, contacts, pairs, culled, pair_contacts;
+    std::vector<double> step, cg, contacts, pairs, culled, pair_contacts, part_contacts;
     for (auto& v : stage) v.reserve(frames.size());
     step.reserve(frames.size());
     cg.reserve(frames.size());
@@ -72,6 +72,7 @@ RunSummary summarize(std::span<const StepStats> frames) {
         pairs.push_back(static_cast<double>(c.candidate_pairs));
         culled.push_back(static_cast<double>(c.culled_pairs));
         pair_contacts.push_back(c.contacts);
+        part_contacts.push_back(c.contacts_largest_part);
         sc.ccd_tests += c.ccd_tests;
         sc.ccd_hits += c.ccd_hits;
         sc.impact_zones += c.impact_zones;
@@ -97,6 +98,7 @@ RunSummary summarize(std::span<const StepStats> frames) {
     s.collisions.candidate_pairs = distribution(std::move(pairs));
     s.collisions.culled_pairs = distribution(std::move(culled));
     s.collisions.contacts = distribution(std::move(pair_contacts));
+    s.collisions.contacts_largest_part = distribution(std::move(part_contacts));
     for (std::size_t k = 0; k < kStageCount; ++k) s.stage_ms[k] = distribution(std::move(stage[k]));
     s.step_ms = distribution(std::move(step));
     s.cg_iterations = distribution(std::move(cg));
@@ -254,6 +256,8 @@ void write_summary_fields(JsonWriter& json, const RunContext& c, const RunSummar
     write_distribution(json, col.culled_pairs);
     json.key("contacts");
     write_distribution(json, col.contacts);
+    json.key("contacts_largest_part");
+    write_distribution(json, col.contacts_largest_part);
     json.field("ccd_tests", col.ccd_tests).field("ccd_hits", col.ccd_hits);
     json.field("impact_zones", col.impact_zones).field("impact_iterations_max", col.impact_iterations_max);
     json.field("rigid_zones", col.rigid_zones).field("frozen_vertices", col.frozen_vertices);
@@ -367,6 +371,9 @@ void print_run_summary(std::ostream& out, const RunContext& c, const RunSummary&
             << (c.culled_pairs_counted ? " (culled " + format_fixed(col.culled_pairs.median, 0) + ")"
                                        : std::string(" (culled pairs not counted: collision.count_culled, cpu backend)"))
             << ", pair springs median " << format_fixed(col.contacts.median, 0)
+            << (col.contacts_largest_part.max > 0
+                    ? " (busiest GPU " + format_fixed(col.contacts_largest_part.median, 0) + ")"
+                    : std::string())
             << ", CCD " << col.ccd_hits << " hits in " << col.ccd_tests << " tests\n";
         out << "  impact zones   " << col.impact_zones << " zones, at most " << col.impact_iterations_max
             << " rounds per substep; fallbacks: " << col.rigid_zones << " rigid, " << col.frozen_vertices

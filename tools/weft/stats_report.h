@@ -69,6 +69,7 @@ struct RunSummary {
         Distribution candidate_pairs;         ///< per frame
         Distribution culled_pairs;            ///< per frame
         Distribution contacts;                ///< proximity contacts in a frame's last substep
+        Distribution contacts_largest_part;   ///< several GPUs: those on the busiest part
         long long ccd_tests = 0, ccd_hits = 0;
         long long impact_zones = 0;
         int impact_iterations_max = 0;

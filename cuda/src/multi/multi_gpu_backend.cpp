@@ -6,6 +6,7 @@
 #include <string_view>
 
 #include "multi/multi_solver.h"
+#include "shared_output.h"
 #include "weft/backend/flat_model.h"
 #include "weft/cuda/cuda_backend.h"
 #include "weft/error.h"
@@ -15,8 +16,8 @@ namespace {
 
 class MultiGpuBackend final : public Backend, public CudaBackendApi {
 public:
-    MultiGpuBackend(std::vector<int> devices, std::string description)
-        : solver_(std::move(devices)), description_(std::move(description)) {}
+    MultiGpuBackend(std::vector<int> devices, DeviceInfo display, std::string description)
+        : solver_(std::move(devices)), display_(std::move(display)), description_(std::move(description)) {}
 
     std::string_view name() const override { return "cuda"; }
 
@@ -58,12 +59,19 @@ public:
 
     std::size_t memory_bytes() const override { return solver_.memory_bytes(); }
     MultiSolver& solver() { return solver_; }
+
+    // The renderer's slots on the first GPU: every part's vertices gathered there, then copied into
+    // the slot on that GPU (MultiSolver::set_output); no byte through the host.
+    std::unique_ptr<SharedOutput> share_output(std::span<const SharedSlotHandle> slots, const DeviceUuid& device,
+                                               std::string& why) override {
+        return make_shared_output(output_source(solver_), display_, slots, device, why);
+    }
     std::vector<std::pair<std::string, std::size_t>> memory_breakdown() const override { return solver_.memory_breakdown(); }
 
     // ---- CudaBackendApi ---------------------------------------------------------------------------
     void set_stream(CUstream_st* stream) override { solver_.set_stream(stream); }
     CUstream_st* stream() const override { return solver_.stream(); }
-    // Each part writes its owned vertices into the buffer on the first GPU (peer writes).
+    // Each part writes its owned vertices into a buffer on the first GPU (peer writes), copied there.
     void set_output(void* device_buffer, std::size_t stride) override { solver_.set_output(device_buffer, stride); }
     std::size_t vertex_count() const override { return flat_.vertex_count; }
     void set_use_graph(bool enabled) override { solver_.set_use_graph(enabled); }
@@ -75,6 +83,7 @@ public:
 private:
     mutable MultiSolver solver_;  // the audit enqueues work on the parts' streams
     FlatModel flat_;
+    DeviceInfo display_;          // the first GPU: where the output lives
     std::string description_;
 };
 
@@ -107,7 +116,8 @@ std::unique_ptr<Backend> make_multi_gpu_backend(const BackendOptions& options) {
             description += (p == 0 ? "" : " + ") + all[static_cast<std::size_t>(d)].name;
     }
     if (one_device) description += " (" + std::to_string(options.gpus) + " parts on one GPU: test mode)";
-    auto backend = std::make_unique<MultiGpuBackend>(std::move(devices), std::move(description));
+    const DeviceInfo display = all[static_cast<std::size_t>(options.device)];  // the first part's GPU
+    auto backend = std::make_unique<MultiGpuBackend>(std::move(devices), display, std::move(description));
     // WEFT_CUDA_GRAPHS=0: the same kernels without graphs, as on one GPU.
     if (const char* graphs = std::getenv("WEFT_CUDA_GRAPHS"); graphs != nullptr && std::string_view(graphs) == "0")
         backend->set_use_graph(false);

@@ -40,6 +40,9 @@ MultiSolver::~MultiSolver() {
     if (!devices_.empty()) cudaSetDevice(devices_.front());
     for (cudaEvent_t e : events_) cudaEventDestroy(e);
     if (user_event_ != nullptr) cudaEventDestroy(user_event_);
+    if (output_copied_ != nullptr) cudaEventDestroy(output_copied_);
+    if (output_ordered_ != nullptr) cudaEventDestroy(output_ordered_);
+    for (cudaEvent_t e : output_written_) cudaEventDestroy(e);
     if (leader_event_ != nullptr) cudaEventDestroy(leader_event_);
     for (cudaEvent_t e : part_event_) cudaEventDestroy(e);
     for (cudaEvent_t e : part_done_) cudaEventDestroy(e);
@@ -136,7 +139,7 @@ void MultiSolver::build(const FlatModel& flat, const Model& model) {
     schwarz_ = false;
     pcg_.reset();
     choose_preconditioner(model.settings.solver);
-    has_output_ = false;
+    output_ = nullptr;
 }
 
 void MultiSolver::choose_preconditioner(const SolverSettings& settings) {
@@ -256,7 +259,12 @@ void MultiSolver::detect_contacts(const Model& model, double t, double h, StepSt
     bool grew = false;
     for (auto& s : solvers_) grew = s->part_receive_contacts(shares, leader_contacts_.inputs(), leader_event_, kinematic) || grew;
     std::vector<ContactView> lists;
-    for (auto& s : solvers_) lists.push_back(s->view().contacts);
+    int largest = 0;
+    for (auto& s : solvers_) {
+        lists.push_back(s->view().contacts);
+        largest = std::max(largest, static_cast<int>(s->part_contact_count()));
+    }
+    stats.collision.contacts_largest_part = largest;
     mirror_->list_contact_vertices(lists);
     if (grew || !pcg_) make_cg();  // the parts' contact arrays moved: the CG's systems and graphs with them
 }
@@ -432,9 +440,9 @@ void MultiSolver::substep(const Model& model, double t, double h, StepStats& sta
         if (swept) exchange_state();  // a ghost may have been carried along differently from its owner
         if (colliding) resolve_contacts(model, h, stats.collision.swept_collider_hits > hits_before, stats);
     }
-    if (has_output_) {
-        for (auto& s : solvers_) s->part_write_output();
-        synchronize();
+    if (output_ != nullptr) {
+        write_output();
+        if (output_synchronous_) synchronize();
     }
     if (user_stream_ != nullptr) {
         // The outside stream's later work after the substep's.
@@ -530,14 +538,65 @@ EnergyAudit MultiSolver::energy_audit(const Model& model, double t, double h, bo
     return sum;
 }
 
-void MultiSolver::set_output(void* device_buffer, std::size_t stride) {
+void MultiSolver::set_output(void* device_buffer, std::size_t stride, bool synchronous) {
     if (device_buffer != nullptr && stride < 6 * sizeof(float))
         throw Error("CUDA backend: output stride " + std::to_string(stride) + " is smaller than one vertex (24 bytes)");
-    // The buffer lives on the first part's GPU; the others write into it through peer access.
-    for (auto& s : solvers_) enable_peer_access(s->device(), devices_.front());
-    for (auto& s : solvers_) s->set_output(device_buffer, stride, false);
-    has_output_ = device_buffer != nullptr;
-    synchronize();
+    output_ = device_buffer;
+    output_stride_ = stride;
+    output_synchronous_ = synchronous;
+    if (device_buffer == nullptr || solvers_.empty()) {
+        for (auto& s : solvers_) s->set_output(nullptr, stride, false);
+        return;
+    }
+    const std::size_t bytes = flat_->vertex_count * stride;
+    if (output_staging_.size() != bytes) {
+        // The staging buffer lives on the first part's GPU; the others write into it through peer
+        // access. Replaced only when the size changes: every earlier copy out of it is done first.
+        synchronize();
+        WEFT_CUDA_CHECK(cudaSetDevice(devices_.front()));
+        output_staging_ = {};
+        output_staging_.allocate(bytes, ledger_, "output staging (first GPU)");
+        ledger_.set("output staging (first GPU)", bytes);
+        if (output_copied_ == nullptr) {
+            WEFT_CUDA_CHECK(cudaEventCreateWithFlags(&output_copied_, cudaEventDisableTiming));
+            WEFT_CUDA_CHECK(cudaEventRecord(output_copied_, solvers_.front()->stream()));
+            for (const int d : devices_) {
+                WEFT_CUDA_CHECK(cudaSetDevice(d));
+                cudaEvent_t e = nullptr;
+                WEFT_CUDA_CHECK(cudaEventCreateWithFlags(&e, cudaEventDisableTiming));
+                output_written_.push_back(e);
+            }
+        }
+        for (auto& s : solvers_) enable_peer_access(s->device(), devices_.front());
+    }
+    for (auto& s : solvers_) s->set_output(nullptr, stride, false);  // bound at each write
+    write_output();
+    if (synchronous) synchronize();
+}
+
+void MultiSolver::write_output() {
+    DeviceSolver& leader = *solvers_.front();
+    // Each part writes its owned vertices once the last copy has read the staging buffer.
+    for (std::size_t p = 0; p < solvers_.size(); ++p) {
+        DeviceSolver& s = *solvers_[p];
+        WEFT_CUDA_CHECK(cudaSetDevice(s.device()));
+        WEFT_CUDA_CHECK(cudaStreamWaitEvent(s.stream(), output_copied_, 0));
+        s.set_output(output_staging_.get(), output_stride_, false);  // writes its vertices now
+        s.set_output(nullptr, output_stride_, false);
+        WEFT_CUDA_CHECK(cudaEventRecord(output_written_[p], s.stream()));
+    }
+    WEFT_CUDA_CHECK(cudaSetDevice(leader.device()));
+    for (cudaEvent_t e : output_written_) WEFT_CUDA_CHECK(cudaStreamWaitEvent(leader.stream(), e, 0));
+    if (user_stream_ != nullptr) {
+        // The target is ordered on the outside stream (a shared slot's wait comes before the copy).
+        if (output_ordered_ == nullptr) WEFT_CUDA_CHECK(cudaEventCreateWithFlags(&output_ordered_, cudaEventDisableTiming));
+        WEFT_CUDA_CHECK(cudaEventRecord(output_ordered_, user_stream_));
+        WEFT_CUDA_CHECK(cudaStreamWaitEvent(leader.stream(), output_ordered_, 0));
+    }
+    WEFT_CUDA_CHECK(cudaMemcpyAsync(output_, output_staging_.get(), output_staging_.size(), cudaMemcpyDeviceToDevice,
+                                    leader.stream()));
+    WEFT_CUDA_CHECK(cudaEventRecord(output_copied_, leader.stream()));
+    if (user_stream_ != nullptr) WEFT_CUDA_CHECK(cudaStreamWaitEvent(user_stream_, output_copied_, 0));
 }
 
 std::size_t MultiSolver::memory_bytes() const {

@@ -53,9 +53,14 @@ public:
     /// elements by the owner of their first corner): a few numbers come back, not the state.
     [[nodiscard]] EnergyAudit energy_audit(const Model& model, double t, double h, bool with_wind);
     /// Every substep ends with each part writing its owned vertices' positions and normals into
-    /// `device_buffer` (on devices()[0]; the other GPUs write through peer access), vertex i at
-    /// stride·i bytes; the host waits for those writes.
-    void set_output(void* device_buffer, std::size_t stride);
+    /// `device_buffer` (on devices()[0]), vertex i at stride·i bytes; the current state is written
+    /// at once. The parts write into a buffer of the solver's on the first GPU (the other GPUs
+    /// through peer access) and the first GPU copies it into `device_buffer` on stream(): memory a
+    /// renderer exported (Vulkan, OpenGL) is mapped on the first GPU only. `synchronous`: the host
+    /// waits for those writes (the public API's promise); a shared output does not.
+    void set_output(void* device_buffer, std::size_t stride, bool synchronous = true);
+    /// Vertices of the built model (0 before build).
+    [[nodiscard]] std::size_t vertex_count() const { return flat_ != nullptr ? flat_->vertex_count : 0; }
 
     /// Orders every substep after the work enqueued so far on `stream` and makes `stream` wait for
     /// the substep (nullptr: no outside stream). The parts keep their own streams.
@@ -133,7 +138,16 @@ private:
     std::unique_ptr<ContactMirror> mirror_;
     cudaEvent_t leader_event_ = nullptr;             // on the first GPU
     std::vector<cudaEvent_t> part_event_;            // per part, on its GPU
-    bool has_output_ = false;
+    /// The output (set_output): the target, the parts' staging buffer on the first GPU, and the
+    /// events that order the parts' writes, the copy and the next writes.
+    void write_output();
+    void* output_ = nullptr;
+    std::size_t output_stride_ = 0;
+    bool output_synchronous_ = true;
+    DeviceArray<unsigned char> output_staging_;
+    cudaEvent_t output_copied_ = nullptr;        // on the first GPU: the staging buffer is free again
+    std::vector<cudaEvent_t> output_written_;    // per part, on its GPU: its vertices are in the staging buffer
+    cudaEvent_t output_ordered_ = nullptr;       // on the outside stream's device: its work before the copy
     std::vector<cudaEvent_t> events_;  // stage timing, on devices_.front()
     cudaStream_t user_stream_ = nullptr;
     cudaEvent_t user_event_ = nullptr;  // on the outside stream's device

@@ -36,6 +36,10 @@ struct CollisionStats {
     std::int64_t candidate_pairs = 0;   ///< vertex–face + edge–edge pairs the broad phase produced
     std::int64_t culled_pairs = 0;      ///< pairs normal-cone culling removed (candidates without culling = both)
     int contacts = 0;                   ///< proximity contacts in the last substep's solve
+    /// Several GPUs: the proximity contacts on the part that has the most, in the last substep (a
+    /// contact with vertices on two parts is on both). Against `contacts` / parts it shows how
+    /// evenly the contact work of the solve is spread; 0 on one GPU and on the CPU.
+    int contacts_largest_part = 0;
     std::int64_t ccd_tests = 0;         ///< CCD queries run
     std::int64_t ccd_hits = 0;          ///< of those, reported as colliding (false positives included)
     int impact_zones = 0;               ///< zones formed in the step (summed over substeps)
