@@ -4,11 +4,25 @@
 
 #include <cuda_runtime_api.h>
 
+#include <atomic>
+#include <map>
 #include <string>
 
 #include "weft/error.h"
 
 namespace weft::cuda {
+
+/// Launch record (launch_record.cpp): while on, every checked launch (WEFT_CUDA_CHECK_LAUNCH) counts
+/// under "FILE: NAME" (FILE relative to cuda/src, e.g. "collision/broad_phase_gpu.cu: bounds_kernel"),
+/// process-wide. Kernels inside a replayed CUDA graph are counted once, at capture:
+/// record with graphs off (WEFT_CUDA_GRAPHS=0, CudaBackendApi::set_use_graph) to see every launch.
+/// For the stage-pruning test and benchmark: which kernels a scene launches.
+inline std::atomic<bool> launch_record_on{false};
+void note_launch(const char* file, const char* name);
+/// Starts counting (clears the counts).
+void start_launch_record();
+/// Stops counting and returns the launches by name.
+[[nodiscard]] std::map<std::string, long long> stop_launch_record();
 
 [[noreturn]] inline void throw_cuda_error(cudaError_t err, const char* what, const char* file, int line) {
     throw Error(std::string(file) + ":" + std::to_string(line) + ": " + what + ": " + cudaGetErrorName(err) + " (" +
@@ -29,4 +43,5 @@ namespace weft::cuda {
     do {                                                                                          \
         const cudaError_t weft_cuda_err_ = cudaGetLastError();                                    \
         if (weft_cuda_err_ != cudaSuccess) ::weft::cuda::throw_cuda_error(weft_cuda_err_, "launch of " name, __FILE__, __LINE__); \
+        if (::weft::cuda::launch_record_on.load(std::memory_order_relaxed)) ::weft::cuda::note_launch(__FILE__, name);       \
     } while (0)
