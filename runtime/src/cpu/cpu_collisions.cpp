@@ -20,7 +20,10 @@ void CpuCollisions<T>::build(const FlatModel& flat, const Model& model) {
     geometry_ = collision::build_collision_geometry(flat, model);
     const collision::CollisionGeometry& g = geometry_;
     active_ = g.self || !g.meshes.empty();
-    if (!active_) return;
+    if (!active_) {
+        geometry_ = {};  // a scene without cloth collisions holds none of their memory
+        return;
+    }
     if (g.self) {
         // Built over every triangle (mesh colliders too: their patches only ever meet cloth patches
         // of other groups, which are never culled); the positions only guide the splits.
