@@ -15,12 +15,13 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
-#include <fstream>
 #include <iostream>
 #include <string>
 #include <vector>
 
 #include "heavy_elastica.h"
+#include "json_file.h"
+#include "json_writer.h"
 #include "strip_sweep_args.h"
 #include "weft/error.h"
 #include "weft/mesh.h"
@@ -125,21 +126,26 @@ int main(int argc, char** argv) {
                     std::fflush(stdout);
                     rows.push_back(r);
                 }
-        if (!sweep.json.empty()) {
-            std::ofstream out(sweep.json);
-            if (!out) throw weft::Error("--json: cannot write " + sweep.json);
-            out << "[\n";
-            for (std::size_t k = 0; k < rows.size(); ++k) {
-                const Row& r = rows[k];
-                out << "  {\"load\": " << r.load << ", \"cells_along\": " << r.cells_along << ", \"cells_across\": " << r.cells_across
-                    << ", \"aspect\": " << r.aspect << ", \"deflection_m\": " << r.deflection << ", \"elastica_m\": " << r.reference
-                    << ", \"error\": " << r.error << ", \"curvature_along\": " << r.curvature_along
-                    << ", \"curvature_across\": " << r.curvature_across << ", \"seconds\": " << r.seconds << "}" << (k + 1 < rows.size() ? "," : "") << "\n";
-            }
-            out << "]\n";
-            if (!out) throw weft::Error("--json: cannot write " + sweep.json);
-            std::printf("results: %s\n", sweep.json.c_str());
-        }
+        if (!sweep.json.empty() &&
+            !weft::bench::write_json_file(sweep.json, "weft_bending_bench", [&](std::ostream& out) {
+                weft::json::JsonWriter json(out);
+                json.begin_array();
+                for (const Row& r : rows)
+                    json.begin_object()
+                        .field("load", r.load)
+                        .field("cells_along", r.cells_along)
+                        .field("cells_across", r.cells_across)
+                        .field("aspect", r.aspect)
+                        .field("deflection_m", r.deflection)
+                        .field("elastica_m", r.reference)
+                        .field("error", r.error)
+                        .field("curvature_along", r.curvature_along)
+                        .field("curvature_across", r.curvature_across)
+                        .field("seconds", r.seconds)
+                        .end_object();
+                json.end_array();
+            }))
+            return 1;
     } catch (const std::exception& e) {
         std::fprintf(stderr, "weft_bending_bench: %s\n", e.what());
         return 1;

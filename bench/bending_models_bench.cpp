@@ -21,7 +21,6 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
-#include <fstream>
 #include <functional>
 #include <map>
 #include <numbers>
@@ -30,6 +29,8 @@
 #include <vector>
 
 #include "heavy_elastica.h"
+#include "json_file.h"
+#include "json_writer.h"
 #include "strip_sweep_args.h"
 #include "weft/error.h"
 #include "weft/physics/bending.h"
@@ -486,23 +487,29 @@ int main(int argc, char** argv) {
                     print(rows.back());
                 }
         }
-        if (!sweep.json.empty()) {
-            std::ofstream out(sweep.json);
-            if (!out) throw weft::Error("--json: cannot write " + sweep.json);
-            out << "[\n";
-            for (std::size_t k = 0; k < rows.size(); ++k) {
-                const Row& r = rows[k];
-                out << "  {\"model\": \"" << name(r.model) << "\", \"mesh\": \"" << (r.cells_across < 0 ? "rows at 45 degrees" : "grid")
-                    << "\", \"load\": " << r.load << ", \"cells_along\": " << r.cells_along
-                    << ", \"cells_across\": " << r.cells_across << ", \"aspect\": " << r.aspect << ", \"deflection_m\": " << r.deflection
-                    << ", \"elastica_m\": " << r.reference << ", \"error\": " << r.error << ", \"elastica_half_cell_m\": " << r.reference_mid
-                    << ", \"error_half_cell\": " << r.error_mid << ", \"newton\": " << r.newton
-                    << ", \"seconds\": " << r.seconds << "}" << (k + 1 < rows.size() ? "," : "") << "\n";
-            }
-            out << "]\n";
-            if (!out) throw weft::Error("--json: cannot write " + sweep.json);
-            std::printf("results: %s\n", sweep.json.c_str());
-        }
+        if (!sweep.json.empty() &&
+            !weft::bench::write_json_file(sweep.json, "weft_bending_models_bench", [&](std::ostream& out) {
+                weft::json::JsonWriter json(out);
+                json.begin_array();
+                for (const Row& r : rows)
+                    json.begin_object()
+                        .field("model", name(r.model))
+                        .field("mesh", r.cells_across < 0 ? "rows at 45 degrees" : "grid")
+                        .field("load", r.load)
+                        .field("cells_along", r.cells_along)
+                        .field("cells_across", r.cells_across)
+                        .field("aspect", r.aspect)
+                        .field("deflection_m", r.deflection)
+                        .field("elastica_m", r.reference)
+                        .field("error", r.error)
+                        .field("elastica_half_cell_m", r.reference_mid)
+                        .field("error_half_cell", r.error_mid)
+                        .field("newton", r.newton)
+                        .field("seconds", r.seconds)
+                        .end_object();
+                json.end_array();
+            }))
+            return 1;
     } catch (const std::exception& e) {
         std::fprintf(stderr, "weft_bending_models_bench: %s\n", e.what());
         return 1;

@@ -5,10 +5,11 @@
 //
 //   weft_stability_bench [--backends cpu,cuda] [--small] [--json FILE]
 #include <cstdio>
-#include <fstream>
 #include <string>
 #include <vector>
 
+#include "json_file.h"
+#include "json_writer.h"
 #include "stability_matrix.h"
 #include "optional_backends.h"
 #include "weft/error.h"
@@ -23,15 +24,6 @@ std::vector<std::string> split(const std::string& value) {
         out.push_back(value.substr(at, comma == std::string::npos ? std::string::npos : comma - at));
         if (comma == std::string::npos) break;
         at = comma + 1;
-    }
-    return out;
-}
-
-std::string escaped(const std::string& s) {
-    std::string out;
-    for (const char c : s) {
-        if (c == '"' || c == '\\') out += '\\';
-        out += c == '\n' ? ' ' : c;
     }
     return out;
 }
@@ -83,22 +75,24 @@ int main(int argc, char** argv) {
                     rows.push_back({c, backend, model, r});
                 }
         std::printf("\n%d of %d cells stable or refused\n", total - failing, total);
-        if (!json.empty()) {
-            std::ofstream out(json);
-            if (!out) throw Error("--json: cannot write " + json);
-            out << "[\n";
-            for (std::size_t k = 0; k < rows.size(); ++k) {
-                const Row& w = rows[k];
-                out << "  {\"case\": \"" << escaped(w.c.name) << "\", \"backend\": \"" << w.backend << "\", \"bending\": \"" << w.model
-                    << "\", \"outcome\": \"" << test::outcome_name(w.r.outcome) << "\", \"steps\": " << w.r.steps
-                    << ", \"energy_gained_substeps\": " << w.r.energy_gained << ", \"deepest_m\": " << w.r.deepest
-                    << ", \"seconds\": " << w.r.seconds << ", \"detail\": \"" << escaped(w.r.detail) << "\"}"
-                    << (k + 1 < rows.size() ? "," : "") << "\n";
-            }
-            out << "]\n";
-            if (!out) throw Error("--json: cannot write " + json);
-            std::printf("results: %s\n", json.c_str());
-        }
+        if (!json.empty() && !bench::write_json_file(json, "weft_stability_bench", [&](std::ostream& out) {
+                json::JsonWriter w(out);
+                w.begin_array();
+                for (const Row& row : rows)
+                    w.begin_object()
+                        .field("case", row.c.name)
+                        .field("backend", row.backend)
+                        .field("bending", row.model)
+                        .field("outcome", test::outcome_name(row.r.outcome))
+                        .field("steps", row.r.steps)
+                        .field("energy_gained_substeps", row.r.energy_gained)
+                        .field("deepest_m", row.r.deepest)
+                        .field("seconds", row.r.seconds)
+                        .field("detail", row.r.detail)
+                        .end_object();
+                w.end_array();
+            }))
+            return 1;
     } catch (const std::exception& e) {
         std::fprintf(stderr, "weft_stability_bench: %s\n", e.what());
         return 1;

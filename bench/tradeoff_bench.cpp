@@ -19,6 +19,8 @@
 #include <string>
 #include <vector>
 
+#include "json_file.h"
+#include "json_writer.h"
 #include "scene_lookup.h"
 #include "optional_backends.h"
 #include "weft/error.h"
@@ -166,15 +168,6 @@ void write_plot(const std::string& file, const std::string& title, const std::ve
     if (!out) throw weft::Error("--plot: cannot write " + file);
 }
 
-std::string escaped(const std::string& s) {
-    std::string out;
-    for (const char c : s) {
-        if (c == '"' || c == '\\') out += '\\';
-        out += c;
-    }
-    return out;
-}
-
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -272,22 +265,27 @@ int main(int argc, char** argv) {
             write_plot(plot, scene_name + " on " + backend + ", " + std::to_string(frames) + " frames: error against cost", runs);
             std::printf("\nplot: %s\n", plot.c_str());
         }
-        if (!json.empty()) {
-            std::ofstream out(json);
-            if (!out) throw weft::Error("--json: cannot write " + json);
-            out << "{\"scene\": \"" << escaped(scene_name) << "\", \"backend\": \"" << backend << "\", \"frames\": " << frames
-                << ", \"reference_ms_per_second\": " << 1000.0 * reference.seconds / reference.simulated << ", \"runs\": [\n";
-            for (std::size_t k = 0; k < runs.size(); ++k) {
-                const Run& r = runs[k];
-                out << "  {\"configuration\": \"" << escaped(r.name) << "\", \"ms_per_second\": " << r.ms_per_second
-                    << ", \"rms_error_m\": " << r.error << ", \"relative_error\": " << r.relative << ", \"clean\": " << (r.ok ? "true" : "false")
-                    << ", \"front\": " << (r.front ? "true" : "false") << ", \"failure\": \"" << escaped(r.failure) << "\"}"
-                    << (k + 1 < runs.size() ? "," : "") << "\n";
-            }
-            out << "]}\n";
-            if (!out) throw weft::Error("--json: cannot write " + json);
-            std::printf("\nresults: %s\n", json.c_str());
-        }
+        if (!json.empty() && !weft::bench::write_json_file(json, "weft_tradeoff_bench", [&](std::ostream& out) {
+                weft::json::JsonWriter w(out);
+                w.begin_object()
+                    .field("scene", scene_name)
+                    .field("backend", backend)
+                    .field("frames", frames)
+                    .field("reference_ms_per_second", 1000.0 * reference.seconds / reference.simulated);
+                w.key("runs").begin_array();
+                for (const Run& r : runs)
+                    w.begin_object()
+                        .field("configuration", r.name)
+                        .field("ms_per_second", r.ms_per_second)
+                        .field("rms_error_m", r.error)
+                        .field("relative_error", r.relative)
+                        .field("clean", r.ok)
+                        .field("front", r.front)
+                        .field("failure", r.failure)
+                        .end_object();
+                w.end_array().end_object();
+            }))
+            return 1;
     } catch (const std::exception& e) {
         std::fprintf(stderr, "weft_tradeoff_bench: %s\n", e.what());
         return 1;
