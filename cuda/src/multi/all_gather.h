@@ -6,16 +6,18 @@
 /// Schwarz preconditioner across GPUs gathers its level 1 this way: the restricted residual every
 /// CG iteration, the coupling blocks every Newton iteration.
 ///
-/// Ordered like the halo exchange (multi/halo_exchange.h), with no host synchronisation: each push
-/// runs on a side stream of its sender after the work enqueued so far on the sender's stream (the
-/// run is written) and on every receiver's stream (their earlier reads of the copy are done); each
-/// part's later work waits for every push into it.
+/// Ordered as one round of peer stores (multi/peer_round.h), with no host synchronisation: each push
+/// runs on a side stream of its sender after the work enqueued so far on every part's stream (the
+/// run is written, the receivers' earlier reads of the copy are done); each part's later work waits
+/// for every push.
 
 #include <cuda_runtime_api.h>
 
 #include <cstddef>
 #include <span>
 #include <vector>
+
+#include "multi/peer_round.h"
 
 namespace weft::cuda::multi {
 
@@ -24,7 +26,6 @@ public:
     /// Part p on CUDA device `devices[p]`, its work on `streams[p]`. Enables peer access between the
     /// devices; throws weft::Error naming a pair that cannot reach each other.
     AllGather(std::span<const int> devices, std::span<const cudaStream_t> streams);
-    ~AllGather();
     AllGather(const AllGather&) = delete;
     AllGather& operator=(const AllGather&) = delete;
 
@@ -33,12 +34,7 @@ public:
     void enqueue(std::span<float* const> arrays, std::span<const std::size_t> begin, std::span<const std::size_t> end);
 
 private:
-    struct Part {
-        int device = 0;
-        cudaStream_t stream = nullptr, side = nullptr;
-        cudaEvent_t ready = nullptr, pushed = nullptr;
-    };
-    std::vector<Part> part_;
+    PeerRound round_;
 };
 
 }  // namespace weft::cuda::multi

@@ -7,7 +7,6 @@
 #include "cuda_check.h"
 #include "contact_terms.cuh"
 #include "kernels.h"
-#include "multi/peer_access.h"
 #include "weft/error.h"
 
 namespace weft::cuda::multi {
@@ -59,7 +58,7 @@ __global__ void push_kernel(const float* from, std::uint32_t stride, const std::
 ContactMirror::ContactMirror(std::span<const int> devices, std::span<const cudaStream_t> streams,
                              std::span<const std::uint32_t* const> global_of_owned, std::span<const std::uint32_t> owned,
                              std::uint32_t whole)
-    : whole_(whole) {
+    : round_(devices, streams), whole_(whole) {
     const std::size_t parts = devices.size();
     if (streams.size() != parts || global_of_owned.size() != parts || owned.size() != parts)
         throw Error("ContactMirror: " + std::to_string(parts) + " devices, " + std::to_string(streams.size()) + " streams, " +
@@ -74,9 +73,6 @@ ContactMirror::ContactMirror(std::span<const int> devices, std::span<const cudaS
         part.global = global_of_owned[p];
         part.owned = owned[p];
         WEFT_CUDA_CHECK(cudaSetDevice(part.device));
-        WEFT_CUDA_CHECK(cudaStreamCreateWithFlags(&part.side, cudaStreamNonBlocking));
-        WEFT_CUDA_CHECK(cudaEventCreateWithFlags(&part.ready, cudaEventDisableTiming));
-        WEFT_CUDA_CHECK(cudaEventCreateWithFlags(&part.pushed, cudaEventDisableTiming));
         part.copies.allocate(std::size_t{kVectors} * 3 * whole, ledger_, "contact mirrors");
         part.copies.zero(part.stream);
         part.list.allocate(std::size_t{part.owned} + 1, ledger_, "contact mirrors");
@@ -87,9 +83,7 @@ ContactMirror::ContactMirror(std::span<const int> devices, std::span<const cudaS
         part.named.zero(part.stream);
         WEFT_CUDA_CHECK(cudaEventCreateWithFlags(&part.marked, cudaEventDisableTiming));
     }
-    for (const Part& a : part_)
-        for (const Part& b : part_) enable_peer_access(a.device, b.device);
-    for (std::size_t p = 0; p < parts; ++p) {
+    for (std::size_t p = 0; p < parts; ++p) {  // peer access: enabled by the round
         std::vector<const std::uint8_t*> others;
         for (std::size_t q = 0; q < parts; ++q)
             if (q != p) others.push_back(part_[q].named.get());
@@ -104,12 +98,8 @@ ContactMirror::ContactMirror(std::span<const int> devices, std::span<const cudaS
 }
 
 ContactMirror::~ContactMirror() {
-    for (Part& part : part_) {
-        if (part.ready != nullptr) cudaEventDestroy(part.ready);
-        if (part.pushed != nullptr) cudaEventDestroy(part.pushed);
+    for (Part& part : part_)
         if (part.marked != nullptr) cudaEventDestroy(part.marked);
-        if (part.side != nullptr) cudaStreamDestroy(part.side);
-    }
 }
 
 float* ContactMirror::copy(std::size_t p, Vector which) const {
@@ -176,29 +166,20 @@ void ContactMirror::enqueue_push(Vector which, std::span<const float* const> vec
         throw Error("ContactMirror::push: " + std::to_string(vectors.size()) + " vectors for " + std::to_string(parts) + " parts");
     int previous = 0;
     WEFT_CUDA_CHECK(cudaGetDevice(&previous));
-    for (Part& part : part_) {
-        WEFT_CUDA_CHECK(cudaSetDevice(part.device));
-        WEFT_CUDA_CHECK(cudaEventRecord(part.ready, part.stream));
-    }
+    round_.open();
     for (std::size_t p = 0; p < parts; ++p) {
-        Part& from = part_[p];
+        const Part& from = part_[p];
         WEFT_CUDA_CHECK(cudaSetDevice(from.device));
-        for (const Part& to : part_) WEFT_CUDA_CHECK(cudaStreamWaitEvent(from.side, to.ready, 0));
         const unsigned blocks = std::max(1u, std::min(1024u, grid_for(from.owned)));
         const std::uint32_t* rows = across ? from.across.get() : from.list.get();
         for (std::size_t q = 0; q < parts; ++q) {
             if (across && q == p) continue;
-            push_kernel<<<blocks, kBlockSize, 0, from.side>>>(vectors[p], stride[p], rows, from.owned, from.global,
-                                                             copy(q, which), whole_);
+            push_kernel<<<blocks, kBlockSize, 0, round_.side(p)>>>(vectors[p], stride[p], rows, from.owned, from.global,
+                                                                  copy(q, which), whole_);
             WEFT_CUDA_CHECK_LAUNCH("contact mirror push_kernel");
         }
-        WEFT_CUDA_CHECK(cudaEventRecord(from.pushed, from.side));
     }
-    for (std::size_t q = 0; q < parts; ++q) {
-        Part& to = part_[q];
-        WEFT_CUDA_CHECK(cudaSetDevice(to.device));
-        for (std::size_t p = 0; p < parts; ++p) WEFT_CUDA_CHECK(cudaStreamWaitEvent(to.stream, part_[p].pushed, 0));
-    }
+    round_.close();
     WEFT_CUDA_CHECK(cudaSetDevice(previous));
 }
 

@@ -22,6 +22,7 @@
 
 #include "device_array.h"
 #include "device_contacts.h"
+#include "multi/peer_round.h"
 
 namespace weft::cuda::multi {
 
@@ -56,8 +57,7 @@ public:
 private:
     struct Part {
         int device = 0;
-        cudaStream_t stream = nullptr, side = nullptr;
-        cudaEvent_t ready = nullptr, pushed = nullptr;
+        cudaStream_t stream = nullptr;
         const std::uint32_t* global = nullptr;
         std::uint32_t owned = 0;
         DeviceArray<float> copies;          // kVectors whole-size SoA vectors
@@ -71,6 +71,7 @@ private:
     /// `across` rows into the other parts' copies.
     void enqueue_push(Vector which, std::span<const float* const> vectors, std::span<const std::uint32_t> stride, bool across);
     std::vector<Part> part_;
+    PeerRound round_;  // the pushes
     std::uint32_t whole_ = 0;
     MemoryLedger ledger_;
 };
