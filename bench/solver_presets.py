@@ -22,7 +22,7 @@ def frame_file(out, preset, frame):
 
 def main():
     out, frames = sys.argv[1], [int(f) for f in sys.argv[2:]]
-    presets = ["loose", "fast", "balanced", "accurate"]
+    presets = ["loose", "interactive", "balanced", "accurate"]
     rows = []
     for preset in presets:
         runs = [json.load(open(f)) for f in sorted(glob.glob(os.path.join(out, f"{preset}-*.json")))]

@@ -24,6 +24,7 @@
 #include "scene_lookup.h"
 #include "optional_backends.h"
 #include "weft/error.h"
+#include "weft/presets.h"
 #include "weft/scene.h"
 #include "weft/world.h"
 
@@ -226,6 +227,8 @@ int main(int argc, char** argv) {
             configs.push_back({std::string("preconditioner ") + p, {std::string("solver.preconditioner=\"") + p + "\""}});
         if (backend == "cpu") configs.push_back({"float", {"solver.precision=\"float\""}});
         configs.push_back({"Hessian projected", {"solver.hessian=\"projected\""}});
+        // The shipped presets (weft/presets.h): named points that should lie on the front.
+        for (const weft::Preset& p : weft::solver_presets()) configs.push_back({"preset " + p.name, weft::preset_overrides(p)});
 
         std::vector<Run> runs;
         for (const Config& c : configs) {

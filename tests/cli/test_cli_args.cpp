@@ -2,12 +2,14 @@
 // names the flag or value at fault.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <initializer_list>
 #include <string>
 #include <string_view>
 #include <vector>
 
 #include "weft/error.h"
+#include "weft/presets.h"
 
 #include "cli_args.h"
 #include "usage.h"
@@ -115,6 +117,22 @@ TEST(CliArgs, Gpus) {
     EXPECT_NE(error_of({"run", "flag", "--gpus", "0"}).find("--gpus"), std::string::npos);
     EXPECT_NE(error_of({"bench", "flag", "--gpus", "1,,2"}).find("--gpus"), std::string::npos);
     EXPECT_NE(error_of({"bench", "flag", "--gpus", "1,x"}).find("'x'"), std::string::npos);
+}
+
+// A solver preset is a set of scene overrides under the --set keys, wherever it stands on the line;
+// a second --preset replaces the first; an unknown one names the presets.
+TEST(CliArgs, PresetGoesUnderTheSetKeys) {
+    const Invocation inv = parse({"run", "flag", "--set", "solver.substeps=3", "--preset", "accurate"});
+    const std::vector<std::string>& o = inv.run.sim.overrides;
+    ASSERT_GE(o.size(), 2u);
+    EXPECT_EQ(o.back(), "solver.substeps=3") << "the --set comes after the preset's keys, so it wins";
+    EXPECT_NE(std::find(o.begin(), o.end(), "solver.cg_tolerance=1e-06"), o.end());
+    EXPECT_NE(std::find(o.begin(), o.end(), "solver.precision=\"double\""), o.end());
+    const Invocation twice = parse({"bench", "flag", "--preset", "accurate", "--preset", "interactive"});
+    EXPECT_EQ(twice.bench.sim.overrides, solver_preset_overrides("interactive"));
+    const std::string e = error_of({"run", "flag", "--preset", "quick"});
+    EXPECT_NE(e.find("unknown solver preset 'quick'"), std::string::npos) << e;
+    EXPECT_NE(e.find("interactive"), std::string::npos) << e;
 }
 
 TEST(CliArgs, FramesZeroWritesInitialStateOnly) { EXPECT_EQ(parse({"run", "flag", "--frames", "0"}).run.frames, 0); }

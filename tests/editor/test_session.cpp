@@ -127,7 +127,7 @@ TEST(Session, PresetsApplyThroughTheTable) {
     EXPECT_EQ(s.cg_tolerance, 1e-6);
     EXPECT_EQ(s.precision, Precision::Double);
     EXPECT_EQ(s.hessian, HessianMode::Projected);
-    session->apply_preset("solver", "fast");
+    session->apply_preset("solver", "interactive");
     EXPECT_EQ(session->world().settings().solver.precision, Precision::Float);
     // "piled" switches the contact mode, live, and every other solver preset switches it back.
     session->apply_preset("solver", "piled");
@@ -157,7 +157,7 @@ TEST(Session, PresetsApplyThroughTheTable) {
     EXPECT_NE(session->message().find("re-cooking"), std::string::npos) << session->message();
 
     EXPECT_EQ(error_of([&] { session->apply_preset("solver", "slow"); }),
-              "unknown solver preset 'slow' (presets: fast, balanced, accurate, piled)");
+              "unknown solver preset 'slow' (presets: interactive, balanced, accurate, piled)");
     EXPECT_NE(error_of([&] { session->apply_preset(table, "velvet"); }).find("cotton, silk, denim, leather, rubber"),
               std::string::npos);
     EXPECT_NE(error_of([&] { session->apply_preset("nosuch", "silk"); }).find("no cloth 'nosuch'"), std::string::npos);

@@ -10,6 +10,7 @@
 #include <vector>
 
 #include "weft/error.h"
+#include "weft/presets.h"
 
 #include "scene_keys_help.h"
 
@@ -157,21 +158,32 @@ bool apply_simulation_flag(std::string_view command, SimulationOptions& sim, std
         }
     } else if (name == "--set") {
         sim.overrides.push_back(parse_override(command, value));
+    } else if (name == "--preset") {
+        // Its keys first, so that every --set (before it on the line or after) wins over it.
+        std::vector<std::string> preset;
+        try {
+            preset = solver_preset_overrides(value);
+        } catch (const Error& e) {
+            throw UsageError(command, std::string("--preset: ") + e.what());
+        }
+        sim.overrides.erase(sim.overrides.begin(), sim.overrides.begin() + static_cast<std::ptrdiff_t>(sim.preset_keys));
+        sim.overrides.insert(sim.overrides.begin(), preset.begin(), preset.end());
+        sim.preset_keys = preset.size();
     } else {
         return false;
     }
     return true;
 }
 
-constexpr FlagSpec kRunFlags[] = {{"--backend", true}, {"--threads", true}, {"--host-wait", true}, {"--gpus", true}, {"--set", true},   {"--frames", true},
+constexpr FlagSpec kRunFlags[] = {{"--backend", true}, {"--threads", true}, {"--host-wait", true}, {"--gpus", true}, {"--set", true}, {"--preset", true},   {"--frames", true},
                                   {"--out", true},     {"--format", true},  {"--stats", true}, {"--quiet", false},
                                   {"--check", false},  {"--capture", true}, {"--size", true}};
 
-constexpr FlagSpec kViewFlags[] = {{"--backend", true}, {"--threads", true}, {"--host-wait", true}, {"--gpus", true},    {"--set", true},
+constexpr FlagSpec kViewFlags[] = {{"--backend", true}, {"--threads", true}, {"--host-wait", true}, {"--gpus", true},    {"--set", true}, {"--preset", true},
                                    {"--frames", true},  {"--screenshot", true}, {"--size", true},
                                    {"--time-scale", true}, {"--validation", false}};
 
-constexpr FlagSpec kEditFlags[] = {{"--backend", true},    {"--threads", true}, {"--host-wait", true}, {"--gpus", true},    {"--set", true},
+constexpr FlagSpec kEditFlags[] = {{"--backend", true},    {"--threads", true}, {"--host-wait", true}, {"--gpus", true},    {"--set", true}, {"--preset", true},
                                    {"--frames", true},     {"--screenshot", true}, {"--size", true},
                                    {"--time-scale", true}, {"--validation", false}, {"--script", true},
                                    {"--ui-scale", true}};
@@ -195,7 +207,7 @@ void parse_size(std::string_view cmd, std::string_view name, std::string_view va
     height = parse_int(cmd, name, value.substr(x + 1), 16, 8192);
 }
 
-constexpr FlagSpec kBenchFlags[] = {{"--backend", true}, {"--threads", true}, {"--host-wait", true}, {"--gpus", true}, {"--set", true},
+constexpr FlagSpec kBenchFlags[] = {{"--backend", true}, {"--threads", true}, {"--host-wait", true}, {"--gpus", true}, {"--set", true}, {"--preset", true},
                                     {"--frames", true},  {"--warmup", true},  {"--json", true}};
 
 Invocation help_for(std::string_view topic) {

@@ -45,7 +45,8 @@ struct SimulationOptions {
     int threads = 0;                     ///< 0 = all cores
     HostWait host_wait = HostWait::automatic;  ///< how the host waits for a GPU backend (--host-wait)
     int gpus = 0;                        ///< GPUs one world is split across (--gpus; cuda backend); 0: the scene's solver.gpus
-    std::vector<std::string> overrides;  ///< "dotted.key=value", in command-line order
+    std::vector<std::string> overrides;  ///< "dotted.key=value": a --preset's first, then --set in command-line order
+    std::size_t preset_keys = 0;         ///< the first overrides are --preset's (a later --preset replaces them)
 };
 
 struct RunOptions {

@@ -48,6 +48,8 @@ Options:
   --size WxH         picture size for --capture, pixels; default 1280x720
   --stats FILE.json  write run statistics as JSON (per-stage ms, CG iterations, per-frame series)
   --set KEY=VALUE    override a scene key, as if written in the file; repeatable
+  --preset NAME      a solver preset (interactive, balanced, accurate, piled: docs/tuning.md)
+                     under the --set keys
                      e.g. --set solver.substeps=4 --set 'wind.velocity=[2, 0, 0]'
   --quiet            no progress bar and no summary table (warnings are still printed)
   --check            after every frame, test every pair of triangles exactly for intersection
@@ -74,6 +76,8 @@ Options:
   --gpus LIST        GPU counts to run every scene on, e.g. 1,2 (cuda backend); default: the
                      scene's solver.gpus (1)
   --set KEY=VALUE    override a scene key in every scene; repeatable
+  --preset NAME      a solver preset (interactive, balanced, accurate, piled: docs/tuning.md)
+                     under the --set keys
   -h, --help         this text
 )";
 
@@ -102,6 +106,8 @@ Options:
   --gpus N           GPUs one world is split across (cuda backend; docs/multi-gpu.md); default: the
                      scene's solver.gpus (1)
   --set KEY=VALUE    override a scene key, as if written in the file; repeatable
+  --preset NAME      a solver preset (interactive, balanced, accurate, piled: docs/tuning.md)
+                     under the --set keys
   --frames N         quit after N displayed frames (scripted runs, tests)
   --screenshot FILE.png
                      write the last displayed frame to FILE.png at exit
@@ -139,6 +145,8 @@ Options:
   --gpus N           GPUs one world is split across (cuda backend; docs/multi-gpu.md); default: the
                      scene's solver.gpus (1)
   --set KEY=VALUE    override a scene key, as if written in the file; repeatable
+  --preset NAME      a solver preset (interactive, balanced, accurate, piled: docs/tuning.md)
+                     under the --set keys
   --script FILE      run FILE's commands instead of waiting for a person, one step per
                      displayed frame (frame N, set KEY VALUE, expect KEY VALUE, pause, play,
                      step, reset, timescale X, screenshot FILE.png, quit; see docs/editor.md);

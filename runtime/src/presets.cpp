@@ -1,13 +1,17 @@
-// The editor's presets (see presets.h). Stretch stiffness is Young's modulus times thickness (N/m),
+// The presets (weft/presets.h). Stretch stiffness is Young's modulus times thickness (N/m),
 // bending stiffness the plate stiffness (N·m), both of the orders reported for woven fabrics and
 // sheets; they are starting points to tune from, not measured fabrics.
-#include "weft/editor/presets.h"
+#include "weft/presets.h"
 
 #include <array>
+#include <charconv>
+#include <cmath>
+
+#include "weft/error.h"
 
 #include "weft/parameters.h"
 
-namespace weft::editor {
+namespace weft {
 namespace {
 
 Preset fabric(std::string name, std::string description, double stretch, double poisson, double bending,
@@ -66,7 +70,7 @@ std::span<const Preset> solver_presets() {
     static const std::array<Preset, 4> presets{
         // CG to 1e-3, not looser: at 1e-2 the drape scene gains energy and the cloth leaves the ball
         // (docs/results.md, "Solver presets").
-        solver("fast", "one float Newton step, CG to 1e-3 (at most 100 iterations): for many cloths in real time", 1,
+        solver("interactive", "one float Newton step, CG to 1e-3 (at most 100 iterations): for many cloths in real time", 1,
                1, 1e-3, 100, true, false),
         solver("balanced", "the defaults: one double Newton step, CG to 1e-4",
                static_cast<int>(default_of("solver.substeps")), static_cast<int>(default_of("solver.newton_iterations")),
@@ -96,4 +100,40 @@ std::string preset_names(std::span<const Preset> presets) {
     return out;
 }
 
-}  // namespace weft::editor
+std::vector<std::string> preset_overrides(const Preset& preset) {
+    std::vector<std::string> out;
+    for (const auto& [key, value] : preset.values) {
+        const Parameter* p = find_parameter(key);
+        if (p == nullptr) throw Error("preset '" + preset.name + "': no scene key '" + key + "'");
+        std::string text;
+        if (p->type == ParameterType::Choice) {
+            const auto index = static_cast<std::size_t>(std::lround(value));
+            if (index >= p->choices.size())
+                throw Error("preset '" + preset.name + "': " + key + " has no choice " + std::to_string(index));
+            text.reserve(p->choices[index].size() + 2);
+            text.push_back('"');
+            text.append(p->choices[index]);
+            text.push_back('"');
+        } else if (p->type == ParameterType::Integer) {
+            text = std::to_string(std::lround(value));
+        } else if (p->type == ParameterType::Boolean) {
+            text = value != 0.0 ? "true" : "false";
+        } else {
+            char buffer[32];  // the shortest form that reads back as the same double
+            const auto written = std::to_chars(buffer, buffer + sizeof buffer, value);
+            text.assign(buffer, written.ptr);
+            if (text.find_first_of(".eEn") == std::string::npos) text += ".0";  // a TOML float, not an integer
+        }
+        out.push_back(key + "=" + text);
+    }
+    return out;
+}
+
+std::vector<std::string> solver_preset_overrides(std::string_view name) {
+    const Preset* preset = find_preset(solver_presets(), name);
+    if (preset == nullptr)
+        throw Error("unknown solver preset '" + std::string(name) + "' (presets: " + preset_names(solver_presets()) + ")");
+    return preset_overrides(*preset);
+}
+
+}  // namespace weft
