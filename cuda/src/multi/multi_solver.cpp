@@ -140,6 +140,7 @@ void MultiSolver::build(const FlatModel& flat, const Model& model) {
     pcg_.reset();
     choose_preconditioner(model.settings.solver);
     output_ = nullptr;
+    staged_stride_ = 0;  // the new parts are bound to the staging buffer at the next set_output
 }
 
 void MultiSolver::choose_preconditioner(const SolverSettings& settings) {
@@ -552,12 +553,9 @@ void MultiSolver::set_output(void* device_buffer, std::size_t stride, bool synch
     output_ = device_buffer;
     output_stride_ = stride;
     output_synchronous_ = synchronous;
-    if (device_buffer == nullptr || solvers_.empty()) {
-        for (auto& s : solvers_) s->set_output(nullptr, stride, false);
-        return;
-    }
+    if (device_buffer == nullptr || solvers_.empty()) return;
     const std::size_t bytes = flat_->vertex_count * stride;
-    if (output_staging_.size() != bytes) {
+    if (output_staging_.size() != bytes || staged_stride_ != stride) {
         // The staging buffer lives on the first part's GPU; the others write into it through peer
         // access. Replaced only when the size changes: every earlier copy out of it is done first.
         synchronize();
@@ -576,8 +574,11 @@ void MultiSolver::set_output(void* device_buffer, std::size_t stride, bool synch
             }
         }
         for (auto& s : solvers_) enable_peer_access(s->device(), devices_.front());
+        // Every part writes into the staging buffer from now on (part_write_output); this writes
+        // the current state there at once, before the copy below.
+        for (auto& s : solvers_) s->set_output(output_staging_.get(), stride, false);
+        staged_stride_ = stride;
     }
-    for (auto& s : solvers_) s->set_output(nullptr, stride, false);  // bound at each write
     write_output();
     if (synchronous) synchronize();
 }
@@ -589,8 +590,7 @@ void MultiSolver::write_output() {
         DeviceSolver& s = *solvers_[p];
         WEFT_CUDA_CHECK(cudaSetDevice(s.device()));
         WEFT_CUDA_CHECK(cudaStreamWaitEvent(s.stream(), output_copied_, 0));
-        s.set_output(output_staging_.get(), output_stride_, false);  // writes its vertices now
-        s.set_output(nullptr, output_stride_, false);
+        s.part_write_output();
         WEFT_CUDA_CHECK(cudaEventRecord(output_written_[p], s.stream()));
     }
     WEFT_CUDA_CHECK(cudaSetDevice(leader.device()));

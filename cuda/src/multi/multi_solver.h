@@ -145,6 +145,7 @@ private:
     std::size_t output_stride_ = 0;
     bool output_synchronous_ = true;
     DeviceArray<unsigned char> output_staging_;
+    std::size_t staged_stride_ = 0;              // the parts are bound to the staging buffer with it (0: not bound)
     cudaEvent_t output_copied_ = nullptr;        // on the first GPU: the staging buffer is free again
     std::vector<cudaEvent_t> output_written_;    // per part, on its GPU: its vertices are in the staging buffer
     cudaEvent_t output_ordered_ = nullptr;       // on the outside stream's device: its work before the copy
