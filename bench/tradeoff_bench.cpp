@@ -227,6 +227,14 @@ int main(int argc, char** argv) {
             configs.push_back({std::string("preconditioner ") + p, {std::string("solver.preconditioner=\"") + p + "\""}});
         if (backend == "cpu") configs.push_back({"float", {"solver.precision=\"float\""}});
         configs.push_back({"Hessian projected", {"solver.hessian=\"projected\""}});
+        // Knobs together: the pairs that the single-knob runs suggest trade best (more substeps or
+        // Newton iterations, paid for with a looser CG).
+        const std::string twice = "solver.substeps=" + std::to_string(2 * shipped.substeps);
+        const std::string four = "solver.substeps=" + std::to_string(4 * shipped.substeps);
+        configs.push_back({"substeps ×2 + Newton 2", {twice, "solver.newton_iterations=2"}});
+        configs.push_back({"substeps ×2 + CG 1e-3", {twice, "solver.cg_tolerance=1e-3"}});
+        configs.push_back({"Newton 3 + CG 1e-3", {"solver.newton_iterations=3", "solver.cg_tolerance=1e-3"}});
+        configs.push_back({"substeps ×4 + Newton 2 + CG 1e-3", {four, "solver.newton_iterations=2", "solver.cg_tolerance=1e-3"}});
         // The shipped presets (weft/presets.h): named points that should lie on the front.
         for (const weft::Preset& p : weft::solver_presets()) configs.push_back({"preset " + p.name, weft::preset_overrides(p)});
 
