@@ -223,6 +223,11 @@ void write_summary_fields(JsonWriter& json, const RunContext& c, const RunSummar
     json.key("step");
     write_distribution(json, s.step_ms);
     json.end_object();
+    // The stages that took time in any frame: a scene pays only for what it models.
+    json.key("stages_run").begin_array(true);
+    for (std::size_t k = 0; k < kStageCount; ++k)
+        if (s.stage_ms[k].max > 0.0) json.value(kStageNames[k]);
+    json.end_array();
 
     json.key("cg_iterations").begin_object();
     json.field("mean", s.cg_iterations.mean);  // per step (all solves of a frame)
