@@ -4,7 +4,8 @@
 #   bench/run_scaling_benchmarks.sh BUILD_DIR OUT_DIR [strong|weak|all] [GPU_COUNTS]
 #
 # strong: the same scene on 1, 2, 4, 8 GPUs (those the host has; GPU_COUNTS, e.g. 1,2,4, to choose):
-#   flag 1.2M triangles with self-contact at dt 1/250, the twist 317² (200K) over its first second
+#   flag 1.2M triangles with self-contact at dt 1/250 (and weft_multi_gpu_spmv_bench on its pattern:
+#   the time the pipelined product hides, bytes between GPUs, CG time per iteration), the twist 317² (200K) over its first second
 #   (the winding after it takes minutes a run on one GPU: docs/results.md, "Offset geometric contact"),
 #   and a skirt of 1M triangles on the turning mannequin (tools/make_skirt.py, self-contact and the
 #   body as a mesh collider);
@@ -67,6 +68,14 @@ if wants strong; then
     run strong_twist twist "${TWIST[@]}" --gpus "$COUNTS" --warmup 20 --frames 580
     SKIRT=${SKIRT:-$OUT/skirt_1m.obj}  # the 1M-triangle skirt (made once; SKIRT=FILE puts it elsewhere)
     [[ -s $SKIRT ]] || python3 "$ROOT/tools/make_skirt.py" --segments 1000 --rings 500 -o "$SKIRT"
+    # The pipelined product on the strong flag's pattern: time hidden, bytes between GPUs, CG time per
+    # iteration (the reductions), per GPU count.
+    SPMV="$BUILD/bin/weft_multi_gpu_spmv_bench"
+    if [[ -x $SPMV ]]; then
+        echo "== spmv: $SPMV flag --parts $COUNTS" >&2
+        timeout "${RUN_TIMEOUT:-0}" "$SPMV" "$ROOT/assets/scenes/flag.toml" --set 'cloth.flag.mesh.grid.cells=[1000,600]' \
+            --parts "$COUNTS" --json "$OUT/spmv.json" > "$OUT/spmv.txt" 2>&1 || { echo "   failed, see spmv.txt" >&2; failed=$((failed + 1)); }
+    fi
     run strong_garment garment --set "cloth.skirt.mesh.file=\"$SKIRT\"" --gpus "$COUNTS" --warmup 1 --frames 3
 fi
 if wants weak; then
@@ -86,6 +95,11 @@ fi
   if wants strong; then
       echo "## Strong scaling"
       python3 "$TABLE" strong "$OUT"/strong_*.json
+      if [[ -s $OUT/spmv.txt ]]; then
+          echo
+          echo "## The pipelined product A·x on the strong flag's pattern (weft_multi_gpu_spmv_bench)"
+          grep '^|' "$OUT/spmv.txt"
+      fi
   fi
   if wants weak; then
       echo

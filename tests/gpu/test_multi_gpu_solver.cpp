@@ -1,5 +1,6 @@
 // The CUDA backend across parts (cuda/src/multi/multi_solver.h): G parts on one GPU (the test
-// mode, any GPU host) and two parts on two GPUs against one GPU over 100 steps of shipped scenes;
+// mode, any GPU host; G = 2, 3, 4, 8) and G parts on G GPUs (2, 4, 8, as the host has them)
+// against one GPU over up to 100 steps of shipped scenes;
 // determinism for a fixed G; the parts' bits independent of where the parts run; clear errors.
 #include <gtest/gtest.h>
 
@@ -236,6 +237,51 @@ TEST(MultiGpuSolver, TwoGpusGiveTheBitsOfTheSamePartsOnOneGpu) {
         const double worst = step_gaps(scene, with({}), 2, false, 100).worst;
         std::printf("[ multi    ] %s: 2 parts on 2 GPUs, 100 steps: worst step gap %.3g of the step's move\n", scene, worst);
         EXPECT_LT(worst, kStepTolerance) << scene;
+    }
+}
+
+// Four and eight parts: the partitions of a 4- and an 8-GPU host. On one GPU (any host) each step
+// must land where one GPU's does, with and without contacts; on a host with that many GPUs the
+// parts must give the bits of the same parts on one GPU, so the one-GPU run proves the many-GPU one.
+TEST(MultiGpuSolver, FourAndEightPartsFollowOneGpu) {
+    WEFT_REQUIRE_GPU();
+    const std::vector<std::string> contacts = with({"collision.continuous=false", "solver.substeps=1",
+                                                    "cloth.sheets.material.friction=0", "collider.ball.friction=0"});
+    for (const int parts : {4, 8}) {
+        const double flag = step_gaps("flag", with({}), parts, true, 60).worst;
+        const double layers = step_gaps("layers", contacts, parts, true, 40).worst;
+        std::printf("[ multi    ] %d parts on one GPU: flag 60 steps worst step gap %.3g, layers with contacts 40 steps %.3g "
+                    "of the move\n",
+                    parts, flag, layers);
+        EXPECT_LT(flag, kStepTolerance) << parts << " parts";
+        EXPECT_LT(layers, kStepTolerance) << parts << " parts";
+    }
+}
+
+TEST(MultiGpuSolver, EveryGpuOfTheHostGivesTheBitsOfTheSamePartsOnOneGpu) {
+    WEFT_REQUIRE_GPU();
+    const int devices = static_cast<int>(cuda::devices().size());
+    if (devices < 4) GTEST_SKIP() << devices << " CUDA device(s): this test needs 4 or 8 (the 2-GPU test covers two)";
+    const std::vector<std::string> contacts = with({"collision.continuous=false", "solver.substeps=1",
+                                                    "cloth.sheets.material.friction=0", "collider.ball.friction=0"});
+    for (const int gpus : {4, 8}) {
+        if (gpus > devices) continue;
+        const std::vector<std::string> o = with({"collision.self=false"});
+        for (const char* scene : {"flag", "twist"}) {
+            const Trajectory on_one = run(scene, o, gpus, 60, true), across = run(scene, o, gpus, 60, false);
+            EXPECT_TRUE(same_bits(on_one, across)) << scene << " on " << gpus << " GPUs";
+            EXPECT_FALSE(across.non_finite) << scene << " on " << gpus << " GPUs";
+        }
+        EXPECT_TRUE(same_bits(run("layers", contacts, gpus, 40, true), run("layers", contacts, gpus, 40, false)))
+            << "layers with contacts on " << gpus << " GPUs";
+        const std::vector<std::string> checked = {"collision.check=true"};
+        auto world = make("layers", checked, gpus, false);
+        std::int64_t intersecting = 0;
+        for (int f = 0; f < 45; ++f) intersecting += world->step().collision.remaining_intersections;
+        EXPECT_EQ(intersecting, 0) << "layers on " << gpus << " GPUs";
+        std::printf("[ multi    ] %d GPUs: flag, twist, layers give the bits of %d parts on one GPU; layers 45 frames, %lld "
+                    "intersecting pairs left\n",
+                    gpus, gpus, static_cast<long long>(intersecting));
     }
 }
 
