@@ -215,6 +215,11 @@ constexpr Parameter kTable[] = {
      .doc = "GPUs one world is split across on the cuda backend (the cpu backend ignores it); `--gpus` and "
             "`BackendOptions::gpus` take precedence when non-zero",
      .effect = E::Rebuild, .access = field<&WorldDesc::solver, &SolverSettings::gpus>()},
+    {.section = "solver", .name = "gpu_rebalance", .type = T::Real, .range = R{0.0, 100.0},
+     .doc = "several GPUs with cloth collisions: re-cut the parts by rows and contacts when the busiest holds more "
+            "than this multiple of the mean part's contacts for 3 detections in a row (a rebuild of the parts); 0 never",
+     .label = "GPU rebalance", .panel = "solver",
+     .access = field<&WorldDesc::solver, &SolverSettings::gpu_rebalance>()},
 
     // ---- [world]
     {.section = "world", .name = "gravity", .type = T::Vector, .unit = "m/s²", .range = R{0.0, 1000.0},

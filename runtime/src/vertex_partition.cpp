@@ -18,6 +18,15 @@ std::vector<double> row_work(const BlockPattern& pattern) {
     return work;
 }
 
+std::vector<double> row_and_contact_work(const BlockPattern& pattern, std::span<const std::uint32_t> contacts_at) {
+    std::vector<double> work = row_work(pattern);
+    if (contacts_at.size() != work.size())
+        throw Error("row_and_contact_work: " + std::to_string(contacts_at.size()) + " contact counts for " +
+                    std::to_string(work.size()) + " rows");
+    for (std::size_t i = 0; i < work.size(); ++i) work[i] += kContactWorkPerVertex * static_cast<double>(contacts_at[i]);
+    return work;
+}
+
 std::vector<std::uint32_t> cut_order(std::span<const std::uint32_t> order, std::span<const double> work,
                                      std::uint32_t parts, std::uint32_t granule) {
     const std::size_t n = order.size();

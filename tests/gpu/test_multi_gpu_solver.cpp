@@ -100,6 +100,7 @@ std::vector<std::string> with(std::vector<std::string> overrides) {
 struct StepGaps {
     double worst = 0.0;  ///< the largest step gap over the step's largest move
     long long iterations_one = 0, iterations_split = 0;  ///< CG iterations summed over the steps
+    int recuts = 0;  ///< re-cuts of the split world's parts by contact load
 };
 
 StepGaps compare_steps(World& one_world, World& other_world, int steps, bool nudge_other = false);
@@ -143,6 +144,7 @@ StepGaps compare_steps(World& one_world, World& other_world, int steps, bool nud
         const StepStats& b = split->step();
         out.iterations_one += a.cg_iterations;
         out.iterations_split += b.cg_iterations;
+        out.recuts += b.collision.parts_recut;
         EXPECT_FALSE(a.non_finite || b.non_finite) << scene << ", step " << s;
         EXPECT_EQ(a.cg_not_converged, 0) << scene << ", step " << s;
         EXPECT_EQ(b.cg_not_converged, 0) << scene << ", step " << s;
@@ -432,6 +434,93 @@ TEST(MultiGpuSolver, ContactStepsFollowOneGpu) {
     if (cuda::devices().size() >= 2) {
         EXPECT_TRUE(same_bits(run("layers", o, 2, 40, true), run("layers", o, 2, 40, false))) << "layers on two GPUs";
     }
+}
+
+// Re-cutting the parts by contact load (solver.gpu_rebalance; weft/backend/recut_policy.h). A bar
+// of 1 re-cuts as soon as the policy allows (three detections in): after the re-cut each step still
+// lands where one GPU's does. Stepped freely, a world that re-cuts stays within rounding of one that
+// does not (the state and the warm start carry over; a lost ghost or a stale contact row would move
+// the cloth by the step's size), stays intersection-free, and its renderer output still holds every
+// vertex.
+TEST(MultiGpuSolver, ARecutByContactLoadKeepsTheStateAndTheSteps) {
+    WEFT_REQUIRE_GPU();
+    const std::vector<std::string> contacts = with({"collision.continuous=false", "solver.substeps=1",
+                                                    "cloth.sheets.material.friction=0", "collider.ball.friction=0"});
+    std::vector<std::string> eager = contacts, never = contacts;
+    eager.push_back("solver.gpu_rebalance=1");
+    never.push_back("solver.gpu_rebalance=0");
+    for (const int parts : {2, 3}) {
+        const StepGaps g = step_gaps("layers", eager, parts, true, 40);
+        std::printf("[ multi    ] layers, %d parts on one GPU re-cut %d times in 40 steps: worst step gap %.3g of the move\n",
+                    parts, g.recuts, g.worst);
+        EXPECT_GE(g.recuts, 1) << parts << " parts: the bar of 1 never re-cut";
+        EXPECT_LT(g.worst, kStepTolerance) << parts << " parts";
+    }
+    for (const bool one_device : {true, false}) {
+        if (!one_device && cuda::devices().size() < 2) continue;
+        auto recut = make("layers", eager, 2, one_device);
+        auto kept = make("layers", never, 2, one_device);
+        (void)recut->step();
+        const std::size_t n = cuda::as_cuda(recut->backend())->vertex_count();
+        WEFT_CUDA_CHECK(cudaSetDevice(0));
+        void* buffer = nullptr;
+        WEFT_CUDA_CHECK(cudaMalloc(&buffer, n * sizeof(cuda::OutputVertex)));
+        cuda::as_cuda(recut->backend())->set_output(buffer, sizeof(cuda::OutputVertex));
+        (void)kept->step();
+        // The same cut gives the same bits, so the two worlds agree to the bit until the re-cut; the
+        // step of the re-cut may differ by rounding (other parts sum in another order).
+        int recuts = 0;
+        double gap_after_recut = -1.0, move = 0.0;
+        for (int s = 1; s < 40 && recuts == 0; ++s) {
+            std::vector<std::vector<Vec3d>> before;
+            for (std::size_t c = 0; c < kept->cloth_count(); ++c) before.push_back(kept->positions(c));
+            const StepStats& a = recut->step();
+            (void)kept->step();
+            recuts += a.collision.parts_recut;
+            if (a.collision.parts_recut > 0) {
+                gap_after_recut = 0.0;
+                for (std::size_t c = 0; c < recut->cloth_count(); ++c) {
+                    const std::vector<Vec3d> xa = recut->positions(c), xb = kept->positions(c);
+                    for (std::size_t i = 0; i < xa.size(); ++i) {
+                        gap_after_recut = std::max(gap_after_recut, length(xa[i] - xb[i]));
+                        move = std::max(move, length(xb[i] - before[c][i]));
+                    }
+                }
+            }
+        }
+        for (int s = 0; s < 3; ++s) recuts += recut->step().collision.parts_recut;  // the cooldown holds
+        std::vector<cuda::OutputVertex> out(n);
+        WEFT_CUDA_CHECK(cudaMemcpy(out.data(), buffer, n * sizeof(cuda::OutputVertex), cudaMemcpyDeviceToHost));
+        cuda::as_cuda(recut->backend())->set_output(nullptr, sizeof(cuda::OutputVertex));
+        WEFT_CUDA_CHECK(cudaFree(buffer));
+        std::printf("[ multi    ] layers on 2 %s: %d re-cut; the step of the re-cut %.3g m from the world without it, "
+                    "the step moved %.3g m\n",
+                    one_device ? "parts on one GPU" : "GPUs", recuts, gap_after_recut, move);
+        ASSERT_EQ(recuts, 1) << "a bar of 1: one re-cut three detections into the contacts, then the cooldown";
+        EXPECT_LT(gap_after_recut, kStepTolerance * move) << "the re-cut moved the cloth";
+        std::size_t first = 0;
+        for (std::size_t c = 0; c < recut->cloth_count(); ++c) {
+            const std::vector<Vec3d> x = recut->positions(c);
+            for (std::size_t i = 0; i < x.size(); ++i) {
+                EXPECT_EQ(out[first + i].position[0], static_cast<float>(x[i].x)) << "cloth " << c << " vertex " << i;
+                EXPECT_EQ(out[first + i].position[2], static_cast<float>(x[i].z)) << "cloth " << c << " vertex " << i;
+            }
+            first += x.size();
+        }
+    }
+    std::vector<std::string> checked = eager;
+    checked.push_back("collision.check=true");
+    checked.push_back("collision.continuous=true");
+    auto world = make("layers", checked, 2, true);
+    std::int64_t intersecting = 0;
+    int recuts = 0;
+    for (int f = 0; f < 45; ++f) {
+        const StepStats& s = world->step();
+        intersecting += s.collision.remaining_intersections;
+        recuts += s.collision.parts_recut;
+    }
+    EXPECT_GE(recuts, 1);
+    EXPECT_EQ(intersecting, 0);
 }
 
 // With Coulomb friction and several substeps a step, the step is not a smooth function of the

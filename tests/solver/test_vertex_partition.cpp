@@ -102,6 +102,40 @@ TEST(VertexPartition, CutsAlongThePreconditionerOrderAreConsistentAndBalanced) {
     }
 }
 
+// A re-cut by contact load: contacts piled on one corner of the cloth move rows off the part that
+// holds it, the parts' row-and-contact work comes out even, and the cut stays consistent.
+TEST(VertexPartition, ContactWorkMovesRowsOffTheBusyPart) {
+    const Grid g = make_cloth(47);
+    const BlockPattern& pattern = g.fabric->pattern();
+    const std::size_t n = g.fabric->vertex_count();
+    const std::vector<Vec3d> rest(g.fabric->rest_positions().begin(), g.fabric->rest_positions().end());
+    std::vector<std::uint32_t> contacts_at(n, 0);
+    for (std::size_t i = 0; i < n; ++i)
+        if (rest[i].x > 0.25 && rest[i].y > 0.25) contacts_at[i] = 12;  // a fold over a quarter of the cloth
+    const std::vector<double> rows = row_work(pattern), loaded = row_and_contact_work(pattern, contacts_at);
+    for (std::size_t i = 0; i < n; ++i) EXPECT_EQ(loaded[i], rows[i] + kContactWorkPerVertex * contacts_at[i]);
+    for (const std::uint32_t parts : {2U, 4U}) {
+        const VertexPartition by_rows = partition_along_order(g, parts);
+        const VertexPartition by_load =
+            build_partition(pattern, cut_order(g.hierarchy.order, loaded, parts, SchwarzHierarchy::kDomainSize), parts, loaded);
+        expect_consistent(pattern, by_load);
+        // The load of each part under either cut, and the busiest part's.
+        const auto busiest = [&](const VertexPartition& vp) {
+            std::vector<double> load(parts, 0.0);
+            for (std::size_t i = 0; i < n; ++i) load[vp.part_of[i]] += loaded[i];
+            double mean = 0.0;
+            for (const double l : load) mean += l / parts;
+            return *std::max_element(load.begin(), load.end()) / mean;
+        };
+        std::printf("[ recut    ] %u parts: busiest part's load %.2f × the mean cut by rows, %.2f cut by rows and contacts\n",
+                    parts, busiest(by_rows), busiest(by_load));
+        EXPECT_GT(busiest(by_rows), 1.1) << parts << " parts: the test's load is not uneven";
+        EXPECT_LT(busiest(by_load), 1.0 + 0.05 * parts) << parts << " parts";
+        EXPECT_NEAR(by_load.quality.imbalance, busiest(by_load), 1e-9);
+    }
+    EXPECT_THROW((void)row_and_contact_work(pattern, std::vector<std::uint32_t>(n - 1, 0)), Error);
+}
+
 // What lets the preconditioner run across GPUs with the single-GPU result: with the cut along its
 // order, every level-1 node (a connected piece of one level-0 domain) has all its vertices in one
 // part, and every level-1 coupling block sums pattern slots of rows that the part owning the block's

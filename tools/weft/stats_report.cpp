@@ -85,6 +85,7 @@ RunSummary summarize(std::span<const StepStats> frames) {
         sc.bound_fallbacks += c.bound_fallbacks;
         sc.uncullings += c.uncullings;
         sc.buffer_growths += c.buffer_growths;
+        sc.parts_recut += c.parts_recut;
         sc.query_radius_max = std::max(sc.query_radius_max, c.query_radius_max);
         if (c.remaining_intersections >= 0) {
             ++sc.checked_frames;
@@ -270,6 +271,7 @@ void write_summary_fields(JsonWriter& json, const RunContext& c, const RunSummar
     json.field("truncated_vertices", col.truncated_vertices).field("redetections", col.redetections);
     json.field("bound_fallbacks", col.bound_fallbacks).field("query_radius_max", col.query_radius_max);
     json.field("uncullings", col.uncullings).field("buffer_growths", col.buffer_growths);
+    json.field("parts_recut", col.parts_recut);
     json.field("checked_frames", col.checked_frames);
     json.end_object();
     json.field("impact_zones", col.impact_zones);
@@ -377,7 +379,9 @@ void print_run_summary(std::ostream& out, const RunContext& c, const RunSummary&
                                        : std::string(" (culled pairs not counted: collision.count_culled, cpu backend)"))
             << ", pair springs median " << format_fixed(col.contacts.median, 0)
             << (col.contacts_largest_part.max > 0
-                    ? " (busiest GPU " + format_fixed(col.contacts_largest_part.median, 0) + ")"
+                    ? " (busiest GPU " + format_fixed(col.contacts_largest_part.median, 0) +
+                          (col.parts_recut > 0 ? "; parts re-cut " + std::to_string(col.parts_recut) + " times" : std::string()) +
+                          ")"
                     : std::string())
             << ", CCD " << col.ccd_hits << " hits in " << col.ccd_tests << " tests\n";
         out << "  impact zones   " << col.impact_zones << " zones, at most " << col.impact_iterations_max

@@ -79,6 +79,7 @@ struct RunSummary {
         /// the largest query radius (m).
         long long truncated_vertices = 0, redetections = 0, bound_fallbacks = 0, uncullings = 0;
         long long buffer_growths = 0;  ///< collision buffers grown while stepping (GPU)
+        long long parts_recut = 0;     ///< several GPUs: re-cuts of the parts by contact load
         double query_radius_max = 0.0;
         std::size_t checked_frames = 0;       ///< frames the exact check ran after
         long long remaining_intersections_max = 0;

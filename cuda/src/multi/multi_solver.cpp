@@ -81,29 +81,10 @@ void MultiSolver::build(const FlatModel& flat, const Model& model) {
     flat_ = &flat;
     const auto parts = static_cast<std::uint32_t>(devices_.size());
     hierarchy_ = build_schwarz_hierarchy(flat.initial_positions, flat.pattern, kSchwarzMaxLevels);
-    {
-        const std::vector<double> work = row_work(flat.pattern);
-        // Throws, naming the count, when there are fewer level-0 domains than parts.
-        partition_ = build_partition(flat.pattern, cut_order(hierarchy_.order, work, parts, SchwarzHierarchy::kDomainSize),
-                                     parts, work);
-    }
-    part_models_.reserve(parts);
-    for (std::uint32_t p = 0; p < parts; ++p) part_models_.push_back(extract_part(flat, partition_, p));
-    std::vector<cudaStream_t> streams;
-    std::vector<PartSystem> systems;
-    for (std::uint32_t p = 0; p < parts; ++p) {
-        auto solver = std::make_unique<DeviceSolver>(devices_[p]);
-        solver->set_assembly(assembly_);
-        solver->build_part(flat, part_models_[p], model);
-        streams.push_back(solver->stream());
-        systems.push_back(solver->part_system());
-        solvers_.push_back(std::move(solver));
-    }
-    halo_ = std::make_unique<HaloExchange>(partition_, devices_, streams);
-    level1_couplings_ = std::make_unique<AllGather>(devices_, streams);
     if (needs_cloth_collisions(model)) {
         // The collision stages on every GPU over the whole model, each detecting its share of the
-        // pairs; the whole-size copies the contacts read on every GPU.
+        // pairs; the whole-size copies the contacts read on every GPU. They do not depend on the
+        // cut: a re-cut keeps them.
         collisions_.resize(parts);
         whole_.resize(parts);
         for (std::uint32_t p = 0; p < parts; ++p) {
@@ -122,6 +103,42 @@ void MultiSolver::build(const FlatModel& flat, const Model& model) {
                 WEFT_CUDA_CHECK(cudaEventCreateWithFlags(&e, cudaEventDisableTiming));
                 part_event_.push_back(e);
             }
+    }
+    found_.assign(parts, 0);
+    recut_policy_ = {};
+    recut_due_ = false;
+    recuts_ = 0;
+    build_parts(model, row_work(flat.pattern));
+    output_ = nullptr;
+    staged_stride_ = 0;  // the new parts are bound to the staging buffer at the next set_output
+}
+
+void MultiSolver::build_parts(const Model& model, const std::vector<double>& work) {
+    const FlatModel& flat = *flat_;
+    const auto parts = static_cast<std::uint32_t>(devices_.size());
+    synchronize();
+    pcg_.reset();
+    level1_couplings_.reset();
+    mirror_.reset();
+    halo_.reset();
+    solvers_.clear();
+    part_models_.clear();
+    // Throws, naming the count, when there are fewer level-0 domains than parts.
+    partition_ =
+        build_partition(flat.pattern, cut_order(hierarchy_.order, work, parts, SchwarzHierarchy::kDomainSize), parts, work);
+    part_models_.reserve(parts);
+    for (std::uint32_t p = 0; p < parts; ++p) part_models_.push_back(extract_part(flat, partition_, p));
+    std::vector<cudaStream_t> streams;
+    for (std::uint32_t p = 0; p < parts; ++p) {
+        auto solver = std::make_unique<DeviceSolver>(devices_[p]);
+        solver->set_assembly(assembly_);
+        solver->build_part(flat, part_models_[p], model);
+        streams.push_back(solver->stream());
+        solvers_.push_back(std::move(solver));
+    }
+    halo_ = std::make_unique<HaloExchange>(partition_, devices_, streams);
+    level1_couplings_ = std::make_unique<AllGather>(devices_, streams);
+    if (!collisions_.empty()) {
         std::vector<const std::uint32_t*> global;
         std::vector<std::uint32_t> owned;
         for (std::uint32_t p = 0; p < parts; ++p) {
@@ -139,8 +156,39 @@ void MultiSolver::build(const FlatModel& flat, const Model& model) {
     schwarz_ = false;
     pcg_.reset();
     choose_preconditioner(model.settings.solver);
-    output_ = nullptr;
-    staged_stride_ = 0;  // the new parts are bound to the staging buffer at the next set_output
+}
+
+void MultiSolver::recut(const Model& model) {
+    if (collisions_.empty() || flat_ == nullptr) throw Error("multi-GPU solver: a re-cut by contact load needs cloth collisions");
+    const auto n = static_cast<std::uint32_t>(flat_->vertex_count);
+    // The state (x, v and the warm start) of every part into the first GPU's whole arrays, and the
+    // last detection's contacts counted at each vertex, each GPU its share.
+    collect_whole({kWholeX, kWholeV, kWholePrevious}, 1);
+    std::vector<std::uint32_t> contacts_at(n, 0);
+    {
+        MemoryLedger scratch;
+        std::vector<DeviceArray<std::uint32_t>> counts(solvers_.size());
+        std::vector<std::uint32_t> share(n);
+        for (std::size_t p = 0; p < solvers_.size(); ++p) {
+            WEFT_CUDA_CHECK(cudaSetDevice(devices_[p]));
+            counts[p].allocate(n, scratch, "contacts at each vertex (re-cut)");
+            counts[p].zero(solvers_[p]->stream());
+            launch_count_contacts_at_vertices(collisions_[p]->contacts(), found_[p], n, counts[p].get(), solvers_[p]->stream());
+            WEFT_CUDA_CHECK(cudaMemcpyAsync(share.data(), counts[p].get(), n * sizeof(std::uint32_t), cudaMemcpyDeviceToHost,
+                                            solvers_[p]->stream()));
+            WEFT_CUDA_CHECK(cudaStreamSynchronize(solvers_[p]->stream()));
+            for (std::uint32_t v = 0; v < n; ++v) contacts_at[v] += share[v];
+        }
+    }
+    // The whole arrays live outside the parts: they survive the rebuild, and every new part takes
+    // its owned vertices and ghosts from them.
+    build_parts(model, row_and_contact_work(flat_->pattern, contacts_at));
+    spread_whole();
+    if (output_ != nullptr) {
+        staged_stride_ = 0;  // the new parts write into the staging buffer: bind them
+        set_output(output_, output_stride_, output_synchronous_);
+    }
+    ++recuts_;
 }
 
 void MultiSolver::choose_preconditioner(const SolverSettings& settings) {
@@ -266,6 +314,14 @@ void MultiSolver::detect_contacts(const Model& model, double t, double h, StepSt
         largest = std::max(largest, static_cast<int>(s->part_contact_count()));
     }
     stats.collision.contacts_largest_part = largest;
+    found_ = found;
+    if (parts > 1) {
+        std::size_t on_parts = 0;
+        for (auto& s : solvers_) on_parts += s->part_contact_count();
+        const double mean = static_cast<double>(on_parts) / static_cast<double>(parts);
+        const double imbalance = mean > 0.0 ? static_cast<double>(largest) / mean : 1.0;
+        recut_due_ = recut_policy_.observe(imbalance, model.settings.solver.gpu_rebalance);
+    }
     mirror_->list_contact_vertices(lists);
     if (grew || !pcg_) make_cg();  // the parts' contact arrays moved: the CG's systems and graphs with them
 }
@@ -352,6 +408,16 @@ void MultiSolver::substep(const Model& model, double t, double h, StepStats& sta
         }
     }
     choose_preconditioner(model.settings.solver);  // may change live
+    if (recut_due_) {
+        // The last detections found the contacts lastingly uneven over the parts (RecutPolicy): the
+        // parts are rebuilt by rows and contacts before this substep. Its time counts as update.
+        const auto recut_start = Clock::now();
+        recut(model);
+        recut_due_ = false;
+        recut_policy_.recut_done();
+        ++stats.collision.parts_recut;
+        stats.ms(Stage::Update) += ms_since(recut_start);
+    }
     if (user_stream_ != nullptr) {
         // After the outside stream's work so far.
         int device = 0;

@@ -25,6 +25,7 @@
 #include "weft/backend/flat_model.h"
 #include "weft/backend/model.h"
 #include "weft/backend/part_model.h"
+#include "weft/backend/recut_policy.h"
 #include "weft/backend/schwarz_hierarchy.h"
 #include "weft/backend/vertex_partition.h"
 #include "weft/stats.h"
@@ -84,6 +85,12 @@ public:
     [[nodiscard]] std::uint64_t halo_bytes() const { return halo_ ? halo_->bytes_between_devices() : 0; }
     /// Whether the CG runs with the multilevel Schwarz preconditioner across the parts (else block-Jacobi).
     [[nodiscard]] bool schwarz_active() const { return schwarz_; }
+    /// Re-cuts of the parts by contact load since the build (solver.gpu_rebalance).
+    [[nodiscard]] int recuts() const { return recuts_; }
+    /// Re-cuts the parts now by rows and the last detection's contacts (what the policy does when the
+    /// imbalance lasts; public for tests). The state, the warm start and the output carry over; the
+    /// steps after it are the steps of a world built with that cut. Needs cloth collisions.
+    void recut(const Model& model);
 
 private:
     /// Exchanges the ghosts of x, v and the previous Δv (after a sweep or a rollback changed them).
@@ -96,6 +103,10 @@ private:
     void factor_schwarz(int newton);
     /// A new CG across the parts for their current systems (preconditioner or contact list changed).
     void make_cg();
+    /// Cuts the vertices along the Schwarz order into parts of equal `work` (a weight a vertex) and
+    /// builds every part, the halo, the level-1 all-gather, the contact mirror and the CG. The
+    /// state is the flat model's initial one.
+    void build_parts(const Model& model, const std::vector<double>& work);
     // ---- cloth collisions across GPUs (docs/multi-gpu.md, "Collisions") ---------------------------
     /// Whole arrays on every GPU: x, v, v0 and the previous Δv, 3 × vertices each.
     enum WholeArray : int { kWholeX = 0, kWholeV = 1, kWholeV0 = 2, kWholePrevious = 3 };
@@ -155,6 +166,12 @@ private:
     std::vector<cudaEvent_t> part_done_;  // per part: its substep's end, for the outside stream
     bool use_graph_ = true;
     AssemblyStrategy assembly_ = AssemblyStrategy::Auto;
+    // Re-cutting by contact load: the last detection's contacts per share, the policy, whether the
+    // end of this substep re-cuts, and how many re-cuts so far.
+    std::vector<std::size_t> found_;
+    RecutPolicy recut_policy_;
+    bool recut_due_ = false;
+    int recuts_ = 0;
 };
 
 }  // namespace weft::cuda::multi

@@ -25,7 +25,26 @@ struct TouchesOwnedRow {
     }
 };
 
+__global__ void count_contacts_at_vertices(const DeviceContact* list, std::size_t count, std::uint32_t cloth_vertices,
+                                           std::uint32_t* counts) {
+    const std::size_t k = static_cast<std::size_t>(blockIdx.x) * blockDim.x + threadIdx.x;
+    if (k >= count) return;
+    for (int j = 0; j < 4; ++j) {
+        const std::uint32_t v = list[k].vertex[j];
+        if (v < cloth_vertices) atomicAdd(counts + v, 1U);
+    }
+}
+
 }  // namespace
+
+void launch_count_contacts_at_vertices(const DeviceContact* list, std::size_t count, std::uint32_t cloth_vertices,
+                                       std::uint32_t* counts, cudaStream_t stream) {
+    if (count == 0) return;
+    constexpr unsigned kBlock = 256;
+    const auto blocks = static_cast<unsigned>((count + kBlock - 1) / kBlock);
+    count_contacts_at_vertices<<<blocks, kBlock, 0, stream>>>(list, count, cloth_vertices, counts);
+    WEFT_CUDA_CHECK(cudaGetLastError());
+}
 
 std::size_t part_contact_selection_bytes(std::size_t count) {
     std::size_t bytes = 0;

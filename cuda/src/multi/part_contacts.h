@@ -31,4 +31,9 @@ void launch_select_part_contacts(const DeviceContact* from, std::size_t count, c
                                  std::uint32_t cloth_vertices, DeviceContact* to, std::uint32_t* to_count, void* scratch,
                                  std::size_t scratch_bytes, cudaStream_t stream);
 
+/// counts[v] += the contacts of list[0, count) at cloth vertex v (< cloth_vertices; kinematic
+/// vertices are not counted): the contact load of each row, for a re-cut of the parts.
+void launch_count_contacts_at_vertices(const DeviceContact* list, std::size_t count, std::uint32_t cloth_vertices,
+                                       std::uint32_t* counts, cudaStream_t stream);
+
 }  // namespace weft::cuda::multi

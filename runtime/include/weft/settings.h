@@ -112,6 +112,11 @@ struct SolverSettings {
     /// GPUs one world is split across on the cuda backend (docs/multi-gpu.md); `--gpus` and
     /// BackendOptions::gpus take precedence when non-zero. The CPU backend ignores it.
     int gpus = 1;
+    /// Several GPUs with cloth collisions: re-cut the parts by rows and contacts when the busiest
+    /// part holds more than this multiple of the mean part's contacts for a few detections in a
+    /// row (weft/backend/recut_policy.h; docs/multi-gpu.md, "Re-cutting by contact load"). A re-cut
+    /// rebuilds the parts. 0 never re-cuts.
+    double gpu_rebalance = 1.1;
 };
 
 /// How the broad phase prunes pairs within one cloth (a speed knob that never changes the result).

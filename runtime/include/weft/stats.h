@@ -40,6 +40,8 @@ struct CollisionStats {
     /// contact with vertices on two parts is on both). Against `contacts` / parts it shows how
     /// evenly the contact work of the solve is spread; 0 on one GPU and on the CPU.
     int contacts_largest_part = 0;
+    /// Several GPUs: times the parts were re-cut by contact load in the step (solver.gpu_rebalance).
+    int parts_recut = 0;
     std::int64_t ccd_tests = 0;         ///< CCD queries run
     std::int64_t ccd_hits = 0;          ///< of those, reported as colliding (false positives included)
     int impact_zones = 0;               ///< zones formed in the step (summed over substeps)
