@@ -7,10 +7,10 @@
 // JSON with --json. Knobs that change the model rather than how closely it is solved (the bending
 // model, the contact mode) are not swept: against the reference they would measure the model.
 //
-//   weft_tradeoff_bench SCENE [--backend cpu|cuda] [--frames N] [--set KEY=VALUE]... [--json FILE] [--plot FILE.svg]
+//   weft_tradeoff_bench SCENE [--backend cpu|cuda] [--frames N] [--set KEY=VALUE]... [--json FILE] [--plot FILE.svg|.png]
 //
-// --plot draws error against cost on log axes, each run labelled, the front joined and filled (SVG:
-// text labels need no font).
+// --plot draws error against cost on log axes, each run labelled, the front joined and filled
+// (bench/plot/tradeoff_plot.h: SVG, or PNG where the renderer and ImGui are built).
 #include <algorithm>
 #include <chrono>
 #include <cmath>
@@ -22,6 +22,7 @@
 #include "json_file.h"
 #include "json_writer.h"
 #include "scene_lookup.h"
+#include "tradeoff_plot.h"
 #include "optional_backends.h"
 #include "weft/error.h"
 #include "weft/presets.h"
@@ -101,72 +102,6 @@ double diagonal(const std::vector<Vec3d>& x) {
     }
     const Vec3d d = hi - lo;
     return std::sqrt(d.x * d.x + d.y * d.y + d.z * d.z);
-}
-
-std::string xml(const std::string& s) {
-    std::string out;
-    for (const char c : s) {
-        if (c == '<') out += "&lt;";
-        else if (c == '>') out += "&gt;";
-        else if (c == '&') out += "&amp;";
-        else out += c;
-    }
-    return out;
-}
-
-/// Error (y) against cost (x), both on log axes with a line per decade, the front joined.
-void write_plot(const std::string& file, const std::string& title, const std::vector<Run>& runs) {
-    std::vector<const Run*> shown;
-    for (const Run& r : runs)
-        if (std::isfinite(r.ms_per_second) && std::isfinite(r.error) && r.ms_per_second > 0.0 && r.error > 0.0) shown.push_back(&r);
-    if (shown.empty()) throw weft::Error("--plot: no run with a finite, positive cost and error to draw");
-    double x0 = 1e300, x1 = 0.0, y0 = 1e300, y1 = 0.0;
-    for (const Run* r : shown) {
-        x0 = std::min(x0, r->ms_per_second);
-        x1 = std::max(x1, r->ms_per_second);
-        y0 = std::min(y0, r->error);
-        y1 = std::max(y1, r->error);
-    }
-    const double lx0 = std::floor(std::log10(x0)), lx1 = std::ceil(std::log10(x1) + 1e-9);
-    const double ly0 = std::floor(std::log10(y0)), ly1 = std::ceil(std::log10(y1) + 1e-9);
-    const double W = 900, H = 600, left = 90, right = 220, top = 50, bottom = 70;
-    const auto px = [&](double v) { return left + (std::log10(v) - lx0) / std::max(1.0, lx1 - lx0) * (W - left - right); };
-    const auto py = [&](double v) { return H - bottom - (std::log10(v) - ly0) / std::max(1.0, ly1 - ly0) * (H - top - bottom); };
-    std::ofstream out(file);
-    if (!out) throw weft::Error("--plot: cannot write " + file);
-    out << "<svg xmlns=\"http://www.w3.org/2000/svg\" width=\"" << W << "\" height=\"" << H << "\" font-family=\"sans-serif\" font-size=\"12\">\n";
-    out << "<rect width=\"100%\" height=\"100%\" fill=\"white\"/>\n";
-    out << "<text x=\"" << left << "\" y=\"28\" font-size=\"16\">" << xml(title) << "</text>\n";
-    for (double d = lx0; d <= lx1 + 1e-9; d += 1.0) {
-        const double x = px(std::pow(10.0, d));
-        out << "<line x1=\"" << x << "\" y1=\"" << top << "\" x2=\"" << x << "\" y2=\"" << H - bottom << "\" stroke=\"#ddd\"/>\n";
-        out << "<text x=\"" << x << "\" y=\"" << H - bottom + 18 << "\" text-anchor=\"middle\">1e" << static_cast<int>(d) << "</text>\n";
-    }
-    for (double d = ly0; d <= ly1 + 1e-9; d += 1.0) {
-        const double y = py(std::pow(10.0, d));
-        out << "<line x1=\"" << left << "\" y1=\"" << y << "\" x2=\"" << W - right << "\" y2=\"" << y << "\" stroke=\"#ddd\"/>\n";
-        out << "<text x=\"" << left - 8 << "\" y=\"" << y + 4 << "\" text-anchor=\"end\">1e" << static_cast<int>(d) << "</text>\n";
-    }
-    out << "<text x=\"" << (left + W - right) / 2 << "\" y=\"" << H - 20 << "\" text-anchor=\"middle\">wall ms per simulated second</text>\n";
-    out << "<text x=\"20\" y=\"" << (top + H - bottom) / 2 << "\" transform=\"rotate(-90 20 " << (top + H - bottom) / 2
-        << ")\" text-anchor=\"middle\">RMS position error, m</text>\n";
-    std::vector<const Run*> front;
-    for (const Run* r : shown)
-        if (r->front) front.push_back(r);
-    std::sort(front.begin(), front.end(), [](const Run* a, const Run* b) { return a->ms_per_second < b->ms_per_second; });
-    if (front.size() > 1) {
-        out << "<polyline fill=\"none\" stroke=\"#c0392b\" stroke-width=\"1.5\" points=\"";
-        for (const Run* r : front) out << px(r->ms_per_second) << "," << py(r->error) << " ";
-        out << "\"/>\n";
-    }
-    for (const Run* r : shown) {
-        const double x = px(r->ms_per_second), y = py(r->error);
-        out << "<circle cx=\"" << x << "\" cy=\"" << y << "\" r=\"5\" fill=\"" << (r->front ? "#c0392b" : "white")
-            << "\" stroke=\"" << (r->ok ? "#333" : "#e67e22") << "\" stroke-width=\"1.5\"/>\n";
-        out << "<text x=\"" << x + 8 << "\" y=\"" << y + 4 << "\">" << xml(r->name) << (r->ok ? "" : " (not clean)") << "</text>\n";
-    }
-    out << "</svg>\n";
-    if (!out) throw weft::Error("--plot: cannot write " + file);
 }
 
 }  // namespace
@@ -273,7 +208,10 @@ int main(int argc, char** argv) {
             std::printf("| %s | %.1f | %.3f | %.3f%% | %s | %s |\n", r.name.c_str(), r.ms_per_second, 1000.0 * r.error, 100.0 * r.relative,
                         r.ok ? "yes" : r.failure.c_str(), r.front ? "**yes**" : "");
         if (!plot.empty()) {
-            write_plot(plot, scene_name + " on " + backend + ", " + std::to_string(frames) + " frames: error against cost", runs);
+            std::vector<weft::bench::TradeoffPoint> points;
+            for (const Run& r : runs) points.push_back({r.name, r.ms_per_second, r.error, r.front, r.ok});
+            weft::bench::write_tradeoff_plot(plot, scene_name + " on " + backend + ", " + std::to_string(frames) + " frames: error against cost",
+                                             points);
             std::printf("\nplot: %s\n", plot.c_str());
         }
         if (!json.empty() && !weft::bench::write_json_file(json, "weft_tradeoff_bench", [&](std::ostream& out) {

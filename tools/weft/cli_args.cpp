@@ -177,7 +177,7 @@ bool apply_simulation_flag(std::string_view command, SimulationOptions& sim, std
 
 constexpr FlagSpec kRunFlags[] = {{"--backend", true}, {"--threads", true}, {"--host-wait", true}, {"--gpus", true}, {"--set", true}, {"--preset", true},   {"--frames", true},
                                   {"--out", true},     {"--format", true},  {"--stats", true}, {"--quiet", false},
-                                  {"--check", false},  {"--capture", true}, {"--size", true}};
+                                  {"--check", false},  {"--capture", true}, {"--size", true}, {"--cache", true}};
 
 constexpr FlagSpec kViewFlags[] = {{"--backend", true}, {"--threads", true}, {"--host-wait", true}, {"--gpus", true},    {"--set", true}, {"--preset", true},
                                    {"--frames", true},  {"--screenshot", true}, {"--size", true},
@@ -249,6 +249,13 @@ Invocation parse_run(std::span<const std::string_view> args) {
             run.capture = std::string(value);
         } else if (name == "--size") {
             parse_size(cmd, name, value, run.capture_width, run.capture_height);
+        } else if (name == "--cache") {
+            const std::filesystem::path path(value);
+            std::string ext = path.extension().string();
+            std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return std::tolower(c); });
+            if (ext != ".pc2" || path.stem().empty())
+                throw UsageError(cmd, "--cache expects a .pc2 file name (a PC2 point cache), got " + quoted(value));
+            run.cache_file = path;
         }
     });
     if (!positionals) return help_for(cmd);

@@ -10,6 +10,7 @@
 
 #include "commands.h"
 #include "frame_capture.h"
+#include "cache_writer.h"
 #include "frame_writer.h"
 #include "output_file.h"
 #include "progress_bar.h"
@@ -50,6 +51,8 @@ int run_command(const RunOptions& options, std::ostream& out, std::ostream& err)
     if (!options.stats_file.empty()) stats_stream = open_output_file(options.stats_file, "stats file");
     std::optional<FrameWriter> writer;
     if (!options.out_dir.empty() && options.meshes) writer.emplace(options.out_dir, options.format, cloth_names, frames);
+    std::optional<CacheWriter> cache;
+    if (!options.cache_file.empty()) cache.emplace(options.cache_file, world);
     std::optional<FrameCapture> capture;
     if (options.capture != "none") {
         // Without the renderer in the build, this says so (frame_capture.cpp).
@@ -66,6 +69,7 @@ int run_command(const RunOptions& options, std::ostream& out, std::ostream& err)
 
     const auto start = std::chrono::steady_clock::now();
     if (writer) writer->write(0, world);
+    if (cache) cache->append(world);
     if (capture) capture->capture(0, {});
     std::vector<StepStats> stats;
     stats.reserve(static_cast<std::size_t>(std::min(frames, 1'000'000)));  // a huge --frames grows as it goes
@@ -81,6 +85,7 @@ int run_command(const RunOptions& options, std::ostream& out, std::ostream& err)
             else
                 step();
             if (writer) writer->write(frame, world);
+            if (cache) cache->append(world);
             bar.update(frame);
             if (g_interrupted != 0) {
                 interrupted = true;
@@ -110,6 +115,12 @@ int run_command(const RunOptions& options, std::ostream& out, std::ostream& err)
         if (writer) {
             out << "  meshes         " << writer->files_written()
                 << (writer->files_written() == 1 ? " file: " : " files: ") << writer->pattern() << '\n';
+        }
+        if (cache) {
+            const std::vector<std::filesystem::path> files = cache->files();
+            out << "  cache          " << cache->frames() << " frames in " << files.size()
+                << (files.size() == 1 ? " PC2 file: " : " PC2 files: ") << files.front().string() << (files.size() > 1 ? " …" : "")
+                << " (rest meshes beside, .obj)\n";
         }
         if (!options.stats_file.empty()) out << "  stats          " << options.stats_file.string() << '\n';
     } else {

@@ -40,6 +40,8 @@ Options:
   --frames N         frames to simulate; default: the scene's 'frames'
   --out DIR          write a mesh per cloth per frame: DIR/frame_0000_<cloth>.ply (frame 0 = initial state)
   --format ply|obj   mesh format for --out; default ply
+  --cache FILE.pc2   write the run as a PC2 point cache (Blender's Mesh Cache modifier, 3ds Max,
+                     Maya) with its rest mesh beside it as FILE.obj; several cloths: FILE_<cloth>.pc2
   --capture egl|vulkan|none
                      render every frame headless to DIR/frame_0000.png (needs --out DIR; meshes
                      then only with --format), plus DIR/contact_sheet.png and DIR/capture.mp4
