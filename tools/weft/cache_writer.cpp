@@ -11,11 +11,15 @@
 
 namespace weft::cli {
 
-CacheWriter::CacheWriter(const std::filesystem::path& file, const World& world) {
+CacheWriter::CacheWriter(const std::filesystem::path& file, const World& world, double frame_seconds) {
     std::string ext = file.extension().string();
     std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
-    if (ext != ".pc2" || file.stem().empty())
-        throw Error("--cache " + file.string() + ": the cache is written as a PC2 point cache (FILE.pc2)");
+    if ((ext != ".pc2" && ext != ".glb") || file.stem().empty())
+        throw Error("--cache " + file.string() + ": the cache is a PC2 point cache (FILE.pc2) or a glTF binary (FILE.glb)");
+    if (ext == ".glb") {
+        gltf_ = std::make_unique<GltfCacheWriter>(file, world, frame_seconds);
+        return;
+    }
     if (file.has_parent_path()) {
         std::error_code ec;
         std::filesystem::create_directories(file.parent_path(), ec);
@@ -38,10 +42,21 @@ CacheWriter::CacheWriter(const std::filesystem::path& file, const World& world) 
 }
 
 void CacheWriter::append(const World& world) {
+    if (gltf_) gltf_->append(world);
     for (std::size_t c = 0; c < caches_.size(); ++c) caches_[c].append(world.positions(c));
 }
 
+void CacheWriter::finish(const World& world) {
+    if (gltf_) gltf_->finish(world);
+}
+
+std::size_t CacheWriter::frames() const {
+    if (gltf_) return gltf_->frames();
+    return caches_.empty() ? 0 : caches_.front().frames();
+}
+
 std::vector<std::filesystem::path> CacheWriter::files() const {
+    if (gltf_) return {gltf_->file()};
     std::vector<std::filesystem::path> out;
     for (const PointCacheWriter& w : caches_) out.push_back(w.file());
     return out;

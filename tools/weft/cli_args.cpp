@@ -253,8 +253,9 @@ Invocation parse_run(std::span<const std::string_view> args) {
             const std::filesystem::path path(value);
             std::string ext = path.extension().string();
             std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return std::tolower(c); });
-            if (ext != ".pc2" || path.stem().empty())
-                throw UsageError(cmd, "--cache expects a .pc2 file name (a PC2 point cache), got " + quoted(value));
+            if ((ext != ".pc2" && ext != ".glb") || path.stem().empty())
+                throw UsageError(cmd, "--cache expects a .pc2 (PC2 point cache) or .glb (glTF binary) file name, got " +
+                                          quoted(value));
             run.cache_file = path;
         }
     });

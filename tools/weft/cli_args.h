@@ -62,7 +62,7 @@ struct RunOptions {
     int capture_width = 1280;      ///< pixels
     int capture_height = 720;      ///< pixels
     bool meshes = true;            ///< with --out, write meshes (--capture alone writes only pictures)
-    std::filesystem::path cache_file;  ///< `--cache FILE.pc2`: PC2 point caches and rest meshes (cache_writer.h); empty: none
+    std::filesystem::path cache_file;  ///< `--cache FILE.pc2|.glb`: PC2 point caches or a glTF binary (cache_writer.h); empty: none
 };
 
 struct BenchOptions {

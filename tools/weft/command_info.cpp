@@ -13,6 +13,7 @@
 #endif
 
 #include "build_info.h"
+#include "gltf_cache_writer.h"
 #include "commands.h"
 #include "scene_lookup.h"
 #include "text_table.h"
@@ -126,6 +127,8 @@ int info_command(std::ostream& out) {
         << yes_no(has_mesh_file_loader(), has_mesh_file_loader() ? "assimp: OBJ, PLY, glTF, FBX, ..."
                                                                  : "WEFT_ASSETS off: procedural grids only")
         << '\n';
+    out << "  caches         "
+        << yes_no(true, gltf_caches_available() ? "--cache: PC2 and glTF (TinyGLTF)" : "--cache: PC2 (no TinyGLTF: no glTF)") << '\n';
 
     out << "\nscene folders\n";
     for (const std::filesystem::path& folder : scene_folders()) {

@@ -52,7 +52,7 @@ int run_command(const RunOptions& options, std::ostream& out, std::ostream& err)
     std::optional<FrameWriter> writer;
     if (!options.out_dir.empty() && options.meshes) writer.emplace(options.out_dir, options.format, cloth_names, frames);
     std::optional<CacheWriter> cache;
-    if (!options.cache_file.empty()) cache.emplace(options.cache_file, world);
+    if (!options.cache_file.empty()) cache.emplace(options.cache_file, world, world.settings().solver.dt);
     std::optional<FrameCapture> capture;
     if (options.capture != "none") {
         // Without the renderer in the build, this says so (frame_capture.cpp).
@@ -94,6 +94,7 @@ int run_command(const RunOptions& options, std::ostream& out, std::ostream& err)
         }
     }
     const double wall_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    if (cache) cache->finish(world);  // also after an interrupt: the frames so far
 
     // Describe again: backends may grow scratch memory while stepping (reported: docs/design.md, "Memory").
     const RunContext context = describe_run(loaded.desc, world, options.sim.threads, options.sim.host_wait);
@@ -118,9 +119,9 @@ int run_command(const RunOptions& options, std::ostream& out, std::ostream& err)
         }
         if (cache) {
             const std::vector<std::filesystem::path> files = cache->files();
-            out << "  cache          " << cache->frames() << " frames in " << files.size()
-                << (files.size() == 1 ? " PC2 file: " : " PC2 files: ") << files.front().string() << (files.size() > 1 ? " …" : "")
-                << " (rest meshes beside, .obj)\n";
+            out << "  cache          " << cache->frames() << " frames in " << files.size() << " " << cache->format()
+                << (files.size() == 1 ? " file: " : " files: ") << files.front().string() << (files.size() > 1 ? " …" : "")
+                << (cache->format() == std::string("PC2") ? " (rest meshes beside, .obj)" : "") << "\n";
         }
         if (!options.stats_file.empty()) out << "  stats          " << options.stats_file.string() << '\n';
     } else {

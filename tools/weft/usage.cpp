@@ -42,6 +42,7 @@ Options:
   --format ply|obj   mesh format for --out; default ply
   --cache FILE.pc2   write the run as a PC2 point cache (Blender's Mesh Cache modifier, 3ds Max,
                      Maya) with its rest mesh beside it as FILE.obj; several cloths: FILE_<cloth>.pc2
+  --cache FILE.glb   or as one glTF 2.0 binary: a mesh per cloth, its frames as animated morph targets
   --capture egl|vulkan|none
                      render every frame headless to DIR/frame_0000.png (needs --out DIR; meshes
                      then only with --format), plus DIR/contact_sheet.png and DIR/capture.mp4
