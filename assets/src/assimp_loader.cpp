@@ -6,12 +6,14 @@
 #include <assimp/scene.h>
 
 #include <algorithm>
+#include <cctype>
 #include <cmath>
 #include <exception>
 #include <limits>
 
 #include "weft/error.h"
 #include "weft/mesh.h"
+#include "obj_scan.h"
 
 namespace weft::assets {
 
@@ -25,14 +27,32 @@ MeshData import_mesh(const std::filesystem::path& path, ImportReport* report) {
     std::error_code ec;
     if (!std::filesystem::is_regular_file(path, ec)) throw Error(file + ": mesh file not found");
 
+    // An OBJ is scanned first: assimp keeps only the vertices faces use and stops where the file
+    // ends, so a file cut short would load as a smaller cloth without a word (obj_scan.h).
+    std::string ext = path.extension().string();
+    std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
+    if (ext == ".obj") {
+        const ObjScan scan = scan_obj(path);
+        if (scan.ends_mid_line)
+            throw Error(file + ": the file ends in the middle of a vertex or face line (cut short?): " + std::to_string(scan.vertices) +
+                        " vertices and " + std::to_string(scan.faces) + " faces read");
+        if (scan.unreferenced > 0)
+            throw Error(file + ": " + std::to_string(scan.unreferenced) + " of its " + std::to_string(scan.vertices) +
+                        " vertices are in no face: a file cut short loses its last faces (remove unused vertices if "
+                        "the file is whole)");
+    }
+
     Assimp::Importer importer;
     // Points and lines are not cloth: let SortByPType drop them instead of failing on them later.
     importer.SetPropertyInteger(AI_CONFIG_PP_SBP_REMOVE, aiPrimitiveType_POINT | aiPrimitiveType_LINE);
     // Triangulate polygons; JoinIdenticalVertices undoes the per-corner vertices some formats load
     // (vertices still differ at UV/normal seams: the weld below merges those); PreTransformVertices
     // applies node transforms so that the mesh comes out as the file shows it.
-    const unsigned flags = aiProcess_Triangulate | aiProcess_JoinIdenticalVertices | aiProcess_PreTransformVertices |
-                           aiProcess_SortByPType;
+    // ValidateDataStructure runs before the other steps: a truncated or inconsistent file (a binary
+    // PLY cut short leaves faces indexing vertices that were never read) is refused there instead of
+    // crashing the steps after it.
+    const unsigned flags = aiProcess_ValidateDataStructure | aiProcess_Triangulate | aiProcess_JoinIdenticalVertices |
+                           aiProcess_PreTransformVertices | aiProcess_SortByPType;
     const aiScene* scene = nullptr;
     try {
         scene = importer.ReadFile(file, flags);

@@ -13,6 +13,7 @@
 #include "scene_reader.h"
 #include "weft/collider.h"
 #include "weft/mesh.h"
+#include "weft/world_limits.h"
 #include "weft/scene.h"
 #include "weft/settings.h"
 
@@ -334,8 +335,9 @@ constexpr Parameter kTable[] = {
     // ---- [[motion]]: named rigid motions that pins and colliders follow
     {.section = "motion", .name = "name", .type = T::String, .doc = "how pins and colliders refer to it",
      .effect = E::Rebuild, .constraint = "non-empty, unique", .default_text = "**required**"},
-    {.section = "motion", .name = "origin", .type = T::Vector, .unit = "m", .doc = "frame origin at t = 0",
-     .label = "origin", .panel = "motions", .slider = R{-1e4, 1e4}, .access = field<&Motion::origin>()},
+    {.section = "motion", .name = "origin", .type = T::Vector, .unit = "m", .range = R{-kWorldExtent, kWorldExtent},
+     .doc = "frame origin at t = 0",
+     .label = "origin", .panel = "motions", .vector_bound = VectorBound::Components, .slider = R{-1e4, 1e4}, .access = field<&Motion::origin>()},
     {.section = "motion", .name = "rotation", .type = T::Vector, .unit = "degrees",
      .doc = "initial orientation, Euler angles (see *Rotations*)", .effect = E::Rebuild,
      .access = field<&SceneMotion::rotation_degrees>()},
@@ -357,8 +359,8 @@ constexpr Parameter kTable[] = {
      .effect = E::Rebuild, .constraint = "non-empty, unique", .default_text = "\"cloth0\", \"cloth1\", …"},
     {.section = "cloth", .name = "mesh", .type = T::Table, .doc = "where the rest shape comes from", .effect = E::Recook,
      .constraint = "see below", .default_text = "**required**"},
-    {.section = "cloth", .name = "position", .type = T::Vector, .unit = "m",
-     .doc = "translation of the rest shape into the world", .effect = E::Rebuild,
+    {.section = "cloth", .name = "position", .type = T::Vector, .unit = "m", .range = R{-kWorldExtent, kWorldExtent},
+     .doc = "translation of the rest shape into the world", .effect = E::Rebuild, .vector_bound = VectorBound::Components,
      .access = field<&ClothPlacement::position>()},
     {.section = "cloth", .name = "rotation", .type = T::Vector, .unit = "degrees",
      .doc = "orientation of the rest shape (see *Rotations*)", .effect = E::Rebuild,
@@ -474,9 +476,9 @@ constexpr Parameter kTable[] = {
      .doc = "Coulomb coefficient; omitted: each cloth's material friction", .label = "friction", .panel = "colliders",
      .slider = R{-1.0, 10.0}, .default_text = "the cloth's", .unset_when_negative = true,
      .access = field<&ColliderDesc::friction>()},
-    {.section = "collider", .name = "position", .type = T::Vector, .unit = "m",
+    {.section = "collider", .name = "position", .type = T::Vector, .unit = "m", .range = R{-kWorldExtent, kWorldExtent},
      .doc = "centre (sphere, capsule, box), a point on the plane, the mesh's origin", .label = "position",
-     .panel = "colliders", .slider = R{-1e4, 1e4}, .access = field<&ColliderDesc::motion, &Motion::origin>()},
+     .panel = "colliders", .vector_bound = VectorBound::Components, .slider = R{-1e4, 1e4}, .access = field<&ColliderDesc::motion, &Motion::origin>()},
     {.section = "collider", .name = "rotation", .type = T::Vector, .unit = "degrees",
      .doc = "orientation of the local frame (see *Rotations*)", .effect = E::Rebuild, .default_text = "[0, 0, 0]"},
     {.section = "collider", .name = "motion", .type = T::String,

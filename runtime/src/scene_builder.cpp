@@ -1,14 +1,32 @@
 // build_world: a validated SceneDesc → meshes → cooked fabrics → pins → a World.
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <map>
 #include <set>
 
 #include "weft/error.h"
 #include "weft/scene.h"
+#include "weft/world_limits.h"
 
 namespace weft {
 namespace {
+
+/// Every scaled coordinate within the scene's extent (weft/world_limits.h), else an error naming
+/// the vertex and its coordinate.
+void check_extent(const MeshData& mesh, const std::string& where) {
+    for (std::size_t i = 0; i < mesh.positions.size(); ++i) {
+        const Vec3d& p = mesh.positions[i];
+        for (int k = 0; k < 3; ++k)
+            if (!(std::abs(p[k]) <= kWorldExtent)) {
+                char value[32];
+                std::snprintf(value, sizeof(value), "%g", p[k]);
+                throw Error(where + ": vertex " + std::to_string(i) + " has coordinate " + value +
+                            " m after the mesh's scale, beyond the ±" + std::to_string(static_cast<long long>(kWorldExtent)) +
+                            " m a scene may use (float keeps about 8 mm there)");
+            }
+    }
+}
 
 MeshData make_mesh(const SceneCloth& cloth) {
     const ClothSource& src = cloth.source;
@@ -20,6 +38,7 @@ MeshData make_mesh(const SceneCloth& cloth) {
     MeshData mesh = load_mesh_file(src.file);
     if (src.scale != 1.0)
         for (Vec3d& p : mesh.positions) p = src.scale * p;
+    check_extent(mesh, src.file.string());
     return mesh;
 }
 
@@ -103,6 +122,7 @@ std::shared_ptr<const MeshData> load_collider_mesh(const ColliderMeshSource& src
         p = src.scale * p;
         if (!math::is_finite(p)) throw Error(where + ": " + file + ": a vertex position is not finite");
     }
+    check_extent(mesh, where + ": " + file);
     std::size_t degenerate = 0, first = 0;
     for (std::size_t k = 0; k < mesh.triangles.size(); ++k) {
         const Triangle& t = mesh.triangles[k];

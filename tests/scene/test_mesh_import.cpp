@@ -175,6 +175,62 @@ TEST(MeshImport, ErrorsNameTheFile) {
     expect_error([] { (void)load_mesh_file(data_file("bad_syntax.toml")); }, {"bad_syntax.toml", "cannot import mesh"});
 }
 
+// Files cut short (a copy interrupted): a binary PLY whose faces index vertices never read was a
+// crash inside assimp's post-processing, an OBJ cut in its faces loaded as a smaller cloth. Each is
+// now an error naming the file; the whole files still load.
+TEST(MeshImport, TruncatedFilesAreErrorsNotCrashesOrSmallerCloth) {
+    REQUIRE_ASSETS();
+    ASSERT_TRUE(test::install_loader());
+    const MeshData skirt = load_mesh_file(skirt_path());
+    const auto dir = std::filesystem::temp_directory_path();
+    const auto cut = [&](const std::filesystem::path& whole, double keep, const std::string& name) {
+        std::ifstream in(whole, std::ios::binary);
+        std::ostringstream all;
+        all << in.rdbuf();
+        const std::string bytes = all.str();
+        const auto path = dir / name;
+        std::ofstream(path, std::ios::binary) << bytes.substr(0, static_cast<std::size_t>(keep * static_cast<double>(bytes.size())));
+        return path;
+    };
+    for (const char* ext : {".ply", ".obj"}) {
+        SCOPED_TRACE(ext);
+        const auto whole = dir / (std::string("weft_test_whole") + ext);
+        write_mesh(whole, skirt.positions, skirt.triangles);
+        EXPECT_EQ(load_mesh_file(whole).triangles.size(), skirt.triangles.size());
+        for (const double keep : {0.5, 0.75, 0.9}) {
+            const auto path = cut(whole, keep, std::string("weft_test_cut") + ext);
+            expect_error([&] { (void)load_mesh_file(path); }, {path.filename().string()});
+            std::filesystem::remove(path);
+        }
+        std::filesystem::remove(whole);
+    }
+    // The OBJ forms: cut inside the last face line; cut at a line end (its last vertices in no face);
+    // a face naming a vertex the file does not have. A whole file without a final newline loads.
+    const auto write = [&](const std::string& name, const std::string& text) {
+        const auto path = dir / name;
+        std::ofstream(path, std::ios::binary) << text;
+        return path;
+    };
+    const std::string quad = "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nf 1 2 3\nf 1 3 4";
+    expect_error([&] { (void)load_mesh_file(write("weft_test_midline.obj", "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nf 1 2 3\nf 1 3")); },
+                 {"weft_test_midline.obj", "middle of a vertex or face line"});
+    expect_error([&] { (void)load_mesh_file(write("weft_test_unused.obj", "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nf 1 2 3\n")); },
+                 {"weft_test_unused.obj", "1 of its 4 vertices are in no face"});
+    expect_error([&] { (void)load_mesh_file(write("weft_test_range.obj", "v 0 0 0\nv 1 0 0\nv 1 1 0\nf 1 2 7\n")); },
+                 {"weft_test_range.obj:4", "face index 7 of 3 vertices"});
+    EXPECT_EQ(load_mesh_file(write("weft_test_no_newline.obj", quad)).triangles.size(), 2U);
+    // A coordinate beyond the scene's extent, in a cloth's mesh: refused when the scene is built.
+    const auto huge = write("weft_test_huge.obj", "v 0 0 0\nv 1e30 0 0\nv 0 1 0\nf 1 2 3\n");
+    SceneDesc scene = load_scene(test::scene_file("hanging"));
+    scene.cloths[0].source.kind = ClothSource::Kind::File;
+    scene.cloths[0].source.file = huge;
+    scene.cloths[0].pins.clear();
+    expect_error([&] { (void)build_world(scene, "cpu"); }, {"weft_test_huge.obj", "vertex 1 has coordinate 1e+30"});
+    std::filesystem::remove(huge);
+    for (const char* f : {"weft_test_midline.obj", "weft_test_unused.obj", "weft_test_range.obj", "weft_test_no_newline.obj"})
+        std::filesystem::remove(dir / f);
+}
+
 TEST(MeshImport, SceneWithMeshFileBuildsWithReport) {
     REQUIRE_ASSETS();
     ASSERT_TRUE(test::install_loader());

@@ -27,6 +27,14 @@ TEST(SceneOverrides, ScalarVectorAndIndexedKeys) {
     EXPECT_EQ(s.world.wind.turbulence, load_scene(scene_file("flag")).world.wind.turbulence);
 }
 
+// Positions beyond the scene's extent (weft/world_limits.h) are refused with the component named:
+// 1e30 used to be accepted and threw the cloth 1e29 m in a frame.
+TEST(SceneOverrides, PositionsBeyondTheWorldExtentAreRefused) {
+    flag_error("cloth.0.position=[1e30,0,0]", {"cloth[0].position", "component 0 is 1e30", "[-100000, 100000]"});
+    flag_error("collider.0.position=[0,-2e5,0]", {"position", "component 1"});
+    EXPECT_EQ(flag_with({"cloth.0.position=[9e4,0,0]"}).cloth_placements[0].position.x, 9e4);
+}
+
 TEST(SceneOverrides, ByName) {
     const SceneDesc s = flag_with({"cloth.flag.material.bending_stiffness=1e-4", "collider.pole.radius=0.05",
                                    "cloth.flag.mesh.grid.cells=[80, 48]"});

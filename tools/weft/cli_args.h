@@ -23,7 +23,7 @@ inline constexpr int kExitError = 1;          ///< bad scene, unreadable mesh, u
 inline constexpr int kExitUsage = 2;          ///< wrong flags or values
 inline constexpr int kExitNonFinite = 3;      ///< the simulation produced NaN or Inf at least once
 inline constexpr int kExitCollision = 4;      ///< a collision stayed unresolved, or --check found intersections
-inline constexpr int kExitInterrupted = 130;  ///< Ctrl-C (128 + SIGINT, as shells report it); stats still written
+inline constexpr int kExitInterrupted = 130;  ///< Ctrl-C or SIGTERM (128 + SIGINT, as shells report Ctrl-C); stats still written
 
 /// A command-line mistake. `what()` is one line without the program name; `command` names the
 /// subcommand whose help the user should read ("" for the top level).

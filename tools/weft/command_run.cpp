@@ -21,19 +21,26 @@ namespace weft::cli {
 
 namespace {
 
-// Ctrl-C stops after the current frame so that the stats of the frames done are still written.
+// Ctrl-C (SIGINT) and SIGTERM (a job scheduler, `timeout`, `kill`) stop after the current frame, so
+// that the stats, meshes and caches of the frames done are still written.
 volatile std::sig_atomic_t g_interrupted = 0;
 extern "C" void on_interrupt(int /*signal*/) { g_interrupted = 1; }
 
 class InterruptGuard {
 public:
-    InterruptGuard() : previous_(std::signal(SIGINT, on_interrupt)) { g_interrupted = 0; }
-    ~InterruptGuard() { std::signal(SIGINT, previous_ == SIG_ERR ? SIG_DFL : previous_); }
+    InterruptGuard() : previous_int_(std::signal(SIGINT, on_interrupt)), previous_term_(std::signal(SIGTERM, on_interrupt)) {
+        g_interrupted = 0;
+    }
+    ~InterruptGuard() {
+        std::signal(SIGINT, previous_int_ == SIG_ERR ? SIG_DFL : previous_int_);
+        std::signal(SIGTERM, previous_term_ == SIG_ERR ? SIG_DFL : previous_term_);
+    }
     InterruptGuard(const InterruptGuard&) = delete;
     InterruptGuard& operator=(const InterruptGuard&) = delete;
 
 private:
-    void (*previous_)(int);
+    void (*previous_int_)(int);
+    void (*previous_term_)(int);
 };
 
 }  // namespace

@@ -21,7 +21,7 @@ Run 'weft help run' for the options of a command.
 
 Exit codes: 0 success, 1 error (bad scene, unreadable mesh, unwritable output),
             2 usage error, 3 the simulation produced NaN/Inf,
-            130 interrupted by Ctrl-C (the stats of the frames done are still written).
+            130 interrupted by Ctrl-C or SIGTERM (the stats of the frames done are still written).
 )";
 
 constexpr std::string_view kRun = R"(Usage: weft run SCENE [options]
