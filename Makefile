@@ -1,8 +1,8 @@
 # Weft: set-up, build, demo and tests, one command each (README, "Quick start").
 #   make demo   install missing packages, build Release into build/, simulate the flag scene and
 #               render it headless to PNGs (plus an MP4 when ffmpeg is installed)
-#   make test   the same set-up and build, then the whole test suite
-# Other targets: build, asan, format, tidy, clean. Variables can be overridden: make demo DEMO_FRAMES=60
+#   make test   the same set-up and build, a short run of every fuzz target, then the whole test suite
+# Other targets: build, asan, fuzz, format, tidy, clean. Variables can be overridden: make demo DEMO_FRAMES=60
 
 BUILD_DIR   ?= build
 JOBS        ?= $(shell nproc 2>/dev/null || echo 2)
@@ -19,7 +19,7 @@ DEMO_SIZE   ?= 960x540
 
 WEFT := $(BUILD_DIR)/bin/weft
 
-.PHONY: all deps configure build demo test asan format tidy clean
+.PHONY: all deps configure build demo test asan fuzz fuzz-build fuzz-smoke format tidy clean
 
 all: build
 
@@ -41,8 +41,24 @@ demo: build
 	@echo "             $(DEMO_OUT)/contact_sheet.png, $(DEMO_OUT)/capture.mp4 (with ffmpeg)"
 	@echo "             $(DEMO_OUT)/stats.json (timings, CG iterations, memory, capture)"
 
-test: build
+test: build fuzz-smoke
 	ctest --test-dir $(BUILD_DIR) --output-on-failure -j$(JOBS)
+
+# libFuzzer targets (docs/fuzzing.md), from CMakePresets.json into build-fuzz/ with clang, ASan and
+# UBSan: `make test` runs each briefly (FUZZ_SMOKE_RUNS executions after its seeds); `make fuzz` runs
+# each FUZZ_RUNS times and prints the table of docs/fuzzing.md.
+FUZZ_SMOKE_RUNS ?= 3000
+FUZZ_RUNS       ?= 1000000
+FUZZ_TARGETS     = fuzz_scene_loader fuzz_mesh_import fuzz_editor_script
+fuzz-build: deps
+	cmake --preset fuzz > /dev/null
+	cmake --build --preset fuzz -j$(JOBS) --target $(FUZZ_TARGETS)
+
+fuzz-smoke: fuzz-build
+	fuzz/run_fuzzers.sh build-fuzz $(FUZZ_SMOKE_RUNS)
+
+fuzz: fuzz-build
+	fuzz/run_fuzzers.sh build-fuzz $(FUZZ_RUNS)
 
 # Address + undefined-behaviour sanitizers (CPU only), from CMakePresets.json into build-asan/.
 asan: deps
@@ -59,4 +75,4 @@ tidy: configure
 	run-clang-tidy -p $(BUILD_DIR) -quiet '/(runtime|assets|tools|cuda|render|editor)/'
 
 clean:
-	rm -rf $(BUILD_DIR) build-asan out
+	rm -rf $(BUILD_DIR) build-asan build-fuzz out

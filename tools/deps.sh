@@ -13,6 +13,9 @@ ASSETS_PACKAGES=(libassimp-dev)
 # `weft run --cache FILE.glb` writes glTF through TinyGLTF.
 CACHE_PACKAGES=(libtinygltf-dev)
 TEST_PACKAGES=(libgtest-dev libgmock-dev libbenchmark-dev python3)
+# The libFuzzer targets (fuzz/, `make fuzz-smoke` inside `make test`): clang and its fuzzer and
+# sanitizer runtimes.
+FUZZ_PACKAGES=(clang libclang-rt-14-dev)
 # The multi-GPU partition benchmark compares its cut with METIS (bench/partition_bench.cpp).
 BENCH_PACKAGES=(libmetis-dev)
 # The renderer (WEFT_RENDER): Vulkan loader, headers, glslc, lavapipe and the validation layers;
@@ -23,7 +26,7 @@ RENDER_PACKAGES=(libvulkan-dev glslc mesa-vulkan-drivers vulkan-validationlayers
 # The editor (WEFT_EDITOR, `weft edit`): Dear ImGui with its GLFW and Vulkan backends in one static
 # library (its font atlas needs stb); GLFW and Vulkan come with the renderer's group.
 EDITOR_PACKAGES=(libimgui-dev libstb-dev)
-PACKAGE_GROUPS=(BUILD_PACKAGES RUNTIME_PACKAGES ASSETS_PACKAGES CACHE_PACKAGES TEST_PACKAGES BENCH_PACKAGES RENDER_PACKAGES EDITOR_PACKAGES)
+PACKAGE_GROUPS=(BUILD_PACKAGES RUNTIME_PACKAGES ASSETS_PACKAGES CACHE_PACKAGES TEST_PACKAGES FUZZ_PACKAGES BENCH_PACKAGES RENDER_PACKAGES EDITOR_PACKAGES)
 
 if [[ "${WEFT_SKIP_DEPS:-0}" == "1" ]]; then
     echo "deps: skipped (WEFT_SKIP_DEPS=1)"

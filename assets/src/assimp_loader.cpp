@@ -9,11 +9,13 @@
 #include <cctype>
 #include <cmath>
 #include <exception>
+#include <fstream>
 #include <limits>
 
 #include "weft/error.h"
 #include "weft/mesh.h"
 #include "obj_scan.h"
+#include "ply_scan.h"
 
 namespace weft::assets {
 
@@ -31,6 +33,16 @@ MeshData import_mesh(const std::filesystem::path& path, ImportReport* report) {
     // ends, so a file cut short would load as a smaller cloth without a word (obj_scan.h).
     std::string ext = path.extension().string();
     std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
+    // A PLY's header is checked first too: assimp loops forever on one without `end_header`, and
+    // reads past the data of a file cut short (ply_scan.h).
+    // assimp picks its PLY reader by the content as well as the extension: the magic decides here too.
+    const bool ply_magic = [&] {
+        std::ifstream in(path, std::ios::binary);
+        char magic[4] = {};
+        in.read(magic, 4);
+        return in.gcount() == 4 && magic[0] == 'p' && magic[1] == 'l' && magic[2] == 'y' && (magic[3] == '\n' || magic[3] == '\r');
+    }();
+    if (ext == ".ply" || ply_magic) (void)scan_ply(path);
     if (ext == ".obj") {
         const ObjScan scan = scan_obj(path);
         if (scan.ends_mid_line)

@@ -38,12 +38,16 @@ public:
     }
 
     void read_state(std::size_t cloth, std::span<Vec3d> x, std::span<Vec3d> v) const override {
-        const auto [first, count] = flat_.cloth_vertices(cloth, x.size(), v.size());
+        // Named copies, not a structured binding: a lambda may capture those only from clang 16
+        // (the fuzz preset builds with clang 14).
+        const auto range = flat_.cloth_vertices(cloth, x.size(), v.size());
+        const std::size_t first = range.first, count = range.second;
         std::visit([&](const auto& s) { s.read_state(first, count, x.data(), v.data()); }, solver_);
     }
 
     void write_state(std::size_t cloth, std::span<const Vec3d> x, std::span<const Vec3d> v) override {
-        const auto [first, count] = flat_.cloth_vertices(cloth, x.size(), v.size());
+        const auto range = flat_.cloth_vertices(cloth, x.size(), v.size());
+        const std::size_t first = range.first, count = range.second;
         std::visit([&](auto& s) { s.write_state(first, count, x.data(), v.data()); }, solver_);
     }
 
