@@ -18,6 +18,26 @@
 #include "ply_scan.h"
 
 namespace weft::assets {
+namespace {
+
+/// Throws when the first bytes of `path` cannot start a file of extension `ext` (lower case):
+/// glTF JSON opens with '{', a GLB with "glTF", a PLY with "ply", an OBJ is text (no NUL byte in
+/// its first 4 KiB). Other extensions are left to assimp.
+void check_signature(const std::filesystem::path& path, const std::string& ext) {
+    std::ifstream in(path, std::ios::binary);
+    std::string head(4096, '\0');
+    in.read(head.data(), static_cast<std::streamsize>(head.size()));
+    head.resize(static_cast<std::size_t>(in.gcount()));
+    const std::string file = path.string();
+    const auto first = head.find_first_not_of(" \t\r\n\xEF\xBB\xBF");  // a UTF-8 byte-order mark too
+    if (ext == ".gltf" && (first == std::string::npos || head[first] != '{'))
+        throw Error(file + ": not a glTF file (its JSON does not start with '{')");
+    if (ext == ".glb" && head.rfind("glTF", 0) != 0) throw Error(file + ": not a GLB file (no 'glTF' magic)");
+    if (ext == ".ply" && head.rfind("ply", 0) != 0) throw Error(file + ": not a PLY file (no 'ply' on the first line)");
+    if (ext == ".obj" && head.find('\0') != std::string::npos) throw Error(file + ": not an OBJ file (it holds binary data)");
+}
+
+}  // namespace
 
 MeshData import_mesh(const std::filesystem::path& path, ImportReport* report) {
     const std::string file = path.string();
@@ -35,6 +55,10 @@ MeshData import_mesh(const std::filesystem::path& path, ImportReport* report) {
     std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
     // A PLY's header is checked first too: assimp loops forever on one without `end_header`, and
     // reads past the data of a file cut short (ply_scan.h).
+    // assimp tries every reader it has on a file its extension's reader refuses, and some of those
+    // readers overflow their buffers on garbage (a ".gltf" of text: found by fuzz_mesh_import). A
+    // file whose start is not its extension's format is refused here first.
+    check_signature(path, ext);
     // assimp picks its PLY reader by the content as well as the extension: the magic decides here too.
     const bool ply_magic = [&] {
         std::ifstream in(path, std::ios::binary);

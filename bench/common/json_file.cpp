@@ -4,7 +4,12 @@
 #include <iostream>
 #include <system_error>
 
+#include "weft/atomic_file.h"
+#include "weft/error.h"
+
 namespace weft::bench {
+
+using weft::AtomicFile;
 
 bool write_json_file(const std::filesystem::path& file, std::string_view program,
                      const std::function<void(std::ostream&)>& write) {
@@ -12,16 +17,13 @@ bool write_json_file(const std::filesystem::path& file, std::string_view program
         std::error_code ec;
         std::filesystem::create_directories(file.parent_path(), ec);  // a failure shows when opening
     }
-    std::ofstream stream(file);
-    if (!stream) {
-        std::cerr << program << ": cannot write " << file.string() << '\n';
-        return false;
-    }
-    write(stream);
-    stream << '\n';
-    stream.close();
-    if (!stream) {
-        std::cerr << program << ": error writing " << file.string() << '\n';
+    try {
+        AtomicFile out(file, true);  // whole or not at all
+        write(out.stream());
+        out.stream() << '\n';
+        out.commit();
+    } catch (const weft::Error& e) {
+        std::cerr << program << ": " << e.what() << '\n';
         return false;
     }
     std::cout << "\nresults: " << file.string() << '\n';

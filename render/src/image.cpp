@@ -10,6 +10,7 @@
 #include <memory>
 #include <string>
 
+#include "weft/atomic_file.h"
 #include "weft/error.h"
 
 namespace weft::render {
@@ -31,10 +32,21 @@ void png_warn(png_structp, png_const_charp) {}
 
 }  // namespace
 
+/// libpng writes `image` to `path`; messages name `file`, the file the caller asked for.
+static void write_png_to(const std::filesystem::path& path, const std::filesystem::path& file, const Image& image);
+
 void write_png(const std::filesystem::path& file, const Image& image) {
     if (image.empty() || image.rgba.size() != static_cast<std::size_t>(image.width) * image.height * 4)
         throw Error("write_png: " + file.string() + ": the image is empty or its size does not match its pixels");
-    File f(std::fopen(file.c_str(), "wb"));
+    // Whole or not at all: libpng writes the temporary file, which replaces `file` when complete.
+    AtomicFile target(file);
+    target.release_stream();
+    write_png_to(target.temporary(), file, image);
+    target.commit();
+}
+
+static void write_png_to(const std::filesystem::path& path, const std::filesystem::path& file, const Image& image) {
+    File f(std::fopen(path.c_str(), "wb"));
     if (!f) throw Error("write_png: cannot open " + file.string() + " for writing");
     std::string what;
     png_structp png = png_create_write_struct(PNG_LIBPNG_VER_STRING, &what, png_fail, png_warn);

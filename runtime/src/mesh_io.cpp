@@ -7,6 +7,7 @@
 #include <mutex>
 #include <string>
 
+#include "weft/atomic_file.h"
 #include "weft/error.h"
 #include "weft/mesh.h"
 
@@ -111,11 +112,7 @@ void write_mesh(const std::filesystem::path& path, std::span<const Vec3d> positi
     } else {
         throw Error(path.string() + ": cannot write mesh: unknown extension '" + ext + "' (expected .ply or .obj)");
     }
-    std::ofstream out(path, std::ios::binary | std::ios::trunc);
-    if (!out) throw Error(path.string() + ": cannot open for writing");
-    out.write(bytes.data(), static_cast<std::streamsize>(bytes.size()));
-    out.close();
-    if (!out) throw Error(path.string() + ": write failed");
+    write_file_atomically(path, bytes);  // whole or not at all (weft/atomic_file.h)
 }
 
 }  // namespace weft

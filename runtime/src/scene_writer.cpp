@@ -10,6 +10,7 @@
 #include <vector>
 
 #include "weft/backend/model.h"
+#include "weft/atomic_file.h"
 #include "weft/error.h"
 #include "weft/parameters.h"
 #include "weft/scene.h"
@@ -215,11 +216,7 @@ std::string scene_to_toml(const SceneDesc& scene, const std::filesystem::path& d
 
 void save_scene(const SceneDesc& scene, const std::filesystem::path& path) {
     const std::string text = scene_to_toml(scene, path.parent_path());
-    std::ofstream out(path, std::ios::binary | std::ios::trunc);
-    if (!out) throw Error(path.string() + ": cannot open for writing the scene");
-    out << text;
-    out.flush();
-    if (!out) throw Error(path.string() + ": writing the scene failed (disk full?)");
+    write_file_atomically(path, text);  // a failed save leaves the scene file as it was
 }
 
 void update_scene_from_world(SceneDesc& scene, const World& world) {

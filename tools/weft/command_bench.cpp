@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <chrono>
 #include <fstream>
+#include <optional>
 #include <vector>
 
 #include "weft/error.h"
@@ -48,9 +49,9 @@ BenchResult bench_scene(const std::string& scene, const BenchOptions& options, i
     return result;
 }
 
-void write_bench_json(std::ofstream& stream, const std::filesystem::path& file, const BenchOptions& options,
+void write_bench_json(AtomicFile& out, const std::filesystem::path& file, const BenchOptions& options,
                       const std::vector<BenchResult>& results) {
-    JsonWriter json(stream);
+    JsonWriter json(out.stream());
     json.begin_array();
     for (const BenchResult& r : results) {
         json.begin_object();
@@ -64,7 +65,7 @@ void write_bench_json(std::ofstream& stream, const std::filesystem::path& file, 
         json.end_object();
     }
     json.end_array();
-    close_output_file(stream, file, "bench results");
+    close_output_file(out, file, "bench results");
 }
 
 void print_bench_table(std::ostream& out, const std::vector<BenchResult>& results) {
@@ -102,15 +103,15 @@ int bench_command(const BenchOptions& options, std::ostream& out, std::ostream& 
     for (const std::string& scene : options.scenes) (void)find_scene(scene);
 
     // Open the output first: a bad path should fail before minutes of benchmarking, not after.
-    std::ofstream json_stream;
-    if (!options.json_file.empty()) json_stream = open_output_file(options.json_file, "bench results");
+    std::optional<AtomicFile> json_out;
+    if (!options.json_file.empty()) json_out.emplace(open_output_file(options.json_file, "bench results"));
 
     std::vector<BenchResult> results;
     for (const std::string& scene : options.scenes)
         for (const int gpus : options.gpu_counts) results.push_back(bench_scene(scene, options, gpus, err));
     print_bench_table(out, results);
     if (!options.json_file.empty()) {
-        write_bench_json(json_stream, options.json_file, options, results);
+        write_bench_json(*json_out, options.json_file, options, results);
         out << "\nresults: " << options.json_file.string() << '\n';
     }
     bool non_finite = false;

@@ -54,8 +54,8 @@ int run_command(const RunOptions& options, std::ostream& out, std::ostream& err)
 
     std::vector<std::string> cloth_names;
     for (std::size_t c = 0; c < world.cloth_count(); ++c) cloth_names.push_back(world.cloth(c).name);
-    std::ofstream stats_stream;
-    if (!options.stats_file.empty()) stats_stream = open_output_file(options.stats_file, "stats file");
+    std::optional<AtomicFile> stats_out;
+    if (!options.stats_file.empty()) stats_out.emplace(open_output_file(options.stats_file, "stats file"));
     std::optional<FrameWriter> writer;
     if (!options.out_dir.empty() && options.meshes) writer.emplace(options.out_dir, options.format, cloth_names, frames);
     std::optional<CacheWriter> cache;
@@ -112,9 +112,9 @@ int run_command(const RunOptions& options, std::ostream& out, std::ostream& err)
     if (captured && captured->torn_frames > 0)
         err << "weft: WARNING: " << captured->torn_frames
             << " captured frames drew from a cloth slot that held parts of two states (stamps differ)\n";
-    if (stats_stream.is_open()) {
-        write_run_json(stats_stream, context, summary, stats, wall_seconds, capture_summary);
-        close_output_file(stats_stream, options.stats_file, "stats file");
+    if (stats_out) {
+        write_run_json(stats_out->stream(), context, summary, stats, wall_seconds, capture_summary);
+        close_output_file(*stats_out, options.stats_file, "stats file");
     }
 
     if (!options.quiet) {

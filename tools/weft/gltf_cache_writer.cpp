@@ -5,6 +5,7 @@
 #include <cstring>
 #include <string>
 
+#include "weft/atomic_file.h"
 #include "weft/error.h"
 #include "weft/world.h"
 
@@ -165,8 +166,11 @@ void GltfCacheWriter::finish(const World& world) {
     m.scenes.push_back(scene);
     m.defaultScene = 0;
     tinygltf::TinyGLTF gltf;
-    if (!gltf.WriteGltfSceneToFile(&m, file_.string(), true, true, false, true))
+    AtomicFile out(file_);  // whole or not at all: TinyGLTF writes the temporary file
+    out.release_stream();
+    if (!gltf.WriteGltfSceneToFile(&m, out.temporary().string(), true, true, false, true))
         throw Error("cannot write the glTF cache " + file_.string());
+    out.commit();
 #else
     (void)world;
     throw Error("--cache " + file_.string() + ": glTF caches are not built");

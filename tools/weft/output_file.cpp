@@ -7,23 +7,20 @@
 
 namespace weft::cli {
 
-std::ofstream open_output_file(const std::filesystem::path& file, std::string_view what) {
-    if (file.has_parent_path()) {
-        std::error_code ec;
-        std::filesystem::create_directories(file.parent_path(), ec);
-        if (ec) {
-            throw Error("cannot create the folder of " + std::string(what) + " '" + file.string() +
-                        "': " + ec.message());
-        }
+AtomicFile open_output_file(const std::filesystem::path& file, std::string_view what) {
+    try {
+        return AtomicFile(file, true);
+    } catch (const Error& e) {
+        throw Error("cannot open " + std::string(what) + " '" + file.string() + "' for writing: " + e.what());
     }
-    std::ofstream stream(file, std::ios::binary | std::ios::trunc);
-    if (!stream) throw Error("cannot open " + std::string(what) + " '" + file.string() + "' for writing");
-    return stream;
 }
 
-void close_output_file(std::ofstream& stream, const std::filesystem::path& file, std::string_view what) {
-    stream.close();
-    if (!stream) throw Error("failed writing " + std::string(what) + " '" + file.string() + "'");
+void close_output_file(AtomicFile& out, const std::filesystem::path& file, std::string_view what) {
+    try {
+        out.commit();
+    } catch (const Error& e) {
+        throw Error("failed writing " + std::string(what) + " '" + file.string() + "': " + e.what());
+    }
 }
 
 }  // namespace weft::cli
