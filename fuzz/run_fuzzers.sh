@@ -2,7 +2,7 @@
 # Runs every libFuzzer target of a `fuzz` preset build over a seed corpus made from the shipped
 # assets and the tests' data (docs/fuzzing.md):
 #
-#   fuzz/run_fuzzers.sh BUILD_DIR RUNS
+#   fuzz/run_fuzzers.sh BUILD_DIR RUNS [TARGETS]
 #
 # RUNS executions per target after the seeds (deterministic: -seed=1). Prints a table (target,
 # executions, seconds, corpus size, outcome) and exits non-zero when any target crashed, leaked,
@@ -10,6 +10,7 @@
 set -uo pipefail
 BUILD=${1:?usage: fuzz/run_fuzzers.sh BUILD_DIR RUNS}
 RUNS=${2:?usage: fuzz/run_fuzzers.sh BUILD_DIR RUNS}
+TARGETS=${3:-fuzz_scene_loader fuzz_mesh_import fuzz_editor_script}  # a subset, space-separated
 ROOT=$(cd "$(dirname "$0")/.." && pwd)
 CORPORA="$BUILD/fuzz-corpus"
 ARTIFACTS="$BUILD/fuzz-artifacts"
@@ -40,7 +41,7 @@ seed fuzz_editor_script "$ROOT"/tests/editor/data/*.txt
 
 failed=0
 printf '| target | executions | seconds | corpus files | outcome |\n|---|---|---|---|---|\n'
-for target in fuzz_scene_loader fuzz_mesh_import fuzz_editor_script; do
+for target in $TARGETS; do
     bin="$BUILD/bin/$target"
     if [[ ! -x $bin ]]; then
         printf '| %s | — | — | — | not built |\n' "$target"

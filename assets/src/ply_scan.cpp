@@ -94,6 +94,11 @@ PlyScan scan_ply(const std::filesystem::path& path) {
         s.header_bytes += line.size() + 1;
         if (s.header_bytes > kHeaderLimit) break;
         if (!line.empty() && line.back() == '\r') line.pop_back();
+        // Printable ASCII, spaces and tabs only: assimp reads a header line with other whitespace in
+        // it (a vertical tab after `end_header`) as no end at all and loops (fuzz_mesh_import).
+        for (const char c : line)
+            if ((c < ' ' || c > '~') && c != '\t')
+                throw Error(file + ":" + std::to_string(number) + ": a control or non-ASCII character in the PLY header");
         std::istringstream words(line);
         std::string word;
         words >> word;
@@ -142,6 +147,8 @@ PlyScan scan_ply(const std::filesystem::path& path) {
                 elements.back().properties.push_back({false, name});
             }
         } else if (word == "end_header") {
+            if (line.find_first_not_of(" \t", line.find("end_header") + 10) != std::string::npos)
+                throw Error(where + "text after end_header on its line");
             ended = true;
         } else if (word != "comment" && word != "obj_info" && !word.empty()) {
             throw Error(where + "unknown header line '" + line.substr(0, 40) + "'");

@@ -230,13 +230,17 @@ TEST(MeshImport, TruncatedFilesAreErrorsNotCrashesOrSmallerCloth) {
     expect_error([&] { (void)load_mesh_file(write("weft_test_no_end.ply", ply_head)); }, {"weft_test_no_end.ply", "no end_header"});
     expect_error([&] { (void)load_mesh_file(write("weft_test_short.ply", ply_head + "end_header\n0 0 0\n1 0 0\n1 1 0\n0 1 0\n3 0 1 2\n")); },
                  {"weft_test_short.ply", "declares 6 element lines", "the file has 5"});
-    // A malformed face line made assimp abort in its post-processing (found by fuzz_mesh_import); a
-    // PLY under another extension is checked by its magic, as assimp picks its reader by it too.
+    // A malformed face line made assimp abort in its post-processing, and an `end_header` followed by
+    // a vertical tab made it loop (both found by fuzz_mesh_import); a file whose first bytes are not
+    // its extension's format is refused before assimp tries its other readers on it.
     expect_error([&] { (void)load_mesh_file(write("weft_test_comma.ply", ply_head + "end_header\n" + ply_body.substr(0, 32) + ", 0 2 3\n")); },
                  {"weft_test_comma.ply:15", "',' is not a number"});
     expect_error([&] { (void)load_mesh_file(write("weft_test_index.ply", ply_head + "end_header\n" + ply_body.substr(0, 32) + "3 0 2 9\n")); },
                  {"weft_test_index.ply:15", "vertex index 9 of 4"});
-    expect_error([&] { (void)load_mesh_file(write("weft_test_ply_as.glb", ply_head + ply_body)); }, {"weft_test_ply_as.glb", "unknown header line"});
+    expect_error([&] { (void)load_mesh_file(write("weft_test_ply_as.glb", ply_head + ply_body)); }, {"weft_test_ply_as.glb", "not a GLB file"});
+    expect_error([&] { (void)load_mesh_file(write("weft_test_vtab.ply", ply_head + "end_header\v0 0 -1\n" + ply_body)); },
+                 {"weft_test_vtab.ply:9", "control or non-ASCII character"});
+    std::filesystem::remove(dir / "weft_test_vtab.ply");
     for (const char* f : {"weft_test_comma.ply", "weft_test_index.ply", "weft_test_ply_as.glb"}) std::filesystem::remove(dir / f);
     for (const char* f : {"weft_test_whole.ply", "weft_test_endless.ply", "weft_test_no_end.ply", "weft_test_short.ply"})
         std::filesystem::remove(dir / f);

@@ -177,7 +177,8 @@ bool apply_simulation_flag(std::string_view command, SimulationOptions& sim, std
 
 constexpr FlagSpec kRunFlags[] = {{"--backend", true}, {"--threads", true}, {"--host-wait", true}, {"--gpus", true}, {"--set", true}, {"--preset", true},   {"--frames", true},
                                   {"--out", true},     {"--format", true},  {"--stats", true}, {"--quiet", false},
-                                  {"--check", false},  {"--capture", true}, {"--size", true}, {"--cache", true}};
+                                  {"--check", false},  {"--capture", true}, {"--size", true}, {"--cache", true},
+                                  {"--checkpoint", true}, {"--checkpoint-every", true}, {"--resume", true}};
 
 constexpr FlagSpec kViewFlags[] = {{"--backend", true}, {"--threads", true}, {"--host-wait", true}, {"--gpus", true},    {"--set", true}, {"--preset", true},
                                    {"--frames", true},  {"--screenshot", true}, {"--size", true},
@@ -249,6 +250,12 @@ Invocation parse_run(std::span<const std::string_view> args) {
             run.capture = std::string(value);
         } else if (name == "--size") {
             parse_size(cmd, name, value, run.capture_width, run.capture_height);
+        } else if (name == "--checkpoint") {
+            run.checkpoint_dir = std::filesystem::path(value);
+        } else if (name == "--checkpoint-every") {
+            run.checkpoint_every = parse_int(cmd, name, value, 1, 100'000'000);
+        } else if (name == "--resume") {
+            run.resume_file = std::filesystem::path(value);
         } else if (name == "--cache") {
             const std::filesystem::path path(value);
             std::string ext = path.extension().string();
@@ -260,6 +267,8 @@ Invocation parse_run(std::span<const std::string_view> args) {
         }
     });
     if (!positionals) return help_for(cmd);
+    if (run.checkpoint_every > 0 && run.checkpoint_dir.empty())
+        throw UsageError(cmd, "--checkpoint-every needs --checkpoint DIR for the files");
     if (run.capture != "none" && run.out_dir.empty())
         throw UsageError(cmd, "--capture " + run.capture + " needs --out DIR for the pictures");
     // Captured runs write pictures; meshes only when a mesh format was asked for as well.

@@ -62,6 +62,9 @@ struct RunOptions {
     int capture_width = 1280;      ///< pixels
     int capture_height = 720;      ///< pixels
     bool meshes = true;            ///< with --out, write meshes (--capture alone writes only pictures)
+    std::filesystem::path checkpoint_dir;  ///< `--checkpoint DIR`: DIR/frame_NNNNNN.state at the end (and every N frames); empty: none
+    int checkpoint_every = 0;              ///< `--checkpoint-every N`: also every N frames (0: at the end only)
+    std::filesystem::path resume_file;     ///< `--resume FILE`: start from a checkpoint of this scene
     std::filesystem::path cache_file;  ///< `--cache FILE.pc2|.glb`: PC2 point caches or a glTF binary (cache_writer.h); empty: none
 };
 

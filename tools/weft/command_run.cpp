@@ -2,6 +2,7 @@
 #include <algorithm>
 #include <chrono>
 #include <csignal>
+#include <cstdio>
 #include <fstream>
 #include <optional>
 #include <vector>
@@ -51,13 +52,25 @@ int run_command(const RunOptions& options, std::ostream& out, std::ostream& err)
     World& world = *loaded.world;
     if (options.check) world.settings().collision.check = true;
     const int frames = options.frames.value_or(loaded.desc.frames);
+    // A resumed run goes on from the checkpoint's frame: its outputs are numbered from there.
+    if (!options.resume_file.empty()) world.load_state(options.resume_file);
+    const int first_frame = static_cast<int>(world.steps());
+    const auto checkpoint = [&](int frame) {
+        char name[32];
+        std::snprintf(name, sizeof(name), "frame_%06d.state", frame);
+        std::error_code ec;
+        std::filesystem::create_directories(options.checkpoint_dir, ec);
+        if (ec) throw Error("cannot create the checkpoint folder '" + options.checkpoint_dir.string() + "': " + ec.message());
+        world.save_state(options.checkpoint_dir / name);
+    };
 
     std::vector<std::string> cloth_names;
     for (std::size_t c = 0; c < world.cloth_count(); ++c) cloth_names.push_back(world.cloth(c).name);
     std::optional<AtomicFile> stats_out;
     if (!options.stats_file.empty()) stats_out.emplace(open_output_file(options.stats_file, "stats file"));
     std::optional<FrameWriter> writer;
-    if (!options.out_dir.empty() && options.meshes) writer.emplace(options.out_dir, options.format, cloth_names, frames);
+    if (!options.out_dir.empty() && options.meshes)
+        writer.emplace(options.out_dir, options.format, cloth_names, first_frame + frames);
     std::optional<CacheWriter> cache;
     if (!options.cache_file.empty()) cache.emplace(options.cache_file, world, world.settings().solver.dt);
     std::optional<FrameCapture> capture;
@@ -75,7 +88,7 @@ int run_command(const RunOptions& options, std::ostream& out, std::ostream& err)
     }
 
     const auto start = std::chrono::steady_clock::now();
-    if (writer) writer->write(0, world);
+    if (writer) writer->write(first_frame, world);
     if (cache) cache->append(world);
     if (capture) capture->capture(0, {});
     std::vector<StepStats> stats;
@@ -91,8 +104,10 @@ int run_command(const RunOptions& options, std::ostream& out, std::ostream& err)
                 capture->capture(frame, step);
             else
                 step();
-            if (writer) writer->write(frame, world);
+            if (writer) writer->write(first_frame + frame, world);
             if (cache) cache->append(world);
+            if (options.checkpoint_every > 0 && (first_frame + frame) % options.checkpoint_every == 0)
+                checkpoint(first_frame + frame);
             bar.update(frame);
             if (g_interrupted != 0) {
                 interrupted = true;
@@ -102,6 +117,9 @@ int run_command(const RunOptions& options, std::ostream& out, std::ostream& err)
     }
     const double wall_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     if (cache) cache->finish(world);  // also after an interrupt: the frames so far
+    const int last_frame = static_cast<int>(world.steps());
+    if (!options.checkpoint_dir.empty() && (options.checkpoint_every == 0 || last_frame % options.checkpoint_every != 0))
+        checkpoint(last_frame);  // the end (or where Ctrl-C stopped it) unless just written
 
     // Describe again: backends may grow scratch memory while stepping (reported: docs/design.md, "Memory").
     const RunContext context = describe_run(loaded.desc, world, options.sim.threads, options.sim.host_wait);
@@ -130,6 +148,9 @@ int run_command(const RunOptions& options, std::ostream& out, std::ostream& err)
                 << (files.size() == 1 ? " file: " : " files: ") << files.front().string() << (files.size() > 1 ? " …" : "")
                 << (cache->format() == std::string("PC2") ? " (rest meshes beside, .obj)" : "") << "\n";
         }
+        if (!options.checkpoint_dir.empty())
+            out << "  checkpoints    " << (options.checkpoint_dir / "frame_*.state").string() << " (the last: frame " << last_frame
+                << "; resume with --resume FILE)\n";
         if (!options.stats_file.empty()) out << "  stats          " << options.stats_file.string() << '\n';
     } else {
         for (const std::string& w : run_warnings(context, summary)) err << "weft: WARNING: " << w << '\n';

@@ -43,6 +43,12 @@ Options:
   --cache FILE.pc2   write the run as a PC2 point cache (Blender's Mesh Cache modifier, 3ds Max,
                      Maya) with its rest mesh beside it as FILE.obj; several cloths: FILE_<cloth>.pc2
   --cache FILE.glb   or as one glTF 2.0 binary: a mesh per cloth, its frames as animated morph targets
+  --checkpoint DIR   write a checkpoint DIR/frame_NNNNNN.state at the end of the run (and where Ctrl-C
+                     or SIGTERM stops it): everything that decides the next frame
+  --checkpoint-every N
+                     also every N frames (needs --checkpoint)
+  --resume FILE      start from a checkpoint of the same scene (the CPU backend goes on bit for bit);
+                     outputs are numbered from its frame on
   --capture egl|vulkan|none
                      render every frame headless to DIR/frame_0000.png (needs --out DIR; meshes
                      then only with --format), plus DIR/contact_sheet.png and DIR/capture.mp4

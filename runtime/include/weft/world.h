@@ -11,6 +11,7 @@
 /// @endcode
 
 #include <cstddef>
+#include <filesystem>
 #include <memory>
 #include <optional>
 #include <span>
@@ -99,6 +100,17 @@ public:
     [[nodiscard]] std::vector<Vec3d> velocities(std::size_t cloth) const;
     /// Overwrites a cloth's state (sizes must equal the fabric's vertex count).
     void set_state(std::size_t cloth, std::span<const Vec3d> positions, std::span<const Vec3d> velocities);
+
+    /// Checkpoints (docs/design.md, "Checkpoints"). save_state writes everything that decides the
+    /// next step besides the scene's settings: simulated time and step count, every cloth's
+    /// positions, velocities and pins, the grab, and the backend's solver state (the CG warm start);
+    /// versioned, with a checksum, whole or not at all. Throws weft::Error naming the file.
+    void save_state(const std::filesystem::path& file) const;
+    /// Restores a checkpoint of this world (the same scene: cloths and vertex counts, backend and
+    /// precision): stepping on gives the bits the saved world would have given on the CPU backend.
+    /// Throws weft::Error naming the file and the reason for a corrupt, cut or mismatched
+    /// checkpoint, before changing anything.
+    void load_state(const std::filesystem::path& file);
 
     /// Kinetic + gravitational potential + elastic energy of all cloths, J (diagnostics and tests).
     [[nodiscard]] double energy() const;

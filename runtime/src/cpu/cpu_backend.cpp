@@ -45,6 +45,13 @@ public:
         std::visit([&](const auto& s) { s.read_state(first, count, x.data(), v.data()); }, solver_);
     }
 
+    std::vector<std::uint8_t> solver_state() const override {
+        return std::visit([](const auto& s) { return s.solver_state(); }, solver_);
+    }
+    void restore_solver_state(std::span<const std::uint8_t> bytes) override {
+        std::visit([&](auto& s) { s.restore_solver_state(bytes); }, solver_);
+    }
+
     void write_state(std::size_t cloth, std::span<const Vec3d> x, std::span<const Vec3d> v) override {
         const auto range = flat_.cloth_vertices(cloth, x.size(), v.size());
         const std::size_t first = range.first, count = range.second;

@@ -3,9 +3,11 @@
 #include "cpu/cpu_solver.h"
 
 #include <chrono>
+#include <cstring>
 #include <cmath>
 
 #include "weft/backend/collider_shape.h"
+#include "weft/error.h"
 #include "weft/backend/timing.h"
 #include "weft/physics/aerodynamics.h"
 #include "weft/physics/swept_collider.h"
@@ -425,6 +427,43 @@ void CpuSolver<T>::write_state(std::size_t first, std::size_t count, const Vec3d
         v_[first + i] = to<T>(v[i]);
         dv_previous_[first + i] = V3{};  // the motion was replaced: nothing to extrapolate from
     }
+}
+
+template <typename T>
+std::vector<std::uint8_t> CpuSolver<T>::solver_state() const {
+    // 'C', the scalar's size, the vertex count, the substep count, then the warm start's scalars.
+    const std::uint64_t n = n_;
+    const std::int64_t substeps = substep_count_;
+    std::vector<std::uint8_t> out(2 + sizeof(n) + sizeof(substeps) + dv_previous_.size() * sizeof(V3));
+    out[0] = 'C';
+    out[1] = static_cast<std::uint8_t>(sizeof(T));
+    std::memcpy(out.data() + 2, &n, sizeof(n));
+    std::memcpy(out.data() + 2 + sizeof(n), &substeps, sizeof(substeps));
+    if (!dv_previous_.empty())
+        std::memcpy(out.data() + 2 + sizeof(n) + sizeof(substeps), dv_previous_.data(), dv_previous_.size() * sizeof(V3));
+    return out;
+}
+
+template <typename T>
+void CpuSolver<T>::restore_solver_state(std::span<const std::uint8_t> bytes) {
+    std::uint64_t n = 0;
+    std::int64_t substeps = 0;
+    const std::size_t head = 2 + sizeof(n) + sizeof(substeps);
+    if (bytes.size() < head || bytes[0] != 'C')
+        throw Error("cpu backend: the checkpoint's solver state is not the CPU backend's");
+    if (bytes[1] != sizeof(T))
+        throw Error(std::string("cpu backend: the checkpoint was made in ") + (bytes[1] == 4 ? "float" : "double") +
+                    ", this world runs in " + (sizeof(T) == 4 ? "float" : "double") + " (solver.precision)");
+    std::memcpy(&n, bytes.data() + 2, sizeof(n));
+    std::memcpy(&substeps, bytes.data() + 2 + sizeof(n), sizeof(substeps));
+    if (n != n_ || bytes.size() != head + n * sizeof(V3))
+        throw Error("cpu backend: the checkpoint's solver state is for " + std::to_string(n) + " vertices, this world has " +
+                    std::to_string(n_));
+    std::memcpy(dv_previous_.data(), bytes.data() + head, n * sizeof(V3));
+    substep_count_ = substeps;
+    // The Schwarz factors are not in the checkpoint: the next substep refactors (with
+    // preconditioner_refresh = 1, the default, it would anyway).
+    schwarz_factored_ = false;
 }
 
 template <typename T>

@@ -36,6 +36,11 @@ public:
     void substep(const Model& model, double t, double h, StepStats& stats);
     void read_state(std::size_t first, std::size_t count, Vec3d* x, Vec3d* v) const;
     void write_state(std::size_t first, std::size_t count, const Vec3d* x, const Vec3d* v);
+    /// The CG warm start and the substep count (the preconditioner's refresh phase) as bytes, for a
+    /// checkpoint; restore_solver_state takes them back (after write_state, which clears the warm
+    /// start) and throws weft::Error when they come from another precision or vertex count.
+    [[nodiscard]] std::vector<std::uint8_t> solver_state() const;
+    void restore_solver_state(std::span<const std::uint8_t> bytes);
     [[nodiscard]] std::size_t memory_bytes() const;
     /// The share of `memory_bytes` held by the collision pipeline.
     [[nodiscard]] std::size_t collision_memory_bytes() const { return collisions_.memory_bytes(); }

@@ -5,6 +5,7 @@
 /// backend by name and `BackendOptions` (weft/backend_options.h) and never includes this header.
 
 #include <cstddef>
+#include <cstdint>
 #include <functional>
 #include <memory>
 #include <span>
@@ -44,6 +45,14 @@ public:
     virtual void read_state(std::size_t cloth, std::span<Vec3d> positions, std::span<Vec3d> velocities) const = 0;
     /// Overwrites a cloth's positions and velocities (reset, editing, tests).
     virtual void write_state(std::size_t cloth, std::span<const Vec3d> positions, std::span<const Vec3d> velocities) = 0;
+    /// What besides the positions and velocities decides the next substep (the CG warm start, the
+    /// preconditioner's refresh phase), as bytes for a checkpoint (World::save_state); empty when
+    /// the backend keeps nothing more. Read after the state: restore_solver_state comes after
+    /// write_state, which clears it.
+    [[nodiscard]] virtual std::vector<std::uint8_t> solver_state() const { return {}; }
+    /// Restores what solver_state returned on a backend of the same kind, precision and model.
+    /// Throws weft::Error naming what does not match.
+    virtual void restore_solver_state(std::span<const std::uint8_t> bytes);
     /// The energy guard's audit of the current state at time `t` (s) of substeps of `h` (s), with the
     /// wind's power when `with_wind` (weft/backend/energy_audit.h). The default reads every cloth back
     /// with `read_state` and sums on the host; a backend that keeps its state on a device may sum there
