@@ -2,6 +2,8 @@
 // commit, an abandoned write leaves it as it was and no temporary behind, and failures name the file.
 #include <gtest/gtest.h>
 
+#include "file_bytes.h"
+
 #include <filesystem>
 #include <fstream>
 #include <sstream>
@@ -14,12 +16,6 @@
 namespace weft {
 namespace {
 
-std::string read_all(const std::filesystem::path& p) {
-    std::ifstream in(p, std::ios::binary);
-    std::ostringstream s;
-    s << in.rdbuf();
-    return s.str();
-}
 
 TEST(AtomicFile, TheTargetChangesOnlyAtTheCommit) {
     const auto dir = std::filesystem::temp_directory_path() / "weft_atomic_file";
@@ -27,29 +23,29 @@ TEST(AtomicFile, TheTargetChangesOnlyAtTheCommit) {
     const auto target = dir / "sub" / "stats.json";
     EXPECT_THROW(write_file_atomically(target, "old"), Error) << "no folder, and none made unasked";
     { AtomicFile made(target, true); made.stream() << "old"; made.commit(); }
-    EXPECT_EQ(read_all(target), "old");
+    EXPECT_EQ(test::file_bytes(target), "old");
     {
         AtomicFile f(target);
         f.stream() << "new, and longer";
         f.stream().flush();
-        EXPECT_EQ(read_all(target), "old") << "before the commit";
+        EXPECT_EQ(test::file_bytes(target), "old") << "before the commit";
         EXPECT_TRUE(std::filesystem::exists(f.temporary()));
         f.commit();
         EXPECT_FALSE(std::filesystem::exists(f.temporary()));
     }
-    EXPECT_EQ(read_all(target), "new, and longer");
+    EXPECT_EQ(test::file_bytes(target), "new, and longer");
     {
         AtomicFile abandoned(target);
         abandoned.stream() << "half";
     }  // an exception, a return: never committed
-    EXPECT_EQ(read_all(target), "new, and longer");
+    EXPECT_EQ(test::file_bytes(target), "new, and longer");
     EXPECT_EQ(std::distance(std::filesystem::directory_iterator(dir / "sub"), std::filesystem::directory_iterator{}), 1)
         << "no temporary left behind";
     // Meshes go the same way.
     const std::vector<Vec3d> x{{0, 0, 0}, {1, 0, 0}, {0, 1, 0}};
     const std::vector<Triangle> t{Triangle{{0, 1, 2}}};
     write_mesh(dir / "m.obj", x, t);
-    EXPECT_NE(read_all(dir / "m.obj").find("f 1 2 3"), std::string::npos);
+    EXPECT_NE(test::file_bytes(dir / "m.obj").find("f 1 2 3"), std::string::npos);
     std::filesystem::remove_all(dir);
 }
 

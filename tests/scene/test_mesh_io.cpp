@@ -4,6 +4,7 @@
 #include <fstream>
 #include <sstream>
 
+#include "file_bytes.h"
 #include "scene_test_util.h"
 
 namespace weft {
@@ -18,17 +19,11 @@ std::filesystem::path temp_path(const std::string& name) {
     return std::filesystem::temp_directory_path() / ("weft_test_mesh_io_" + name);
 }
 
-std::string read_all(const std::filesystem::path& p) {
-    std::ifstream in(p, std::ios::binary);
-    std::ostringstream s;
-    s << in.rdbuf();
-    return s.str();
-}
 
 TEST(MeshIo, WritesObj) {
     const auto path = temp_path("a.obj");
     write_mesh(path, kPositions, kTriangles);
-    std::istringstream in(read_all(path));
+    std::istringstream in(test::file_bytes(path));
     std::vector<Vec3d> v;
     std::vector<Triangle> f;
     std::string tag;
@@ -57,7 +52,7 @@ TEST(MeshIo, WritesObj) {
 TEST(MeshIo, WritesBinaryLittleEndianPly) {
     const auto path = temp_path("a.PLY");  // the extension is case-insensitive
     write_mesh(path, kPositions, kTriangles);
-    const std::string bytes = read_all(path);
+    const std::string bytes = test::file_bytes(path);
     const std::string end = "end_header\n";
     const auto body = bytes.find(end);
     ASSERT_NE(body, std::string::npos);

@@ -4,6 +4,8 @@
 // are refused with the reason, and the world they were offered to is left as it was.
 #include <gtest/gtest.h>
 
+#include "file_bytes.h"
+
 #include <filesystem>
 #include <fstream>
 #include <sstream>
@@ -45,12 +47,7 @@ Snapshot snapshot(const World& w) {
 
 const std::filesystem::path kFile = std::filesystem::temp_directory_path() / "weft_test_checkpoint.state";
 
-std::string read_all(const std::filesystem::path& p) {
-    std::ifstream in(p, std::ios::binary);
-    std::ostringstream s;
-    s << in.rdbuf();
-    return s.str();
-}
+
 
 TEST(Checkpoint, AResumedWorldStepsOnToTheSameBits) {
     struct Case {
@@ -94,7 +91,7 @@ TEST(Checkpoint, BadCheckpointsAreRefusedAndChangeNothing) {
     auto world = make("flag", {"cloth.flag.mesh.grid.cells=[24,14]"});
     for (int f = 0; f < 3; ++f) (void)world->step();
     world->save_state(kFile);
-    const std::string good = read_all(kFile);
+    const std::string good = test::file_bytes(kFile);
     auto target = make("flag", {"cloth.flag.mesh.grid.cells=[24,14]"});
     (void)target->step();
     const Snapshot before = snapshot(*target);
@@ -117,10 +114,10 @@ TEST(Checkpoint, BadCheckpointsAreRefusedAndChangeNothing) {
     // Another scene (other vertex counts), another precision.
     auto other = make("flag", {"cloth.flag.mesh.grid.cells=[20,12]"});
     other->save_state(kFile);
-    refused(read_all(kFile), "vertices in the checkpoint");
+    refused(test::file_bytes(kFile), "vertices in the checkpoint");
     auto single = make("flag", {"cloth.flag.mesh.grid.cells=[24,14]", "solver.precision=\"float\""});
     single->save_state(kFile);
-    refused(read_all(kFile), "made in float");
+    refused(test::file_bytes(kFile), "made in float");
     std::filesystem::remove(kFile);
 }
 
