@@ -23,6 +23,19 @@ ObjScan scan_obj(const std::filesystem::path& path) {
         ++number;
         last_had_newline = !in.eof();
         if (!line.empty() && line.back() == '\r') line.pop_back();
+        // Geometry statements (v, vt, vn, vp, f, fo, l, p) must be what they say, in printable
+        // ASCII: assimp reads any line that starts with 'f' as a face and overran its buffer on one
+        // of 0xFF bytes (found by fuzz_mesh_import).
+        if (!line.empty() && (line[0] == 'v' || line[0] == 'f' || line[0] == 'l' || line[0] == 'p')) {
+            const std::string keyword = line.substr(0, line.find_first_of(" \t"));
+            if (keyword != "v" && keyword != "vt" && keyword != "vn" && keyword != "vp" && keyword != "f" && keyword != "fo" &&
+                keyword != "l" && keyword != "p")
+                throw Error(path.string() + ":" + std::to_string(number) + ": not an OBJ statement");
+            for (const char c : line)
+                if ((c < ' ' || c > '~') && c != '\t')
+                    throw Error(path.string() + ":" + std::to_string(number) + ": a control or non-ASCII character in a '" + keyword +
+                                "' line");
+        }
         if (line.size() > 1 && line[0] == 'v' && (line[1] == ' ' || line[1] == '\t')) {
             ++s.vertices;
             // Fewer than three coordinates: a line cut short.

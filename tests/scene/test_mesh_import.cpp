@@ -219,6 +219,13 @@ TEST(MeshImport, TruncatedFilesAreErrorsNotCrashesOrSmallerCloth) {
     expect_error([&] { (void)load_mesh_file(write("weft_test_range.obj", "v 0 0 0\nv 1 0 0\nv 1 1 0\nf 1 2 7\n")); },
                  {"weft_test_range.obj:4", "face index 7 of 3 vertices"});
     EXPECT_EQ(load_mesh_file(write("weft_test_no_newline.obj", quad)).triangles.size(), 2U);
+    // A face line of 0xFF bytes overran assimp's buffer (found by fuzz_mesh_import).
+    expect_error([&] { (void)load_mesh_file(write("weft_test_ff.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf\xff\xff\xff 2\t1\n")); },
+                 {"weft_test_ff.obj:4", "not an OBJ statement"});
+    expect_error([&] { (void)load_mesh_file(write("weft_test_ff2.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\xff\n")); },
+                 {"weft_test_ff2.obj:4", "non-ASCII character in a 'f' line"});
+    std::filesystem::remove(dir / "weft_test_ff.obj");
+    std::filesystem::remove(dir / "weft_test_ff2.obj");
     // PLY headers: assimp loops forever on one that never ends (found by fuzz_mesh_import); an ASCII
     // file with fewer element lines than its header declares is cut short.
     const std::string ply_head = "ply\nformat ascii 1.0\nelement vertex 4\nproperty float x\nproperty float y\nproperty float z\n"
