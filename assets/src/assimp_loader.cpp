@@ -22,8 +22,9 @@ namespace {
 
 /// Throws when the first bytes of `path` cannot start a file of extension `ext` (lower case):
 /// glTF JSON opens with '{', a GLB with "glTF", a PLY with "ply", an OBJ is text (no NUL byte in
-/// its first 4 KiB). Other extensions are left to assimp.
-void check_signature(const std::filesystem::path& path, const std::string& ext) {
+/// its first 4 KiB). Other extensions are left to assimp. Returns whether the file starts with the
+/// PLY magic line, whatever its extension.
+bool check_signature(const std::filesystem::path& path, const std::string& ext) {
     std::ifstream in(path, std::ios::binary);
     std::string head(4096, '\0');
     in.read(head.data(), static_cast<std::streamsize>(head.size()));
@@ -35,6 +36,7 @@ void check_signature(const std::filesystem::path& path, const std::string& ext) 
     if (ext == ".glb" && head.rfind("glTF", 0) != 0) throw Error(file + ": not a GLB file (no 'glTF' magic)");
     if (ext == ".ply" && head.rfind("ply", 0) != 0) throw Error(file + ": not a PLY file (no 'ply' on the first line)");
     if (ext == ".obj" && head.find('\0') != std::string::npos) throw Error(file + ": not an OBJ file (it holds binary data)");
+    return head.size() >= 4 && head.rfind("ply", 0) == 0 && (head[3] == '\n' || head[3] == '\r');
 }
 
 }  // namespace
@@ -53,19 +55,13 @@ MeshData import_mesh(const std::filesystem::path& path, ImportReport* report) {
     // ends, so a file cut short would load as a smaller cloth without a word (obj_scan.h).
     std::string ext = path.extension().string();
     std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
-    // A PLY's header is checked first too: assimp loops forever on one without `end_header`, and
-    // reads past the data of a file cut short (ply_scan.h).
     // assimp tries every reader it has on a file its extension's reader refuses, and some of those
     // readers overflow their buffers on garbage (a ".gltf" of text: found by fuzz_mesh_import). A
     // file whose start is not its extension's format is refused here first.
-    check_signature(path, ext);
-    // assimp picks its PLY reader by the content as well as the extension: the magic decides here too.
-    const bool ply_magic = [&] {
-        std::ifstream in(path, std::ios::binary);
-        char magic[4] = {};
-        in.read(magic, 4);
-        return in.gcount() == 4 && magic[0] == 'p' && magic[1] == 'l' && magic[2] == 'y' && (magic[3] == '\n' || magic[3] == '\r');
-    }();
+    const bool ply_magic = check_signature(path, ext);
+    // A PLY's header is checked too (ply_scan.h): assimp loops forever on one without `end_header`
+    // and reads past the data of a file cut short. It picks its PLY reader by the content as well as
+    // the extension, so the magic decides here too.
     if (ext == ".ply" || ply_magic) (void)scan_ply(path);
     if (ext == ".obj") {
         const ObjScan scan = scan_obj(path);
