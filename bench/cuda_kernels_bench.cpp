@@ -603,11 +603,11 @@ void print_table(std::ostream& out, const std::vector<SizeResult>& results) {
 
     for (const SizeResult& r : results) {
         if (!r.error.empty()) continue;
-        out << "\ndevice memory, " << r.spec.label << ": " << cli::format_bytes(static_cast<double>(r.memory_bytes)) << " ("
+        out << "\ndevice memory, " << r.spec.label << ": " << weft::format_bytes(static_cast<double>(r.memory_bytes)) << " ("
             << format_fixed(static_cast<double>(r.memory_bytes) / static_cast<double>(std::max<std::size_t>(1, r.triangles)), 0)
             << " B/triangle)\n";
         for (const auto& [name, bytes] : r.memory_breakdown)
-            out << "  " << name << ": " << cli::format_bytes(static_cast<double>(bytes)) << '\n';
+            out << "  " << name << ": " << weft::format_bytes(static_cast<double>(bytes)) << '\n';
         if (!r.pcg_note.empty()) out << "  note: " << r.pcg_note << '\n';
     }
 }
@@ -777,8 +777,8 @@ int main(int argc, char** argv) {
         int l2_bytes = 0;
         WEFT_CUDA_CHECK(cudaDeviceGetAttribute(&l2_bytes, cudaDevAttrL2CacheSize, gpu.ordinal));
         std::cout << "GPU: " << gpu.name << " (sm_" << gpu.compute_major << gpu.compute_minor << ", "
-                  << cli::format_bytes(static_cast<double>(gpu.memory_bytes)) << ", L2 "
-                  << cli::format_bytes(static_cast<double>(l2_bytes)) << ")\nscene: " << scene_path.string() << '\n';
+                  << weft::format_bytes(static_cast<double>(gpu.memory_bytes)) << ", L2 "
+                  << weft::format_bytes(static_cast<double>(l2_bytes)) << ")\nscene: " << scene_path.string() << '\n';
 
         std::vector<SizeResult> results;
         for (const SizeSpec& spec : opt.sizes) {

@@ -52,18 +52,6 @@ std::string format_fixed(double value, int decimals) {
     return buf;
 }
 
-std::string format_bytes(double bytes) {
-    static constexpr const char* kUnits[] = {"B", "KiB", "MiB", "GiB", "TiB"};
-    int unit = 0;
-    while (bytes >= 1024.0 && unit < 4) {
-        bytes /= 1024.0;
-        ++unit;
-    }
-    if (unit == 0) return format_fixed(bytes, 0) + " B";
-    const int decimals = bytes < 10.0 ? 2 : (bytes < 100.0 ? 1 : 0);
-    return format_fixed(bytes, decimals) + " " + kUnits[unit];
-}
-
 std::string format_duration(double seconds) {
     if (!std::isfinite(seconds) || seconds < 0.0) return "-:--";
     const auto total = static_cast<long long>(std::llround(seconds));

@@ -9,6 +9,8 @@
 #include <string_view>
 #include <vector>
 
+#include "weft/byte_size.h"  // format_bytes, beside the table's other formats
+
 namespace weft::cli {
 
 class TextTable {
@@ -32,8 +34,6 @@ private:
 
 /// `value` with `decimals` digits after the point; "-" when not finite.
 [[nodiscard]] std::string format_fixed(double value, int decimals);
-/// A byte count in B, KiB, MiB or GiB with three significant digits.
-[[nodiscard]] std::string format_bytes(double bytes);
 /// Seconds as m:ss or h:mm:ss.
 [[nodiscard]] std::string format_duration(double seconds);
 /// Characters shown on a terminal for UTF-8 `text` (code points; no wide-character handling).
