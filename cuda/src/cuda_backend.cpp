@@ -12,6 +12,7 @@
 #include "cuda_check.h"
 #include "device_solver.h"
 #include "multi/multi_gpu_backend.h"
+#include "device_memory_budget.h"
 #include "shared_output.h"
 #include "weft/error.h"
 #include "weft/backend/flat_model.h"
@@ -42,7 +43,7 @@ void set_host_wait(int device, HostWait wait) {
 
 class CudaBackend final : public Backend, public CudaBackendApi {
 public:
-    explicit CudaBackend(const BackendOptions& options) {
+    explicit CudaBackend(const BackendOptions& options) : budget_(options.device_memory_limit) {
         const std::vector<DeviceInfo> all = devices();
         if (all.empty()) throw Error("CUDA backend: " + unavailable_reason());
         if (options.device < 0 || options.device >= static_cast<int>(all.size()))
@@ -93,6 +94,7 @@ public:
     // rebuilds them at the next substep.
     void build(const Model& model) override {
         require_device_support(model.settings.solver);
+        const BudgetScope scope(&budget_);
         flat_ = flatten(model);
         solver_->build(flat_, model);
     }
@@ -100,8 +102,12 @@ public:
     // Fast analytic colliders are swept per vertex after the solve, in the device solver as on the CPU.
     void substep(const Model& model, double t, double h, StepStats& stats) override {
         require_device_support(model.settings.solver);
+        const BudgetScope scope(&budget_);
         solver_->substep(model, t, h, stats);
     }
+
+    std::vector<std::uint8_t> solver_state() const override { return solver_->solver_state(); }
+    void restore_solver_state(std::span<const std::uint8_t> bytes) override { solver_->restore_solver_state(bytes); }
 
     void read_state(std::size_t cloth, std::span<Vec3d> x, std::span<Vec3d> v) const override {
         const auto [first, count] = flat_.cloth_vertices(cloth, x.size(), v.size());
@@ -115,6 +121,7 @@ public:
 
     // The energy guard sums on the device (energy_kernels.cu): no state is read back.
     EnergyAudit energy_audit(const Model& model, double t, double h, bool with_wind) const override {
+        const BudgetScope scope(&budget_);
         return solver_->energy_audit(model, t, h, with_wind);
     }
 
@@ -140,6 +147,7 @@ public:
 private:
     DeviceInfo info_;
     FlatModel flat_;
+    mutable DeviceMemoryBudget budget_;  // before the solver: its arrays give their bytes back to it
     std::unique_ptr<DeviceSolver> solver_;
 };
 

@@ -1,6 +1,7 @@
 #pragma once
 // Owning device allocations. All of them are made in DeviceSolver::build (docs/design.md: nothing
-// allocated inside the step); an arena of named allocations reports how the device memory is spent.
+// allocated inside the step) or when a collision buffer grows; an arena of named allocations reports
+// how the device memory is spent, and the thread's memory budget (device_memory_budget.h) caps it.
 
 #include <cuda_runtime_api.h>
 
@@ -10,6 +11,7 @@
 #include <vector>
 
 #include "cuda_check.h"
+#include "device_memory_budget.h"
 
 namespace weft::cuda {
 
@@ -51,24 +53,42 @@ public:
     DeviceArray() = default;
     DeviceArray(const DeviceArray&) = delete;
     DeviceArray& operator=(const DeviceArray&) = delete;
-    DeviceArray(DeviceArray&& o) noexcept : ptr_(std::exchange(o.ptr_, nullptr)), size_(std::exchange(o.size_, 0)) {}
+    DeviceArray(DeviceArray&& o) noexcept
+        : ptr_(std::exchange(o.ptr_, nullptr)), size_(std::exchange(o.size_, 0)), budget_(std::exchange(o.budget_, nullptr)),
+          device_(o.device_) {}
     DeviceArray& operator=(DeviceArray&& o) noexcept {
         if (this != &o) {
             release();
             ptr_ = std::exchange(o.ptr_, nullptr);
             size_ = std::exchange(o.size_, 0);
+            budget_ = std::exchange(o.budget_, nullptr);
+            device_ = o.device_;
         }
         return *this;
     }
     ~DeviceArray() { release(); }
 
-    /// Allocates `count` elements (contents undefined), charged to `purpose` in `ledger`.
+    /// Allocates `count` elements (contents undefined), charged to `purpose` in `ledger` and to the
+    /// thread's memory budget. Out of memory (the budget's or the device's) throws weft::Error with
+    /// the bytes asked for, held and free, and leaves the array empty.
     void allocate(std::size_t count, MemoryLedger& ledger, const std::string& purpose) {
         release();
-        size_ = count;
         if (count == 0) return;
-        WEFT_CUDA_CHECK(cudaMalloc(reinterpret_cast<void**>(&ptr_), count * sizeof(T)));
-        ledger.add(purpose, count * sizeof(T));
+        const std::size_t bytes = count * sizeof(T);
+        WEFT_CUDA_CHECK(cudaGetDevice(&device_));
+        DeviceMemoryBudget* budget = current_budget();
+        if (budget != nullptr) budget->charge(device_, bytes, purpose);
+        const cudaError_t err = cudaMalloc(reinterpret_cast<void**>(&ptr_), bytes);
+        if (err != cudaSuccess) {
+            ptr_ = nullptr;
+            if (budget != nullptr) budget->refund(device_, bytes);
+            (void)cudaGetLastError();  // not sticky: the context stays usable
+            if (err == cudaErrorMemoryAllocation) throw_out_of_device_memory(device_, bytes, purpose, budget);
+            throw_cuda_error(err, "cudaMalloc", __FILE__, __LINE__);
+        }
+        size_ = count;
+        budget_ = budget;
+        ledger.add(purpose, bytes);
     }
     /// Allocates and copies `host` in (synchronously: build time only).
     void upload(const std::vector<T>& host, MemoryLedger& ledger, const std::string& purpose) {
@@ -84,12 +104,18 @@ public:
 
 private:
     void release() noexcept {
-        if (ptr_ != nullptr) cudaFree(ptr_);
+        if (ptr_ != nullptr) {
+            cudaFree(ptr_);
+            if (budget_ != nullptr) budget_->refund(device_, size_ * sizeof(T));
+        }
         ptr_ = nullptr;
         size_ = 0;
+        budget_ = nullptr;
     }
     T* ptr_ = nullptr;
     std::size_t size_ = 0;
+    DeviceMemoryBudget* budget_ = nullptr;  // charged at allocate; outlives the array (the backend owns both)
+    int device_ = 0;
 };
 
 /// Page-locked host memory for asynchronous copies (parameters in, stats out).

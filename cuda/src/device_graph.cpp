@@ -89,6 +89,7 @@ void DeviceSolver::record(cudaStream_t stream, bool capturing) {
     auto mark = [&] { WEFT_CUDA_CHECK(cudaEventRecordWithFlags(events_[static_cast<std::size_t>(e++)], stream, flags)); };
     mark();
     launch_begin_substep(view_, stream);
+    if (!capturing) substep_started_ = true;  // x0 and v0 now hold the substep's start (a fault rolls back to them)
     launch_pin_velocities(view_, stream);
     const bool contacts = view_.contacts.capacity > 0;
     // Offset contacts change from active to inactive with every evaluation: their incidence is built
@@ -204,6 +205,7 @@ void DeviceSolver::launch_substep(cudaStream_t stream, int newton_iterations) {
     }
     if (want_graph && graph_exec_ != nullptr) {
         WEFT_CUDA_CHECK(cudaGraphLaunch(graph_exec_, stream));
+        substep_started_ = true;  // the graph's first kernel writes x0 and v0
         graph_active_ = true;
     } else {
         record(stream, false);

@@ -104,17 +104,78 @@ void DeviceSolver::set_assembly(AssemblyStrategy strategy) {
 }
 
 void DeviceSolver::substep(const Model& model, double t, double h, StepStats& stats) {
+    if (!device_lost_.empty())
+        throw Error("CUDA backend: GPU " + std::to_string(device_) + " was lost in an earlier substep (" + device_lost_ +
+                    "); its state cannot be read: build a new world");
+    if (rebuild_pending_) rebuild_after_fault(model);
     if (view_.n == 0) return;
+    substep_started_ = false;
+    try {
+        run_substep(model, t, h, stats);
+    } catch (const Error& e) {
+        recover_from_fault(e, t);
+    }
+}
+
+// A failed substep (docs/design.md, "Device faults"). Out of memory (the budget's or the device's)
+// and other errors that leave the context usable: the cloth goes back to the substep's start (x0,
+// v0, written by the substep's first kernel) and onto the host, and the buffers are rebuilt from it
+// by the next substep, since a buffer that failed to grow may have left its owner half resized. A
+// sticky error (an illegal address, a kernel that faulted) loses the context and everything on it.
+void DeviceSolver::recover_from_fault(const Error& error, double t) {
+    const std::string stage = stage_;
+    std::string where = "CUDA backend: the substep from t = " + std::to_string(t) + " s failed in " + stage + ": " + error.what();
+    (void)cudaSetDevice(device_);
+    (void)cudaGetLastError();
+    // An asynchronous error is reported by the first synchronisation and cleared; a sticky one by all.
+    bool usable = cudaDeviceSynchronize() == cudaSuccess;
+    if (!usable) {
+        (void)cudaGetLastError();
+        usable = cudaDeviceSynchronize() == cudaSuccess;
+    }
+    (void)cudaGetLastError();
+    if (usable) {
+        std::string failure;
+        try {
+            if (substep_started_) launch_rollback(view_, active_stream());
+            rescued_x_.resize(view_.n);
+            rescued_v_.resize(view_.n);
+            read_state(0, view_.n, rescued_x_.data(), rescued_v_.data());
+            rebuild_pending_ = true;
+            destroy_graph();
+        } catch (const Error& again) {
+            failure = again.what();
+        }
+        if (failure.empty())
+            throw Error(where + "; the cloth is back where that substep started (t = " + std::to_string(t) + " s)");
+        where += "; putting the cloth back failed too: " + failure;
+    }
+    device_lost_ = std::string(error.what());
+    throw Error(where + "; the device is lost (a sticky CUDA error): its state cannot be read, build a new world");
+}
+
+void DeviceSolver::rebuild_after_fault(const Model& model) {
+    // build() forgets the rescue once it has succeeded; until then it stays for the next try.
+    const std::vector<Vec3d> x = rescued_x_, v = rescued_v_;
+    build(*flat_, model);
+    write_state(0, x.size(), x.data(), v.data());
+}
+
+void DeviceSolver::run_substep(const Model& model, double t, double h, StepStats& stats) {
     WEFT_CUDA_CHECK(cudaSetDevice(device_));
     const auto host_start = Clock::now();
     cudaStream_t stream = active_stream();
+    stage_ = "the parameter upload";
     stage_substep(model, t, h, stream);
     const double host_ms = ms_since(host_start);
 
     // Collision detection before the solve, outside the graph on the same stream (it reads overflow
     // counters back): the contacts go straight into the solve's device list.
+    stage_ = "collision detection";
     if (collisions_.stale(model)) build_collisions(model);  // self-collision toggled live
+    stage_ = "the preconditioner's build";
     choose_preconditioner(model.settings.solver.preconditioner);  // may change live
+    stage_ = "collision detection";
     if (collisions_.active()) {
         const std::size_t found = collisions_.detect(model, t, h, view_.x, view_.v, view_.dv_previous, stream, stats);
         reserve_contacts(found, collisions_.kinematic_count());  // grows (and re-captures) only when needed
@@ -122,12 +183,15 @@ void DeviceSolver::substep(const Model& model, double t, double h, StepStats& st
     }
 
     offset_model_ = collisions_.active() && collisions_.offset() ? &model : nullptr;
+    stage_ = "the solve";
     launch_substep(stream, model.settings.solver.newton_iterations);
     if (schwarz_on_) schwarz_factored_ = true;
     if (offset_model_ != nullptr) {
         // Offset contact: while too many moves were truncated, detect again where the truncation left
         // the cloth and take one more Newton iteration from there (CollisionSettings::redetect_share).
+        stage_ = "the offset contact's truncation";
         while (collisions_.finish_truncation(model, stream, stats)) {
+            stage_ = "the offset contact's detection rerun";
             const auto extra = Clock::now();
             const std::size_t found = collisions_.redetect(model, h, view_.x0, view_.vk,
                                                            &reinterpret_cast<const StepParams*>(view_.staging)->h, stream, stats);
@@ -139,6 +203,7 @@ void DeviceSolver::substep(const Model& model, double t, double h, StepStats& st
         }
         offset_model_ = nullptr;
     }
+    stage_ = "the solve";
     WEFT_CUDA_CHECK(cudaMemcpyAsync(host_stats_.get(), stats_.get(), sizeof(DeviceStats), cudaMemcpyDeviceToHost, stream));
     WEFT_CUDA_CHECK(cudaStreamSynchronize(stream));
     warm_ = true;
@@ -175,10 +240,12 @@ void DeviceSolver::substep(const Model& model, double t, double h, StepStats& st
     // After the solve and before CCD, as on the CPU: vertices that an analytic collider ran into
     // during the substep ride along with it (outside the graph, which stays as captured).
     const int swept_before = stats.collision.swept_collider_hits;
+    stage_ = "the fast-collider sweep";
     if (ds.non_finite == 0) sweep_colliders(std::bit_cast<float>(ds.largest_move_bits), stream, stats);
 
     // After the solve: CCD and the impact zones on the device (device_collisions.h); in offset mode
     // only as the fallback.
+    stage_ = "CCD and the impact zones";
     if (collisions_.active() && ds.non_finite == 0) {
         (void)collisions_.resolve(model, h, view_.x, view_.v, view_.v0, view_.dv_previous,
                                   stats.collision.swept_collider_hits > swept_before, stream, stats);
@@ -189,6 +256,7 @@ void DeviceSolver::substep(const Model& model, double t, double h, StepStats& st
     // the graph so that switching buffers (the two shared slots of a frame pipeline) re-captures
     // nothing. A shared slot is ordered by its timeline (SharedOutput::end_frame); a buffer bound with
     // set_output() is complete when the step returns, as that API promises.
+    stage_ = "the output write";
     if (output_ != nullptr) {
         launch_write_output(view_, output_, output_stride_, stream);
         if (output_synchronous_) WEFT_CUDA_CHECK(cudaStreamSynchronize(stream));

@@ -17,6 +17,7 @@
 #include "device_schwarz.h"
 #include "device_view.h"
 #include "weft/cuda/cuda_backend.h"
+#include "weft/error.h"
 #include "weft/backend/energy_audit.h"
 #include "weft/backend/flat_model.h"
 #include "weft/backend/model.h"
@@ -42,9 +43,19 @@ public:
     /// Uploads `flat` (kept by reference; it must outlive the solver) and allocates every buffer the
     /// step needs. `model` sizes the per-substep parameter block (cloths, colliders, pins).
     void build(const FlatModel& flat, const Model& model);
+    /// One substep. A failure (a CUDA error, a buffer that cannot grow within the memory budget)
+    /// throws weft::Error naming the stage it happened in; where the device is still usable the
+    /// cloth is first put back where the substep started and kept on the host, and the next substep
+    /// rebuilds the device buffers from it (docs/design.md, "Device faults"). After a sticky error
+    /// (the context is lost) every later call throws.
     void substep(const Model& model, double t, double h, StepStats& stats);
     void read_state(std::size_t first, std::size_t count, Vec3d* x, Vec3d* v) const;
     void write_state(std::size_t first, std::size_t count, const Vec3d* x, const Vec3d* v);
+    /// What decides the next substep besides x and v (Backend::solver_state): the CG warm start
+    /// (previous Δv) and the substep count (the preconditioner's refresh phase), as bytes.
+    [[nodiscard]] std::vector<std::uint8_t> solver_state() const;
+    /// Takes back what solver_state returned for the same model; throws weft::Error naming a mismatch.
+    void restore_solver_state(std::span<const std::uint8_t> bytes);
 
     void set_stream(cudaStream_t stream);
     /// Every substep ends by writing positions and normals to `device_buffer` (and so does this call,
@@ -271,6 +282,18 @@ private:
     PinnedArray<DeviceStats> host_stats_;
     PinnedArray<int> host_running_;
     StepParams layout_params_{};  // offsets of the arrays in the staging block
+
+    // Device faults (substep): the stage running, whether the substep's start (x0, v0) is on the
+    // device (the solve was enqueued, so x and v may have moved), and after a fault the state kept on
+    // the host until the next substep rebuilds the buffers, or why the device is lost.
+    void run_substep(const Model& model, double t, double h, StepStats& stats);
+    [[noreturn]] void recover_from_fault(const Error& error, double t);
+    void rebuild_after_fault(const Model& model);
+    const char* stage_ = "";
+    bool substep_started_ = false;
+    bool rebuild_pending_ = false;
+    std::vector<Vec3d> rescued_x_, rescued_v_;
+    std::string device_lost_;
 
     void* output_ = nullptr;
     std::size_t output_stride_ = 0;

@@ -4,6 +4,7 @@
 #include "device_solver.h"
 
 #include <algorithm>
+#include <cstring>
 #include <string>
 #include <vector>
 
@@ -157,6 +158,10 @@ void DeviceSolver::build(const FlatModel& flat, const Model& model) {
     choose_pcg_loop();
     if (part_ == nullptr) build_collisions(model);  // part mode: the MultiSolver detects (docs/multi-gpu.md)
     WEFT_CUDA_CHECK(cudaDeviceSynchronize());
+    // Built: a state rescued from a fault is the caller's to write now (rebuild_after_fault).
+    rebuild_pending_ = false;
+    rescued_x_.clear();
+    rescued_v_.clear();
 }
 
 void DeviceSolver::build_collisions(const Model& model) {
@@ -195,6 +200,11 @@ void DeviceSolver::contacts_resized() {
 }
 
 void DeviceSolver::read_state(std::size_t first, std::size_t count, Vec3d* x, Vec3d* v) const {
+    if (rebuild_pending_) {  // after a fault the state is on the host (DeviceSolver::substep)
+        std::copy_n(rescued_x_.begin() + static_cast<std::ptrdiff_t>(first), count, x);
+        std::copy_n(rescued_v_.begin() + static_cast<std::ptrdiff_t>(first), count, v);
+        return;
+    }
     WEFT_CUDA_CHECK(cudaSetDevice(device_));
     WEFT_CUDA_CHECK(cudaStreamSynchronize(active_stream()));
     const std::size_t n = view_.n;
@@ -211,6 +221,11 @@ void DeviceSolver::read_state(std::size_t first, std::size_t count, Vec3d* x, Ve
 }
 
 void DeviceSolver::write_state(std::size_t first, std::size_t count, const Vec3d* x, const Vec3d* v) {
+    if (rebuild_pending_) {
+        std::copy_n(x, count, rescued_x_.begin() + static_cast<std::ptrdiff_t>(first));
+        std::copy_n(v, count, rescued_v_.begin() + static_cast<std::ptrdiff_t>(first));
+        return;
+    }
     WEFT_CUDA_CHECK(cudaSetDevice(device_));
     WEFT_CUDA_CHECK(cudaStreamSynchronize(active_stream()));
     const std::size_t n = view_.n;
@@ -226,6 +241,54 @@ void DeviceSolver::write_state(std::size_t first, std::size_t count, const Vec3d
             WEFT_CUDA_CHECK(cudaMemcpy(arrays[a] + c * n + first, buf.data() + c * count, count * sizeof(float),
                                        cudaMemcpyHostToDevice));
     }
+}
+
+}  // namespace weft::cuda
+
+namespace weft::cuda {
+
+// 'G', 4 (float), the vertex count, the substep count, then the previous Δv as the device holds it
+// (SoA, 3n floats): the bits the next substep's warm start reads.
+std::vector<std::uint8_t> DeviceSolver::solver_state() const {
+    const std::uint64_t n = view_.n;
+    const std::int64_t substeps = substep_count_;
+    constexpr std::size_t kHead = 2 + sizeof(std::uint64_t) + sizeof(std::int64_t);
+    std::vector<std::uint8_t> out(kHead + 3 * n * sizeof(float));
+    out[0] = 'G';
+    out[1] = sizeof(float);
+    std::memcpy(out.data() + 2, &n, sizeof(n));
+    std::memcpy(out.data() + 2 + sizeof(n), &substeps, sizeof(substeps));
+    if (n == 0) return out;
+    if (rebuild_pending_) return out;  // after a fault: the rebuild starts cold (zeros)
+    WEFT_CUDA_CHECK(cudaSetDevice(device_));
+    WEFT_CUDA_CHECK(cudaStreamSynchronize(active_stream()));
+    WEFT_CUDA_CHECK(cudaMemcpy(out.data() + kHead, view_.dv_previous, 3 * n * sizeof(float), cudaMemcpyDeviceToHost));
+    return out;
+}
+
+void DeviceSolver::restore_solver_state(std::span<const std::uint8_t> bytes) {
+    std::uint64_t n = 0;
+    std::int64_t substeps = 0;
+    constexpr std::size_t kHead = 2 + sizeof(n) + sizeof(substeps);
+    if (bytes.empty()) return;  // saved across several GPUs, which keep no warm start yet: start cold
+    if (bytes.size() < kHead || bytes[0] != 'G')
+        throw Error("cuda backend: the checkpoint's solver state is not the CUDA backend's");
+    if (bytes[1] != sizeof(float)) throw Error("cuda backend: the checkpoint's solver state is not in float");
+    std::memcpy(&n, bytes.data() + 2, sizeof(n));
+    std::memcpy(&substeps, bytes.data() + 2 + sizeof(n), sizeof(substeps));
+    if (n != view_.n || bytes.size() != kHead + 3 * n * sizeof(float))
+        throw Error("cuda backend: the checkpoint's solver state is for " + std::to_string(n) + " vertices, this world has " +
+                    std::to_string(view_.n));
+    if (substeps < 0) throw Error("cuda backend: the checkpoint's substep count is negative");
+    if (n > 0) {
+        WEFT_CUDA_CHECK(cudaSetDevice(device_));
+        WEFT_CUDA_CHECK(cudaStreamSynchronize(active_stream()));
+        WEFT_CUDA_CHECK(cudaMemcpy(view_.dv_previous, bytes.data() + kHead, 3 * n * sizeof(float), cudaMemcpyHostToDevice));
+    }
+    substep_count_ = substeps;
+    // The Schwarz factors are not in the checkpoint: the next substep refactors (with
+    // preconditioner_refresh = 1, the default, it would anyway).
+    schwarz_factored_ = false;
 }
 
 }  // namespace weft::cuda

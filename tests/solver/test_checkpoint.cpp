@@ -45,11 +45,16 @@ Snapshot snapshot(const World& w) {
     return s;
 }
 
-const std::filesystem::path kFile = std::filesystem::temp_directory_path() / "weft_test_checkpoint.state";
+// One file per test: ctest runs the tests of one binary as processes side by side.
+std::filesystem::path state_file() {
+    return std::filesystem::temp_directory_path() /
+           (std::string("weft_test_checkpoint_") + ::testing::UnitTest::GetInstance()->current_test_info()->name() + ".state");
+}
 
 
 
 TEST(Checkpoint, AResumedWorldStepsOnToTheSameBits) {
+    const std::filesystem::path kFile = state_file();
     struct Case {
         const char* scene;
         std::vector<std::string> overrides;
@@ -88,6 +93,7 @@ TEST(Checkpoint, AResumedWorldStepsOnToTheSameBits) {
 }
 
 TEST(Checkpoint, BadCheckpointsAreRefusedAndChangeNothing) {
+    const std::filesystem::path kFile = state_file();
     auto world = make("flag", {"cloth.flag.mesh.grid.cells=[24,14]"});
     for (int f = 0; f < 3; ++f) (void)world->step();
     world->save_state(kFile);

@@ -150,6 +150,8 @@ bool apply_simulation_flag(std::string_view command, SimulationOptions& sim, std
         sim.threads = parse_int(command, name, value, 0, 4096);
     } else if (name == "--gpus") {
         sim.gpus = parse_int(command, name, value, 1, 64);
+    } else if (name == "--device-memory-limit") {
+        sim.device_memory_limit_mib = parse_int(command, name, value, 1, 64 * 1024 * 1024);
     } else if (name == "--host-wait") {
         try {
             sim.host_wait = parse_host_wait(value);
@@ -175,7 +177,7 @@ bool apply_simulation_flag(std::string_view command, SimulationOptions& sim, std
     return true;
 }
 
-constexpr FlagSpec kRunFlags[] = {{"--backend", true}, {"--threads", true}, {"--host-wait", true}, {"--gpus", true}, {"--set", true}, {"--preset", true},   {"--frames", true},
+constexpr FlagSpec kRunFlags[] = {{"--backend", true}, {"--threads", true}, {"--host-wait", true}, {"--gpus", true}, {"--device-memory-limit", true}, {"--set", true}, {"--preset", true},   {"--frames", true},
                                   {"--out", true},     {"--format", true},  {"--stats", true}, {"--quiet", false},
                                   {"--check", false},  {"--capture", true}, {"--size", true}, {"--cache", true},
                                   {"--checkpoint", true}, {"--checkpoint-every", true}, {"--resume", true}};
@@ -208,7 +210,7 @@ void parse_size(std::string_view cmd, std::string_view name, std::string_view va
     height = parse_int(cmd, name, value.substr(x + 1), 16, 8192);
 }
 
-constexpr FlagSpec kBenchFlags[] = {{"--backend", true}, {"--threads", true}, {"--host-wait", true}, {"--gpus", true}, {"--set", true}, {"--preset", true},
+constexpr FlagSpec kBenchFlags[] = {{"--backend", true}, {"--threads", true}, {"--host-wait", true}, {"--gpus", true}, {"--device-memory-limit", true}, {"--set", true}, {"--preset", true},
                                     {"--frames", true},  {"--warmup", true},  {"--json", true}};
 
 Invocation help_for(std::string_view topic) {

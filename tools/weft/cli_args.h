@@ -23,6 +23,7 @@ inline constexpr int kExitError = 1;          ///< bad scene, unreadable mesh, u
 inline constexpr int kExitUsage = 2;          ///< wrong flags or values
 inline constexpr int kExitNonFinite = 3;      ///< the simulation produced NaN or Inf at least once
 inline constexpr int kExitCollision = 4;      ///< a collision stayed unresolved, or --check found intersections
+inline constexpr int kExitStepFailed = 5;     ///< a step failed (a device fault, out of device memory): the frames before it are written
 inline constexpr int kExitInterrupted = 130;  ///< Ctrl-C or SIGTERM (128 + SIGINT, as shells report Ctrl-C); stats still written
 
 /// A command-line mistake. `what()` is one line without the program name; `command` names the
@@ -45,6 +46,7 @@ struct SimulationOptions {
     int threads = 0;                     ///< 0 = all cores
     HostWait host_wait = HostWait::automatic;  ///< how the host waits for a GPU backend (--host-wait)
     int gpus = 0;                        ///< GPUs one world is split across (--gpus; cuda backend); 0: the scene's solver.gpus
+    int device_memory_limit_mib = 0;     ///< --device-memory-limit: MiB the backend may hold per GPU; 0 = the device's
     std::vector<std::string> overrides;  ///< "dotted.key=value": a --preset's first, then --set in command-line order
     std::size_t preset_keys = 0;         ///< the first overrides are --preset's (a later --preset replaces them)
 };

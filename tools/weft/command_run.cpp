@@ -94,16 +94,22 @@ int run_command(const RunOptions& options, std::ostream& out, std::ostream& err)
     std::vector<StepStats> stats;
     stats.reserve(static_cast<std::size_t>(std::min(frames, 1'000'000)));  // a huge --frames grows as it goes
     bool interrupted = false;
+    std::string step_failure;  // a step that threw (a device fault): the run stops, what it did is written
     {
         const InterruptGuard guard;
         ProgressBar bar(err, frames, !options.quiet && ProgressBar::stderr_is_terminal(), start);
         for (int frame = 1; frame <= frames; ++frame) {
             // With a capture, the step runs while the GPU draws the frame before (frame_capture.h).
             const auto step = [&] { stats.push_back(world.step()); };
-            if (capture)
-                capture->capture(frame, step);
-            else
-                step();
+            try {
+                if (capture)
+                    capture->capture(frame, step);
+                else
+                    step();
+            } catch (const Error& e) {
+                step_failure = e.what();
+                break;
+            }
             if (writer) writer->write(first_frame + frame, world);
             if (cache) cache->append(world);
             if (options.checkpoint_every > 0 && (first_frame + frame) % options.checkpoint_every == 0)
@@ -118,7 +124,9 @@ int run_command(const RunOptions& options, std::ostream& out, std::ostream& err)
     const double wall_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     if (cache) cache->finish(world);  // also after an interrupt: the frames so far
     const int last_frame = static_cast<int>(world.steps());
-    if (!options.checkpoint_dir.empty() && (options.checkpoint_every == 0 || last_frame % options.checkpoint_every != 0))
+    // Not after a failed step: the world stopped inside that frame (at the failed substep's start).
+    if (!options.checkpoint_dir.empty() && step_failure.empty() &&
+        (options.checkpoint_every == 0 || last_frame % options.checkpoint_every != 0))
         checkpoint(last_frame);  // the end (or where Ctrl-C stopped it) unless just written
 
     // Describe again: backends may grow scratch memory while stepping (reported: docs/design.md, "Memory").
@@ -156,6 +164,11 @@ int run_command(const RunOptions& options, std::ostream& out, std::ostream& err)
         for (const std::string& w : run_warnings(context, summary)) err << "weft: WARNING: " << w << '\n';
     }
 
+    if (!step_failure.empty()) {
+        err << "weft: frame " << first_frame + static_cast<int>(stats.size()) + 1 << " failed: " << step_failure
+            << "\nweft: the " << stats.size() << " frames before it are written; exit code " << kExitStepFailed << std::endl;
+        return kExitStepFailed;
+    }
     if (interrupted) {
         err << "weft: interrupted after " << stats.size() << " of " << frames << " frames" << std::endl;
         return kExitInterrupted;

@@ -20,7 +20,8 @@ SCENE is a scene file (assets/scenes/*.toml) or the bare name of one, e.g. 'flag
 Run 'weft help run' for the options of a command.
 
 Exit codes: 0 success, 1 error (bad scene, unreadable mesh, unwritable output),
-            2 usage error, 3 the simulation produced NaN/Inf,
+            2 usage error, 3 the simulation produced NaN/Inf, 4 collisions left,
+            5 a step failed mid-run (a device fault, out of device memory),
             130 interrupted by Ctrl-C or SIGTERM (the stats of the frames done are still written).
 )";
 
@@ -37,6 +38,9 @@ Options:
                      busy), block (sleeps, frees the core), yield, auto (the driver's choice, default)
   --gpus N           GPUs one world is split across (cuda backend; docs/multi-gpu.md); default: the
                      scene's solver.gpus (1)
+  --device-memory-limit MIB
+                     device memory the cuda backend may hold on each GPU; a scene needing more
+                     fails at build with the bytes needed and free; default: the whole device
   --frames N         frames to simulate; default: the scene's 'frames'
   --out DIR          write a mesh per cloth per frame: DIR/frame_0000_<cloth>.ply (frame 0 = initial state)
   --format ply|obj   mesh format for --out; default ply
@@ -66,7 +70,9 @@ Options:
   -h, --help         this text
 
 Exit code 3 means the solver met non-finite values (NaN/Inf) at least once; 4 that a collision
-was left unresolved or --check found intersecting triangles.
+was left unresolved or --check found intersecting triangles; 5 that a step failed (a device fault,
+out of device memory): the message names the stage, and the stats, meshes and cache hold the
+frames before it.
 )";
 
 constexpr std::string_view kBench = R"(Usage: weft bench SCENE... [options]
@@ -84,6 +90,8 @@ Options:
                      busy), block (sleeps, frees the core), yield, auto (the driver's choice, default)
   --gpus LIST        GPU counts to run every scene on, e.g. 1,2 (cuda backend); default: the
                      scene's solver.gpus (1)
+  --device-memory-limit MIB
+                     device memory the cuda backend may hold on each GPU; default: the whole device
   --set KEY=VALUE    override a scene key in every scene; repeatable
   --preset NAME      a solver preset (interactive, balanced, accurate, piled: docs/tuning.md)
                      under the --set keys

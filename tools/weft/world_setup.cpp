@@ -46,6 +46,9 @@ LoadedScene load_world(std::string_view scene, const SimulationOptions& sim) {
     if (sim.gpus > 1 && backend != "cuda")
         throw Error("--gpus " + std::to_string(sim.gpus) + " splits the world across GPUs, which only the cuda backend does (this run "
                     "uses '" + backend + "')");
+    if (sim.device_memory_limit_mib > 0 && backend != "cuda")
+        throw Error("--device-memory-limit caps a GPU backend's device memory; this run uses '" + backend + "'");
+    options.device_memory_limit = static_cast<std::size_t>(sim.device_memory_limit_mib) << 20;
     loaded.world = build_world(loaded.desc, backend, options);
     return loaded;
 }

@@ -5,6 +5,7 @@
 #include <string>
 #include <string_view>
 
+#include "device_memory_budget.h"
 #include "multi/multi_solver.h"
 #include "shared_output.h"
 #include "weft/backend/flat_model.h"
@@ -16,8 +17,8 @@ namespace {
 
 class MultiGpuBackend final : public Backend, public CudaBackendApi {
 public:
-    MultiGpuBackend(std::vector<int> devices, DeviceInfo display, std::string description)
-        : solver_(std::move(devices)), display_(std::move(display)), description_(std::move(description)) {}
+    MultiGpuBackend(std::vector<int> devices, DeviceInfo display, std::string description, std::size_t memory_limit)
+        : budget_(memory_limit), solver_(std::move(devices)), display_(std::move(display)), description_(std::move(description)) {}
 
     std::string_view name() const override { return "cuda"; }
 
@@ -33,12 +34,14 @@ public:
 
     void build(const Model& model) override {
         require_device_support(model.settings.solver);
+        const BudgetScope scope(&budget_);
         flat_ = flatten(model);
         solver_.build(flat_, model);
     }
 
     void substep(const Model& model, double t, double h, StepStats& stats) override {
         require_device_support(model.settings.solver);
+        const BudgetScope scope(&budget_);
         solver_.substep(model, t, h, stats);
     }
 
@@ -54,6 +57,7 @@ public:
 
     // Summed on the devices (energy_kernels.cu, each part counting what it owns): no state read back.
     EnergyAudit energy_audit(const Model& model, double t, double h, bool with_wind) const override {
+        const BudgetScope scope(&budget_);
         return solver_.energy_audit(model, t, h, with_wind);
     }
 
@@ -81,6 +85,7 @@ public:
     void set_pcg_loop(PcgLoop /*loop*/) override {}
 
 private:
+    mutable DeviceMemoryBudget budget_;  // before the solver: its arrays give their bytes back to it
     mutable MultiSolver solver_;  // the audit enqueues work on the parts' streams
     FlatModel flat_;
     DeviceInfo display_;          // the first GPU: where the output lives
@@ -117,7 +122,8 @@ std::unique_ptr<Backend> make_multi_gpu_backend(const BackendOptions& options) {
     }
     if (one_device) description += " (" + std::to_string(options.gpus) + " parts on one GPU: test mode)";
     const DeviceInfo display = all[static_cast<std::size_t>(options.device)];  // the first part's GPU
-    auto backend = std::make_unique<MultiGpuBackend>(std::move(devices), display, std::move(description));
+    auto backend = std::make_unique<MultiGpuBackend>(std::move(devices), display, std::move(description),
+                                                    options.device_memory_limit);
     // WEFT_CUDA_GRAPHS=0: the same kernels without graphs, as on one GPU.
     if (const char* graphs = std::getenv("WEFT_CUDA_GRAPHS"); graphs != nullptr && std::string_view(graphs) == "0")
         backend->set_use_graph(false);

@@ -258,7 +258,9 @@ void MultiSolver::detect_contacts(const Model& model, double t, double h, StepSt
     // Every GPU its share at once: one host thread a GPU (each detection waits for its device).
     std::vector<StepStats> share_stats(parts);
     std::vector<std::size_t> found(parts, 0);
+    DeviceMemoryBudget* const budget = current_budget();  // the backend's, on this thread
     const auto detect_share = [&](std::size_t p) {
+        const BudgetScope scope(budget);  // the same on the share's thread: its buffers grow there
         DeviceSolver& s = *solvers_[p];
         WEFT_CUDA_CHECK(cudaSetDevice(s.device()));
         found[p] = collisions_[p]->detect(model, t, h, whole(p, kWholeX), whole(p, kWholeV), whole(p, kWholePrevious),

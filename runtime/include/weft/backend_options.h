@@ -3,6 +3,7 @@
 /// Choosing and configuring the backend that steps a `World`: its name ("cpu", "cuda", …) and
 /// `BackendOptions`. The backends themselves are behind a factory (weft/backend/backend.h).
 
+#include <cstddef>
 #include <string>
 #include <string_view>
 #include <vector>
@@ -33,6 +34,10 @@ struct BackendOptions {
     int device = 0;    ///< first GPU
     int gpus = 0;      ///< GPUs one world is split across; 0 = the scene's `solver.gpus` (1 unless set)
     HostWait host_wait = HostWait::automatic;  ///< how the host waits for a GPU backend
+    /// Bytes of device memory the backend may hold on each GPU; 0 = as much as the device has. A
+    /// scene that needs more fails at build, a buffer that would grow past it fails the substep,
+    /// each with the bytes asked for, held and free (docs/design.md, "Device faults").
+    std::size_t device_memory_limit = 0;
 };
 
 /// Names of the registered backends, "cpu" first.

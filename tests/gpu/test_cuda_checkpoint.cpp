@@ -1,0 +1,105 @@
+// Checkpoints on the CUDA backend (World::save_state / load_state; docs/design.md, "Checkpoints"):
+// a world resumed on the same device steps on to the bits the saved world gives, with wind and pins,
+// proximity contacts and impact zones, offset contact and the Schwarz preconditioner; the warm start
+// travels in the checkpoint (without it the same steps land elsewhere); a checkpoint of the CPU
+// backend is refused with the reason and leaves the world as it was.
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <string>
+#include <vector>
+
+#include "gpu_test_util.h"
+#include "weft/error.h"
+
+namespace weft {
+namespace {
+
+struct Snapshot {
+    std::vector<std::vector<Vec3d>> x, v;
+    double time = 0.0;
+    std::size_t steps = 0;
+    bool operator==(const Snapshot&) const = default;
+};
+
+Snapshot snapshot(const World& w) {
+    Snapshot s;
+    for (std::size_t c = 0; c < w.cloth_count(); ++c) {
+        s.x.push_back(w.positions(c));
+        s.v.push_back(w.velocities(c));
+    }
+    s.time = w.time();
+    s.steps = w.steps();
+    return s;
+}
+
+// One file per test: ctest runs the tests of one binary as processes side by side.
+std::filesystem::path state_file() {
+    return std::filesystem::temp_directory_path() /
+           (std::string("weft_test_cuda_checkpoint_") + ::testing::UnitTest::GetInstance()->current_test_info()->name() + ".state");
+}
+
+TEST(CudaCheckpoint, AResumedWorldStepsOnToTheSameBits) {
+    WEFT_REQUIRE_GPU();
+    const std::filesystem::path kFile = state_file();
+    struct Case {
+        const char* scene;
+        std::vector<std::string> overrides;
+        bool warm_start_matters;  // whether a cold restart must land elsewhere
+    };
+    const Case cases[] = {
+        {"flag", {}, true},                                          // wind, gusts, pins, a capsule
+        {"layers", {}, false},                                       // self-contact: contacts, CCD, impact zones
+        {"layers", {"collision.mode=\"offset\""}, false},            // offset contact and its truncation
+        {"drape", {"solver.preconditioner=\"mas\""}, true},          // a ball, the Schwarz preconditioner
+    };
+    for (const Case& c : cases) {
+        SCOPED_TRACE(std::string(c.scene) + (c.overrides.empty() ? "" : " " + c.overrides.back()));
+        auto saved = test::make_world(c.scene, "cuda", c.overrides);
+        for (int f = 0; f < 5; ++f) (void)saved->step();
+        (void)saved->pin(0, 3);  // a pin added at run time travels with the checkpoint
+        (void)saved->step();
+        saved->save_state(kFile);
+        for (int f = 0; f < 6; ++f) (void)saved->step();
+
+        auto resumed = test::make_world(c.scene, "cuda", c.overrides);
+        resumed->load_state(kFile);
+        EXPECT_EQ(resumed->steps(), 6U);
+        EXPECT_TRUE(resumed->is_pinned(0, 3));
+        for (int f = 0; f < 6; ++f) (void)resumed->step();
+        EXPECT_TRUE(snapshot(*resumed) == snapshot(*saved)) << "the continuation differs";
+
+        auto cold = test::make_world(c.scene, "cuda", c.overrides);
+        cold->load_state(kFile);
+        for (std::size_t k = 0; k < cold->cloth_count(); ++k) cold->set_state(k, cold->positions(k), cold->velocities(k));
+        for (int f = 0; f < 6; ++f) (void)cold->step();
+        if (c.warm_start_matters) {
+            EXPECT_FALSE(snapshot(*cold) == snapshot(*saved)) << "the warm start made no difference";
+        }
+    }
+    std::filesystem::remove(kFile);
+}
+
+TEST(CudaCheckpoint, ACheckpointOfTheCpuBackendIsRefusedAndChangesNothing) {
+    WEFT_REQUIRE_GPU();
+    const std::filesystem::path kFile = state_file();
+    const std::vector<std::string> small = {"cloth.flag.mesh.grid.cells=[24,14]"};
+    auto cpu = test::make_world("flag", "cpu", small);
+    (void)cpu->step();
+    cpu->save_state(kFile);
+    auto gpu = test::make_world("flag", "cuda", small);
+    (void)gpu->step();
+    (void)gpu->step();
+    const Snapshot before = snapshot(*gpu);
+    try {
+        gpu->load_state(kFile);
+        ADD_FAILURE() << "a CPU checkpoint was taken by the CUDA backend";
+    } catch (const Error& e) {
+        EXPECT_NE(std::string(e.what()).find("cpu backend"), std::string::npos) << e.what();
+    }
+    EXPECT_TRUE(snapshot(*gpu) == before);
+    std::filesystem::remove(kFile);
+}
+
+}  // namespace
+}  // namespace weft
