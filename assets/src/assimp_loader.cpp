@@ -13,6 +13,7 @@
 #include <limits>
 
 #include "weft/error.h"
+#include "weft/world_limits.h"
 #include "weft/mesh.h"
 #include "obj_scan.h"
 #include "ply_scan.h"
@@ -50,6 +51,7 @@ MeshData import_mesh(const std::filesystem::path& path, ImportReport* report) {
 
     std::error_code ec;
     if (!std::filesystem::is_regular_file(path, ec)) throw Error(file + ": mesh file not found");
+    check_file_size(path, kMaxMeshFileBytes, "mesh file");
 
     // An OBJ is scanned first: assimp keeps only the vertices faces use and stops where the file
     // ends, so a file cut short would load as a smaller cloth without a word (obj_scan.h).

@@ -7,6 +7,7 @@
 #include <sstream>
 
 #include "weft/error.h"
+#include "weft/world_limits.h"
 #include "weft/parameters.h"
 
 namespace weft::editor {
@@ -190,6 +191,7 @@ Script parse_script(std::string_view text, const std::string& name) {
 Script read_script(const std::filesystem::path& file) {
     std::ifstream in(file, std::ios::binary);
     if (!in) throw Error("script " + file.string() + ": cannot be read");
+    check_file_size(file, kMaxTextFileBytes, "script");
     std::ostringstream text;
     text << in.rdbuf();
     return parse_script(text.str(), file.string());

@@ -182,6 +182,7 @@ std::unique_ptr<World> build_world(const SceneDesc& scene, std::string_view back
 
     // Copies made by `repeat` are adjacent and identical up to their placement: they share one fabric.
     std::shared_ptr<const Fabric> shared;
+    std::size_t vertices = 0;  // in the world so far, against kMaxWorldVertices
     for (std::size_t c = 0; c < scene.cloths.size(); ++c) {
         const SceneCloth& cloth = scene.cloths[c];
         const std::string where = file + ": cloth[" + std::to_string(cloth.entry) + "] '" + cloth.desc.name + "'";
@@ -195,7 +196,17 @@ std::unique_ptr<World> build_world(const SceneDesc& scene, std::string_view back
                 throw Error(where + ": " + e.what());
             }
             shared = desc.fabric;
+            // The entry's copies all at once, before any is added.
+            std::size_t copies = 1;
+            while (c + copies < scene.cloths.size() && scene.cloths[c + copies].entry == cloth.entry) ++copies;
+            const std::size_t total = vertices + copies * desc.fabric->vertex_count();
+            if (total > kMaxWorldVertices)
+                throw Error(where + ": " + std::to_string(copies) + (copies == 1 ? " copy" : " copies") + " of " +
+                            std::to_string(desc.fabric->vertex_count()) + " vertices bring the world to " + std::to_string(total) +
+                            " cloth vertices, more than the " + std::to_string(kMaxWorldVertices) +
+                            " a world may hold (weft/world_limits.h; check the grid cells and the repeat count)");
         }
+        vertices += desc.fabric->vertex_count();
         desc.pins = scene_pins(scene, c, *desc.fabric);
         world->add_cloth(desc);
     }

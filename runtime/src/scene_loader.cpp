@@ -14,6 +14,7 @@
 #include "scene_overrides.h"
 #include "scene_reader.h"
 #include "weft/error.h"
+#include "weft/world_limits.h"
 #include "weft/parameters.h"
 #include "weft/scene.h"
 
@@ -438,6 +439,7 @@ SceneDesc parse_scene(std::string_view toml_text, const std::filesystem::path& n
 SceneDesc load_scene(const std::filesystem::path& path, std::span<const std::string> overrides) {
     std::ifstream in(path, std::ios::binary);
     if (!in) throw Error(path.string() + ": cannot open scene file");
+    check_file_size(path, kMaxTextFileBytes, "scene file");
     std::ostringstream text;
     text << in.rdbuf();
     if (in.bad()) throw Error(path.string() + ": cannot read scene file");
