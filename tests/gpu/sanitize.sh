@@ -56,6 +56,12 @@ fi
 export WEFT_CUDA_GRAPHS=0
 run racecheck "$weft" run drape --backend cuda --frames 2 --quiet --set 'solver.cg_max_iterations=100'
 run synccheck "$weft" run drape --backend cuda --frames 2 --quiet --set 'solver.cg_max_iterations=100'
+# The collision kernels under racecheck and synccheck too: twist (the broad phase, normal cones,
+# contacts, CCD and impact zones) and layers in offset mode (bounds, offset contacts, truncation).
+run racecheck "$weft" run twist --backend cuda --frames 2 --quiet --set 'solver.cg_max_iterations=100'
+run synccheck "$weft" run twist --backend cuda --frames 2 --quiet --set 'solver.cg_max_iterations=100'
+run racecheck "$weft" run layers --backend cuda --frames 1 --quiet --set 'collision.mode=offset' --set 'solver.cg_max_iterations=100'
+run synccheck "$weft" run layers --backend cuda --frames 1 --quiet --set 'collision.mode=offset' --set 'solver.cg_max_iterations=100'
 WEFT_CUDA_PCG=kernels run racecheck "$weft" run drape --backend cuda --frames 2 --quiet --set 'solver.preconditioner=mas' --set 'solver.cg_max_iterations=100'
 run synccheck "$weft" run drape --backend cuda --frames 2 --quiet --set 'solver.preconditioner=mas' --set 'solver.cg_max_iterations=100'
 run initcheck "$weft" run flag --backend cuda --frames 2 --quiet --set 'solver.cg_max_iterations=100'
