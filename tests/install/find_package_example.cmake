@@ -2,7 +2,7 @@
 # own against it (find_package(Weft REQUIRED) through CMAKE_PREFIX_PATH) and checks that it prints
 # the same tip position as the hello_cloth built inside the tree, both on the CPU backend.
 #   cmake -DBUILD_DIR=… -DEXAMPLE_DIR=… -DWORK_DIR=… -DIN_TREE_EXE=… -DGENERATOR=… -DMAKE_PROGRAM=…
-#         -DCXX_COMPILER=… [-DCXX_COMPILER_LAUNCHER=…] [-DBUILD_TYPE=…] [-DCUDA_ROOT=…]
+#         -DCXX_COMPILER=… [-DCXX_COMPILER_LAUNCHER=…] [-DBUILD_TYPE=…] [-DCUDA_ROOT=…] [-DRUNNER_DIR=…]
 #         -P find_package_example.cmake
 foreach(var BUILD_DIR EXAMPLE_DIR WORK_DIR IN_TREE_EXE GENERATOR CXX_COMPILER)
   if(NOT ${var})
@@ -94,3 +94,14 @@ if(NOT installed_tip STREQUAL in_tree_tip)
   message(FATAL_ERROR "FAILED: the tip positions differ (m):\n  installed package: ${installed_tip}\n  inside the tree:   ${in_tree_tip}")
 endif()
 message("PASSED: both builds put the tip at ${in_tree_tip} m")
+
+# The game prototype (examples/cape_runner) against the same install, where the renderer is in it:
+# configured and built alone (it needs a window to run: tests/cli runs the in-tree one under Xvfb).
+if(RUNNER_DIR)
+  set(runner_build ${WORK_DIR}/cape_runner)
+  list(TRANSFORM configure_args REPLACE "^${EXAMPLE_DIR}$" "${RUNNER_DIR}")
+  list(TRANSFORM configure_args REPLACE "^${example_build}$" "${runner_build}")
+  run("configure examples/cape_runner alone with find_package(Weft REQUIRED COMPONENTS render)" COMMAND ${CMAKE_COMMAND} ${configure_args})
+  run("build the separate cape_runner project" COMMAND ${CMAKE_COMMAND} --build ${runner_build} ${config_arg})
+  message("PASSED: cape_runner builds against the installed package")
+endif()

@@ -13,6 +13,7 @@
 #include <GLFW/glfw3.h>
 
 #include <algorithm>
+#include <cmath>
 #include <functional>
 #include <memory>
 #include <string>
@@ -233,6 +234,29 @@ void Window::set_title(const std::string& title) { glfwSetWindowTitle(impl_->win
 const Camera& Window::camera() const { return impl_->input.camera().camera(); }
 
 void Window::reset_camera() { impl_->input.camera().reset(); }
+
+void Window::set_camera(const Camera& camera) { impl_->input.camera() = detail::OrbitCamera(camera); }
+
+GameInput Window::game_input() const {
+    GLFWwindow* w = impl_->window.handle;
+    const auto held = [w](int a, int b) { return glfwGetKey(w, a) == GLFW_PRESS || glfwGetKey(w, b) == GLFW_PRESS; };
+    GameInput in;
+    in.forward = (held(GLFW_KEY_W, GLFW_KEY_UP) ? 1.0F : 0.0F) - (held(GLFW_KEY_S, GLFW_KEY_DOWN) ? 1.0F : 0.0F);
+    in.turn = (held(GLFW_KEY_D, GLFW_KEY_RIGHT) ? 1.0F : 0.0F) - (held(GLFW_KEY_A, GLFW_KEY_LEFT) ? 1.0F : 0.0F);
+    in.jump = glfwGetKey(w, GLFW_KEY_SPACE) == GLFW_PRESS;
+    in.run = held(GLFW_KEY_LEFT_SHIFT, GLFW_KEY_RIGHT_SHIFT);
+    GLFWgamepadstate pad{};
+    if (glfwJoystickIsGamepad(GLFW_JOYSTICK_1) == GLFW_TRUE && glfwGetGamepadState(GLFW_JOYSTICK_1, &pad) == GLFW_TRUE) {
+        in.gamepad = true;
+        constexpr float kDeadZone = 0.2F;
+        const float x = pad.axes[GLFW_GAMEPAD_AXIS_LEFT_X], y = -pad.axes[GLFW_GAMEPAD_AXIS_LEFT_Y];  // stick up is −1
+        if (std::abs(y) > kDeadZone) in.forward = std::clamp(in.forward + y, -1.0F, 1.0F);
+        if (std::abs(x) > kDeadZone) in.turn = std::clamp(in.turn + x, -1.0F, 1.0F);
+        in.jump = in.jump || pad.buttons[GLFW_GAMEPAD_BUTTON_A] == GLFW_PRESS;
+        in.run = in.run || pad.buttons[GLFW_GAMEPAD_BUTTON_RIGHT_BUMPER] == GLFW_PRESS;
+    }
+    return in;
+}
 
 int Window::width() const { return impl_->renderer.width(); }
 

@@ -28,6 +28,18 @@ struct ViewerRequests {
     bool screenshot = false;    ///< S pressed
 };
 
+/// The keys and gamepad a game reads each frame (Window::game_input), polled, not queued: what is
+/// held now. Keyboard: W/Up forward, S/Down back, A/Left and D/Right turn, Space jump, Shift run.
+/// The first gamepad GLFW maps (SDL's mapping database) adds its left stick, A button and right
+/// bumper. The viewer's own keys (weft view) still act: a game ignores take_requests().
+struct GameInput {
+    float forward = 0.0F;  ///< −1 (back) … 1 (forward)
+    float turn = 0.0F;     ///< −1 (left) … 1 (right)
+    bool jump = false;
+    bool run = false;
+    bool gamepad = false;  ///< a gamepad is connected and was read
+};
+
 class Window {
 public:
     /// Opens a window of `options.width`×`options.height` screen pixels titled `title` and creates
@@ -64,6 +76,10 @@ public:
     void set_title(const std::string& title);
     [[nodiscard]] const Camera& camera() const;
     void reset_camera();
+    /// Puts the camera at `camera` (a game's follow camera; mouse orbiting starts from there).
+    void set_camera(const Camera& camera);
+    /// What the player holds now (GameInput).
+    [[nodiscard]] GameInput game_input() const;
     /// The picture's size, pixels (the window's framebuffer size at the last present).
     [[nodiscard]] int width() const;
     [[nodiscard]] int height() const;

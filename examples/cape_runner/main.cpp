@@ -1,0 +1,357 @@
+// cape_runner: a small game on Weft. The player runs a capsule character, wearing a cape and a
+// skirt, round a level with a flag on a pole and a banner hanging across the way, which the runner
+// can run through. The cloth runs on the GPU when the package has the CUDA backend and a device
+// answers (drawn straight from the solver's buffer, no copy through the host), on the CPU otherwise.
+//
+//   cape_runner [--cpu] [--detail N] [--script FILE] [--frames N] [--check] [--screenshot FILE.png]
+//               [--validation] [--offscreen]
+//
+// --offscreen draws every frame with the Vulkan renderer but into no window (a fixed camera): for
+// timing on a machine without a display.
+//
+// W/Up and S/Down run forward and back, A/Left and D/Right turn, Space jumps, Shift runs faster; a
+// gamepad's left stick, A and right bumper do the same. Esc quits. The window's title shows the
+// frame time and the cloth's share of it. examples/README.md walks through this file.
+#include <array>
+#include <chrono>
+#include <cstdio>
+#include <cstdlib>
+#include <memory>
+#include <optional>
+#include <stdexcept>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include <numbers>
+
+#include "input_script.h"
+#include "runner.h"
+#include "weft/error.h"
+#include "weft/mesh.h"
+#include "weft/render/cloth_feed.h"
+#include "weft/render/image.h"
+#include "weft/render/render_scene.h"
+#include "weft/render/renderer.h"
+#include "weft/render/window.h"
+#include "weft/world.h"
+#if WEFT_HAVE_CUDA_BACKEND
+#include "weft/cuda/cuda_backend.h"
+#endif
+
+namespace {
+
+using weft::Vec3d;
+using namespace cape_runner;
+
+struct Options {
+    bool cpu = false;
+    int detail = 0;  // cloth resolution: 1 coarse … 4 fine; 0 = 3 on the GPU, 1 on the CPU
+    std::string script, screenshot;
+    int frames = 0;  // 0: until the window closes (or the script ends)
+    bool check = false, validation = false, offscreen = false;
+};
+
+Options parse(int argc, char** argv) {
+    Options o;
+    for (int i = 1; i < argc; ++i) {
+        const std::string_view a = argv[i];
+        const auto value = [&]() -> std::string {
+            if (i + 1 >= argc) throw std::runtime_error(std::string(a) + " needs a value");
+            return argv[++i];
+        };
+        if (a == "--cpu") o.cpu = true;
+        else if (a == "--detail") o.detail = std::stoi(value());
+        else if (a == "--script") o.script = value();
+        else if (a == "--frames") o.frames = std::stoi(value());
+        else if (a == "--check") o.check = true;
+        else if (a == "--screenshot") o.screenshot = value();
+        else if (a == "--validation") o.validation = true;
+        else if (a == "--offscreen") o.offscreen = true;
+        else throw std::runtime_error("unknown option " + std::string(a) + " (see the comment at the top of main.cpp)");
+    }
+    if (o.detail < 0 || o.detail > 4) throw std::runtime_error("--detail takes 1 to 4");
+    if (o.offscreen && o.script.empty() && o.frames == 0) throw std::runtime_error("--offscreen needs --script or --frames");
+    return o;
+}
+
+// ---- the level ------------------------------------------------------------------------------------
+
+constexpr double kShoulderHeight = 1.45;  // m above the feet: the cape's pinned edge
+constexpr double kCapeHeight = 0.85;      // m
+
+/// What the game keeps of the world it built: the runner's motion and body colliders, the cape.
+struct Level {
+    int runner_motion = -1;  // the cape's and the skirt's pins follow it
+    std::size_t body = 0, head = 0;
+    std::size_t cape = 0;
+};
+
+/// A static analytic collider.
+weft::ColliderDesc collider(const char* name, weft::ColliderShape shape, Vec3d at) {
+    weft::ColliderDesc c{.name = name, .shape = shape};
+    c.motion.origin = at;
+    return c;
+}
+
+/// A skirt: a truncated cone of `segments` × `rings` quads round the y axis, its waist (ring 0) at
+/// `top` with radius `r_top`, its hem at `bottom` with radius `r_bottom`. Vertex (s, k) = k·segments + s.
+weft::MeshData skirt_mesh(int segments, int rings, double top, double bottom, double r_top, double r_bottom) {
+    weft::MeshData m;
+    m.source = "cape_runner skirt";
+    for (int k = 0; k <= rings; ++k) {
+        const double f = static_cast<double>(k) / rings, r = r_top + f * (r_bottom - r_top), y = top + f * (bottom - top);
+        for (int s = 0; s < segments; ++s) {
+            const double a = 2.0 * std::numbers::pi * s / segments;
+            m.positions.push_back({r * std::sin(a), y, r * std::cos(a)});
+        }
+    }
+    const auto id = [&](int s, int k) { return static_cast<std::uint32_t>(k * segments + (s % segments)); };
+    for (int k = 0; k < rings; ++k)
+        for (int s = 0; s < segments; ++s) {  // outward-facing, alternating diagonals
+            if ((s + k) % 2 == 0) {
+                m.triangles.push_back({{id(s, k), id(s, k + 1), id(s + 1, k + 1)}});
+                m.triangles.push_back({{id(s, k), id(s + 1, k + 1), id(s + 1, k)}});
+            } else {
+                m.triangles.push_back({{id(s, k), id(s, k + 1), id(s + 1, k)}});
+                m.triangles.push_back({{id(s + 1, k), id(s, k + 1), id(s + 1, k + 1)}});
+            }
+        }
+    return m;
+}
+
+Level build_level(weft::World& world, const Runner& runner, int detail) {
+    Level level;
+    world.add_collider(collider("ground", weft::ColliderShape::Plane, {}));
+
+    // The runner: a capsule body and a sphere head on the motion the game rewrites every frame.
+    level.runner_motion = world.add_motion(runner.motion(0.0, 1.0));
+    auto body = collider("body", weft::ColliderShape::Capsule, {0.0, 0.95, 0.0});
+    body.radius = 0.2;
+    body.half_height = 0.35;
+    body.friction = 0.1;  // the banner slides over the runner rather than being carried along
+    level.body = world.add_collider(body);
+    auto head = collider("head", weft::ColliderShape::Sphere, {0.0, 1.72, 0.0});
+    head.radius = 0.14;
+    head.friction = 0.1;
+    level.head = world.add_collider(head);
+
+    // The cape: hanging behind the back, its top row pinned to the runner's shoulders.
+    const int cx = 14 * detail, cy = 20 * detail;
+    weft::ClothDesc cape{.name = "cape", .fabric = weft::Fabric::cook(weft::make_grid(0.56, kCapeHeight, cx, cy), {.density = 0.25})};
+    // Tilted so that it falls clear of the skirt: its top 2 cm behind the back, its hem 16 cm.
+    cape.transform.rotation = weft::rotation_from_vector({0.165, 0.0, 0.0});
+    cape.transform.translation = runner.position() + Vec3d{0.0, kShoulderHeight - kCapeHeight / 2, -0.29};
+    for (int i = 0; i <= cx; ++i)
+        cape.pins.push_back({.vertex = static_cast<std::uint32_t>(cy * (cx + 1) + i), .motion = level.runner_motion});
+    level.cape = world.add_cloth(cape);
+
+    // The skirt: a cone round the hips, its waist pinned to the runner.
+    const int segments = 28 * detail, rings = 6 * detail;
+    weft::ClothDesc skirt{.name = "skirt",
+                          .fabric = weft::Fabric::cook(skirt_mesh(segments, rings, 0.95, 0.5, 0.22, 0.30), {.density = 0.2})};
+    skirt.transform.translation = runner.position();
+    for (int s = 0; s < segments; ++s) skirt.pins.push_back({.vertex = static_cast<std::uint32_t>(s), .motion = level.runner_motion});
+    (void)world.add_cloth(skirt);
+
+    // A flag on a pole beside the way, pinned along the pole.
+    auto pole = collider("pole", weft::ColliderShape::Capsule, {2.5, 1.5, 6.0});
+    pole.radius = 0.04;
+    pole.half_height = 1.5;
+    world.add_collider(pole);
+    const int fx = 16 * detail, fy = 10 * detail;
+    weft::ClothDesc flag{.name = "flag", .fabric = weft::Fabric::cook(weft::make_grid(1.2, 0.75, fx, fy), {.density = 0.12})};
+    flag.transform.translation = {2.5 + 0.65, 2.55, 6.0};
+    for (int j = 0; j <= fy; ++j) flag.pins.push_back({.vertex = static_cast<std::uint32_t>(j * (fx + 1))});
+    (void)world.add_cloth(flag);
+
+    // A banner across the way between two posts, pinned along its top: the runner goes through it.
+    for (double x : {-1.05, 1.05}) {
+        auto post = collider(x < 0 ? "post left" : "post right", weft::ColliderShape::Capsule, {x, 1.2, 9.0});
+        post.radius = 0.05;
+        post.half_height = 1.2;
+        world.add_collider(post);
+    }
+    const int bx = 18 * detail, by = 9 * detail;
+    weft::ClothDesc banner{.name = "banner", .fabric = weft::Fabric::cook(weft::make_grid(1.9, 0.9, bx, by), {.density = 0.15})};
+    banner.material.stretch_stiffness = 2e4;  // N/m: a heavier weave than the cape's
+    banner.transform.translation = {0.0, 2.25 - 0.45, 9.0};  // hangs to 1.35 m: the runner's head and shoulders meet it
+    for (int i = 0; i <= bx; ++i) banner.pins.push_back({.vertex = static_cast<std::uint32_t>(by * (bx + 1) + i)});
+    (void)world.add_cloth(banner);
+    return level;
+}
+
+/// Before each step: the runner's motion for the frame [t, t + dt], for its pins and its body.
+void drive(weft::World& world, const Level& level, const Runner& runner, double t, double dt) {
+    const weft::Motion m = runner.motion(t, dt);
+    world.motion(level.runner_motion) = m;
+    // The body parts sit on the runner's vertical axis, which its turning leaves in place.
+    world.collider(level.body).motion = m;
+    world.collider(level.body).motion.origin += Vec3d{0.0, 0.95, 0.0};
+    world.collider(level.head).motion = m;
+    world.collider(level.head).motion.origin += Vec3d{0.0, 1.72, 0.0};
+}
+
+/// A camera behind and above the runner, looking a little ahead of it.
+weft::render::Camera follow_camera(const Runner& runner) {
+    const Vec3d p = runner.position(), f = runner.facing();
+    const Vec3d eye = p - 4.5 * f + Vec3d{0.0, 2.4, 0.0}, at = p + 1.5 * f + Vec3d{0.0, 1.0, 0.0};
+    weft::render::Camera c;
+    c.position = {static_cast<float>(eye.x), static_cast<float>(eye.y), static_cast<float>(eye.z)};
+    c.target = {static_cast<float>(at.x), static_cast<float>(at.y), static_cast<float>(at.z)};
+    c.fov_degrees = 55.0F;
+    return c;
+}
+
+/// Where the cape hangs, in the runner's frame (x right of its back, y up from the feet, z ahead).
+Vec3d cape_in_runner_frame(const weft::World& world, const Level& level, const Runner& runner) {
+    Vec3d sum{};
+    const std::vector<Vec3d> x = world.positions(level.cape);
+    for (const Vec3d& p : x) sum += p;
+    const weft::Transform frame = runner.frame();
+    return weft::math::transpose(frame.rotation) * (sum / static_cast<double>(x.size()) - frame.translation);
+}
+
+std::string choose_backend(bool force_cpu, std::string& why) {
+    why = force_cpu ? "forced by --cpu" : "built without the CUDA backend";
+#if WEFT_HAVE_CUDA_BACKEND
+    weft::cuda::register_cuda_backend();
+    if (!force_cpu) {
+        why = weft::cuda::unavailable_reason();
+        if (why.empty()) {
+            why = weft::cuda::devices().front().name;
+            return "cuda";
+        }
+    }
+#endif
+    return "cpu";
+}
+
+int play(const Options& options) {
+    std::string why;
+    const std::string backend = choose_backend(options.cpu, why);
+    const int detail = options.detail > 0 ? options.detail : (backend == "cuda" ? 3 : 1);
+
+    weft::WorldDesc desc;
+    desc.wind.velocity = {3.0, 0.0, 0.5};  // m/s: a breeze for the flag
+    desc.wind.turbulence = 1.5;
+    desc.collision.self_collision = true;  // cape against skirt, and each against itself
+    desc.collision.check = options.check;  // the exact intersection check after every step (tests)
+    weft::World world(desc, backend);
+    Runner runner({0.0, 0.0, 0.0});
+    const Level level = build_level(world, runner, detail);
+    std::optional<InputScript> script;
+    if (!options.script.empty()) script.emplace(options.script);
+
+    weft::render::RendererOptions view{.width = 1280, .height = 720, .validation = options.validation};
+    // A window, or (--offscreen) the same renderer with no window: a camera that watches the way.
+    std::unique_ptr<weft::render::Window> window;
+    std::unique_ptr<weft::render::Renderer> offscreen;
+    weft::CameraDesc start_camera;  // in a window, replaced by the follow camera from the first frame
+    start_camera.position = {5.0, 3.0, -2.0};
+    start_camera.target = {0.0, 1.0, 6.0};
+    const weft::render::RenderScene scene = weft::render::make_render_scene(world, start_camera);
+    if (options.offscreen) {
+        offscreen = weft::render::create_renderer("vulkan", view);
+        offscreen->load(scene);
+    } else {
+        window = std::make_unique<weft::render::Window>(view, "cape_runner");
+        window->load(scene);
+    }
+    weft::render::Renderer& renderer = window ? window->renderer() : *offscreen;
+    weft::render::ClothFeed feed(world, renderer, scene);  // zero-copy where it can be
+    std::printf("cape_runner: %zu cloth triangles on %s (%s); cloth by %s\n", [&] {
+        std::size_t n = 0;
+        for (std::size_t c = 0; c < world.cloth_count(); ++c) n += world.cloth(c).fabric->triangle_count();
+        return n;
+    }(), backend.c_str(), why.c_str(), feed.describe().c_str());
+
+    using Clock = std::chrono::steady_clock;
+    constexpr double dt = 1.0 / 60.0;  // the world's step (WorldDesc's default dt)
+    int frame = 0, cape_lost = 0, intersections = 0, failed_steps = 0;
+    double cloth_ms_sum = 0.0, frame_ms_sum = 0.0;
+    std::array<double, weft::kStageNames.size()> stage_ms_sum{};  // where the cloth's time goes
+    Clock::time_point last = Clock::now();
+    weft::render::RenderFrame previous;
+    weft::render::Image last_picture;  // --offscreen: the frame just drawn
+    while (window ? window->poll_events() : true) {
+        if (options.frames > 0 && frame >= options.frames) break;
+        if (script && options.frames == 0 && world.time() > script->length() + 1.0) break;
+
+        // 1. Input: the script's keys, or what the player holds.
+        Controls c;
+        if (script) {
+            c = script->at(world.time());
+        } else if (window) {
+            const weft::render::GameInput in = window->game_input();
+            c = {.forward = in.forward, .turn = in.turn, .jump = in.jump, .run = in.run};
+        }
+        // 2. Game logic, then tell Weft where the runner goes during this frame.
+        runner.advance(c, dt);
+        drive(world, level, runner, world.time(), dt);
+        // 3. Step the cloth; the feed has the backend write the renderer's buffer directly.
+        weft::StepStats stats;
+        weft::render::RenderFrame next = feed.simulate([&] { stats = world.step(); });
+        // 4. Draw from behind the runner.
+        if (window) {
+            window->set_camera(follow_camera(runner));
+            window->present(next);
+            if (frame > 0) (void)feed.check(previous, window->transfer());
+        } else {
+            renderer.submit(next);
+            last_picture = renderer.collect();
+            (void)feed.check(next, renderer.transfer());
+        }
+        previous = std::move(next);
+
+        // What the tests look at: the cape hangs behind the runner within its length of the
+        // shoulders, and nothing went through anything.
+        const Vec3d cape = cape_in_runner_frame(world, level, runner);
+        const double from_shoulders = weft::math::length(cape - Vec3d{0.0, kShoulderHeight, -0.25});
+        if (cape.z > 0.05 || from_shoulders > kCapeHeight) ++cape_lost;
+    if (frame == 0 && stats.collision.remaining_intersections > 0) std::printf("cape_runner: the level starts intersecting\n");
+        if (stats.collision.remaining_intersections > 0) ++intersections;
+        if (stats.non_finite) ++failed_steps;
+
+        const Clock::time_point now = Clock::now();
+        const double frame_ms = std::chrono::duration<double, std::milli>(now - last).count();
+        last = now;
+        cloth_ms_sum += stats.step_ms;
+        for (std::size_t k = 0; k < stage_ms_sum.size(); ++k) stage_ms_sum[k] += stats.stage_ms[k];
+        frame_ms_sum += frame_ms;
+        ++frame;
+        if (frame % 15 == 0) {
+            char title[160];
+            std::snprintf(title, sizeof(title), "cape_runner  |  frame %.1f ms  |  cloth %.2f ms (%s)%s", frame_ms, stats.step_ms,
+                          backend.c_str(), feed.zero_copy() ? ", zero-copy" : "");
+            if (window) window->set_title(title);
+        }
+    }
+    if (!options.screenshot.empty() && frame > 0)
+        weft::render::write_png(options.screenshot, window ? window->screenshot() : last_picture);
+
+    std::printf("cape_runner: %d frames, mean frame %.2f ms, mean cloth step %.2f ms; runner at (%.2f, %.2f, %.2f)\n", frame,
+                frame > 0 ? frame_ms_sum / frame : 0.0, frame > 0 ? cloth_ms_sum / frame : 0.0, runner.position().x,
+                runner.position().y, runner.position().z);
+    std::printf("cape_runner: mean ms per frame by stage:");
+    for (std::size_t k = 0; k < stage_ms_sum.size(); ++k)
+        if (frame > 0 && stage_ms_sum[k] > 0.0) std::printf(" %s %.2f", std::string(weft::kStageNames[k]).c_str(), stage_ms_sum[k] / frame);
+    std::printf("\n");
+    std::printf("cape_runner: cape away from the shoulders in %d frames, intersections after %d, failed steps %d, "
+                "torn frames %lld, validation messages %d\n",
+                cape_lost, intersections, failed_steps, static_cast<long long>(feed.torn_frames()), renderer.validation_messages());
+    const bool ok = cape_lost == 0 && intersections == 0 && failed_steps == 0 && feed.torn_frames() == 0 &&
+                    renderer.validation_messages() == 0;
+    return options.check && !ok ? 1 : 0;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+    try {
+        return play(parse(argc, argv));
+    } catch (const std::exception& e) {  // weft::Error and the example's own
+        std::fprintf(stderr, "cape_runner: %s\n", e.what());
+        return 2;
+    }
+}
