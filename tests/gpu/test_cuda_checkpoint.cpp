@@ -11,33 +11,15 @@
 
 #include "gpu_test_util.h"
 #include "weft/error.h"
+#include "world_snapshot.h"
 
 namespace weft {
 namespace {
 
-struct Snapshot {
-    std::vector<std::vector<Vec3d>> x, v;
-    double time = 0.0;
-    std::size_t steps = 0;
-    bool operator==(const Snapshot&) const = default;
-};
+using test::snapshot;
 
-Snapshot snapshot(const World& w) {
-    Snapshot s;
-    for (std::size_t c = 0; c < w.cloth_count(); ++c) {
-        s.x.push_back(w.positions(c));
-        s.v.push_back(w.velocities(c));
-    }
-    s.time = w.time();
-    s.steps = w.steps();
-    return s;
-}
-
-// One file per test: ctest runs the tests of one binary as processes side by side.
-std::filesystem::path state_file() {
-    return std::filesystem::temp_directory_path() /
-           (std::string("weft_test_cuda_checkpoint_") + ::testing::UnitTest::GetInstance()->current_test_info()->name() + ".state");
-}
+// One file per test (test::test_state_file).
+std::filesystem::path state_file() { return test::test_state_file("weft_test_cuda_checkpoint_"); }
 
 TEST(CudaCheckpoint, AResumedWorldStepsOnToTheSameBits) {
     WEFT_REQUIRE_GPU();
@@ -90,7 +72,7 @@ TEST(CudaCheckpoint, ACheckpointOfTheCpuBackendIsRefusedAndChangesNothing) {
     auto gpu = test::make_world("flag", "cuda", small);
     (void)gpu->step();
     (void)gpu->step();
-    const Snapshot before = snapshot(*gpu);
+    const test::WorldSnapshot before = snapshot(*gpu);
     try {
         gpu->load_state(kFile);
         ADD_FAILURE() << "a CPU checkpoint was taken by the CUDA backend";

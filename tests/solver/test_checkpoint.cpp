@@ -13,6 +13,7 @@
 #include <vector>
 
 #include "weft/error.h"
+#include "world_snapshot.h"
 #include "weft/scene.h"
 #include "weft/world.h"
 
@@ -27,31 +28,10 @@ std::unique_ptr<World> make(const std::string& scene, std::vector<std::string> o
     return build_world(load_scene(scene_file(scene), overrides), "cpu");
 }
 
-struct Snapshot {
-    std::vector<std::vector<Vec3d>> x, v;
-    double time = 0.0;
-    std::size_t steps = 0;
-    bool operator==(const Snapshot&) const = default;
-};
+using test::snapshot;
 
-Snapshot snapshot(const World& w) {
-    Snapshot s;
-    for (std::size_t c = 0; c < w.cloth_count(); ++c) {
-        s.x.push_back(w.positions(c));
-        s.v.push_back(w.velocities(c));
-    }
-    s.time = w.time();
-    s.steps = w.steps();
-    return s;
-}
-
-// One file per test: ctest runs the tests of one binary as processes side by side.
-std::filesystem::path state_file() {
-    return std::filesystem::temp_directory_path() /
-           (std::string("weft_test_checkpoint_") + ::testing::UnitTest::GetInstance()->current_test_info()->name() + ".state");
-}
-
-
+// One file per test (test::test_state_file).
+std::filesystem::path state_file() { return test::test_state_file("weft_test_checkpoint_"); }
 
 TEST(Checkpoint, AResumedWorldStepsOnToTheSameBits) {
     const std::filesystem::path kFile = state_file();
@@ -100,7 +80,7 @@ TEST(Checkpoint, BadCheckpointsAreRefusedAndChangeNothing) {
     const std::string good = test::file_bytes(kFile);
     auto target = make("flag", {"cloth.flag.mesh.grid.cells=[24,14]"});
     (void)target->step();
-    const Snapshot before = snapshot(*target);
+    const test::WorldSnapshot before = snapshot(*target);
     const auto refused = [&](const std::string& bytes, const std::string& says) {
         std::ofstream(kFile, std::ios::binary | std::ios::trunc) << bytes;
         try {
