@@ -255,9 +255,8 @@ int run_editor(const SceneDesc& scene, std::unique_ptr<World> world, EditorOptio
             const double wall = shown == 0 ? 0.0
                                 : scripted ? session->world().settings().solver.dt / loop.time_scale()
                                            : seconds(now - last);
-            const std::int64_t before = loop.steps();
             (void)loop.advance(wall);
-            if (loop.steps() > before) session->history().record(loop.last_stats());
+            for (const StepStats& step : loop.frame_stats()) session->history().record(step);  // every step of the frame
         });
         if (shown > 0) session->history().frame_ms.push(1000.0 * seconds(now - last));
         last = now;

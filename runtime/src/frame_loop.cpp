@@ -42,10 +42,12 @@ double FrameLoop::alpha() const {
 int FrameLoop::advance(double wall_seconds) {
     if (!(wall_seconds >= 0.0) || !std::isfinite(wall_seconds))
         throw Error("frame loop: wall time " + std::to_string(wall_seconds) + " s is not a finite time ≥ 0");
+    frame_stats_.clear();
     if (paused_) {
         if (!single_step_) return 0;
         single_step_ = false;
         last_ = world_.step();
+        frame_stats_.push_back(last_);
         ++steps_;
         return 1;
     }
@@ -62,6 +64,7 @@ int FrameLoop::advance(double wall_seconds) {
     }
     for (std::int64_t k = 0; k < due; ++k) {
         last_ = world_.step();
+        frame_stats_.push_back(last_);
         ++steps_;
         ++ran;
     }

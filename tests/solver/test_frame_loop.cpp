@@ -1,5 +1,5 @@
 // The frame loop: a fixed simulation rate under any display rate, the cap on steps per frame,
-// pause, single step and time scale.
+// pause, single step and time scale, the stats of every step of a frame.
 #include <gtest/gtest.h>
 
 #include <limits>
@@ -66,6 +66,23 @@ TEST(FrameLoop, PauseSingleStepAndTimeScale) {
     EXPECT_EQ(loop.advance(0.06), 3);  // 0.03 s simulated
     EXPECT_NEAR(world->time(), 0.04, 1e-9);
     EXPECT_GT(loop.last_stats().substeps, 0);
+}
+
+// Each step of a frame has its own stats (the editor's per-step history), in order, the last one
+// being last_stats(); a frame that ran none has none.
+TEST(FrameLoop, EveryStepOfAFrameReportsItsStats) {
+    auto world = small_world(0.01);
+    FrameLoop loop(*world);
+    EXPECT_EQ(loop.advance(0.035), 3);
+    ASSERT_EQ(loop.frame_stats().size(), 3U);
+    for (const StepStats& s : loop.frame_stats()) EXPECT_EQ(s.substeps, world->settings().solver.substeps);
+    EXPECT_EQ(loop.frame_stats().back().step_ms, loop.last_stats().step_ms);
+    EXPECT_EQ(loop.advance(0.001), 0);
+    EXPECT_TRUE(loop.frame_stats().empty());
+    loop.set_paused(true);
+    loop.request_single_step();
+    EXPECT_EQ(loop.advance(0.0), 1);
+    EXPECT_EQ(loop.frame_stats().size(), 1U);
 }
 
 TEST(FrameLoop, BadValuesAreErrors) {

@@ -9,6 +9,8 @@
 /// are what an editor's play controls need.
 #include <cstdint>
 
+#include <vector>
+
 #include "weft/stats.h"
 #include "weft/world.h"
 
@@ -45,6 +47,11 @@ public:
     [[nodiscard]] std::int64_t dropped_steps() const { return dropped_; }
     /// Stats of the last step taken (empty before the first).
     [[nodiscard]] const StepStats& last_stats() const { return last_; }
+    /// Stats of every step the last `advance` ran, in order (empty when it ran none): a frame that
+    /// runs several steps shows each (the editor's per-step history). Holds at most
+    /// max_steps_per_frame entries; its storage is reused, nothing is allocated after the first frame
+    /// that ran that many.
+    [[nodiscard]] const std::vector<StepStats>& frame_stats() const { return frame_stats_; }
 
 private:
     World& world_;
@@ -55,6 +62,7 @@ private:
     std::int64_t steps_ = 0;
     std::int64_t dropped_ = 0;
     StepStats last_{};
+    std::vector<StepStats> frame_stats_;
 };
 
 }  // namespace weft
