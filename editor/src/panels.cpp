@@ -427,13 +427,11 @@ void pin_rows(Session& session) {
     if (unpin) (void)session.toggle_pin(unpin->first, unpin->second);  // after the list: it changes the pins
 }
 
-// Mesh colliders have no live rows: their triangles are cooked.
+// A mesh collider's rows are its friction and position: its triangles are cooked.
 void collider_rows(Session& session, bool visible) {
     parameter_rows(session, "colliders", visible);
     if (!visible) return;
     const auto& colliders = session.world().model().colliders;
-    for (const ColliderDesc& c : colliders)
-        if (!c.is_analytic()) ImGui::TextDisabled("collider %s (mesh): its triangles are cooked (edit the file)", c.name.c_str());
     if (colliders.empty()) ImGui::TextDisabled("no colliders");
 }
 

@@ -176,12 +176,12 @@ ParameterTable::ParameterTable(const World& world, std::span<const std::string> 
                                  [index](World& w) -> Motion& { return w.motion(index); }, follow);
     }
 
-    // ---- colliders: sizes, friction and (for one that follows no motion) position, read at every
-    // substep (World::collider). A mesh collider's triangles are cooked: it has no live rows.
+    // ---- colliders: sizes (analytic shapes), friction and (for one that follows no motion) position,
+    // read at every substep (World::collider). A mesh collider's triangles are cooked, but where they
+    // are is its frame, placed at every substep (collision_geometry.cpp): it gets friction and position.
     const auto shape_names = weft::parameter("collider", "shape").choices;
     for (std::size_t k = 0; k < world.model().colliders.size(); ++k) {
         const ColliderDesc& c = world.model().colliders[k];
-        if (!c.is_analytic()) continue;
         const std::string name = c.name.empty() ? std::to_string(k) : c.name;
         const std::string group =
             "collider " + name + " (" + std::string(shape_names[static_cast<std::size_t>(c.shape)]) + ")";

@@ -189,6 +189,34 @@ TEST(Parameters, CollidersAreLiveAndMoveWithTheirMotion) {
     EXPECT_EQ(world.collider(0).motion.angular_velocity.y, 4.0) << "the ball spins with its motion";
 }
 
+// A mesh collider is in the table too: its friction, and its position when it follows no motion
+// (its triangles are cooked; where they are is read at every substep), which moves it in the world.
+TEST(Parameters, AMeshColliderHasFrictionAndAPositionLive) {
+#if WEFT_TEST_HAVE_ASSETS
+    weft::assets::install_mesh_loader();
+#else
+    GTEST_SKIP() << "mesh import not built (WEFT_ASSETS off): the garment's body is an OBJ file";
+#endif
+    auto moving = open_session("garment");
+    const Parameter* friction = moving->parameters().find("collider.body.friction");
+    ASSERT_NE(friction, nullptr);
+    EXPECT_EQ(friction->group, "collider body (mesh)");
+    EXPECT_EQ(moving->parameters().find("collider.body.position.x"), nullptr) << "the body follows the motion 'body'";
+    EXPECT_EQ(moving->parameters().find("collider.body.radius"), nullptr) << "a mesh has no radius";
+
+    // The same body standing still: its position is a row, and moves the collider's frame.
+    SceneDesc scene = load_scene(kScenes / "garment.toml");
+    scene.collider_motions.at(0).clear();
+    scene.colliders.at(0).motion = Motion{};
+    auto world = build_world(scene);
+    Session still(std::move(scene), "cpu", BackendOptions{}, std::move(world), 1.0);
+    const Parameter* x = still.parameters().find("collider.body.position.x");
+    ASSERT_NE(x, nullptr);
+    still.apply(*x, 0.25);
+    EXPECT_EQ(still.world().collider(0).motion.origin.x, 0.25);
+    EXPECT_NO_THROW((void)still.world().step());  // the collision stages place the moved triangles
+}
+
 // A reset goes back to the start with what was tuned: pins made live, colliders, motions.
 TEST(Session, ResetKeepsPinsCollidersAndMotions) {
     auto session = open_session("flag", kSmallFlag);
