@@ -3,7 +3,9 @@
 // table on stdout, JSON with --json; exit status 0 whatever the outcomes (it measures; the test
 // asserts).
 //
-//   weft_stability_bench [--backends cpu,cuda] [--small] [--json FILE]
+//   weft_stability_bench [--backends cpu,cuda] [--small] [--only TEXT] [--json FILE]
+//
+// --only runs the cases whose name contains TEXT (e.g. "dt 1/24").
 #include <cstdio>
 #include <string>
 #include <vector>
@@ -36,7 +38,7 @@ int main(int argc, char** argv) {
         weft::bench::install_optional_backends();
         std::vector<std::string> backends{"cpu"};
         bool small = false;
-        std::string json;
+        std::string json, only;
         for (int i = 1; i < argc; ++i) {
             const std::string flag = argv[i];
             if (flag == "--small") {
@@ -49,8 +51,10 @@ int main(int argc, char** argv) {
                 backends = split(value);
             else if (flag == "--json")
                 json = value;
+            else if (flag == "--only")
+                only = value;
             else
-                throw Error("unknown option '" + flag + "' (--backends, --small, --json)");
+                throw Error("unknown option '" + flag + "' (--backends, --small, --only, --json)");
         }
         struct Row {
             test::StabilityCase c;
@@ -61,7 +65,8 @@ int main(int argc, char** argv) {
         std::printf("| case | backend | bending | outcome | steps | substeps gaining energy | deepest in the ball, mm | s | detail |\n");
         std::printf("|---|---|---|---|---|---|---|---|---|\n");
         int failing = 0, total = 0;
-        for (const test::StabilityCase& c : test::stability_cases(!small))
+        for (const test::StabilityCase& c : test::stability_cases(!small)) {
+            if (!only.empty() && c.name.find(only) == std::string::npos) continue;
             for (const std::string& backend : backends)
                 for (const BendingModel m : {BendingModel::Hinge, BendingModel::Shell}) {
                     const test::StabilityResult r = test::run_stability_case(c, backend, m);
@@ -74,6 +79,7 @@ int main(int argc, char** argv) {
                     if (r.outcome != test::StabilityOutcome::Stable && r.outcome != test::StabilityOutcome::Refused) ++failing;
                     rows.push_back({c, backend, model, r});
                 }
+        }
         std::printf("\n%d of %d cells stable or refused\n", total - failing, total);
         if (!json.empty() && !bench::write_json_file(json, "weft_stability_bench", [&](std::ostream& out) {
                 json::JsonWriter w(out);

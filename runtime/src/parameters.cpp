@@ -199,10 +199,15 @@ constexpr Parameter kTable[] = {
             "reuses it, saving its setup at the price of some CG iterations)",
      .label = "MAS refresh", .panel = "solver", .log_scale = true,
      .access = field<&WorldDesc::solver, &SolverSettings::preconditioner_refresh>()},
+    {.section = "solver", .name = "line_search", .type = T::Boolean,
+     .doc = "halve a Newton update while it raises implicit Euler's objective (elastic, gravity and collider "
+            "potentials): keeps stiff, light cloth from diverging over long steps; one energy evaluation per Newton "
+            "iteration; cpu backend only (the cuda backend ignores it); the energy guard's redo turns it on",
+     .label = "line search", .panel = "solver", .access = field<&WorldDesc::solver, &SolverSettings::line_search>()},
     {.section = "solver", .name = "energy_guard", .type = T::Choice,
      .doc = "check every substep for energy gained beyond the external work (an inexact solve): `off`; `report`: "
-            "count it in the stats; `retry`: also redo the substep once with the CG tolerance / 100, the cap × 4 and 4× the Newton "
-            "iterations (then as four quarter substeps if it still gains), keeping the attempt that gained least",
+            "count it in the stats; `retry`: also redo the substep once with the CG tolerance / 100, the cap × 4, 4× the Newton "
+            "iterations and the line search (then as four quarter substeps if it still gains), keeping the attempt that gained least",
      .label = "energy guard", .panel = "solver", .choices = kEnergyGuardNames,
      .access = choice_field<kEnergyGuards, &WorldDesc::solver, &SolverSettings::energy_guard>()},
     {.section = "solver", .name = "contact_stiffness", .type = T::Real, .unit = "N/m", .range = R{0.0, 1e12},

@@ -258,6 +258,8 @@ void World::guarded_substep(double h, bool retry, EnergyAudit& audit) {
         // collider's penalty): measured on the stability matrix, they cure the moving ball and the
         // 2.5 mm cells where the tighter CG alone cured nothing. Where they do not either, the
         // substep is redone once more as four quarter substeps.
+        const bool line_search = solver.line_search;
+        solver.line_search = true;  // and backtracking on each update: plain Newton may diverge (CPU backend)
         solver.cg_tolerance = std::max(1e-12, tolerance / 100.0);
         solver.cg_max_iterations = static_cast<int>(std::min<long>(100'000, 4L * cap));
         solver.newton_iterations = std::min(50, 4 * newton);
@@ -276,6 +278,7 @@ void World::guarded_substep(double h, bool retry, EnergyAudit& audit) {
         solver.cg_tolerance = tolerance;
         solver.cg_max_iterations = cap;
         solver.newton_iterations = newton;
+        solver.line_search = line_search;
         if (!judged) {
             ++stats_.energy_unchecked;
             audit = end;

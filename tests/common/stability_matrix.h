@@ -105,8 +105,10 @@ inline std::vector<StabilityCase> stability_cases(bool all) {
 
 /// Runs `c` for half a second of simulated time (at most `max_steps` steps) on `backend` with the
 /// bending model `bending`.
+/// `guard` and `line_search`: the energy guard's mode and SolverSettings::line_search (the matrix
+/// runs with the redo on, which turns the line search on for its redos).
 inline StabilityResult run_stability_case(const StabilityCase& c, const std::string& backend, BendingModel bending,
-                                          int max_steps = 300) {
+                                          int max_steps = 300, EnergyGuard guard = EnergyGuard::Retry, bool line_search = false) {
     StabilityResult r;
     const auto start = std::chrono::steady_clock::now();
     const double ball_radius = 0.15 * c.size;
@@ -116,7 +118,8 @@ inline StabilityResult run_stability_case(const StabilityCase& c, const std::str
         desc.solver.cg_tolerance = 1e-4;
         desc.solver.cg_max_iterations = 2000;
         desc.solver.bending = bending;
-        desc.solver.energy_guard = EnergyGuard::Retry;  // the engine's remedy on: a cell is judged by what it ends with
+        desc.solver.energy_guard = guard;  // Retry: the engine's remedy on: a cell is judged by what it ends with
+        desc.solver.line_search = line_search;
         desc.wind.velocity = {4.0, 0.0, 2.0};
         desc.wind.turbulence = 2.0;
         auto world = std::make_unique<World>(desc, backend);

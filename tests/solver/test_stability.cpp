@@ -102,5 +102,38 @@ TEST(StabilityMatrix, EveryExtremeIsStableOrRefused) {
     EXPECT_GE(checked, 20);
 }
 
+// The stiff (1e7 N/m), light (0.01 kg/m²) sheet at 1/24 s: one Baraff–Witkin step there is so poor a
+// model of the energy that plain Newton gains kJ in a substep, even redone with 4× the iterations
+// or as quarter substeps. With the line search (SolverSettings::line_search) it gains nothing, and
+// the matrix's redo (which turns it on) leaves the corner stable for both bending models.
+const test::StabilityCase& stiff_light_long_step() {
+    static const test::StabilityCase c = [] {
+        for (const test::StabilityCase& k : test::stability_cases(true))
+            if (k.name == "corner stiff no-bending light dt 1/24") return k;
+        throw Error("the stability matrix lost its stiff light corner");
+    }();
+    return c;
+}
+
+TEST(LineSearch, KeepsPlainNewtonFromGainingEnergyOnAStiffLightSheet) {
+    const test::StabilityCase& c = stiff_light_long_step();
+    const test::StabilityResult plain = test::run_stability_case(c, "cpu", BendingModel::Hinge, 300, EnergyGuard::Report, false);
+    const test::StabilityResult searched = test::run_stability_case(c, "cpu", BendingModel::Hinge, 300, EnergyGuard::Report, true);
+    EXPECT_GT(plain.energy_gained, 0) << "plain Newton no longer gains energy here: the test lost its point";
+    EXPECT_EQ(searched.energy_gained, 0) << searched.energy_gain << " J gained with the line search";
+    EXPECT_EQ(searched.outcome, test::StabilityOutcome::Stable) << searched.detail;
+}
+
+TEST(StabilityMatrix, TheStiffLightCornersAtALongStepAreStable) {
+    for (const test::StabilityCase& c : test::stability_cases(true)) {
+        if (c.name.find("stiff") == std::string::npos || c.name.find("light dt 1/24") == std::string::npos) continue;
+        for (const BendingModel m : {BendingModel::Hinge, BendingModel::Shell}) {
+            const test::StabilityResult r = test::run_stability_case(c, "cpu", m);
+            EXPECT_EQ(r.outcome, test::StabilityOutcome::Stable)
+                << c.name << (m == BendingModel::Hinge ? ", hinge: " : ", shell: ") << test::outcome_name(r.outcome) << ": " << r.detail;
+        }
+    }
+}
+
 }  // namespace
 }  // namespace weft

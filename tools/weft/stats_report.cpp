@@ -64,6 +64,7 @@ RunSummary summarize(std::span<const StepStats> frames) {
         s.energy_gained += st.energy_gained;
         s.energy_gain += st.energy_gain;
         s.energy_retries += st.energy_retries;
+        s.line_search_halvings += st.line_search_halvings;
         s.energy_unchecked += st.energy_unchecked;
         const CollisionStats& c = st.collision;
         auto& sc = s.collisions;
@@ -250,6 +251,7 @@ void write_summary_fields(JsonWriter& json, const RunContext& c, const RunSummar
     json.field("retries", s.energy_retries);
     json.field("unchecked_substeps", s.energy_unchecked);
     json.end_object();
+    json.field("line_search_halvings", s.line_search_halvings);
 
     json.key("contacts").begin_object().field("mean", s.contacts.mean).field("max", s.contacts.max).end_object();
     const auto& col = s.collisions;

@@ -62,6 +62,7 @@ struct RunSummary {
     long long first_energy_frame = -1;  ///< 1-based frame number, -1 if none
     double energy_gain = 0.0;
     long long energy_retries = 0;
+    long long line_search_halvings = 0;
     long long energy_unchecked = 0;
     /// Cloth collisions (docs/collisions.md), over all frames.
     struct Collisions {

@@ -107,6 +107,12 @@ struct SolverSettings {
     /// Energy check after every substep (a cost of two host reads of the state per substep on a device
     /// backend; docs/tuning.md measures it on the CPU).
     EnergyGuard energy_guard = EnergyGuard::Report;
+    /// A backtracking line search on every Newton update (CPU backend; the cuda backend ignores it):
+    /// the update is halved, up to kLineSearchHalvings times, while it raises implicit Euler's
+    /// objective ½‖v − v₀‖²_M + Ψ(x₀ + h·v) (elastic, gravity and collider potentials). Costs one
+    /// energy evaluation per Newton iteration, and more where it backtracks; it keeps plain Newton
+    /// from diverging on stiff, light cloth over long steps. The energy guard's redo turns it on.
+    bool line_search = false;
     double contact_stiffness = 0.0;  ///< N/m per vertex against colliders; 0 picks a stiffness from mass and dt
     int threads = 0;               ///< CPU worker threads; 0 = all cores. Results do not depend on it.
     /// GPUs one world is split across on the cuda backend (docs/multi-gpu.md); `--gpus` and

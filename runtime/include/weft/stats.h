@@ -89,6 +89,8 @@ struct StepStats {
     /// Substeps redone with a tighter CG tolerance because their first solve gained energy (retry
     /// mode); those the redo did not cure are also in `energy_gained`.
     int energy_retries = 0;
+    /// Halvings of Newton updates by the line search (SolverSettings::line_search), over the step.
+    int line_search_halvings = 0;
     /// Substeps the guard could not judge: a moving mesh collider, or a fast analytic collider that
     /// carried cloth along (work it cannot bound).
     int energy_unchecked = 0;

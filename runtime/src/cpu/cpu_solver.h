@@ -78,6 +78,11 @@ private:
     int evaluate_vertices(const Model& model, T h);
     void assemble();
     int sweep_fast_colliders(T h);
+    /// Implicit Euler's objective at velocities `v`: ½ Σ m|v − v₀|² + Ψ(x₀ + h·v), Ψ the elastic,
+    /// gravity and collider potentials (and offset contact's), at time `t1`, J (line_search).
+    double incremental_potential(const Model& model, double t1, T h, const std::vector<V3>& v);
+    /// Halves dv_ (free vertices) while vk_ + dv_ raises incremental_potential; returns the halvings.
+    int line_search(const Model& model, double t1, T h);
 
     const FlatModel* flat_ = nullptr;
     std::size_t n_ = 0;
@@ -107,6 +112,9 @@ private:
     std::vector<std::uint8_t> fixed_;
     std::vector<int> contacts_;
     std::vector<double> partials_;
+    // The line search's trial velocities and the per-cloth positions its energy reads (double).
+    std::vector<V3> trial_v_;
+    std::vector<std::vector<Vec3d>> merit_x_, merit_v_;
     BsrMatrix<T> A_;
     Pcg<T> pcg_;
     // Multilevel additive Schwarz (SolverSettings::preconditioner): levels built from the initial
