@@ -4,7 +4,7 @@
 // answers (drawn straight from the solver's buffer, no copy through the host), on the CPU otherwise.
 //
 //   cape_runner [--cpu] [--detail N] [--script FILE] [--frames N] [--check] [--screenshot FILE.png]
-//               [--validation] [--offscreen]
+//               [--validation] [--offscreen] [--cg-tolerance EPS]
 //
 // --offscreen draws every frame with the Vulkan renderer but into no window (a fixed camera): for
 // timing on a machine without a display.
@@ -50,6 +50,7 @@ struct Options {
     std::string script, screenshot;
     int frames = 0;  // 0: until the window closes (or the script ends)
     bool check = false, validation = false, offscreen = false;
+    double cg_tolerance = 0.0;  // 0: the engine's default (SolverSettings::cg_tolerance)
 };
 
 Options parse(int argc, char** argv) {
@@ -68,6 +69,7 @@ Options parse(int argc, char** argv) {
         else if (a == "--screenshot") o.screenshot = value();
         else if (a == "--validation") o.validation = true;
         else if (a == "--offscreen") o.offscreen = true;
+        else if (a == "--cg-tolerance") o.cg_tolerance = std::stod(value());
         else throw std::runtime_error("unknown option " + std::string(a) + " (see the comment at the top of main.cpp)");
     }
     if (o.detail < 0 || o.detail > 4) throw std::runtime_error("--detail takes 1 to 4");
@@ -237,6 +239,7 @@ int play(const Options& options) {
     desc.wind.turbulence = 1.5;
     desc.collision.self_collision = true;  // cape against skirt, and each against itself
     desc.collision.check = options.check;  // the exact intersection check after every step (tests)
+    if (options.cg_tolerance > 0.0) desc.solver.cg_tolerance = options.cg_tolerance;  // speed against accuracy
     weft::World world(desc, backend);
     Runner runner({0.0, 0.0, 0.0});
     const Level level = build_level(world, runner, detail);
@@ -271,6 +274,7 @@ int play(const Options& options) {
     int frame = 0, cape_lost = 0, intersections = 0, failed_steps = 0;
     double cloth_ms_sum = 0.0, frame_ms_sum = 0.0;
     std::array<double, weft::kStageNames.size()> stage_ms_sum{};  // where the cloth's time goes
+    long long cg_iterations = 0, capped_solves = 0;
     Clock::time_point last = Clock::now();
     weft::render::RenderFrame previous;
     weft::render::Image last_picture;  // --offscreen: the frame just drawn
@@ -318,6 +322,8 @@ int play(const Options& options) {
         last = now;
         cloth_ms_sum += stats.step_ms;
         for (std::size_t k = 0; k < stage_ms_sum.size(); ++k) stage_ms_sum[k] += stats.stage_ms[k];
+        cg_iterations += stats.cg_iterations;
+        capped_solves += stats.cg_not_converged;
         frame_ms_sum += frame_ms;
         ++frame;
         if (frame % 15 == 0) {
@@ -336,7 +342,8 @@ int play(const Options& options) {
     std::printf("cape_runner: mean ms per frame by stage:");
     for (std::size_t k = 0; k < stage_ms_sum.size(); ++k)
         if (frame > 0 && stage_ms_sum[k] > 0.0) std::printf(" %s %.2f", std::string(weft::kStageNames[k]).c_str(), stage_ms_sum[k] / frame);
-    std::printf("\n");
+    std::printf("; CG %.0f iterations a frame, %lld solves capped\n", frame > 0 ? static_cast<double>(cg_iterations) / frame : 0.0,
+                capped_solves);
     std::printf("cape_runner: cape away from the shoulders in %d frames, intersections after %d, failed steps %d, "
                 "torn frames %lld, validation messages %d\n",
                 cape_lost, intersections, failed_steps, static_cast<long long>(feed.torn_frames()), renderer.validation_messages());
