@@ -108,7 +108,7 @@ struct SolverSettings {
     /// backend; docs/tuning.md measures it on the CPU).
     EnergyGuard energy_guard = EnergyGuard::Report;
     /// A backtracking line search on every Newton update (CPU backend; the cuda backend ignores it):
-    /// the update is halved, up to kLineSearchHalvings times, while it raises implicit Euler's
+    /// the update is halved, up to 8 times, while it raises implicit Euler's
     /// objective ½‖v − v₀‖²_M + Ψ(x₀ + h·v) (elastic, gravity and collider potentials). Costs one
     /// energy evaluation per Newton iteration, and more where it backtracks; it keeps plain Newton
     /// from diverging on stiff, light cloth over long steps. The energy guard's redo turns it on.

@@ -441,9 +441,9 @@ double CpuSolver<T>::incremental_potential(const Model& model, double t1, T h, c
     });
     double offset = 0.0;
     if (collisions_.active() && collisions_.offset()) {
-        std::vector<V3> x(n_);
-        for (std::size_t i = 0; i < n_; ++i) x[i] = x0_[i] + h * v[i];
-        offset = collisions_.terms().energy_at(x, collisions_.kinematic_x1());
+        merit_positions_.resize(n_);
+        for (std::size_t i = 0; i < n_; ++i) merit_positions_[i] = x0_[i] + h * v[i];
+        offset = collisions_.terms().energy_at(merit_positions_, collisions_.kinematic_x1());
     }
     return inertia + a.gravity + a.elastic + a.contact + offset;
 }
@@ -456,7 +456,7 @@ double CpuSolver<T>::incremental_potential(const Model& model, double t1, T h, c
 // condition: damping and wind are not in the objective, so a good step may lower it only a little.
 template <typename T>
 int CpuSolver<T>::line_search(const Model& model, double t1, T h) {
-    constexpr int kLineSearchHalvings = 8;
+    constexpr int kLineSearchHalvings = 8;  // the update is then 1/256 of Newton's
     trial_v_.resize(n_);
     for (std::size_t i = 0; i < n_; ++i) trial_v_[i] = fixed_[i] ? vk_[i] + dv_[i] : vk_[i];
     const double start = incremental_potential(model, t1, h, trial_v_);

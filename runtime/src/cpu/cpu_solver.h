@@ -113,7 +113,7 @@ private:
     std::vector<int> contacts_;
     std::vector<double> partials_;
     // The line search's trial velocities and the per-cloth positions its energy reads (double).
-    std::vector<V3> trial_v_;
+    std::vector<V3> trial_v_, merit_positions_;
     std::vector<std::vector<Vec3d>> merit_x_, merit_v_;
     BsrMatrix<T> A_;
     Pcg<T> pcg_;
