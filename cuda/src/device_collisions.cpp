@@ -252,7 +252,7 @@ std::size_t DeviceCollisions::detect(const Model& model, double t, double h, con
             k.detect_stride = vertices_;
             k.shift_device = offset_shift_.get();
             k.planar = settings.bound_shape == BoundShape::Planar;
-            bounds_.truncate(k, stream);
+            bounds_.truncate(k, stream, true, reduce_);
             fallback_ = bounds_.read_back(stream).broken > 0;
         }
         return found;
@@ -295,7 +295,9 @@ std::size_t DeviceCollisions::detect_offset(const Model& model, double h, cudaSt
     b.triangle_cloth = triangle_group_.get();
     b.radius = radius_.get();
     b.relaxation = static_cast<float>(settings.relaxation);
-    bounds_.compute(b, broad_, stream);
+    b.share_index = share_index_;
+    b.share_count = share_count_;
+    bounds_.compute(b, broad_, stream, reduce_);
     const collision::GpuBoundsCounters& c = bounds_.read_back(stream);
     stats.collision.candidate_pairs += static_cast<std::int64_t>(c.measured_vf + c.measured_ee);
     std::uint32_t largest = 0;
@@ -312,8 +314,8 @@ std::size_t DeviceCollisions::detect_offset(const Model& model, double h, cudaSt
     return pc.contacts;
 }
 
-void DeviceCollisions::enqueue_truncation(const Model& model, const float* x0, float* vk, float* wk,
-                                          const std::uint8_t* fixed, const float* h_device, cudaStream_t stream) {
+collision::GpuTruncateInput DeviceCollisions::cloth_truncation(const Model& model, const float* x0, float* vk, float* wk,
+                                                               const std::uint8_t* fixed, const float* h_device) const {
     collision::GpuTruncateInput t;
     t.x_detect = detect_positions_.get();
     t.x0 = x0;
@@ -327,7 +329,24 @@ void DeviceCollisions::enqueue_truncation(const Model& model, const float* x0, f
     t.h_device = h_device;
     t.shift_device = offset_shift_.get();
     t.planar = model.settings.collision.bound_shape == BoundShape::Planar;
-    bounds_.truncate(t, stream);
+    return t;
+}
+
+void DeviceCollisions::enqueue_truncation(const Model& model, const float* x0, float* vk, float* wk,
+                                          const std::uint8_t* fixed, const float* h_device, cudaStream_t stream) {
+    bounds_.truncate(cloth_truncation(model, x0, vk, wk, fixed, h_device), stream);
+}
+
+void DeviceCollisions::enqueue_share_limits(const Model& model, const float* x0, const float* vk, const float* h_device,
+                                            cudaStream_t stream) {
+    bounds_.limit_shares(cloth_truncation(model, x0, const_cast<float*>(vk), nullptr, nullptr, h_device), stream);
+}
+
+void DeviceCollisions::enqueue_reduced_truncation(const Model& model, std::span<const std::uint32_t* const> shares,
+                                                  const float* x0, float* vk, const std::uint8_t* fixed,
+                                                  const float* h_device, cudaStream_t stream) {
+    const std::uint32_t* reduced = bounds_.reduce_across(shares, vertices_, stream);
+    bounds_.apply_shares(cloth_truncation(model, x0, vk, nullptr, fixed, h_device), reduced, stream);
 }
 
 bool DeviceCollisions::finish_truncation(const Model& model, cudaStream_t stream, StepStats& stats) {

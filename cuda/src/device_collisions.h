@@ -24,6 +24,7 @@
 #include <bit>
 #include <cstddef>
 #include <cstdint>
+#include <span>
 #include <string>
 #include <utility>
 #include <vector>
@@ -117,6 +118,28 @@ public:
     std::size_t redetect(const Model& model, double h, const float* x0, const float* vk, const float* h_device,
                          cudaStream_t stream, StepStats& stats);
 
+    // ---- offset contact across GPUs (docs/multi-gpu.md, "Collisions") ----
+    /// Across GPUs: `detect` and `redetect` call `reduce` where this share's nearest distances or
+    /// pair limits are partial (collision::BoundsReduction; the multi-GPU solver waits there for the
+    /// other shares and takes the minimum over the GPUs). Empty: one GPU.
+    void set_bounds_reduction(collision::BoundsReduction reduce) { reduce_ = std::move(reduce); }
+    /// This GPU's per-vertex array of `which` (device), for the other GPUs' reductions.
+    [[nodiscard]] const std::uint32_t* bounds_array(collision::BoundsArray which) const { return bounds_.array(which); }
+    /// The minimum of `arrays` (every GPU's array of one kind) over the bounds' vertices, on this
+    /// GPU (enqueued); returns the device array.
+    const std::uint32_t* reduce_bounds(std::span<const std::uint32_t* const> arrays, cudaStream_t stream) {
+        return bounds_.reduce_across(arrays, vertices_, stream);
+    }
+    /// Across GPUs, after a Newton update: the first half of `enqueue_truncation` over the whole
+    /// model's arrays on this GPU (x0, v_k: stride n), the kept shares from this GPU's share of the
+    /// pairs (enqueued).
+    void enqueue_share_limits(const Model& model, const float* x0, const float* vk, const float* h_device, cudaStream_t stream);
+    /// The second half, once every GPU's limits are done: v_k (whole, on this GPU) truncated by the
+    /// minimum of `shares` (every GPU's Shares array); pins (`fixed`, whole) counted, not moved; the
+    /// remainders for a rerun kept (enqueued). `finish_truncation` reads the counts.
+    void enqueue_reduced_truncation(const Model& model, std::span<const std::uint32_t* const> shares, const float* x0,
+                                    float* vk, const std::uint8_t* fixed, const float* h_device, cudaStream_t stream);
+
     /// Device memory held, bytes.
     [[nodiscard]] std::size_t memory_bytes() const;
     /// `memory_bytes` by purpose, each name prefixed "collisions: ".
@@ -127,6 +150,9 @@ public:
     void count_buffer_growths(StepStats& stats);
 
 private:
+    /// The truncation of the cloth vertices' v_k (whole model, stride n_) to the last detection's bounds.
+    [[nodiscard]] collision::GpuTruncateInput cloth_truncation(const Model& model, const float* x0, float* vk, float* wk,
+                                                               const std::uint8_t* fixed, const float* h_device) const;
 
     /// The broad-phase input over `x0c` → `x1c` with bounds grown by `thickness` (m).
     [[nodiscard]] collision::GpuBroadPhaseInput broad_phase_input(double thickness) const;
@@ -164,6 +190,7 @@ private:
     std::size_t detect_offset(const Model& model, double h, cudaStream_t stream, StepStats& stats);
     bool offset_ = false;
     bool fallback_ = false;
+    collision::BoundsReduction reduce_;  // set_bounds_reduction
     int redetections_ = 0;
     int growths_counted_ = 0;  // count_buffer_growths: the passes' rerun total seen so far
     std::size_t free_vertices_ = 0;

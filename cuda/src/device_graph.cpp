@@ -129,8 +129,7 @@ void DeviceSolver::record_contact_evaluation(cudaStream_t stream) {
 
 void DeviceSolver::record_truncation(cudaStream_t stream) {
     if (offset_model_ == nullptr) return;
-    const float* h = &reinterpret_cast<const StepParams*>(view_.staging)->h;
-    collisions_.enqueue_truncation(*offset_model_, view_.x0, view_.vk, view_.wk, view_.fixed, h, stream);
+    collisions_.enqueue_truncation(*offset_model_, view_.x0, view_.vk, view_.wk, view_.fixed, step_h_device(), stream);
 }
 
 void DeviceSolver::record_extra_newton(cudaStream_t stream) {

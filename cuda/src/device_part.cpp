@@ -54,7 +54,7 @@ void DeviceSolver::part_begin_substep(const Model& model, double t, double h) {
     launch_pin_velocities(view_, stream);
 }
 
-void DeviceSolver::part_assemble(bool first_newton) {
+void DeviceSolver::part_assemble(bool first_newton, bool offset_contacts) {
     WEFT_CUDA_CHECK(cudaSetDevice(device_));
     cudaStream_t stream = active_stream();
     launch_begin_newton(view_, stream);
@@ -70,9 +70,13 @@ void DeviceSolver::part_assemble(bool first_newton) {
         whole.wk = const_cast<float*>(contact_wk_);
         whole.vk = const_cast<float*>(contact_vk_);
         launch_contact_evaluate(whole, stream);
+        // Offset contacts turn active and inactive with each evaluation (kInactiveContactBit).
+        if (offset_contacts) launch_contact_incidence(view_, contacts_.scan_storage(), contacts_.scan_storage_bytes(), stream);
     }
     launch_pcg_setup(view_, first_newton, schwarz_on_, stream);
 }
+
+const float* DeviceSolver::step_h_device() const { return &reinterpret_cast<const StepParams*>(view_.staging)->h; }
 
 void DeviceSolver::part_use_schwarz(bool on, const SchwarzHierarchy& whole) {
     WEFT_CUDA_CHECK(cudaSetDevice(device_));

@@ -193,8 +193,7 @@ void DeviceSolver::run_substep(const Model& model, double t, double h, StepStats
         while (collisions_.finish_truncation(model, stream, stats)) {
             stage_ = "the offset contact's detection rerun";
             const auto extra = Clock::now();
-            const std::size_t found = collisions_.redetect(model, h, view_.x0, view_.vk,
-                                                           &reinterpret_cast<const StepParams*>(view_.staging)->h, stream, stats);
+            const std::size_t found = collisions_.redetect(model, h, view_.x0, view_.vk, step_h_device(), stream, stats);
             reserve_contacts(found, collisions_.kinematic_count());
             collisions_.publish(contacts_.inputs(), stream, stats);
             record_extra_newton(stream);
@@ -307,7 +306,7 @@ void DeviceSolver::sweep_colliders(float largest_move, cudaStream_t stream, Step
     stats.ms(Stage::Update) += ms_since(start);
 }
 
-EnergyAudit DeviceSolver::energy_audit(const Model& model, double t, double h, bool with_wind) {
+EnergyAudit DeviceSolver::energy_audit(const Model& model, double t, double h, bool with_wind, const float* whole_x) {
     EnergyAudit a;
     a.with_wind = with_wind;
     // A moving mesh collider's work is not bounded (as in host_energy_audit).
@@ -332,7 +331,8 @@ EnergyAudit DeviceSolver::energy_audit(const Model& model, double t, double h, b
     DeviceView view = view_;
     view.staging = audit_staging_.get();
     double* sums = audit_partials_.get() + static_cast<std::size_t>(kEnergySums) * energy_partial_stride(view_);
-    launch_energy_audit(view, with_wind, audit_partials_.get(), sums, stream);
+    launch_energy_audit(view, with_wind, audit_partials_.get(), sums, stream, whole_x,
+                        whole_ != nullptr ? static_cast<std::uint32_t>(whole_->vertex_count) : 0);
     WEFT_CUDA_CHECK(cudaMemcpyAsync(audit_sums_.get(), sums, kEnergySums * sizeof(double), cudaMemcpyDeviceToHost, stream));
     WEFT_CUDA_CHECK(cudaStreamSynchronize(stream));
     const double* s = audit_sums_.get();

@@ -96,7 +96,10 @@ public:
     /// lives: kinetic, gravitational, elastic and collider-penalty energy and the power bounds of
     /// moving colliders, moving pins, the grab and (`with_wind`) the wind, at time `t` (s) of
     /// substeps of `h` (s). Reads back a few numbers, not the state.
-    [[nodiscard]] EnergyAudit energy_audit(const Model& model, double t, double h, bool with_wind);
+    /// In part mode, `whole_x` (the whole model's positions on this GPU, or null) lets the offset
+    /// contacts' energy in (launch_energy_audit).
+    [[nodiscard]] EnergyAudit energy_audit(const Model& model, double t, double h, bool with_wind,
+                                           const float* whole_x = nullptr);
     /// Whether the last substep solved with the Schwarz preconditioner (SolverSettings::preconditioner).
     [[nodiscard]] bool schwarz_active() const { return schwarz_on_; }
     /// Its levels (built on first use; tests compare them with the CPU backend's).
@@ -125,8 +128,12 @@ public:
     void part_begin_substep(const Model& model, double t, double h);
     /// Enqueues one Newton iteration's system: every row's forces and blocks, then the owned rows'
     /// block-Jacobi inverse (with Schwarz: the diagonal blocks it aggregates) and Δv's start
-    /// (`first_newton`: the warm start may apply).
-    void part_assemble(bool first_newton);
+    /// (`first_newton`: the warm start may apply). `offset_contacts`: the contacts are offset contacts,
+    /// whose incidence is rebuilt after each evaluation (only the pairs in contact, as on one GPU).
+    void part_assemble(bool first_newton, bool offset_contacts = false);
+    /// The substep's h on the device (the staged step parameters), s: what a captured or enqueued
+    /// truncation reads.
+    [[nodiscard]] const float* step_h_device() const;
     /// Switches the multilevel Schwarz preconditioner across the parts on or off; on builds this
     /// part's share of `whole` (the hierarchy of the whole model) the first time.
     void part_use_schwarz(bool on, const SchwarzHierarchy& whole);

@@ -168,17 +168,27 @@ __global__ void audit_pin_kernel(DeviceView d, double* partials) {
 /// The offset contacts of the last substep (docs/methods.md §7b) at the current state: their penalty
 /// energy with the closest points taken here, as the CPU's ContactTerms::energy_at. Grid-stride over
 /// the list (its count lives on the device); one partial per block.
-__global__ void audit_offset_contact_kernel(DeviceView d, double* partials) {
+__global__ void audit_offset_contact_kernel(DeviceView d, double* partials, const float* whole_x, std::uint32_t whole_n) {
     const ContactView& c = d.contacts;
     const std::uint32_t m = contact_count(c);
+    // Part mode: whole-model ids, read from the whole positions; one GPU: the solver's own.
+    const float* x_of = whole_x != nullptr ? whole_x : d.x;
+    const std::uint32_t n = whole_x != nullptr ? whole_n : d.n;
     double energy = 0.0;
     for (std::uint32_t p = blockIdx.x * blockDim.x + threadIdx.x; p < m; p += gridDim.x * blockDim.x) {
         const DeviceContact& pair = c.list[p];
         if ((pair.pair & kOffsetContactBit) == 0) continue;
+        if (c.row_of != nullptr) {
+            // Counted once across the parts: by the owner of the first cloth corner.
+            std::uint32_t first = 0xFFFFFFFFu;
+            for (int j = 0; j < 4 && first == 0xFFFFFFFFu; ++j)
+                if (pair.vertex[j] < n) first = pair.vertex[j];
+            if (first == 0xFFFFFFFFu || c.row_of[first] == 0xFFFFFFFFu) continue;
+        }
         V3 x[4];
         for (int j = 0; j < 4; ++j) {
             const std::uint32_t v = pair.vertex[j];
-            x[j] = v < d.n ? position(d, v) : load3(c.kinematic_x1, v - d.n, c.kinematic_capacity);
+            x[j] = v < n ? load3(x_of, v, n) : load3(c.kinematic_x1, v - n, c.kinematic_capacity);
         }
         const float distance = (pair.pair & kEdgeEdgeContactBit) != 0
                                    ? physics::edge_edge_proximity(x[0], x[1], x[2], x[3]).distance
@@ -208,7 +218,8 @@ std::uint32_t energy_partial_stride(const DeviceView& d) {
     return blocks;
 }
 
-void launch_energy_audit(const DeviceView& d, bool with_wind, double* partials, double* sums, cudaStream_t stream) {
+void launch_energy_audit(const DeviceView& d, bool with_wind, double* partials, double* sums, cudaStream_t stream,
+                         const float* whole_x, std::uint32_t whole_n) {
     const std::uint32_t stride = energy_partial_stride(d);
     EnergySumCounts counts{};
     const std::uint32_t vertex_blocks = grid_for(d.n);
@@ -233,10 +244,12 @@ void launch_energy_audit(const DeviceView& d, bool with_wind, double* partials, 
         WEFT_CUDA_CHECK_LAUNCH("audit_pin_kernel");
     }
     // Offset contacts: at most `stride` blocks (grid-stride over the list), none without a list.
-    counts.blocks[kEnergyOffsetContact] = d.contacts.capacity > 0 ? std::min(stride, grid_for(d.contacts.capacity)) : 0;
+    const bool readable = d.contacts.row_of == nullptr || whole_x != nullptr;  // a part needs the whole positions
+    counts.blocks[kEnergyOffsetContact] =
+        d.contacts.capacity > 0 && readable ? std::min(stride, grid_for(d.contacts.capacity)) : 0;
     if (counts.blocks[kEnergyOffsetContact] > 0) {
         audit_offset_contact_kernel<<<counts.blocks[kEnergyOffsetContact], kBlockSize, 0, stream>>>(
-            d, partials + kEnergyOffsetContact * stride);
+            d, partials + kEnergyOffsetContact * stride, whole_x, whole_n);
         WEFT_CUDA_CHECK_LAUNCH("audit_offset_contact_kernel");
     }
     audit_finish_kernel<<<1, kBlockSize, 0, stream>>>(partials, stride, counts, sums);

@@ -163,7 +163,12 @@ struct EnergySumCounts {
 /// The audit of the state in `d` (x and v) with the parameters staged in d.staging for the
 /// substep starting at the audit's time (colliders at their start pose): every sum of EnergySum into
 /// `sums` (device memory), deterministically; the wind's power only `with_wind` (else 0).
-void launch_energy_audit(const DeviceView& d, bool with_wind, double* partials, double* sums, cudaStream_t stream);
+/// In part mode (d.contacts.row_of set) the offset contacts name whole-model vertices: they read
+/// `whole_x` (the whole model's positions on this GPU, stride `whole_n`), and each counts on the part
+/// that owns its first cloth corner, so that the parts' sums add up to one GPU's; without `whole_x`
+/// a part leaves them out.
+void launch_energy_audit(const DeviceView& d, bool with_wind, double* partials, double* sums, cudaStream_t stream,
+                         const float* whole_x = nullptr, std::uint32_t whole_n = 0);
 
 /// y = A·x over the fabric matrix (benchmarks; the solver's SpMV is fused with its dot product and
 /// adds the contacts).

@@ -133,9 +133,25 @@ __global__ void apply_kernel(GpuTruncateInput t, std::uint32_t stride, std::uint
     atomicAdd(&counters->truncated, 1U);
 }
 
+/// Up to kMaxReducedArrays device arrays, passed by value (peers' pointers included).
+struct ArraySet {
+    const std::uint32_t* array[GpuDisplacementBounds::kMaxReducedArrays];
+    std::uint32_t count;
+};
+
+/// out[v] = min over the arrays of array[v]: the bits of non-negative floats order like the floats.
+__global__ void min_across_kernel(ArraySet set, std::uint32_t n, std::uint32_t* out) {
+    const std::uint32_t v = blockIdx.x * blockDim.x + threadIdx.x;
+    if (v >= n) return;
+    std::uint32_t m = set.array[0][v];
+    for (std::uint32_t a = 1; a < set.count; ++a) m = min(m, set.array[a][v]);
+    out[v] = m;
+}
+
 }  // namespace
 
-void GpuDisplacementBounds::compute(const GpuBoundsInput& in, GpuBroadPhase& hash, cudaStream_t stream) {
+void GpuDisplacementBounds::compute(const GpuBoundsInput& in, GpuBroadPhase& hash, cudaStream_t stream,
+                                    const BoundsReduction& reduce) {
     if (in.vertex_count > 0 && (in.x == nullptr || in.radius == nullptr))
         throw Error("GPU displacement bounds: positions or radii missing");
     if (!(in.relaxation > 0.0F && in.relaxation < 0.5F))
@@ -154,6 +170,8 @@ void GpuDisplacementBounds::compute(const GpuBoundsInput& in, GpuBroadPhase& has
     b.triangle_cloth = in.triangle_cloth;
     b.self_pairs = in.self_pairs;
     b.vertex_padding = in.radius;
+    b.share_index = in.share_index;
+    b.share_count = in.share_count;
     (void)hash.find(b, stream);
     pairs_ = hash.pairs();
 
@@ -181,12 +199,23 @@ void GpuDisplacementBounds::compute(const GpuBoundsInput& in, GpuBroadPhase& has
             in, stride, pairs_, pair_geometry_.get(), pair_ids_.get(), nearest_bits_.get(), counters_.get());
         WEFT_CUDA_CHECK_LAUNCH("pair_kernel");
     }
-    vertex_kernel<<<blocks_for(in.vertex_count, kThreads), kThreads, 0, stream>>>(in, nearest_bits_.get(), bound_.get(),
-                                                                                 reach_.get(), counters_.get());
+    // Across GPUs every share's nearest distances are partial: the vertex pass takes their minimum.
+    const std::uint32_t* nearest = reduce ? reduce(BoundsArray::Nearest, stream) : nearest_bits_.get();
+    vertex_kernel<<<blocks_for(in.vertex_count, kThreads), kThreads, 0, stream>>>(in, nearest, bound_.get(), reach_.get(),
+                                                                                 counters_.get());
     WEFT_CUDA_CHECK_LAUNCH("vertex_kernel");
 }
 
-void GpuDisplacementBounds::truncate(const GpuTruncateInput& t, cudaStream_t stream, bool reset_counts) {
+void GpuDisplacementBounds::truncate(const GpuTruncateInput& t, cudaStream_t stream, bool reset_counts,
+                                     const BoundsReduction& reduce) {
+    enqueue_limits(t, stream, reset_counts);
+    // Across GPUs each share's pair limits are partial: the moves take the minimum over the shares.
+    apply_shares(t, reduce ? reduce(BoundsArray::Shares, stream) : share_bits_.get(), stream);
+}
+
+void GpuDisplacementBounds::limit_shares(const GpuTruncateInput& t, cudaStream_t stream) { enqueue_limits(t, stream, true); }
+
+void GpuDisplacementBounds::enqueue_limits(const GpuTruncateInput& t, cudaStream_t stream, bool reset_counts) {
     if (std::uint64_t{t.first} + t.vertex_count > in_.vertex_count)
         throw Error("GPU displacement bounds: truncating vertices [" + std::to_string(t.first) + ", " +
                     std::to_string(std::uint64_t{t.first} + t.vertex_count) + ") with bounds for " +
@@ -195,8 +224,7 @@ void GpuDisplacementBounds::truncate(const GpuTruncateInput& t, cudaStream_t str
         throw Error("GPU displacement bounds: truncation arrays missing");
     if (t.h_device == nullptr && !(t.h > 0.0F)) throw Error("GPU displacement bounds: h must be positive");
     const std::uint32_t stride = t.stride != 0 ? t.stride : t.vertex_count;
-    const std::uint32_t detect_stride =
-        t.detect_stride != 0 ? t.detect_stride : (in_.stride != 0 ? in_.stride : in_.vertex_count);
+    const std::uint32_t detect_stride = detect_stride_of(t);
     share_kernel<<<blocks_for(t.vertex_count, kThreads), kThreads, 0, stream>>>(
         t, stride, detect_stride, bound_.get(), reach_.get(), share_bits_.get(), counters_.get(), reset_counts ? 1 : 0);
     WEFT_CUDA_CHECK_LAUNCH("share_kernel");
@@ -206,9 +234,33 @@ void GpuDisplacementBounds::truncate(const GpuTruncateInput& t, cudaStream_t str
             share_bits_.get());
         WEFT_CUDA_CHECK_LAUNCH("pair_share_kernel");
     }
-    apply_kernel<<<blocks_for(t.vertex_count, kThreads), kThreads, 0, stream>>>(t, stride, detect_stride,
-                                                                               share_bits_.get(), counters_.get());
+}
+
+void GpuDisplacementBounds::apply_shares(const GpuTruncateInput& t, const std::uint32_t* share, cudaStream_t stream) {
+    const std::uint32_t stride = t.stride != 0 ? t.stride : t.vertex_count;
+    apply_kernel<<<blocks_for(t.vertex_count, kThreads), kThreads, 0, stream>>>(t, stride, detect_stride_of(t), share,
+                                                                               counters_.get());
     WEFT_CUDA_CHECK_LAUNCH("apply_kernel");
+}
+
+std::uint32_t GpuDisplacementBounds::detect_stride_of(const GpuTruncateInput& t) const {
+    return t.detect_stride != 0 ? t.detect_stride : (in_.stride != 0 ? in_.stride : in_.vertex_count);
+}
+
+const std::uint32_t* GpuDisplacementBounds::reduce_across(std::span<const std::uint32_t* const> arrays, std::uint32_t count,
+                                                          cudaStream_t stream) {
+    if (arrays.empty() || arrays.size() > kMaxReducedArrays)
+        throw Error("GPU displacement bounds: a reduction across " + std::to_string(arrays.size()) + " arrays (1 to " +
+                    std::to_string(kMaxReducedArrays) + " GPUs' shares)");
+    if (reduced_bits_.size() < count) reduced_bits_.allocate(count, ledger_, "offset bounds: across GPUs");
+    ArraySet set{};
+    for (std::size_t a = 0; a < arrays.size(); ++a) set.array[a] = arrays[a];
+    set.count = static_cast<std::uint32_t>(arrays.size());
+    if (count > 0) {
+        min_across_kernel<<<blocks_for(count, kThreads), kThreads, 0, stream>>>(set, count, reduced_bits_.get());
+        WEFT_CUDA_CHECK_LAUNCH("min_across_kernel");
+    }
+    return reduced_bits_.get();
 }
 
 const GpuBoundsCounters& GpuDisplacementBounds::read_back(cudaStream_t stream) {
@@ -229,8 +281,8 @@ void GpuDisplacementBounds::download(std::vector<float>& bound, std::vector<floa
 }
 
 std::size_t GpuDisplacementBounds::memory_bytes() const {
-    return nearest_bits_.bytes() + share_bits_.bytes() + bound_.bytes() + reach_.bytes() + pair_geometry_.bytes() +
-           pair_ids_.bytes() + counters_.bytes();
+    return nearest_bits_.bytes() + share_bits_.bytes() + reduced_bits_.bytes() + bound_.bytes() + reach_.bytes() +
+           pair_geometry_.bytes() + pair_ids_.bytes() + counters_.bytes();
 }
 
 }  // namespace weft::cuda::collision

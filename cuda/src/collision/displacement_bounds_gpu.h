@@ -17,6 +17,12 @@
 /// γ·d / (move·towards) where the vertex advances towards the partner (atomicMin on bits again), then
 /// per vertex the move is scaled by t. The result is the CPU's kept_share up to float rounding.
 ///
+/// Across GPUs (docs/multi-gpu.md, "Collisions"). Each GPU measures its share of the candidate pairs
+/// (`share_index` of `share_count`, as the broad phase shares them), so its nearest distances and its
+/// pair limits are partial: the per-vertex minimum over the GPUs' arrays (`reduce_across`, peer
+/// reads; min is exact and order-free) is the one-GPU array, so every GPU ends with the same bounds
+/// and the same truncation bits whatever the GPU count.
+///
 /// Float. Distances carry float rounding (about 1e-7 of the coordinates' magnitude); the bounds keep
 /// (1 − 2γ) of every gap (10 % at γ = 0.45), far above it except for pairs closer than about 1e-6 m,
 /// which the contact barrier keeps from forming.
@@ -25,6 +31,8 @@
 
 #include <cstddef>
 #include <cstdint>
+#include <functional>
+#include <span>
 #include <vector>
 
 #include "collision/broad_phase_gpu.h"
@@ -47,7 +55,21 @@ struct GpuBoundsInput {
     const std::uint32_t* triangle_cloth = nullptr;
     const float* radius = nullptr;  ///< r_v per vertex, m (> 0)
     float relaxation = 0.45F;       ///< γ in (0, ½)
+    /// Which share of the candidate pairs this GPU measures (GpuBroadPhaseInput::share_index).
+    std::uint32_t share_index = 0;
+    std::uint32_t share_count = 1;
 };
+
+/// The per-vertex arrays that a GPU's share leaves partial.
+enum class BoundsArray {
+    Nearest,  ///< nearest measured distance (float bits), after `compute`'s pair pass
+    Shares,   ///< kept share of the move (float bits), after `limit_shares`
+};
+
+/// Across GPUs: given the array this GPU's share left partial, makes every GPU's array of that kind
+/// available (waiting for the other shares as needed) and returns this GPU's device array holding
+/// the per-vertex minimum over all of them (GpuDisplacementBounds::reduce_across).
+using BoundsReduction = std::function<const std::uint32_t*(BoundsArray, cudaStream_t)>;
 
 /// One truncation: local vertex i (bounds vertex first + i) proposes x0_i + h·v_i; its move from the
 /// detection is that minus the frame shift minus x_detect (the bounds' positions). Truncated vertices
@@ -86,11 +108,28 @@ struct GpuBoundsCounters {
 class GpuDisplacementBounds {
 public:
     /// The bounds at in.x: the broad phase with the radii as padding (grown and rerun until it fits:
-    /// one host synchronisation), then the pair and vertex passes, enqueued on `stream`.
-    void compute(const GpuBoundsInput& in, GpuBroadPhase& hash, cudaStream_t stream);
+    /// one host synchronisation), then the pair and vertex passes, enqueued on `stream`. With
+    /// `reduce` (a share across GPUs), the vertex pass reads the nearest distances it returns.
+    void compute(const GpuBoundsInput& in, GpuBroadPhase& hash, cudaStream_t stream, const BoundsReduction& reduce = {});
     /// Truncates the moves of the vertices in `t` to the bounds of the last `compute` (enqueued).
-    /// `reset_counts` false adds to the last truncation's counts (a check after a truncation).
-    void truncate(const GpuTruncateInput& t, cudaStream_t stream, bool reset_counts = true);
+    /// `reset_counts` false adds to the last truncation's counts (a check after a truncation). With
+    /// `reduce` (a share across GPUs), the moves are scaled by the shares it returns.
+    void truncate(const GpuTruncateInput& t, cudaStream_t stream, bool reset_counts = true,
+                  const BoundsReduction& reduce = {});
+    /// The first half of `truncate`: the kept share of every vertex in `t` from its own bound and
+    /// this share's measured pairs, into the Shares array (enqueued; resets the counts).
+    void limit_shares(const GpuTruncateInput& t, cudaStream_t stream);
+    /// The second half: each vertex of `t` moved by `share` (a Shares array, this GPU's or reduced),
+    /// counted, its remainder written (enqueued).
+    void apply_shares(const GpuTruncateInput& t, const std::uint32_t* share, cudaStream_t stream);
+    /// This GPU's array of `which` (device; read by the other GPUs' reduce_across).
+    [[nodiscard]] const std::uint32_t* array(BoundsArray which) const {
+        return which == BoundsArray::Nearest ? nearest_bits_.get() : share_bits_.get();
+    }
+    /// The per-vertex minimum of `arrays` (device pointers, peers' included, each ≥ `count` long; at
+    /// most kMaxReducedArrays) into this object's reduction array, which it returns (enqueued).
+    const std::uint32_t* reduce_across(std::span<const std::uint32_t* const> arrays, std::uint32_t count, cudaStream_t stream);
+    static constexpr std::size_t kMaxReducedArrays = 16;
     /// Copies the counters to the host and waits.
     const GpuBoundsCounters& read_back(cudaStream_t stream);
     [[nodiscard]] const GpuBoundsCounters& counters() const { return *counters_host_.get(); }
@@ -112,6 +151,9 @@ public:
     [[nodiscard]] std::size_t memory_bytes() const;
 
 private:
+    void enqueue_limits(const GpuTruncateInput& t, cudaStream_t stream, bool reset_counts);
+    [[nodiscard]] std::uint32_t detect_stride_of(const GpuTruncateInput& t) const;
+
     GpuBoundsInput in_{};
     GpuPairList pairs_{};
     // The truncation's own copy of each candidate (its four vertices, the edge–edge flag in bit 31 of
@@ -123,6 +165,7 @@ private:
     DeviceArray<uint4> pair_ids_;
     MemoryLedger ledger_;
     DeviceArray<std::uint32_t> nearest_bits_, share_bits_;
+    DeviceArray<std::uint32_t> reduced_bits_;  // reduce_across's result (allocated on first use)
     DeviceArray<float> bound_, reach_;
     DeviceArray<float4> pair_geometry_;
     DeviceArray<GpuBoundsCounters> counters_;

@@ -53,16 +53,13 @@ MultiSolver::~MultiSolver() {
         cudaSetDevice(devices_[p]);
         collisions_[p].reset();
         whole_[p] = {};
+        whole_fixed_[p] = {};
     }
     halo_.reset();
     solvers_.clear();
 }
 
 void MultiSolver::build(const FlatModel& flat, const Model& model) {
-    if (needs_cloth_collisions(model) && model.settings.collision.mode == CollisionMode::Offset)
-        throw Error("CUDA backend on " + std::to_string(devices_.size()) +
-                    " parts: offset contact (collision.mode = \"offset\") is not split across GPUs yet; use "
-                    "\"ccd_zones\" or one GPU");
     pcg_.reset();
     level1_couplings_.reset();
     mirror_.reset();
@@ -70,9 +67,11 @@ void MultiSolver::build(const FlatModel& flat, const Model& model) {
         WEFT_CUDA_CHECK(cudaSetDevice(devices_[p]));
         collisions_[p].reset();
         whole_[p] = {};
+        whole_fixed_[p] = {};
     }
     collisions_.clear();
     whole_.clear();
+    whole_fixed_.clear();
     WEFT_CUDA_CHECK(cudaSetDevice(devices_.front()));
     leader_contacts_.release();
     halo_.reset();
@@ -87,12 +86,19 @@ void MultiSolver::build(const FlatModel& flat, const Model& model) {
         // cut: a re-cut keeps them.
         collisions_.resize(parts);
         whole_.resize(parts);
+        whole_fixed_.resize(parts);
+        std::vector<std::uint8_t> fixed(flat.vertex_count, 0);
+        for (std::size_t i = 0; i < fixed.size(); ++i) fixed[i] = i < flat.vertex_pin.size() && flat.vertex_pin[i] >= 0 ? 1 : 0;
         for (std::uint32_t p = 0; p < parts; ++p) {
             WEFT_CUDA_CHECK(cudaSetDevice(devices_[p]));
             collisions_[p] = std::make_unique<DeviceCollisions>();
             collisions_[p]->build(flat, model);
             collisions_[p]->set_share(p, parts);
+            // Offset mode: each share's bounds are partial until reduced over every GPU's.
+            collisions_[p]->set_bounds_reduction(
+                [this, p](collision::BoundsArray which, cudaStream_t stream) { return reduce_bounds_across(p, which, stream); });
             whole_[p].allocate(4 * 3 * flat.vertex_count, ledger_, "whole state for the collision stages");
+            whole_fixed_[p].upload(fixed, ledger_, "whole pins for the offset truncation");
         }
         WEFT_CUDA_CHECK(cudaSetDevice(devices_.front()));
         if (leader_event_ == nullptr) WEFT_CUDA_CHECK(cudaEventCreateWithFlags(&leader_event_, cudaEventDisableTiming));
@@ -252,26 +258,63 @@ void MultiSolver::spread_whole() {
 }
 
 void MultiSolver::detect_contacts(const Model& model, double t, double h, StepStats& stats) {
-    // The detection reads x and v (the offset mode's Δv is not split across GPUs).
+    // The detection reads x and v; offset mode's predicted moves also the previous Δv.
     const std::size_t parts = solvers_.size();
-    collect_whole({kWholeX, kWholeV}, parts);
-    // Every GPU its share at once: one host thread a GPU (each detection waits for its device).
+    offset_ = model.settings.collision.mode == CollisionMode::Offset;
+    if (offset_)
+        collect_whole({kWholeX, kWholeV, kWholePrevious}, parts);
+    else
+        collect_whole({kWholeX, kWholeV}, parts);
+    const std::vector<std::size_t> found = detect_shares(
+        [&](std::size_t p, StepStats& share_stats) {
+            DeviceSolver& s = *solvers_[p];
+            return collisions_[p]->detect(model, t, h, whole(p, kWholeX), whole(p, kWholeV), whole(p, kWholePrevious),
+                                          s.stream(), share_stats);
+        },
+        stats);
+    distribute_contacts(model, found, stats);
+}
+
+void MultiSolver::redetect_contacts(const Model& model, double h, StepStats& stats) {
+    // Whole x holds the substep's start and whole v the truncated v_k on every GPU (truncate_across_parts).
+    const std::vector<std::size_t> found = detect_shares(
+        [&](std::size_t p, StepStats& share_stats) {
+            DeviceSolver& s = *solvers_[p];
+            return collisions_[p]->redetect(model, h, whole(p, kWholeX), whole(p, kWholeV), s.step_h_device(), s.stream(),
+                                            share_stats);
+        },
+        stats);
+    distribute_contacts(model, found, stats);
+}
+
+std::vector<std::size_t> MultiSolver::detect_shares(const std::function<std::size_t(std::size_t, StepStats&)>& detect_share,
+                                                    StepStats& stats) {
+    const std::size_t parts = solvers_.size();
     std::vector<StepStats> share_stats(parts);
     std::vector<std::size_t> found(parts, 0);
     DeviceMemoryBudget* const budget = current_budget();  // the backend's, on this thread
-    const auto detect_share = [&](std::size_t p) {
+    share_failed_ = false;
+    share_barrier_ = std::make_unique<std::barrier<>>(static_cast<std::ptrdiff_t>(parts));
+    const auto run_share = [&](std::size_t p) {
         const BudgetScope scope(budget);  // the same on the share's thread: its buffers grow there
-        DeviceSolver& s = *solvers_[p];
-        WEFT_CUDA_CHECK(cudaSetDevice(s.device()));
-        found[p] = collisions_[p]->detect(model, t, h, whole(p, kWholeX), whole(p, kWholeV), whole(p, kWholePrevious),
-                                          s.stream(), share_stats[p]);
-        if (p > 0) collisions_[p]->count_buffer_growths(share_stats[p]);
+        try {
+            WEFT_CUDA_CHECK(cudaSetDevice(solvers_[p]->device()));
+            found[p] = detect_share(p, share_stats[p]);
+            if (p > 0) collisions_[p]->count_buffer_growths(share_stats[p]);
+        } catch (...) {
+            // The other shares must not wait for this one at the barrier (reduce_bounds_across).
+            share_failed_ = true;
+            share_barrier_->arrive_and_drop();
+            throw;
+        }
+        share_barrier_->arrive_and_drop();
     };
+    // Every GPU its share at once: one host thread a GPU (each detection waits for its device).
     std::vector<std::future<void>> others;
-    for (std::size_t p = 1; p < parts; ++p) others.push_back(std::async(std::launch::async, detect_share, p));
+    for (std::size_t p = 1; p < parts; ++p) others.push_back(std::async(std::launch::async, run_share, p));
     std::exception_ptr failure;
     try {
-        detect_share(0);
+        run_share(0);
     } catch (...) {
         failure = std::current_exception();
     }
@@ -283,21 +326,37 @@ void MultiSolver::detect_contacts(const Model& model, double t, double h, StepSt
         }
     }
     if (failure) std::rethrow_exception(failure);
-    // The shares ran side by side: each stage took the longest share's time; the counts add up.
+    // The shares ran side by side: each stage took the longest share's time; the counts add up
+    // (every share reruns together: its count once).
     std::size_t contacts = 0;
     for (std::size_t p = 0; p < parts; ++p) {
         const StepStats& a = share_stats[p];
         stats.collision.candidate_pairs += a.collision.candidate_pairs;
         stats.collision.buffer_growths += a.collision.buffer_growths;
+        stats.collision.query_radius_max = std::max(stats.collision.query_radius_max, a.collision.query_radius_max);
         contacts += found[p];
     }
+    stats.collision.redetections += share_stats[0].collision.redetections;
     for (const Stage stage : {Stage::BroadPhase, Stage::Culling, Stage::NarrowPhase}) {
         double longest = 0.0;
         for (const StepStats& a : share_stats) longest = std::max(longest, a.ms(stage));
         stats.ms(stage) += longest;
     }
     stats.collision.contacts = static_cast<int>(contacts);
+    return found;
+}
 
+const std::uint32_t* MultiSolver::reduce_bounds_across(std::size_t p, collision::BoundsArray which, cudaStream_t stream) {
+    WEFT_CUDA_CHECK(cudaStreamSynchronize(stream));  // this share's array is complete
+    share_barrier_->arrive_and_wait();                // and so is every other share's
+    if (share_failed_) throw Error("multi-GPU solver: another GPU's share of the collision detection failed");
+    std::vector<const std::uint32_t*> arrays;
+    for (const auto& c : collisions_) arrays.push_back(c->bounds_array(which));
+    return collisions_[p]->reduce_bounds(arrays, stream);
+}
+
+void MultiSolver::distribute_contacts(const Model& model, const std::vector<std::size_t>& found, StepStats& stats) {
+    const std::size_t parts = solvers_.size();
     DeviceSolver& leader = *solvers_.front();
     WEFT_CUDA_CHECK(cudaSetDevice(leader.device()));
     const std::size_t kinematic = collisions_[0]->kinematic_count();
@@ -315,14 +374,14 @@ void MultiSolver::detect_contacts(const Model& model, double t, double h, StepSt
         lists.push_back(s->view().contacts);
         largest = std::max(largest, static_cast<int>(s->part_contact_count()));
     }
-    stats.collision.contacts_largest_part = largest;
+    stats.collision.contacts_largest_part = std::max(stats.collision.contacts_largest_part, largest);
     found_ = found;
     if (parts > 1) {
         std::size_t on_parts = 0;
         for (auto& s : solvers_) on_parts += s->part_contact_count();
         const double mean = static_cast<double>(on_parts) / static_cast<double>(parts);
         const double imbalance = mean > 0.0 ? static_cast<double>(largest) / mean : 1.0;
-        recut_due_ = recut_policy_.observe(imbalance, model.settings.solver.gpu_rebalance);
+        recut_due_ = recut_policy_.observe(imbalance, model.settings.solver.gpu_rebalance) || recut_due_;
     }
     mirror_->list_contact_vertices(lists);
     if (grew || !pcg_) make_cg();  // the parts' contact arrays moved: the CG's systems and graphs with them
@@ -399,10 +458,9 @@ double MultiSolver::elapsed_ms(std::size_t a, std::size_t b) const {
 void MultiSolver::substep(const Model& model, double t, double h, StepStats& stats) {
     if (solvers_.empty() || flat_ == nullptr || flat_->vertex_count == 0) return;
     const bool colliding = !collisions_.empty();
-    if (needs_cloth_collisions(model) != colliding || (colliding && model.settings.collision.mode == CollisionMode::Offset))
+    if (needs_cloth_collisions(model) != colliding)
         throw Error("CUDA backend on " + std::to_string(devices_.size()) +
-                    " parts: the cloth collisions were switched on or off, or to offset contact, after the build; across "
-                    "GPUs that takes a new world");
+                    " parts: the cloth collisions were switched on or off after the build; across GPUs that takes a new world");
     if (colliding && collisions_.front()->stale(model)) {
         for (std::size_t p = 0; p < collisions_.size(); ++p) {  // self-collision toggled live
             WEFT_CUDA_CHECK(cudaSetDevice(devices_[p]));
@@ -442,43 +500,26 @@ void MultiSolver::substep(const Model& model, double t, double h, StepStats& sta
     const double host_ms = ms_since(host_start);
     mark(e++);
     const SolverSettings& settings = model.settings.solver;
-    std::vector<const float*> b;
-    std::vector<float*> dv;
-    for (auto& s : solvers_) {
-        b.push_back(s->view().b);
-        dv.push_back(s->view().dv);
-    }
-    for (int it = 0; it < settings.newton_iterations; ++it) {
-        if (colliding) {
-            // The linearisation point of every contact vertex, on every GPU.
-            std::vector<const float*> x0, wk, vk;
-            std::vector<std::uint32_t> stride;
-            for (auto& s : solvers_) {
-                x0.push_back(s->view().x0);
-                wk.push_back(s->view().wk);
-                vk.push_back(s->view().vk);
-                stride.push_back(s->view().n);
-            }
-            mirror_->push(ContactMirror::kX0, x0, stride);
-            mirror_->push(ContactMirror::kWk, wk, stride);
-            mirror_->push(ContactMirror::kVk, vk, stride);
-        }
-        for (auto& s : solvers_) s->part_assemble(it == 0);
-        if (schwarz_) factor_schwarz(it);
-        // The first part's stream waits for the others' work at the solve's first exchange.
-        mark(e++);
-        const PartPcgResult r = pcg_->solve(b, dv, settings.cg_tolerance, settings.cg_max_iterations, kIterationsPerLaunch);
-        mark(e++);
-        stats.cg_iterations += r.iterations;
-        stats.cg_iterations_max = std::max(stats.cg_iterations_max, r.iterations);
-        stats.cg_residual = std::max(stats.cg_residual, r.relative_residual);
-        if (!r.converged) ++stats.cg_not_converged;
-        ++stats.newton_iterations;
-        for (auto& s : solvers_) s->part_newton_update();
-        mark(e++);
-    }
+    if (!colliding) offset_ = false;
+    for (int it = 0; it < settings.newton_iterations; ++it) newton_iteration(model, it, stats, &e);
     for (auto& s : solvers_) s->part_commit();
     mark(e++);
+    if (offset_) {
+        // Offset contact: while too many moves were truncated, detect again where the truncation left
+        // the cloth and take one more Newton iteration from there (CollisionSettings::redetect_share),
+        // as on one GPU. Every GPU's truncation counted the same whole model: the first's counts decide.
+        DeviceSolver& leader = *solvers_.front();
+        for (;;) {
+            WEFT_CUDA_CHECK(cudaSetDevice(leader.device()));
+            if (!collisions_.front()->finish_truncation(model, leader.stream(), stats)) break;
+            const auto extra = Clock::now();
+            redetect_contacts(model, h, stats);
+            newton_iteration(model, 1, stats, nullptr);
+            for (auto& s : solvers_) s->part_commit();
+            synchronize();
+            stats.ms(Stage::Solve) += ms_since(extra);
+        }
+    }
 
     // Every part checks its own vertices (ghosts included) for NaN and Inf; one finding rolls every
     // part back, as one GPU would.
@@ -530,6 +571,91 @@ void MultiSolver::substep(const Model& model, double t, double h, StepStats& sta
         }
     }
     stats.ms(Stage::Update) += std::max(0.0, ms_since(after) - (staged() - staged_before));
+}
+
+void MultiSolver::newton_iteration(const Model& model, int newton, StepStats& stats, std::size_t* marks) {
+    const SolverSettings& settings = model.settings.solver;
+    if (!collisions_.empty()) {
+        // The linearisation point of every contact vertex, on every GPU.
+        std::vector<const float*> x0, wk, vk;
+        std::vector<std::uint32_t> stride;
+        for (auto& s : solvers_) {
+            x0.push_back(s->view().x0);
+            wk.push_back(s->view().wk);
+            vk.push_back(s->view().vk);
+            stride.push_back(s->view().n);
+        }
+        mirror_->push(ContactMirror::kX0, x0, stride);
+        mirror_->push(ContactMirror::kWk, wk, stride);
+        mirror_->push(ContactMirror::kVk, vk, stride);
+    }
+    for (auto& s : solvers_) s->part_assemble(newton == 0, offset_);
+    if (schwarz_) factor_schwarz(newton);
+    // The first part's stream waits for the others' work at the solve's first exchange.
+    if (marks != nullptr) mark((*marks)++);
+    std::vector<const float*> b;
+    std::vector<float*> dv;
+    for (auto& s : solvers_) {
+        b.push_back(s->view().b);
+        dv.push_back(s->view().dv);
+    }
+    const PartPcgResult r = pcg_->solve(b, dv, settings.cg_tolerance, settings.cg_max_iterations, kIterationsPerLaunch);
+    if (marks != nullptr) mark((*marks)++);
+    stats.cg_iterations += r.iterations;
+    stats.cg_iterations_max = std::max(stats.cg_iterations_max, r.iterations);
+    stats.cg_residual = std::max(stats.cg_residual, r.relative_residual);
+    if (!r.converged) ++stats.cg_not_converged;
+    ++stats.newton_iterations;
+    for (auto& s : solvers_) s->part_newton_update();
+    if (offset_) truncate_across_parts(model);
+    if (marks != nullptr) mark((*marks)++);
+}
+
+void MultiSolver::truncate_across_parts(const Model& model) {
+    const auto n = static_cast<std::uint32_t>(flat_->vertex_count);
+    const std::size_t parts = solvers_.size();
+    // The reads of the whole arrays and of the shares before this (the last truncation, the
+    // detection's reductions) are done everywhere before they are written again.
+    join_parts();
+    // v_k of every vertex, from its owner, on every GPU (whole x holds the substep's start).
+    for (std::size_t p = 0; p < parts; ++p) {
+        DeviceSolver& s = *solvers_[p];
+        const DeviceView& v = s.view();
+        WEFT_CUDA_CHECK(cudaSetDevice(s.device()));
+        for (std::size_t q = 0; q < parts; ++q) launch_owned_to_whole(v.vk, v.n, v.rows, s.part_global_ids(), whole(q, kWholeV), n, s.stream());
+    }
+    join_parts();
+    // Each GPU's share of the pair limits, then (once all are done) their minimum on every GPU.
+    for (std::size_t q = 0; q < parts; ++q) {
+        DeviceSolver& s = *solvers_[q];
+        WEFT_CUDA_CHECK(cudaSetDevice(s.device()));
+        collisions_[q]->enqueue_share_limits(model, whole(q, kWholeX), whole(q, kWholeV), s.step_h_device(), s.stream());
+    }
+    join_parts();
+    std::vector<const std::uint32_t*> shares;
+    for (const auto& c : collisions_) shares.push_back(c->bounds_array(collision::BoundsArray::Shares));
+    for (std::size_t q = 0; q < parts; ++q) {
+        DeviceSolver& s = *solvers_[q];
+        const DeviceView& v = s.view();
+        WEFT_CUDA_CHECK(cudaSetDevice(s.device()));
+        collisions_[q]->enqueue_reduced_truncation(model, shares, whole(q, kWholeX), whole(q, kWholeV), whole_fixed_[q].get(),
+                                                   s.step_h_device(), s.stream());
+        // After a Newton update w_k = v_k at every vertex, truncated or not: both from the whole v_k.
+        launch_whole_to_local(whole(q, kWholeV), n, s.part_global_ids(), v.vk, v.n, s.stream());
+        launch_whole_to_local(whole(q, kWholeV), n, s.part_global_ids(), v.wk, v.n, s.stream());
+    }
+}
+
+void MultiSolver::join_parts() {
+    for (std::size_t p = 0; p < solvers_.size(); ++p) {
+        WEFT_CUDA_CHECK(cudaSetDevice(solvers_[p]->device()));
+        WEFT_CUDA_CHECK(cudaEventRecord(part_event_[p], solvers_[p]->stream()));
+    }
+    for (std::size_t p = 0; p < solvers_.size(); ++p) {
+        WEFT_CUDA_CHECK(cudaSetDevice(solvers_[p]->device()));
+        for (std::size_t q = 0; q < solvers_.size(); ++q)
+            if (q != p) WEFT_CUDA_CHECK(cudaStreamWaitEvent(solvers_[p]->stream(), part_event_[q], 0));
+    }
 }
 
 void MultiSolver::set_stream(cudaStream_t stream) {
@@ -603,8 +729,11 @@ void MultiSolver::write_state(std::size_t first, std::size_t count, const Vec3d*
 EnergyAudit MultiSolver::energy_audit(const Model& model, double t, double h, bool with_wind) {
     EnergyAudit sum;
     sum.with_wind = with_wind;
+    // Offset contacts name vertices of the whole model: every part reads them from its GPU's whole x.
+    if (!collisions_.empty()) collect_whole({kWholeX}, solvers_.size());
     for (std::size_t p = 0; p < solvers_.size(); ++p) {
-        const EnergyAudit a = solvers_[p]->energy_audit(model, t, h, with_wind);
+        const EnergyAudit a =
+            solvers_[p]->energy_audit(model, t, h, with_wind, collisions_.empty() ? nullptr : whole(p, kWholeX));
         sum.bounded = sum.bounded && a.bounded;
         sum.kinetic += a.kinetic;
         sum.gravity += a.gravity;

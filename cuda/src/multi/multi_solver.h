@@ -8,7 +8,10 @@
 ///
 /// Several parts may share one GPU: the test mode that checks the partition logic on any GPU host.
 
+#include <atomic>
+#include <barrier>
 #include <cstdint>
+#include <functional>
 #include <initializer_list>
 #include <memory>
 #include <string>
@@ -119,8 +122,32 @@ private:
     void spread_whole();
     /// Before the solve: every GPU hashes the whole state and narrows down its share of the pairs
     /// (concurrently, one host thread a GPU); each part takes the contacts at its rows from every
-    /// share, then builds its incidence and contact vertices.
+    /// share, then builds its incidence and contact vertices. In offset mode the shares' bounds are
+    /// reduced across the GPUs on the way (reduce_bounds_across).
     void detect_contacts(const Model& model, double t, double h, StepStats& stats);
+    /// Offset mode: the detection again at the truncated state (the whole v_k that
+    /// truncate_across_parts left on every GPU), then the contacts to the parts, as detect_contacts.
+    void redetect_contacts(const Model& model, double h, StepStats& stats);
+    /// Runs `detect_share(p, its stats)` for every share at once, one host thread a GPU, with the
+    /// barrier that reduce_bounds_across waits at; merges the shares' stats into `stats` and
+    /// returns each share's contact count.
+    std::vector<std::size_t> detect_shares(const std::function<std::size_t(std::size_t, StepStats&)>& detect_share,
+                                           StepStats& stats);
+    /// Each part takes the contacts at its rows from every share (`found`: the shares' counts).
+    void distribute_contacts(const Model& model, const std::vector<std::size_t>& found, StepStats& stats);
+    /// Offset mode, called by share p's detection (collision::BoundsReduction): waits until every
+    /// share's array of `which` is complete (host barrier), then enqueues their minimum on GPU p.
+    const std::uint32_t* reduce_bounds_across(std::size_t p, collision::BoundsArray which, cudaStream_t stream);
+    /// One Newton iteration across the parts: the contacts' linearisation point, assembly, the
+    /// Schwarz factorisation, the CG, the update and, in offset mode, the truncation. `marks`: the
+    /// next stage event to record (none when null).
+    void newton_iteration(const Model& model, int newton, StepStats& stats, std::size_t* marks);
+    /// Offset mode, after a Newton update: v_k gathered whole on every GPU, each GPU's share of the
+    /// pair limits, their minimum applied to the whole v_k on every GPU (the same bits on each), and
+    /// every part's local v_k and w_k taken back from it (ghosts included).
+    void truncate_across_parts(const Model& model);
+    /// Every part's stream waits for the work enqueued so far on every other part's (events only).
+    void join_parts();
     /// After the solve: CCD and the impact zones on the first GPU; the vertices they moved back to
     /// the parts. `swept`: a fast collider carried vertices in this substep.
     void resolve_contacts(const Model& model, double h, bool swept, StepStats& stats);
@@ -145,6 +172,10 @@ private:
     std::vector<std::unique_ptr<DeviceCollisions>> collisions_;
     DeviceContacts leader_contacts_;  // the first GPU's share, published: the kinematic arrays
     std::vector<DeviceArray<float>> whole_;
+    std::vector<DeviceArray<std::uint8_t>> whole_fixed_;  // per GPU: 1 at the whole model's pinned vertices
+    bool offset_ = false;                                  // this substep's detection ran in offset mode
+    std::unique_ptr<std::barrier<>> share_barrier_;        // detect_shares: the shares' meeting point
+    std::atomic<bool> share_failed_{false};                // a share threw: the others stop at the barrier
     MemoryLedger ledger_;                            // what the solver holds beside the parts
     std::unique_ptr<ContactMirror> mirror_;
     cudaEvent_t leader_event_ = nullptr;             // on the first GPU
