@@ -533,9 +533,9 @@ TEST(CollisionGpu, SameBitsOnEveryRunAndAfterOverflow) {
     EXPECT_EQ(tiny.reruns(), reruns);
 }
 
-// Across GPUs each GPU enumerates a share of the pair slots: the shares are disjoint and together
-// are the whole list, with their tested slots adding up to the whole's (with culling, which cuts
-// runs out of the rows, and with oversized primitives, shared out one by one).
+// Across GPUs each GPU hashes the cells dealt to it and reports their pairs: the shares are disjoint
+// and together are the whole list, with their entries and tested slots adding up to the whole's
+// (with culling, which cuts runs out of the rows, and with oversized primitives, shared out one by one).
 TEST(CollisionGpu, SharesOfThePairsMakeUpTheWholeList) {
     WEFT_REQUIRE_GPU();
     Scene sheet = twisted_sheet(100, 1.5, 0.03, 0.004, 43);
@@ -555,17 +555,20 @@ TEST(CollisionGpu, SharesOfThePairsMakeUpTheWholeList) {
         ASSERT_GT(whole.keys.size(), 100U) << c.what;
         for (const std::uint32_t count : {2U, 3U, 8U}) {
             std::vector<std::uint64_t> joined;
-            unsigned long long tested = 0;
+            unsigned long long tested = 0, entries = 0;
             for (std::uint32_t index = 0; index < count; ++index) {
                 const GpuPairs share = run_gpu(bp, d, stream.s, c.cell, index, count);
                 joined.insert(joined.end(), share.keys.begin(), share.keys.end());
                 tested += share.counters.tested_pairs;
+                entries += share.counters.entries;
                 EXPECT_LT(share.keys.size(), whole.keys.size()) << c.what << ": share " << index << " of " << count;
             }
             std::sort(joined.begin(), joined.end());
             EXPECT_TRUE(std::adjacent_find(joined.begin(), joined.end()) == joined.end()) << c.what << ": a pair in two shares";
             EXPECT_TRUE(joined == whole.keys) << c.what << ": " << count << " shares";
             EXPECT_EQ(tested, whole.counters.tested_pairs) << c.what << ": " << count << " shares";
+            // Each share hashes only its own cells: the shares' entries make up the whole table's.
+            EXPECT_EQ(entries, whole.counters.entries) << c.what << ": " << count << " shares";
         }
         std::printf("shares: %s: %zu pairs (%u oversized primitives) split 2, 3 and 8 ways\n", c.what, whole.keys.size(),
                     whole.counters.oversized);

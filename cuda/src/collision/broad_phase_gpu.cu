@@ -116,6 +116,18 @@ __device__ inline bool reports_here(const Grid& g, unsigned long long lo_a, unsi
     return true;
 }
 
+/// Whether this call's share holds `cell` (multi-GPU detection): cells are dealt to the shares by a
+/// mix of their key (splitmix64's finaliser), so that neighbouring cells, and the dense cells of a
+/// fold, spread over the GPUs. Every cell is in exactly one share, hence so is the pair it reports.
+__device__ inline bool cell_in_share(const Params& p, unsigned long long cell) {
+    if (p.share_count == 1) return true;
+    unsigned long long z = cell + 0x9E3779B97F4A7C15ULL;
+    z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ULL;
+    z = (z ^ (z >> 27)) * 0x94D049BB133111EBULL;
+    z ^= z >> 31;
+    return z % p.share_count == p.share_index;
+}
+
 /// Closed boxes: touching bounds overlap. False when either is NaN.
 __device__ inline bool overlap(float4 alo, float4 ahi, float4 blo, float4 bhi) {
     return alo.x <= bhi.x && blo.x <= ahi.x && alo.y <= bhi.y && blo.y <= ahi.y && alo.z <= bhi.z && blo.z <= ahi.z;
@@ -373,8 +385,13 @@ __global__ void count_kernel(Params p) {
         if (cells > kMaxCellsPerPrimitive) {
             state = kOversized;
             p.oversized[atomicAdd(&p.block->counters.oversized, 1U)] = prim;
-        } else {
+        } else if (p.share_count == 1) {
             count = cells;
+        } else {
+            // Only the cells of this share are hashed here (at most kMaxCellsPerPrimitive to look at).
+            for (std::uint32_t z = cl[2]; z <= ch[2]; ++z)
+                for (std::uint32_t y = cl[1]; y <= ch[1]; ++y)
+                    for (std::uint32_t x = cl[0]; x <= ch[0]; ++x) count += cell_in_share(p, pack(g, x, y, z)) ? 1 : 0;
         }
     }
     p.state[prim] = state;
@@ -400,7 +417,9 @@ __global__ void fill_kernel(Params p, unsigned long long* keys, std::uint32_t* p
     for (std::uint32_t z = coord(g, lo, 2); z <= coord(g, hi, 2); ++z)
         for (std::uint32_t y = coord(g, lo, 1); y <= coord(g, hi, 1); ++y)
             for (std::uint32_t x = coord(g, lo, 0); x <= coord(g, hi, 0); ++x) {
-                keys[at] = pack(g, x, y, z);
+                const unsigned long long key = pack(g, x, y, z);
+                if (!cell_in_share(p, key)) continue;
+                keys[at] = key;
                 prims[at] = prim;
                 ++at;
             }
@@ -566,10 +585,9 @@ __global__ void __launch_bounds__(kThreads) pairs_kernel(Params p, const unsigne
                                                          const uint4* row_info, unsigned long long* out) {
     const Grid g = p.block->grid;
     const std::uint32_t cap = p.entry_capacity;
-    // This call's share of the slots: [first, total), with `total` the end of the share.
-    const unsigned long long all = row_offset[cap];
-    const unsigned long long first = all * p.share_index / p.share_count;
-    const unsigned long long total = all * (p.share_index + 1) / p.share_count;
+    // Every slot of the table: across GPUs the table holds only this share's cells.
+    const unsigned long long first = 0;
+    const unsigned long long total = row_offset[cap];
     const unsigned lane = threadIdx.x & 31U;
     const unsigned long long warp = (static_cast<unsigned long long>(blockIdx.x) * blockDim.x + threadIdx.x) >> 5;
     const unsigned long long warps = (static_cast<unsigned long long>(gridDim.x) * blockDim.x) >> 5;
@@ -676,8 +694,7 @@ __global__ void pad_pairs_kernel(Params p, unsigned long long* keys) {
 
 __global__ void finish_kernel(Params p, const unsigned long long* row_offset) {
     GpuBroadPhaseCounters& c = p.block->counters;
-    const unsigned long long all = row_offset[p.entry_capacity];
-    c.tested_pairs += all * (p.share_index + 1) / p.share_count - all * p.share_index / p.share_count;  // this share's slots
+    c.tested_pairs += row_offset[p.entry_capacity];  // the slots of this share's cells
     c.ee_pairs = c.pairs - c.vf_pairs;
     if (c.pairs > p.pair_capacity) c.overflow |= kOverflowPairs;
 }

@@ -13,7 +13,8 @@
 ///   bounds     swept inflated boxes in float, rounded outward; grid origin; edge extents
 ///   cell size  median edge extent (a radix sort of the extents and a one-thread pick), as the CPU
 ///   patches    with culling only: primitives ordered by (kind, patch, index)
-///   count      cells per primitive; oversized and non-finite primitives set aside
+///   count      cells per primitive (across GPUs, those of this share); oversized and non-finite
+///              primitives set aside
 ///   scan       exclusive sum of the counts; (cell key, primitive) entries written and padded
 ///   sort       CUB radix sort of the entries by cell key (stable: primitive order within a cell)
 ///   ranges     cell starts (flags + inclusive sum) and each cell's extent
@@ -97,12 +98,13 @@ struct GpuBroadPhaseInput {
     /// Hash cell edge, m; 0 picks the median extent (longest axis) of the edges' bounds, computed on
     /// the device (as the CPU does, but from the float bounds: any size gives the same pairs).
     double cell_size = 0.0;
-    /// Which share of the pairs to enumerate (multi-GPU detection, docs/multi-gpu.md): the workload
-    /// table's pair slots are cut into `share_count` equal ranges and this call tests range
-    /// `share_index`, and the oversized primitives whose id is share_index modulo share_count.
-    /// Every pair is in exactly one share, so the shares' lists together are the whole list.
-    /// Everything before the pair stage (the hash) is built whole by every share. Default: one
-    /// share, the whole list.
+    /// Which share of the pairs to enumerate (multi-GPU detection, docs/multi-gpu.md): the hash
+    /// cells are dealt to `share_count` shares by a mix of their key, and this call hashes only the
+    /// cells of share `share_index` (entries, sort, cell ranges, workload table and pair tests), and
+    /// tests the oversized primitives whose id is share_index modulo share_count. A pair is reported
+    /// by one cell only (the min-corner rule), so every pair is in exactly one share and the shares'
+    /// lists together are the whole list. The bounds, the cell size and the per-primitive cell
+    /// counts are computed whole by every share. Default: one share, the whole list.
     std::uint32_t share_index = 0;
     std::uint32_t share_count = 1;
 };
