@@ -143,6 +143,7 @@ public:
     std::vector<std::pair<std::string, std::size_t>> memory_breakdown() const override { return solver_->memory_breakdown(); }
 
     DeviceSolver& solver() { return *solver_; }
+    DeviceMemoryBudget& budget() { return budget_; }
 
 private:
     DeviceInfo info_;
@@ -205,6 +206,11 @@ CudaBackendApi* as_cuda(Backend& backend) { return dynamic_cast<CudaBackendApi*>
 DeviceSolver* device_solver(Backend& backend) {
     auto* b = dynamic_cast<CudaBackend*>(&backend);
     return b != nullptr ? &b->solver() : nullptr;
+}
+
+DeviceMemoryBudget* device_memory_budget(Backend& backend) {
+    auto* b = dynamic_cast<CudaBackend*>(&backend);
+    return b != nullptr ? &b->budget() : nullptr;
 }
 
 }  // namespace weft::cuda

@@ -157,8 +157,16 @@ void DeviceSolver::recover_from_fault(const Error& error, double t) {
 void DeviceSolver::rebuild_after_fault(const Model& model) {
     // build() forgets the rescue once it has succeeded; until then it stays for the next try.
     const std::vector<Vec3d> x = rescued_x_, v = rescued_v_;
-    build(*flat_, model);
+    const std::vector<std::uint8_t> warm = std::move(pending_solver_state_);
+    pending_solver_state_.clear();
+    try {
+        build(*flat_, model);
+    } catch (...) {
+        pending_solver_state_ = warm;  // for the next try
+        throw;
+    }
     write_state(0, x.size(), x.data(), v.data());
+    if (!warm.empty()) restore_solver_state(warm);
 }
 
 void DeviceSolver::run_substep(const Model& model, double t, double h, StepStats& stats) {
@@ -312,6 +320,11 @@ EnergyAudit DeviceSolver::energy_audit(const Model& model, double t, double h, b
     // A moving mesh collider's work is not bounded (as in host_energy_audit).
     for (const ColliderDesc& c : model.colliders)
         if (!c.is_analytic() && !c.motion.is_static()) a.bounded = false;
+    if (!device_lost_.empty())
+        throw Error("CUDA backend: GPU " + std::to_string(device_) + " was lost in an earlier substep (" + device_lost_ +
+                    "); its state cannot be audited");
+    // After a fault the buffers are rebuilt first (a failed rebuild throws here, reading nothing).
+    if (rebuild_pending_) rebuild_after_fault(model);
     if (view_.n == 0) return a;
     WEFT_CUDA_CHECK(cudaSetDevice(device_));
     cudaStream_t stream = active_stream();
@@ -357,7 +370,9 @@ void DeviceSolver::set_output(void* device_buffer, std::size_t stride, bool sync
     output_ = device_buffer;
     output_stride_ = stride;
     output_synchronous_ = synchronous;
-    if (output_ != nullptr && view_.n > 0) {
+    // After a fault (rebuild pending) or with the device lost there are no buffers to write from:
+    // the rebuild's first substep writes the output.
+    if (output_ != nullptr && view_.n > 0 && !rebuild_pending_ && device_lost_.empty()) {
         // Make the buffer valid at once, before the next substep.
         WEFT_CUDA_CHECK(cudaSetDevice(device_));
         launch_write_output(view_, output_, output_stride_, active_stream(), output_index_.get());

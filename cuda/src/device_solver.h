@@ -298,8 +298,12 @@ private:
     void rebuild_after_fault(const Model& model);
     const char* stage_ = "";
     bool substep_started_ = false;
+    // While a rebuild is pending the buffers may be freed (a rebuild that failed too): nothing reads
+    // view_ then. The state is on the host, a restored warm start waits for the rebuild, and an
+    // output buffer is written by the rebuild's first substep.
     bool rebuild_pending_ = false;
     std::vector<Vec3d> rescued_x_, rescued_v_;
+    std::vector<std::uint8_t> pending_solver_state_;
     std::string device_lost_;
 
     void* output_ = nullptr;

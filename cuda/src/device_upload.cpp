@@ -250,7 +250,8 @@ namespace weft::cuda {
 // 'G', 4 (float), the vertex count, the substep count, then the previous Δv as the device holds it
 // (SoA, 3n floats): the bits the next substep's warm start reads.
 std::vector<std::uint8_t> DeviceSolver::solver_state() const {
-    const std::uint64_t n = view_.n;
+    if (rebuild_pending_ && !pending_solver_state_.empty()) return pending_solver_state_;  // restored after a fault
+    const std::uint64_t n = rebuild_pending_ ? rescued_x_.size() : view_.n;
     const std::int64_t substeps = substep_count_;
     constexpr std::size_t kHead = 2 + sizeof(std::uint64_t) + sizeof(std::int64_t);
     std::vector<std::uint8_t> out(kHead + 3 * n * sizeof(float));
@@ -276,10 +277,17 @@ void DeviceSolver::restore_solver_state(std::span<const std::uint8_t> bytes) {
     if (bytes[1] != sizeof(float)) throw Error("cuda backend: the checkpoint's solver state is not in float");
     std::memcpy(&n, bytes.data() + 2, sizeof(n));
     std::memcpy(&substeps, bytes.data() + 2 + sizeof(n), sizeof(substeps));
-    if (n != view_.n || bytes.size() != kHead + 3 * n * sizeof(float))
+    const std::size_t vertices = rebuild_pending_ ? rescued_x_.size() : view_.n;
+    if (n != vertices || bytes.size() != kHead + 3 * n * sizeof(float))
         throw Error("cuda backend: the checkpoint's solver state is for " + std::to_string(n) + " vertices, this world has " +
-                    std::to_string(view_.n));
+                    std::to_string(vertices));
     if (substeps < 0) throw Error("cuda backend: the checkpoint's substep count is negative");
+    if (rebuild_pending_) {
+        // After a fault the buffers may be gone: the warm start waits for the rebuild.
+        pending_solver_state_.assign(bytes.begin(), bytes.end());
+        substep_count_ = substeps;
+        return;
+    }
     if (n > 0) {
         WEFT_CUDA_CHECK(cudaSetDevice(device_));
         WEFT_CUDA_CHECK(cudaStreamSynchronize(active_stream()));

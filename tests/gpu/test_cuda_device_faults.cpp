@@ -2,14 +2,19 @@
 // memory limit (BackendOptions::device_memory_limit): a scene larger than the limit fails at build
 // with the bytes asked for, held and free; a collision buffer that cannot grow mid-run fails its
 // substep with the stage named and leaves the world at the last good state (the bits of a world that
-// never failed, at the same step), from which it can still be saved; and a fault does not crash the
-// next step, which fails again with the same reason.
+// never failed, at the same step), from which it can still be saved; a fault does not crash the
+// next step, which fails again with the same reason; and while the rebuild after it fails too, the
+// audit, an output buffer and a restored warm start read no freed buffer.
 #include <gtest/gtest.h>
 
 #include <filesystem>
 #include <string>
 #include <vector>
 
+#include <cuda_runtime_api.h>
+
+#include "backend_access.h"
+#include "weft/cuda/cuda_backend.h"
 #include "gpu_test_util.h"
 #include "weft/error.h"
 
@@ -96,6 +101,53 @@ TEST(CudaDeviceFaults, ABufferThatCannotGrowMidRunFailsTheSubstepAndKeepsTheLast
         EXPECT_TRUE(contains(e.what(), "out of device memory")) << e.what();
     }
     EXPECT_TRUE(capped->positions(0) == x[g]);
+
+    // A rebuild that fails as well (the limit lowered below what the build needs), when the buffers
+    // are gone: the step fails cleanly; the state stays readable; the energy audit rebuilds first and
+    // fails with the reason instead of reading freed buffers; an output buffer bound meanwhile waits
+    // for the rebuild, and a warm start restored meanwhile is kept for it. With the limit raised again
+    // the world steps on from the last good state and writes the output.
+    Backend& backend = capped->backend();
+    cuda::DeviceMemoryBudget* budget = cuda::device_memory_budget(backend);
+    ASSERT_NE(budget, nullptr);
+    budget->set_limit(1);
+    EXPECT_THROW((void)capped->step(), Error);
+    EXPECT_TRUE(capped->positions(0) == x[g]);
+    const Model& model = capped->model();
+    const double h = model.settings.solver.dt / model.settings.solver.substeps;
+    try {
+        (void)backend.energy_audit(model, capped->time(), h, false);
+        ADD_FAILURE() << "the audit ran without its buffers";
+    } catch (const Error& e) {
+        EXPECT_TRUE(contains(e.what(), "out of device memory")) << e.what();
+    }
+    cuda::CudaBackendApi* api = cuda::as_cuda(backend);
+    ASSERT_NE(api, nullptr);
+    const std::size_t n = api->vertex_count();
+    constexpr std::size_t kStride = 6 * sizeof(float);
+    float* output = nullptr;
+    ASSERT_EQ(cudaMalloc(reinterpret_cast<void**>(&output), n * kStride), cudaSuccess);
+    ASSERT_EQ(cudaMemset(output, 0, n * kStride), cudaSuccess);
+    EXPECT_NO_THROW(api->set_output(output, kStride));
+    std::vector<std::uint8_t> warm;
+    EXPECT_NO_THROW(warm = backend.solver_state());
+    EXPECT_NO_THROW(backend.restore_solver_state(warm));
+    budget->set_limit(0);
+    StepStats resumed;
+    EXPECT_NO_THROW(resumed = capped->step());
+    EXPECT_FALSE(resumed.non_finite);
+    EXPECT_EQ(capped->steps(), static_cast<std::size_t>(growth));
+    std::vector<float> written(6 * n);
+    ASSERT_EQ(cudaMemcpy(written.data(), output, n * kStride, cudaMemcpyDeviceToHost), cudaSuccess);
+    const std::vector<Vec3d> now = capped->positions(0);
+    std::size_t equal = 0;
+    for (std::size_t i = 0; i < now.size(); ++i)
+        if (written[6 * i] == static_cast<float>(now[i].x) && written[6 * i + 1] == static_cast<float>(now[i].y) &&
+            written[6 * i + 2] == static_cast<float>(now[i].z))
+            ++equal;
+    EXPECT_EQ(equal, now.size()) << "the output buffer bound during the fault does not hold the state";
+    api->set_output(nullptr, 0);
+    cudaFree(output);
 }
 
 }  // namespace

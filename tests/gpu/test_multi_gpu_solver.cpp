@@ -664,6 +664,31 @@ TEST(MultiGpuSolver, OffsetContactAcrossPartsFollowsOneGpuAndStaysIntersectionFr
             EXPECT_GT(contacts, 0) << c.scene << ": the scene never touched (the test would prove nothing)";
         }
     }
+    // The energy audit counts every offset contact once across the parts (on the owner of its first
+    // cloth corner, from the whole positions): after one step from the same state, with both worlds
+    // then set to one state, the parts' offset contact energy is one GPU's (a contact counted twice
+    // or lost would be off by its share). No reruns, so both lists are the one detection's.
+    {
+        std::vector<std::string> o = smooth;
+        o.push_back("collision.max_redetections=0");
+        auto one = make("layers", o, 1, false);
+        auto split = make("layers", o, 2, true);
+        for (int f = 0; f < 30; ++f) (void)one->step();
+        for (std::size_t c = 0; c < one->cloth_count(); ++c) split->set_state(c, one->positions(c), one->velocities(c));
+        (void)one->step();
+        (void)split->step();
+        for (std::size_t c = 0; c < one->cloth_count(); ++c) split->set_state(c, one->positions(c), one->velocities(c));
+        const Model& model = one->model();
+        const double t = one->time(), h = model.settings.solver.dt / model.settings.solver.substeps;
+        const auto offset_energy = [&](World& w) {
+            Backend& b = w.backend();
+            return b.energy_audit(model, t, h, false).contact - b.Backend::energy_audit(model, t, h, false).contact;
+        };
+        const double e_one = offset_energy(*one), e_split = offset_energy(*split);
+        std::printf("[ multi    ] offset contact energy in the audit: one GPU %.6e J, 2 parts %.6e J\n", e_one, e_split);
+        EXPECT_GT(e_one, 0.0) << "no offset contact energy: the test would prove nothing";
+        EXPECT_NEAR(e_split, e_one, 1e-2 * e_one);
+    }
     const std::vector<std::string> layers{"collision.mode=\"offset\""};
     EXPECT_TRUE(same_bits(run("layers", layers, 2, 20, true), run("layers", layers, 2, 20, true))) << "offset layers, 2 parts, twice";
     if (cuda::devices().size() >= 2) {
