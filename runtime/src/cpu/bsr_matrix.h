@@ -34,6 +34,26 @@ struct BsrMatrix {
             }
         });
     }
+
+    /// y = filter(A x) and returns xᵀy in one pass (the CG's step denominator without a second
+    /// sweep over the vectors): the same chunks and order as deterministic_sum, so the same bits as
+    /// multiplying and summing apart. `fixed[i]` != 0 zeroes row i. `partials` is scratch.
+    double multiply_dot(const std::vector<physics::Vec3<T>>& x, std::vector<physics::Vec3<T>>& y,
+                        const std::vector<std::uint8_t>& fixed, std::vector<double>& partials) const {
+        const auto& rs = pattern->row_start;
+        const auto& col = pattern->column;
+        return deterministic_sum(rows(), partials, [&](std::size_t b, std::size_t e) {
+            double acc = 0.0;
+            for (std::size_t i = b; i < e; ++i) {
+                physics::Vec3<T> row{};
+                if (!fixed[i])
+                    for (std::uint32_t s = rs[i]; s < rs[i + 1]; ++s) row += blocks[s] * x[col[s]];
+                y[i] = row;
+                acc += static_cast<double>(physics::dot(x[i], row));
+            }
+            return acc;
+        });
+    }
 };
 
 }  // namespace weft::cpu

@@ -242,6 +242,20 @@ struct SystemOperator {
         fabric.multiply(x, y);
         if (contacts != nullptr && contacts->size() > 0) contacts->multiply_add(x, y);
     }
+    /// y = filter(A x), returning xᵀy: one pass over the fabric's rows when there are no contacts.
+    double multiply_dot(const std::vector<physics::Vec3<T>>& x, std::vector<physics::Vec3<T>>& y,
+                        const std::vector<std::uint8_t>& fixed, std::vector<double>& partials) const {
+        if (contacts == nullptr || contacts->size() == 0) return fabric.multiply_dot(x, y, fixed, partials);
+        multiply(x, y);
+        return deterministic_sum(y.size(), partials, [&](std::size_t b, std::size_t e) {
+            double acc = 0.0;
+            for (std::size_t i = b; i < e; ++i) {
+                if (fixed[i]) y[i] = physics::Vec3<T>{};
+                acc += static_cast<double>(physics::dot(x[i], y[i]));
+            }
+            return acc;
+        });
+    }
     [[nodiscard]] physics::Mat3<T> diagonal_block(std::size_t i) const {
         physics::Mat3<T> d = fabric.diagonal_block(i);
         if (contacts != nullptr && contacts->size() > 0) d += contacts->diagonal(i);

@@ -158,6 +158,8 @@ private:
     /// q = filter(A·c); returns cᵀq (the step length's denominator).
     template <typename Operator>
     double product_along_direction(const Operator& A, const std::vector<std::uint8_t>& fixed) {
+        // One pass where the operator can fuse the product and the dot (the same bits either way).
+        if constexpr (requires { A.multiply_dot(c_, q_, fixed, partials_); }) return A.multiply_dot(c_, q_, fixed, partials_);
         A.multiply(c_, q_);
         return sum(c_.size(), [&](std::size_t i) {
             if (fixed[i]) q_[i] = V3{};
