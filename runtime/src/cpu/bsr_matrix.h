@@ -3,6 +3,7 @@
 
 #include <vector>
 
+#include "cpu/bsr_rows.h"
 #include "deterministic_parallel.h"
 #include "weft/fabric.h"
 #include "weft/physics/vec.h"
@@ -27,11 +28,7 @@ struct BsrMatrix {
         const auto& rs = pattern->row_start;
         const auto& col = pattern->column;
         parallel_chunks(rows(), [&](std::size_t b, std::size_t e) {
-            for (std::size_t i = b; i < e; ++i) {
-                physics::Vec3<T> acc{};
-                for (std::uint32_t s = rs[i]; s < rs[i + 1]; ++s) acc += blocks[s] * x[col[s]];
-                y[i] = acc;
-            }
+            bsr_rows_times(blocks.data(), rs.data(), col.data(), x.data(), y.data(), b, e);
         });
     }
 
@@ -43,15 +40,7 @@ struct BsrMatrix {
         const auto& rs = pattern->row_start;
         const auto& col = pattern->column;
         return deterministic_sum(rows(), partials, [&](std::size_t b, std::size_t e) {
-            double acc = 0.0;
-            for (std::size_t i = b; i < e; ++i) {
-                physics::Vec3<T> row{};
-                if (!fixed[i])
-                    for (std::uint32_t s = rs[i]; s < rs[i + 1]; ++s) row += blocks[s] * x[col[s]];
-                y[i] = row;
-                acc += static_cast<double>(physics::dot(x[i], row));
-            }
-            return acc;
+            return bsr_rows_times_dot(blocks.data(), rs.data(), col.data(), x.data(), y.data(), fixed.data(), b, e);
         });
     }
 };

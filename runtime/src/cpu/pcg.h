@@ -12,6 +12,7 @@
 #include <vector>
 
 #include "cpu/bsr_matrix.h"
+#include "cpu/pcg_rows.h"
 #include "cpu/schwarz_preconditioner.h"
 #include "deterministic_parallel.h"
 
@@ -80,11 +81,10 @@ public:
             const double cq = product_along_direction(A, fixed);
             if (!(cq > 0.0)) break;  // loss of positive definiteness or breakdown: report, don't loop
             const T alpha = static_cast<T>(delta / cq);
-            const double delta_new = sum(n, [&](std::size_t i) {
-                dv[i] += alpha * c_[i];
-                r_[i] -= alpha * q_[i];
-                s_[i] = precond_[i] * r_[i];
-                return static_cast<double>(physics::dot(r_[i], s_[i]));
+            // dv += α·c, r −= α·q, s = P⁻¹·r and δ' = rᵀs in one pass (cpu/pcg_rows.h).
+            const double delta_new = deterministic_sum(n, partials_, [&](std::size_t lo, std::size_t hi) {
+                return pcg_jacobi_update_rows(dv.data(), r_.data(), q_.data(), c_.data(), s_.data(), precond_.data(), alpha,
+                                              lo, hi);
             });
             const T beta = static_cast<T>(delta_new / delta);
             delta = delta_new;
@@ -170,7 +170,7 @@ private:
     /// c = filter(s + β·c): the next search direction from the preconditioned residual s.
     void next_direction(T beta, const std::vector<std::uint8_t>& fixed) {
         parallel_chunks(c_.size(), [&](std::size_t lo, std::size_t hi) {
-            for (std::size_t i = lo; i < hi; ++i) c_[i] = fixed[i] ? V3{} : s_[i] + beta * c_[i];
+            pcg_next_direction_rows(c_.data(), s_.data(), fixed.data(), beta, lo, hi);
         });
     }
 
