@@ -158,6 +158,10 @@ constexpr Parameter kTable[] = {
      .access = field<&SceneDesc::frames>()},
 
     // ---- [solver]: the knobs that trade speed for accuracy
+    {.section = "solver", .name = "preset", .type = T::String,
+     .doc = "a solver preset (interactive, game, balanced, accurate, piled; docs/tuning.md) applied before this "
+            "table's other keys and the [collision] table, which win over it",
+     .constraint = "a preset's name", .default_text = "none"},
     {.section = "solver", .name = "dt", .type = T::Real, .unit = "s", .range = R{1e-5, 0.1}, .doc = "frame time step",
      .label = "time step", .panel = "solver", .log_scale = true, .access = field<&WorldDesc::solver, &SolverSettings::dt>()},
     {.section = "solver", .name = "substeps", .type = T::Integer, .range = R{1, 1000},

@@ -16,6 +16,7 @@
 #include "weft/error.h"
 #include "weft/world_limits.h"
 #include "weft/parameters.h"
+#include "weft/presets.h"
 #include "weft/scene.h"
 
 namespace weft {
@@ -156,10 +157,28 @@ void read_scene_section(Table& root, SceneDesc& scene) {
     t->finish();
 }
 
+// `preset = "NAME"` in [solver]: the preset's values (weft/presets.h) into `w`.
+void apply_solver_preset(Table& t, WorldDesc& w) {
+    const toml::node* node = t.find("preset");
+    const std::optional<std::string> name = t.optional_string("preset");
+    if (!name) return;
+    const Preset* preset = find_preset(solver_presets(), *name);
+    if (preset == nullptr) {
+        std::vector<std::string> names;
+        for (const Preset& p : solver_presets()) names.push_back(p.name);
+        const std::string guess = scene_toml::closest(*name, names);
+        t.fail("preset", node,
+               "unknown solver preset '" + *name + "'" + (guess.empty() ? "" : " (did you mean '" + guess + "'?)") +
+                   " (expected one of " + preset_names(solver_presets()) + ")");
+    }
+    for (const auto& [key, value] : preset->values) set_parameter_number(*find_parameter(key), w, value);
+}
+
 // [solver], [world], [wind] and [collision]: every key is a field of WorldDesc.
 void read_world(Table& root, WorldDesc& w) {
     for (const std::string_view section : {"solver", "world", "wind", "collision"}) {
         if (auto t = root.table(section)) {
+            if (section == "solver") apply_solver_preset(*t, w);  // first: the table's own keys win
             read_parameters(*t, section, w);
             t->finish();
         }

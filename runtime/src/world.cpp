@@ -41,7 +41,10 @@ World::World(const WorldDesc& desc, std::string_view backend, const BackendOptio
 
 World::~World() = default;
 
+void World::forget_audit() { carried_audit_.reset(); }
+
 int World::add_motion(const Motion& motion) {
+    forget_audit();
     check_parameter_ranges(motion, "motion " + std::to_string(model_->motions.size()));
     model_->motions.push_back(motion);
     ++model_->topology_version;
@@ -49,6 +52,7 @@ int World::add_motion(const Motion& motion) {
 }
 
 std::size_t World::add_cloth(const ClothDesc& cloth) {
+    forget_audit();
     const std::string where = "cloth '" + cloth.name + "'";
     if (!cloth.fabric) throw Error(where + ": no fabric");
     check_parameter_ranges(cloth.material, where + " material");
@@ -65,6 +69,7 @@ std::size_t World::add_cloth(const ClothDesc& cloth) {
 }
 
 std::size_t World::add_collider(const ColliderDesc& collider) {
+    forget_audit();
     check_parameter_ranges(collider, "collider '" + collider.name + "'");
     model_->colliders.push_back(collider);
     ++model_->topology_version;
@@ -101,6 +106,7 @@ void check_vertex(const Model& m, std::size_t cloth, std::uint32_t vertex, const
 }  // namespace
 
 void World::set_grab(const VertexGrab& grab) {
+    forget_audit();
     check_vertex(*model_, grab.cloth, grab.vertex, "grab");
     check_range("grab", "stiffness", grab.stiffness, 0.0, 1e9);
     check_range("grab", "damping", grab.damping, 0.0, 1e6);
@@ -117,6 +123,7 @@ bool World::is_pinned(std::size_t cloth, std::uint32_t vertex) const {
 }
 
 bool World::pin(std::size_t cloth, std::uint32_t vertex) {
+    forget_audit();
     if (is_pinned(cloth, vertex)) return false;
     PinDesc p;
     p.vertex = vertex;
@@ -127,6 +134,7 @@ bool World::pin(std::size_t cloth, std::uint32_t vertex) {
 }
 
 bool World::unpin(std::size_t cloth, std::uint32_t vertex) {
+    forget_audit();
     if (!is_pinned(cloth, vertex)) return false;
     auto& pins = model_->cloths[cloth].pins;
     pins.erase(std::remove_if(pins.begin(), pins.end(), [&](const PinDesc& p) { return p.vertex == vertex; }), pins.end());
@@ -134,13 +142,28 @@ bool World::unpin(std::size_t cloth, std::uint32_t vertex) {
     return true;
 }
 
-void World::build() { ensure_built(); }
+void World::build() {
+    forget_audit();
+    ensure_built();
+}
 
-WorldDesc& World::settings() { return model_->settings; }
+WorldDesc& World::settings() {
+    forget_audit();
+    return model_->settings;
+}
 const WorldDesc& World::settings() const { return model_->settings; }
-Material& World::material(std::size_t cloth) { return model_->cloths.at(cloth).material; }
-Motion& World::motion(int index) { return model_->motions.at(static_cast<std::size_t>(index)); }
-ColliderDesc& World::collider(std::size_t index) { return model_->colliders.at(index); }
+Material& World::material(std::size_t cloth) {
+    forget_audit();
+    return model_->cloths.at(cloth).material;
+}
+Motion& World::motion(int index) {
+    forget_audit();
+    return model_->motions.at(static_cast<std::size_t>(index));
+}
+ColliderDesc& World::collider(std::size_t index) {
+    forget_audit();
+    return model_->colliders.at(index);
+}
 const ClothDesc& World::cloth(std::size_t index) const { return model_->cloths.at(index); }
 std::size_t World::cloth_count() const { return model_->cloths.size(); }
 std::size_t World::collider_count() const { return model_->colliders.size(); }
@@ -150,7 +173,10 @@ std::string_view World::backend_name() const { return backend_->name(); }
 std::string World::device_description() const { return backend_->device_description(); }
 std::size_t World::memory_bytes() const { return backend_->memory_bytes(); }
 std::vector<std::pair<std::string, std::size_t>> World::memory_breakdown() const { return backend_->memory_breakdown(); }
-void World::release_grab() { model_->grab.reset(); }
+void World::release_grab() {
+    forget_audit();
+    model_->grab.reset();
+}
 const std::optional<VertexGrab>& World::grab() const { return model_->grab; }
 
 const StepStats& World::step() {
@@ -166,7 +192,15 @@ const StepStats& World::step() {
     // ends (the first step of a flag from rest in gusty wind gains more than twice the end power
     // alone allows, with a converged solve).
     const bool wind = model_->settings.wind.active();
-    if (guard != EnergyGuard::Off) audit = backend_->energy_audit(*model_, time_, h, wind);
+    // The last step's end audit is this step's start audit while nothing changed since (forget_audit);
+    // taken out first, so that a step that throws leaves none behind.
+    const std::unique_ptr<EnergyAudit> carried = std::move(carried_audit_);
+    if (guard != EnergyGuard::Off) {
+        if (carried && carried_h_ == h && carried_wind_ == wind)
+            audit = *carried;
+        else
+            audit = backend_->energy_audit(*model_, time_, h, wind);
+    }
     for (int s = 0; s < substeps; ++s) {
         if (guard == EnergyGuard::Off)
             backend_->substep(*model_, time_, h, stats_);
@@ -176,6 +210,11 @@ const StepStats& World::step() {
         ++stats_.substeps;
     }
     ++steps_;
+    if (guard != EnergyGuard::Off) {
+        carried_audit_ = std::make_unique<EnergyAudit>(audit);
+        carried_h_ = h;
+        carried_wind_ = wind;
+    }
     if (model_->settings.collision.check) {
         const auto check_start = std::chrono::steady_clock::now();
         std::vector<std::vector<Vec3d>> x(model_->cloths.size());
@@ -321,6 +360,7 @@ void World::set_state(std::size_t cloth, std::span<const Vec3d> positions, std::
                     std::to_string(positions.size()) + " positions and " + std::to_string(velocities.size()) +
                     " velocities");
     ensure_built();
+    forget_audit();
     backend_->write_state(cloth, positions, velocities);
 }
 

@@ -164,6 +164,7 @@ void World::save_state(const std::filesystem::path& file) const {
 }
 
 void World::load_state(const std::filesystem::path& file) {
+    forget_audit();
     const std::string name = file.string();
     std::ifstream in(file, std::ios::binary);
     if (!in) throw Error("cannot read the checkpoint " + name);

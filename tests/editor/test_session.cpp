@@ -158,7 +158,7 @@ TEST(Session, PresetsApplyThroughTheTable) {
     EXPECT_NE(session->message().find("re-cooking"), std::string::npos) << session->message();
 
     EXPECT_EQ(error_of([&] { session->apply_preset("solver", "slow"); }),
-              "unknown solver preset 'slow' (presets: interactive, balanced, accurate, piled)");
+              "unknown solver preset 'slow' (presets: interactive, game, balanced, accurate, piled)");
     EXPECT_NE(error_of([&] { session->apply_preset(table, "velvet"); }).find("cotton, silk, denim, leather, rubber"),
               std::string::npos);
     EXPECT_NE(error_of([&] { session->apply_preset("nosuch", "silk"); }).find("no cloth 'nosuch'"), std::string::npos);

@@ -254,6 +254,25 @@ fov = 60
 
 // ---- bad input files: file name, line and key in every message -----------------------------------
 
+// `preset = "NAME"` in [solver] sets the preset's values first; the table's own keys and the
+// [collision] table win over it; an unknown name is an error naming the line and the presets.
+TEST(SceneLoader, ASolverPresetIsABaseTheTablesKeysOverride) {
+    const SceneDesc plain = parse(kSheet);
+    const SceneDesc game = parse("[solver]\npreset = \"game\"\n" + kSheet);
+    EXPECT_EQ(game.world.solver.substeps, 1);
+    EXPECT_EQ(game.world.solver.newton_iterations, 1);
+    EXPECT_DOUBLE_EQ(game.world.solver.cg_tolerance, 1e-3);
+    EXPECT_EQ(game.world.solver.cg_max_iterations, 300);
+    EXPECT_EQ(game.world.solver.precision, Precision::Float);
+    EXPECT_NE(plain.world.solver.cg_max_iterations, 300) << "the default would not show the preset";
+    const SceneDesc mixed = parse("[solver]\npreset = \"game\"\ncg_tolerance = 1e-5\n[collision]\nmode = \"offset\"\n" + kSheet);
+    EXPECT_DOUBLE_EQ(mixed.world.solver.cg_tolerance, 1e-5);
+    EXPECT_EQ(mixed.world.solver.cg_max_iterations, 300);
+    EXPECT_EQ(mixed.world.collision.mode, CollisionMode::Offset);
+    parse_error("[solver]\npreset = \"gme\"\n" + kSheet,
+                {"inline.toml:2:", "unknown solver preset 'gme'", "did you mean 'game'", "interactive, game"});
+}
+
 TEST(SceneLoaderErrors, SyntaxError) {
     expect_error([] { (void)load_scene(data_file("bad_syntax.toml")); }, {"bad_syntax.toml:6:", "syntax error"});
 }

@@ -61,7 +61,7 @@ Options:
   --size WxH         picture size for --capture, pixels; default 1280x720
   --stats FILE.json  write run statistics as JSON (per-stage ms, CG iterations, per-frame series)
   --set KEY=VALUE    override a scene key, as if written in the file; repeatable
-  --preset NAME      a solver preset (interactive, balanced, accurate, piled: docs/tuning.md)
+  --preset NAME      a solver preset (interactive, game, balanced, accurate, piled: docs/tuning.md)
                      under the --set keys
                      e.g. --set solver.substeps=4 --set 'wind.velocity=[2, 0, 0]'
   --quiet            no progress bar and no summary table (warnings are still printed)
@@ -93,7 +93,7 @@ Options:
   --device-memory-limit MIB
                      device memory the cuda backend may hold on each GPU; default: the whole device
   --set KEY=VALUE    override a scene key in every scene; repeatable
-  --preset NAME      a solver preset (interactive, balanced, accurate, piled: docs/tuning.md)
+  --preset NAME      a solver preset (interactive, game, balanced, accurate, piled: docs/tuning.md)
                      under the --set keys
   -h, --help         this text
 )";
@@ -123,7 +123,7 @@ Options:
   --gpus N           GPUs one world is split across (cuda backend; docs/multi-gpu.md); default: the
                      scene's solver.gpus (1)
   --set KEY=VALUE    override a scene key, as if written in the file; repeatable
-  --preset NAME      a solver preset (interactive, balanced, accurate, piled: docs/tuning.md)
+  --preset NAME      a solver preset (interactive, game, balanced, accurate, piled: docs/tuning.md)
                      under the --set keys
   --frames N         quit after N displayed frames (scripted runs, tests)
   --screenshot FILE.png
@@ -162,7 +162,7 @@ Options:
   --gpus N           GPUs one world is split across (cuda backend; docs/multi-gpu.md); default: the
                      scene's solver.gpus (1)
   --set KEY=VALUE    override a scene key, as if written in the file; repeatable
-  --preset NAME      a solver preset (interactive, balanced, accurate, piled: docs/tuning.md)
+  --preset NAME      a solver preset (interactive, game, balanced, accurate, piled: docs/tuning.md)
                      under the --set keys
   --script FILE      run FILE's commands instead of waiting for a person, one step per
                      displayed frame (frame N, set KEY VALUE, expect KEY VALUE, pause, play,

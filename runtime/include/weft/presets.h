@@ -25,7 +25,7 @@ struct Preset {
 
 /// Fabrics: cotton (the Material defaults), silk, denim, leather, rubber sheet.
 [[nodiscard]] std::span<const Preset> material_presets();
-/// Solver settings: interactive, balanced (the SolverSettings defaults), accurate, piled.
+/// Solver settings: interactive, game, balanced (the SolverSettings defaults), accurate, piled.
 [[nodiscard]] std::span<const Preset> solver_presets();
 /// The preset called `name` in `presets`, or nullptr.
 [[nodiscard]] const Preset* find_preset(std::span<const Preset> presets, std::string_view name);

@@ -131,12 +131,18 @@ public:
 
     /// The backend that steps this world (weft/backend/backend.h): for tools and backend-specific
     /// hooks such as `weft::cuda::as_cuda(world.backend())`.
-    [[nodiscard]] Backend& backend() { return *backend_; }
+    [[nodiscard]] Backend& backend() {
+        forget_audit();  // the caller may change the state behind the world's back
+        return *backend_;
+    }
     [[nodiscard]] const Backend& backend() const { return *backend_; }
 
 private:
     void ensure_built() const;
     void guarded_substep(double h, bool retry, EnergyAudit& audit);
+    /// Every way to change the model or the state between steps calls this: the next step audits
+    /// its start again instead of taking the last step's end audit.
+    void forget_audit();
     std::unique_ptr<Model> model_;
     std::unique_ptr<Backend> backend_;
     mutable std::uint64_t built_version_ = ~std::uint64_t{0};
@@ -145,6 +151,12 @@ private:
     mutable std::vector<std::size_t> built_vertex_counts_;
     /// The state at the start of the current substep, kept for the energy guard's redo (retry mode).
     std::vector<std::vector<Vec3d>> guard_x_, guard_v_;
+    /// The energy guard's audit of the last step's end (the same state, time, h and wind as the next
+    /// step's start while nothing changed in between): the next step starts from it instead of
+    /// auditing again (the same numbers, one audit fewer a step).
+    std::unique_ptr<EnergyAudit> carried_audit_;
+    double carried_h_ = 0.0;
+    bool carried_wind_ = false;
     double time_ = 0.0;
     std::size_t steps_ = 0;
     StepStats stats_{};
