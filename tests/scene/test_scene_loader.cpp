@@ -264,6 +264,7 @@ TEST(SceneLoader, ASolverPresetIsABaseTheTablesKeysOverride) {
     EXPECT_DOUBLE_EQ(game.world.solver.cg_tolerance, 1e-3);
     EXPECT_EQ(game.world.solver.cg_max_iterations, 300);
     EXPECT_EQ(game.world.solver.precision, Precision::Float);
+    EXPECT_EQ(game.world.solver.preconditioner, Preconditioner::Schwarz);
     EXPECT_NE(plain.world.solver.cg_max_iterations, 300) << "the default would not show the preset";
     const SceneDesc mixed = parse("[solver]\npreset = \"game\"\ncg_tolerance = 1e-5\n[collision]\nmode = \"offset\"\n" + kSheet);
     EXPECT_DOUBLE_EQ(mixed.world.solver.cg_tolerance, 1e-5);
