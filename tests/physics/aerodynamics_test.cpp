@@ -169,6 +169,60 @@ TEST(WindGust, DeterministicSmoothDivergenceFreeAndCalibrated) {
     EXPECT_LE(length(g1 - g0), 1e-7);
 }
 
+/// The noise as its definition reads: every corner's lattice value hashed on its own.
+template <typename T>
+T value_noise4_by_corner(const T p[4], unsigned channel, T grad[3]) {
+    int cell[4];
+    T s[4], ds[4];
+    for (int k = 0; k < 4; ++k) {
+        const T fl = std::floor(p[k]);
+        cell[k] = static_cast<int>(fl);
+        const T f = p[k] - fl;
+        s[k] = f * f * f * (f * (f * T(6) - T(15)) + T(10));
+        ds[k] = T(30) * f * f * (f - T(1)) * (f - T(1));
+    }
+    T value = T(0);
+    grad[0] = grad[1] = grad[2] = T(0);
+    for (int corner = 0; corner < 16; ++corner) {
+        T w[4], dw[4];
+        int b[4];
+        for (int k = 0; k < 4; ++k) {
+            b[k] = (corner >> k) & 1;
+            w[k] = b[k] != 0 ? s[k] : T(1) - s[k];
+            dw[k] = b[k] != 0 ? ds[k] : -ds[k];
+        }
+        const T val = detail::lattice_value<T>(cell[0] + b[0], cell[1] + b[1], cell[2] + b[2], cell[3] + b[3], channel);
+        value += val * (w[0] * w[1] * w[2] * w[3]);
+        grad[0] += val * (dw[0] * w[1] * w[2] * w[3]);
+        grad[1] += val * (w[0] * dw[1] * w[2] * w[3]);
+        grad[2] += val * (w[0] * w[1] * dw[2] * w[3]);
+    }
+    return value;
+}
+
+// The noise shares its hash chain down the corners' tree (fewer mixes): it must give the bits of
+// the corner-by-corner definition, in float and double, at points on both sides of zero.
+template <typename T>
+void expect_same_noise_bits() {
+    std::mt19937 rng(7);
+    std::uniform_real_distribution<double> u(-40.0, 40.0);
+    for (int n = 0; n < 2000; ++n) {
+        const T p[4] = {static_cast<T>(u(rng)), static_cast<T>(u(rng)), static_cast<T>(u(rng)), static_cast<T>(u(rng))};
+        for (unsigned channel = 0; channel < 3; ++channel) {
+            T g[3], r[3];
+            const T v = detail::value_noise4(p, channel, g);
+            const T w = value_noise4_by_corner(p, channel, r);
+            ASSERT_EQ(v, w) << "point " << n << ", channel " << channel;
+            for (int k = 0; k < 3; ++k) ASSERT_EQ(g[k], r[k]) << "point " << n << ", channel " << channel << ", axis " << k;
+        }
+    }
+}
+
+TEST(WindGust, TheSharedHashTreeGivesTheBitsOfTheDefinition) {
+    expect_same_noise_bits<float>();
+    expect_same_noise_bits<double>();
+}
+
 TEST(RayleighDamping, ForcesAndJacobian) {
     const V v{1, -2, 3};
     const V fm = mass_damping_force(0.5, 2.0, v);

@@ -132,19 +132,29 @@ WEFT_HD inline T value_noise4(const T p[4], unsigned channel, T grad[3]) {
     }
     T value = T(0);
     grad[0] = grad[1] = grad[2] = T(0);
-    for (int corner = 0; corner < 16; ++corner) {
-        T w[4], dw[4];
-        int b[4];
-        for (int k = 0; k < 4; ++k) {
-            b[k] = (corner >> k) & 1;
-            w[k] = b[k] != 0 ? s[k] : T(1) - s[k];
-            dw[k] = b[k] != 0 ? ds[k] : -ds[k];
+    // The 16 corners in lattice_value's order (i fastest, l slowest), its hash chain shared down the
+    // tree (l, then k, j, i): 30 mixes instead of 64, the same values.
+    const unsigned seed = 0x9e3779b9U * (channel + 1U);
+    for (int bl = 0; bl < 2; ++bl) {
+        const unsigned hl = mix_u32(static_cast<unsigned>(cell[3] + bl) + seed);
+        const T wl = bl != 0 ? s[3] : T(1) - s[3];
+        for (int bk = 0; bk < 2; ++bk) {
+            const unsigned hk = mix_u32(hl ^ static_cast<unsigned>(cell[2] + bk));
+            const T wk = bk != 0 ? s[2] : T(1) - s[2], dwk = bk != 0 ? ds[2] : -ds[2];
+            for (int bj = 0; bj < 2; ++bj) {
+                const unsigned hj = mix_u32(hk ^ static_cast<unsigned>(cell[1] + bj));
+                const T wj = bj != 0 ? s[1] : T(1) - s[1], dwj = bj != 0 ? ds[1] : -ds[1];
+                for (int bi = 0; bi < 2; ++bi) {
+                    const unsigned h = mix_u32(hj ^ static_cast<unsigned>(cell[0] + bi));
+                    const T wi = bi != 0 ? s[0] : T(1) - s[0], dwi = bi != 0 ? ds[0] : -ds[0];
+                    const T val = static_cast<T>(h >> 8) * T(1.0 / 8388608.0) - T(1);  // as lattice_value
+                    value += val * (wi * wj * wk * wl);
+                    grad[0] += val * (dwi * wj * wk * wl);
+                    grad[1] += val * (wi * dwj * wk * wl);
+                    grad[2] += val * (wi * wj * dwk * wl);
+                }
+            }
         }
-        const T val = lattice_value<T>(cell[0] + b[0], cell[1] + b[1], cell[2] + b[2], cell[3] + b[3], channel);
-        value += val * (w[0] * w[1] * w[2] * w[3]);
-        grad[0] += val * (dw[0] * w[1] * w[2] * w[3]);
-        grad[1] += val * (w[0] * dw[1] * w[2] * w[3]);
-        grad[2] += val * (w[0] * w[1] * dw[2] * w[3]);
     }
     return value;
 }
