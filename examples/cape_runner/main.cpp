@@ -4,7 +4,7 @@
 // answers (drawn straight from the solver's buffer, no copy through the host), on the CPU otherwise.
 //
 //   cape_runner [--cpu] [--detail N] [--script FILE] [--frames N] [--check] [--screenshot FILE.png]
-//               [--validation] [--offscreen] [--cg-tolerance EPS]
+//               [--validation] [--offscreen] [--cg-tolerance EPS] [--preset NAME]
 //
 // --offscreen draws every frame with the Vulkan renderer but into no window (a fixed camera): for
 // timing on a machine without a display.
@@ -29,6 +29,7 @@
 #include "runner.h"
 #include "weft/error.h"
 #include "weft/mesh.h"
+#include "weft/presets.h"
 #include "weft/render/cloth_feed.h"
 #include "weft/render/image.h"
 #include "weft/render/render_scene.h"
@@ -51,6 +52,7 @@ struct Options {
     int frames = 0;  // 0: until the window closes (or the script ends)
     bool check = false, validation = false, offscreen = false;
     double cg_tolerance = 0.0;  // 0: the engine's default (SolverSettings::cg_tolerance)
+    std::string preset;         // a solver preset (weft/presets.h); empty: "game" on the CPU, the defaults on the GPU
 };
 
 Options parse(int argc, char** argv) {
@@ -70,6 +72,7 @@ Options parse(int argc, char** argv) {
         else if (a == "--validation") o.validation = true;
         else if (a == "--offscreen") o.offscreen = true;
         else if (a == "--cg-tolerance") o.cg_tolerance = std::stod(value());
+        else if (a == "--preset") o.preset = value();
         else throw std::runtime_error("unknown option " + std::string(a) + " (see the comment at the top of main.cpp)");
     }
     if (o.detail < 0 || o.detail > 4) throw std::runtime_error("--detail takes 1 to 4");
@@ -239,7 +242,11 @@ int play(const Options& options) {
     desc.wind.turbulence = 1.5;
     desc.collision.self_collision = true;  // cape against skirt, and each against itself
     desc.collision.check = options.check;  // the exact intersection check after every step (tests)
-    if (options.cg_tolerance > 0.0) desc.solver.cg_tolerance = options.cg_tolerance;  // speed against accuracy
+    // The solver's speed against accuracy: a preset (the CPU fallback runs the game preset: one float
+    // step a frame, docs/tuning.md), then an explicit CG tolerance over it.
+    const std::string preset = !options.preset.empty() ? options.preset : (backend == "cpu" ? "game" : "");
+    if (!preset.empty()) weft::apply_solver_preset(desc, preset);
+    if (options.cg_tolerance > 0.0) desc.solver.cg_tolerance = options.cg_tolerance;
     weft::World world(desc, backend);
     Runner runner({0.0, 0.0, 0.0});
     const Level level = build_level(world, runner, detail);

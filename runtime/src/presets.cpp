@@ -10,6 +10,7 @@
 #include "weft/error.h"
 
 #include "weft/parameters.h"
+#include "weft/settings.h"
 
 namespace weft {
 namespace {
@@ -149,6 +150,13 @@ std::vector<std::string> solver_preset_overrides(std::string_view name) {
     if (preset == nullptr)
         throw Error("unknown solver preset '" + std::string(name) + "' (presets: " + preset_names(solver_presets()) + ")");
     return preset_overrides(*preset);
+}
+
+void apply_solver_preset(WorldDesc& desc, std::string_view name) {
+    const Preset* preset = find_preset(solver_presets(), name);
+    if (preset == nullptr)
+        throw Error("unknown solver preset '" + std::string(name) + "' (presets: " + preset_names(solver_presets()) + ")");
+    for (const auto& [key, value] : preset->values) set_parameter_number(*find_parameter(key), desc, value);
 }
 
 }  // namespace weft

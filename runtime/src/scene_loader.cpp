@@ -162,8 +162,7 @@ void apply_solver_preset(Table& t, WorldDesc& w) {
     const toml::node* node = t.find("preset");
     const std::optional<std::string> name = t.optional_string("preset");
     if (!name) return;
-    const Preset* preset = find_preset(solver_presets(), *name);
-    if (preset == nullptr) {
+    if (find_preset(solver_presets(), *name) == nullptr) {
         std::vector<std::string> names;
         for (const Preset& p : solver_presets()) names.push_back(p.name);
         const std::string guess = scene_toml::closest(*name, names);
@@ -171,7 +170,7 @@ void apply_solver_preset(Table& t, WorldDesc& w) {
                "unknown solver preset '" + *name + "'" + (guess.empty() ? "" : " (did you mean '" + guess + "'?)") +
                    " (expected one of " + preset_names(solver_presets()) + ")");
     }
-    for (const auto& [key, value] : preset->values) set_parameter_number(*find_parameter(key), w, value);
+    apply_solver_preset(w, *name);
 }
 
 // [solver], [world], [wind] and [collision]: every key is a field of WorldDesc.

@@ -12,6 +12,8 @@
 
 namespace weft {
 
+struct WorldDesc;
+
 struct Preset {
     std::string name;         ///< "silk", "interactive"
     std::string description;  ///< one line, shown in the tooltip
@@ -36,5 +38,8 @@ struct Preset {
 [[nodiscard]] std::vector<std::string> preset_overrides(const Preset& preset);
 /// The overrides of solver preset `name`; throws weft::Error naming the presets when there is none.
 [[nodiscard]] std::vector<std::string> solver_preset_overrides(std::string_view name);
+/// Sets solver preset `name`'s values in `desc` (a world built in code: `World world(desc)`);
+/// throws weft::Error naming the presets when there is none.
+void apply_solver_preset(WorldDesc& desc, std::string_view name);
 
 }  // namespace weft
