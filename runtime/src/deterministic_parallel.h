@@ -12,8 +12,10 @@
 
 namespace weft {
 
-/// Elements per chunk: large enough to amortise a task, small enough to balance 2–64 threads.
-inline constexpr std::size_t kParallelChunk = 2048;
+/// Elements per chunk: large enough to amortise a task, small enough to balance 2–64 threads on a
+/// game's cloth (5K rows make 10 chunks; 2,048 made 3, and one of two threads waited: 5–7% of a
+/// frame, docs/results.md "The CPU backend as a game fallback").
+inline constexpr std::size_t kParallelChunk = 512;
 
 /// Calls body(begin, end) over [0, n) in parallel chunks.
 template <typename Body>
