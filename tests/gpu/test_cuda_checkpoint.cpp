@@ -2,14 +2,20 @@
 // a world resumed on the same device steps on to the bits the saved world gives, with wind and pins,
 // proximity contacts and impact zones, offset contact and the Schwarz preconditioner; the warm start
 // travels in the checkpoint (without it the same steps land elsewhere); a checkpoint of the CPU
-// backend is refused with the reason and leaves the world as it was.
+// backend is refused with the reason and leaves the world as it was; across parts (--gpus N, here
+// as parts on one GPU) the same, and a checkpoint moves between part counts and one GPU.
 #include <gtest/gtest.h>
 
+#include <cmath>
+#include <cstdlib>
 #include <filesystem>
+#include <fstream>
+#include <iterator>
 #include <string>
 #include <vector>
 
 #include "gpu_test_util.h"
+#include "multi/multi_gpu_backend.h"
 #include "weft/error.h"
 #include "world_snapshot.h"
 
@@ -81,6 +87,71 @@ TEST(CudaCheckpoint, ACheckpointOfTheCpuBackendIsRefusedAndChangesNothing) {
     }
     EXPECT_TRUE(snapshot(*gpu) == before);
     std::filesystem::remove(kFile);
+}
+
+/// Shipped scene `scene` on `parts` parts, all on the first GPU (the multi-GPU test mode); 1: one GPU.
+std::unique_ptr<World> world_on_parts(const std::string& scene, const std::vector<std::string>& overrides, int parts) {
+    setenv(cuda::multi::kPartsOnOneDeviceEnv, "1", 1);
+    BackendOptions options;
+    options.gpus = parts;
+    auto world = build_world(load_scene(test::scene_file(scene), overrides), "cuda", options);
+    unsetenv(cuda::multi::kPartsOnOneDeviceEnv);
+    return world;
+}
+
+std::vector<char> file_bytes(const std::filesystem::path& file) {
+    std::ifstream in(file, std::ios::binary);
+    return {std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
+}
+
+// Across parts the warm start is every part's owned Δv gathered into the one-GPU layout: resuming
+// on the same part count continues to the same bits, and the file is the same whatever the part
+// count that reads it (loaded on 2 parts or 1 GPU and saved at once, it comes back byte for byte).
+TEST(CudaCheckpoint, AcrossPartsAResumedWorldStepsOnToTheSameBitsAndTheFileMovesBetweenPartCounts) {
+    WEFT_REQUIRE_GPU();
+    const std::filesystem::path kFile = state_file();
+    const std::filesystem::path kAgain = kFile.string() + ".again";
+    struct Case {
+        const char* scene;
+        std::vector<std::string> overrides;
+    };
+    const Case cases[] = {
+        {"flag", {"solver.preconditioner=\"jacobi\""}},
+        {"flag", {"solver.preconditioner=\"mas\"", "cloth.flag.mesh.grid.cells=[90,54]"}},
+        {"layers", {"collision.mode=\"offset\""}},
+    };
+    for (const Case& c : cases) {
+        SCOPED_TRACE(std::string(c.scene) + " " + c.overrides.front());
+        auto saved = world_on_parts(c.scene, c.overrides, 2);
+        for (int f = 0; f < 5; ++f) (void)saved->step();
+        saved->save_state(kFile);
+        for (int f = 0; f < 6; ++f) (void)saved->step();
+
+        auto resumed = world_on_parts(c.scene, c.overrides, 2);
+        resumed->load_state(kFile);
+        for (int f = 0; f < 6; ++f) (void)resumed->step();
+        EXPECT_TRUE(snapshot(*resumed) == snapshot(*saved)) << "the continuation on 2 parts differs";
+
+        for (const int parts : {1, 3}) {
+            auto other = world_on_parts(c.scene, c.overrides, parts);
+            other->load_state(kFile);
+            other->save_state(kAgain);
+            EXPECT_TRUE(file_bytes(kAgain) == file_bytes(kFile)) << "2 parts' checkpoint through " << parts << " part(s)";
+        }
+    }
+    // The warm start is in the file: a cold restart of the same state on 2 parts lands elsewhere.
+    const std::vector<std::string> flag{"solver.preconditioner=\"jacobi\""};
+    auto saved = world_on_parts("flag", flag, 2);
+    for (int f = 0; f < 5; ++f) (void)saved->step();
+    saved->save_state(kFile);
+    for (int f = 0; f < 6; ++f) (void)saved->step();
+    auto cold = world_on_parts("flag", flag, 2);
+    cold->load_state(kFile);
+    for (std::size_t k = 0; k < cold->cloth_count(); ++k) cold->set_state(k, cold->positions(k), cold->velocities(k));
+    for (int f = 0; f < 6; ++f) (void)cold->step();
+    EXPECT_FALSE(snapshot(*cold) == snapshot(*saved)) << "the warm start made no difference across parts";
+    std::filesystem::remove(kFile);
+    std::filesystem::remove(kAgain);
 }
 
 }  // namespace

@@ -1,9 +1,12 @@
 // The "cuda" backend on several GPUs (multi/multi_gpu_backend.h).
 #include "multi/multi_gpu_backend.h"
 
+#include <cstdint>
 #include <cstdlib>
+#include <span>
 #include <string>
 #include <string_view>
+#include <vector>
 
 #include "device_memory_budget.h"
 #include "multi/multi_solver.h"
@@ -44,6 +47,10 @@ public:
         const BudgetScope scope(&budget_);
         solver_.substep(model, t, h, stats);
     }
+
+    // The warm start, in the one-GPU layout: a checkpoint moves between part counts and one GPU.
+    std::vector<std::uint8_t> solver_state() const override { return solver_.solver_state(); }
+    void restore_solver_state(std::span<const std::uint8_t> bytes) override { solver_.restore_solver_state(bytes); }
 
     void read_state(std::size_t cloth, std::span<Vec3d> x, std::span<Vec3d> v) const override {
         const auto [first, count] = flat_.cloth_vertices(cloth, x.size(), v.size());

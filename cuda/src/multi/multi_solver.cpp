@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <chrono>
+#include <cstring>
 #include <exception>
 #include <future>
 #include <string>
@@ -726,14 +727,88 @@ void MultiSolver::write_state(std::size_t first, std::size_t count, const Vec3d*
     }
 }
 
+// The one-GPU layout (device_upload.cpp): 'G', sizeof(float), the vertex count (u64), the substep
+// count (i64), then 3n floats of the previous Δv, component by component.
+namespace {
+constexpr std::size_t kStateHead = 2 + sizeof(std::uint64_t) + sizeof(std::int64_t);
+
+std::uint64_t state_vertices(std::span<const std::uint8_t> bytes) {
+    std::uint64_t n = 0;
+    std::memcpy(&n, bytes.data() + 2, sizeof(n));
+    return n;
+}
+std::int64_t state_substeps(std::span<const std::uint8_t> bytes) {
+    std::int64_t substeps = 0;
+    std::memcpy(&substeps, bytes.data() + 2 + sizeof(std::uint64_t), sizeof(substeps));
+    return substeps;
+}
+std::vector<std::uint8_t> state_bytes(std::uint64_t n, std::int64_t substeps) {
+    std::vector<std::uint8_t> out(kStateHead + 3 * n * sizeof(float));
+    out[0] = 'G';
+    out[1] = sizeof(float);
+    std::memcpy(out.data() + 2, &n, sizeof(n));
+    std::memcpy(out.data() + 2 + sizeof(n), &substeps, sizeof(substeps));
+    return out;
+}
+float* state_values(std::vector<std::uint8_t>& bytes) { return reinterpret_cast<float*>(bytes.data() + kStateHead); }
+const float* state_values(std::span<const std::uint8_t> bytes) { return reinterpret_cast<const float*>(bytes.data() + kStateHead); }
+}  // namespace
+
+std::vector<std::uint8_t> MultiSolver::solver_state() const {
+    if (solvers_.empty() || flat_ == nullptr) return {};
+    const std::uint64_t n = flat_->vertex_count;
+    std::vector<std::uint8_t> out;
+    for (std::size_t p = 0; p < solvers_.size(); ++p) {
+        const std::vector<std::uint8_t> local = solvers_[p]->solver_state();
+        const PartModel& pm = part_models_[p];
+        const std::uint64_t local_n = state_vertices(local);
+        if (p == 0) out = state_bytes(n, state_substeps(local));
+        float* whole = state_values(out);
+        const float* values = state_values(std::span<const std::uint8_t>(local));
+        std::vector<float> aligned(3 * local_n);  // the bytes after the head need not be float-aligned
+        std::memcpy(aligned.data(), values, aligned.size() * sizeof(float));
+        for (std::uint32_t i = 0; i < pm.owned; ++i)
+            for (std::size_t c = 0; c < 3; ++c) {
+                const float value = aligned[c * local_n + i];
+                std::memcpy(whole + c * n + pm.global_vertex[i], &value, sizeof(float));
+            }
+    }
+    return out;
+}
+
+void MultiSolver::restore_solver_state(std::span<const std::uint8_t> bytes) {
+    if (bytes.empty()) return;
+    if (bytes.size() < kStateHead || bytes[0] != 'G')
+        throw Error("cuda backend: the checkpoint's solver state is not the CUDA backend's");
+    if (bytes[1] != sizeof(float)) throw Error("cuda backend: the checkpoint's solver state is not in float");
+    const std::uint64_t n = state_vertices(bytes);
+    const std::size_t vertices = flat_ != nullptr ? flat_->vertex_count : 0;
+    if (n != vertices || bytes.size() != kStateHead + 3 * n * sizeof(float))
+        throw Error("cuda backend: the checkpoint's solver state is for " + std::to_string(n) + " vertices, this world has " +
+                    std::to_string(vertices));
+    std::vector<float> whole(3 * n);
+    std::memcpy(whole.data(), state_values(bytes), whole.size() * sizeof(float));
+    for (std::size_t p = 0; p < solvers_.size(); ++p) {
+        const PartModel& pm = part_models_[p];
+        const std::uint64_t local_n = pm.model.vertex_count;
+        std::vector<std::uint8_t> local = state_bytes(local_n, state_substeps(bytes));
+        std::vector<float> values(3 * local_n);
+        for (std::uint64_t i = 0; i < local_n; ++i)  // owned and ghost vertices alike
+            for (std::size_t c = 0; c < 3; ++c) values[c * local_n + i] = whole[c * n + pm.global_vertex[i]];
+        std::memcpy(state_values(local), values.data(), values.size() * sizeof(float));
+        solvers_[p]->restore_solver_state(local);
+    }
+}
+
 EnergyAudit MultiSolver::energy_audit(const Model& model, double t, double h, bool with_wind) {
     EnergyAudit sum;
     sum.with_wind = with_wind;
     // Offset contacts name vertices of the whole model: every part reads them from its GPU's whole x.
-    if (!collisions_.empty()) collect_whole({kWholeX}, solvers_.size());
+    // The other contact modes leave no contact blocks to audit, so they skip the gather.
+    if (offset_) collect_whole({kWholeX}, solvers_.size());
     for (std::size_t p = 0; p < solvers_.size(); ++p) {
         const EnergyAudit a =
-            solvers_[p]->energy_audit(model, t, h, with_wind, collisions_.empty() ? nullptr : whole(p, kWholeX));
+            solvers_[p]->energy_audit(model, t, h, with_wind, offset_ ? whole(p, kWholeX) : nullptr);
         sum.bounded = sum.bounded && a.bounded;
         sum.kinetic += a.kinetic;
         sum.gravity += a.gravity;

@@ -14,6 +14,7 @@
 #include <functional>
 #include <initializer_list>
 #include <memory>
+#include <span>
 #include <string>
 #include <utility>
 #include <vector>
@@ -53,6 +54,13 @@ public:
     void read_state(std::size_t first, std::size_t count, Vec3d* x, Vec3d* v) const;
     /// Sets global vertices [first, first + count) on their owners and every ghost copy.
     void write_state(std::size_t first, std::size_t count, const Vec3d* x, const Vec3d* v);
+    /// The warm start (the previous Δv) of every vertex, gathered from its owner, in the one-GPU
+    /// solver's format (DeviceSolver::solver_state): a checkpoint made on any part count resumes on
+    /// any other, and on one GPU. Empty before the build.
+    [[nodiscard]] std::vector<std::uint8_t> solver_state() const;
+    /// Takes back solver_state's bytes (from any part count, or one GPU): every part's owned and
+    /// ghost vertices get their value. Empty bytes start cold. Throws weft::Error naming a mismatch.
+    void restore_solver_state(std::span<const std::uint8_t> bytes);
     /// The energy guard's audit summed over the parts, each on its device (vertices by their owner,
     /// elements by the owner of their first corner): a few numbers come back, not the state.
     [[nodiscard]] EnergyAudit energy_audit(const Model& model, double t, double h, bool with_wind);
