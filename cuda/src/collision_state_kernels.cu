@@ -1,5 +1,9 @@
 // Positions of the collision stages (device_collisions.h): the cloth part of the collision-space
 // arrays, filled from the solver's state before and after the solve.
+#include <cub/block/block_reduce.cuh>
+
+#include <algorithm>
+
 #include "cuda_check.h"
 #include "kernels.h"
 
@@ -45,14 +49,38 @@ __global__ void collision_scatter_kernel(const float* x1c, const float* x0c, con
     }
 }
 
-/// Offset mode: Σ m·v and Σ m over the free cloth vertices (double atomics into sums[0..3]), for the
-/// frame the moves are bounded in.
-__global__ void offset_momentum_kernel(const float* v, const float* inverse_mass, std::uint32_t n, double* sums) {
-    const std::uint32_t i = blockIdx.x * blockDim.x + threadIdx.x;
-    if (i >= n || !(inverse_mass[i] > 0.0f)) return;
-    const double m = 1.0 / static_cast<double>(inverse_mass[i]);
-    for (int c = 0; c < 3; ++c) atomicAdd(&sums[c], m * static_cast<double>(v[c * n + i]));
-    atomicAdd(&sums[3], m);
+using MomentumReduce = cub::BlockReduce<double, kBlockSize>;
+
+/// Offset mode: Σ m·v and Σ m over the free cloth vertices, for the frame the moves are bounded in.
+/// In a fixed order (grid-stride per thread, a block tree, then the blocks in order by
+/// offset_momentum_finish_kernel): double atomics would round differently from run to run, and the
+/// frame's last bits decide truncations and reruns.
+__global__ void offset_momentum_kernel(const float* v, const float* inverse_mass, std::uint32_t n, double* partials) {
+    double sum[4] = {0.0, 0.0, 0.0, 0.0};
+    for (std::uint32_t i = blockIdx.x * blockDim.x + threadIdx.x; i < n; i += gridDim.x * blockDim.x) {
+        if (!(inverse_mass[i] > 0.0f)) continue;
+        const double m = 1.0 / static_cast<double>(inverse_mass[i]);
+        for (int c = 0; c < 3; ++c) sum[c] += m * static_cast<double>(v[c * n + i]);
+        sum[3] += m;
+    }
+    __shared__ typename MomentumReduce::TempStorage storage;
+    for (int k = 0; k < 4; ++k) {
+        const double total = MomentumReduce(storage).Sum(sum[k]);
+        if (threadIdx.x == 0) partials[4 * blockIdx.x + k] = total;
+        __syncthreads();  // storage is reused by the next sum
+    }
+}
+
+/// One block: sums[k] = the blocks' partials of sum k, in block order.
+__global__ void offset_momentum_finish_kernel(const double* partials, std::uint32_t blocks, double* sums) {
+    __shared__ typename MomentumReduce::TempStorage storage;
+    for (int k = 0; k < 4; ++k) {
+        double acc = 0.0;
+        for (std::uint32_t b = threadIdx.x; b < blocks; b += blockDim.x) acc += partials[4 * b + k];
+        const double total = MomentumReduce(storage).Sum(acc);
+        if (threadIdx.x == 0) sums[k] = total;
+        __syncthreads();
+    }
 }
 
 /// Offset mode: each collision vertex's query radius, 1.5× its move over γ (`move` = x1c − x0c −
@@ -95,11 +123,17 @@ __global__ void offset_detect_positions_kernel(const float* x0, const float* vk,
 
 }  // namespace
 
-void launch_offset_momentum(const float* v, const float* inverse_mass, std::uint32_t n, double* sums, cudaStream_t stream) {
-    WEFT_CUDA_CHECK(cudaMemsetAsync(sums, 0, 4 * sizeof(double), stream));
-    if (n == 0) return;
-    offset_momentum_kernel<<<grid_for(n), kBlockSize, 0, stream>>>(v, inverse_mass, n, sums);
+void launch_offset_momentum(const float* v, const float* inverse_mass, std::uint32_t n, double* sums, double* partials,
+                            cudaStream_t stream) {
+    if (n == 0) {
+        WEFT_CUDA_CHECK(cudaMemsetAsync(sums, 0, 4 * sizeof(double), stream));
+        return;
+    }
+    const std::uint32_t blocks = std::min(grid_for(n), kOffsetMomentumBlocks);
+    offset_momentum_kernel<<<blocks, kBlockSize, 0, stream>>>(v, inverse_mass, n, partials);
     WEFT_CUDA_CHECK_LAUNCH("offset_momentum_kernel");
+    offset_momentum_finish_kernel<<<1, kBlockSize, 0, stream>>>(partials, blocks, sums);
+    WEFT_CUDA_CHECK_LAUNCH("offset_momentum_finish_kernel");
 }
 
 void launch_offset_radius(const float* x0c, const float* x1c, const float* remainder, const float* dv_previous, float h,

@@ -15,6 +15,13 @@
 
 namespace weft::cuda {
 
+/// Waits for what cudaMemcpy and cudaMemset left on the legacy default stream. The solver's streams
+/// are non-blocking, so they are not ordered after it: a pageable host-to-device cudaMemcpy returns
+/// once the bytes are staged, not landed, and cudaMemset returns at once. A kernel enqueued next on
+/// a solver stream could read the old bytes (seen as rare run-to-run differences with several parts
+/// on one GPU); every such blocking call is followed by this.
+inline void wait_for_default_stream() { WEFT_CUDA_CHECK(cudaStreamSynchronize(cudaStreamLegacy)); }
+
 /// Running total of device allocations by purpose.
 class MemoryLedger {
 public:
@@ -93,7 +100,10 @@ public:
     /// Allocates and copies `host` in (synchronously: build time only).
     void upload(const std::vector<T>& host, MemoryLedger& ledger, const std::string& purpose) {
         allocate(host.size(), ledger, purpose);
-        if (!host.empty()) WEFT_CUDA_CHECK(cudaMemcpy(ptr_, host.data(), host.size() * sizeof(T), cudaMemcpyHostToDevice));
+        if (!host.empty()) {
+            WEFT_CUDA_CHECK(cudaMemcpy(ptr_, host.data(), host.size() * sizeof(T), cudaMemcpyHostToDevice));
+            wait_for_default_stream();
+        }
     }
     void zero(cudaStream_t stream) {
         if (size_ > 0) WEFT_CUDA_CHECK(cudaMemsetAsync(ptr_, 0, size_ * sizeof(T), stream));

@@ -217,21 +217,25 @@ std::size_t DeviceCollisions::detect(const Model& model, double t, double h, con
             radius_.allocate(vertices_, ledger_, "offset: query radii");
             remainder_.allocate(std::max<std::uint32_t>(n_, 1), ledger_, "offset: truncation remainders");
             offset_sums_.allocate(4, ledger_, "offset: frame");
+            offset_partials_.allocate(4 * kOffsetMomentumBlocks, ledger_, "offset: frame");
             offset_shift_.allocate(3, ledger_, "offset: frame");
             offset_largest_.allocate(1, ledger_, "offset: frame");
             offset_host_.allocate(4);
         }
         // The frame the moves are bounded in translates with the cloth's mean velocity (mass-weighted
         // over the free vertices), as on the CPU.
-        launch_offset_momentum(v, inverse_mass_.get(), n_, offset_sums_.get(), stream);
+        launch_offset_momentum(v, inverse_mass_.get(), n_, offset_sums_.get(), offset_partials_.get(), stream);
         WEFT_CUDA_CHECK(cudaMemcpyAsync(offset_host_.get(), offset_sums_.get(), 4 * sizeof(double), cudaMemcpyDeviceToHost, stream));
         WEFT_CUDA_CHECK(cudaStreamSynchronize(stream));
         const double* sums = offset_host_.get();
         float host_shift[3] = {0.0F, 0.0F, 0.0F};
         if (sums[3] > 0.0)
             for (int c = 0; c < 3; ++c) host_shift[c] = static_cast<float>(h * sums[c] / sums[3]);
-        // Synchronous: host_shift is on the stack (the stream is idle here anyway).
-        WEFT_CUDA_CHECK(cudaMemcpy(offset_shift_.get(), host_shift, sizeof(host_shift), cudaMemcpyHostToDevice));
+        // On the detection's stream, which the kernels below follow (a blocking cudaMemcpy would go
+        // through the default stream, which this non-blocking stream does not wait for); host_shift
+        // is on the stack, so the copy is waited for.
+        WEFT_CUDA_CHECK(cudaMemcpyAsync(offset_shift_.get(), host_shift, sizeof(host_shift), cudaMemcpyHostToDevice, stream));
+        WEFT_CUDA_CHECK(cudaStreamSynchronize(stream));
         const float contact = static_cast<float>(geometry_.gap(settings));
         launch_offset_radius(x0c, x1c, nullptr, dv_previous, static_cast<float>(h), n_, vertices_, offset_shift_.get(),
                              static_cast<float>(settings.relaxation),
@@ -301,7 +305,8 @@ std::size_t DeviceCollisions::detect_offset(const Model& model, double h, cudaSt
     const collision::GpuBoundsCounters& c = bounds_.read_back(stream);
     stats.collision.candidate_pairs += static_cast<std::int64_t>(c.measured_vf + c.measured_ee);
     std::uint32_t largest = 0;
-    WEFT_CUDA_CHECK(cudaMemcpy(&largest, offset_largest_.get(), sizeof(largest), cudaMemcpyDeviceToHost));
+    WEFT_CUDA_CHECK(cudaMemcpyAsync(&largest, offset_largest_.get(), sizeof(largest), cudaMemcpyDeviceToHost, stream));
+    WEFT_CUDA_CHECK(cudaStreamSynchronize(stream));
     stats.collision.query_radius_max = std::max(stats.collision.query_radius_max, static_cast<double>(std::bit_cast<float>(largest)));
     stats.ms(Stage::BroadPhase) += ms_since(clock);
 

@@ -196,7 +196,8 @@ private:
     std::size_t free_vertices_ = 0;
     collision::GpuDisplacementBounds bounds_;
     DeviceArray<float> detect_positions_, radius_, remainder_;
-    DeviceArray<double> offset_sums_;  // Σ m·v (3), Σ m
+    DeviceArray<double> offset_sums_;      // Σ m·v (3), Σ m
+    DeviceArray<double> offset_partials_;  // their per-block sums (launch_offset_momentum)
     DeviceArray<float> offset_shift_;  // 3
     DeviceArray<std::uint32_t> offset_largest_;
     PinnedArray<double> offset_host_;  // the momentum sums

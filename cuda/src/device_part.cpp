@@ -30,8 +30,10 @@ void DeviceSolver::build_part(const FlatModel& whole, const PartModel& part, con
         const std::uint32_t g = part.global_vertex[i];
         fixed[i] = g < whole.vertex_pin.size() && whole.vertex_pin[g] >= 0 ? 1 : 0;
     }
-    if (!fixed.empty())
+    if (!fixed.empty()) {
         WEFT_CUDA_CHECK(cudaMemcpy(fixed_.get(), fixed.data(), fixed.size(), cudaMemcpyHostToDevice));
+        wait_for_default_stream();
+    }
     const std::vector<std::uint32_t> owned(part.global_vertex.begin(), part.global_vertex.begin() + part.owned);
     output_index_.upload(owned, ledger_, "part output places");
     global_index_.upload(part.global_vertex, ledger_, "part vertex ids");

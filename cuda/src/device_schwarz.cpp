@@ -84,6 +84,7 @@ void DeviceSchwarz::upload(const BlockPattern& pattern, const std::vector<std::u
     floats_.allocate(floats, ledger, "MAS domain inverses and vectors");
     // Padding nodes of the last domain of each level are never written: their values stay 0.
     WEFT_CUDA_CHECK(cudaMemset(floats_.get(), 0, floats_.bytes()));
+    wait_for_default_stream();
 
     const std::uint32_t* base = indices_.get();
     view_.levels = h.levels();

@@ -112,6 +112,7 @@ void DeviceSolver::build(const FlatModel& flat, const Model& model) {
     partials_.allocate(2 * std::max(1u, grid_for(static_cast<std::uint32_t>(n))), ledger_, "CG control and stats");
     WEFT_CUDA_CHECK(cudaMemset(control_.get(), 0, sizeof(PcgControl)));
     WEFT_CUDA_CHECK(cudaMemset(stats_.get(), 0, sizeof(DeviceStats)));
+    wait_for_default_stream();
 
     DeviceView& d = view_;
     d = DeviceView{};
@@ -227,20 +228,25 @@ void DeviceSolver::write_state(std::size_t first, std::size_t count, const Vec3d
         return;
     }
     WEFT_CUDA_CHECK(cudaSetDevice(device_));
-    WEFT_CUDA_CHECK(cudaStreamSynchronize(active_stream()));
+    cudaStream_t stream = active_stream();
+    WEFT_CUDA_CHECK(cudaStreamSynchronize(stream));
     const std::size_t n = view_.n;
-    std::vector<float> buf(3 * count);
+    std::vector<float> buf(6 * count);
     float* arrays[2] = {view_.x, view_.v};
     const Vec3d* ins[2] = {x, v};
+    // On the solver's stream, so the next substep's kernels follow the bytes (wait_for_default_stream).
     // The motion was replaced: nothing to extrapolate the next solve's start from.
-    for (int c = 0; c < 3; ++c) WEFT_CUDA_CHECK(cudaMemset(view_.dv_previous + c * n + first, 0, count * sizeof(float)));
+    for (int c = 0; c < 3; ++c)
+        WEFT_CUDA_CHECK(cudaMemsetAsync(view_.dv_previous + c * n + first, 0, count * sizeof(float), stream));
     for (int a = 0; a < 2; ++a) {
+        float* staged = buf.data() + 3 * a * count;
         for (std::size_t i = 0; i < count; ++i)
-            for (int c = 0; c < 3; ++c) buf[c * count + i] = static_cast<float>(ins[a][i][c]);
+            for (int c = 0; c < 3; ++c) staged[c * count + i] = static_cast<float>(ins[a][i][c]);
         for (int c = 0; c < 3; ++c)
-            WEFT_CUDA_CHECK(cudaMemcpy(arrays[a] + c * n + first, buf.data() + c * count, count * sizeof(float),
-                                       cudaMemcpyHostToDevice));
+            WEFT_CUDA_CHECK(cudaMemcpyAsync(arrays[a] + c * n + first, staged + c * count, count * sizeof(float),
+                                            cudaMemcpyHostToDevice, stream));
     }
+    WEFT_CUDA_CHECK(cudaStreamSynchronize(stream));  // buf is read until the copies are done
 }
 
 }  // namespace weft::cuda
@@ -291,7 +297,9 @@ void DeviceSolver::restore_solver_state(std::span<const std::uint8_t> bytes) {
     if (n > 0) {
         WEFT_CUDA_CHECK(cudaSetDevice(device_));
         WEFT_CUDA_CHECK(cudaStreamSynchronize(active_stream()));
-        WEFT_CUDA_CHECK(cudaMemcpy(view_.dv_previous, bytes.data() + kHead, 3 * n * sizeof(float), cudaMemcpyHostToDevice));
+        WEFT_CUDA_CHECK(cudaMemcpyAsync(view_.dv_previous, bytes.data() + kHead, 3 * n * sizeof(float), cudaMemcpyHostToDevice,
+                                        active_stream()));
+        WEFT_CUDA_CHECK(cudaStreamSynchronize(active_stream()));
     }
     substep_count_ = substeps;
     // The Schwarz factors are not in the checkpoint: the next substep refactors (with

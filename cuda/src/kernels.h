@@ -73,9 +73,12 @@ void launch_contact_product(const DeviceView& d, const float* x, bool in_cg_loop
 // SoA with component stride `stride`), filled from the solver's state (SoA, stride n).
 /// x0c = x, x1c = x + h·v for the n cloth vertices (rounded as the CPU: the product, then the sum).
 /// Offset mode (device_collisions.h): the momentum sums of the free cloth vertices (sums: 4 doubles:
-/// Σ m·v, Σ m), the per-vertex query radii (and their largest, as float bits), and the positions of a
-/// rerun detection (h read from device memory).
-void launch_offset_momentum(const float* v, const float* inverse_mass, std::uint32_t n, double* sums, cudaStream_t stream);
+/// Σ m·v, Σ m; in a fixed order, through `partials`: 4 × kOffsetMomentumBlocks doubles), the per-vertex
+/// query radii (and their largest, as float bits), and the positions of a rerun detection (h read
+/// from device memory).
+inline constexpr std::uint32_t kOffsetMomentumBlocks = 1024;
+void launch_offset_momentum(const float* v, const float* inverse_mass, std::uint32_t n, double* sums, double* partials,
+                            cudaStream_t stream);
 void launch_offset_radius(const float* x0c, const float* x1c, const float* remainder, const float* dv_previous, float h,
                           std::uint32_t n, std::uint32_t vertices, const float* shift, float relaxation, float contact,
                           float cap, float* radius, std::uint32_t* largest, cudaStream_t stream);

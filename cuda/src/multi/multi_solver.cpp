@@ -262,6 +262,7 @@ void MultiSolver::detect_contacts(const Model& model, double t, double h, StepSt
     // The detection reads x and v; offset mode's predicted moves also the previous Δv.
     const std::size_t parts = solvers_.size();
     offset_ = model.settings.collision.mode == CollisionMode::Offset;
+    join_parts();  // every GPU's whole arrays are written below by every part: their readers are done
     if (offset_)
         collect_whole({kWholeX, kWholeV, kWholePrevious}, parts);
     else
@@ -294,6 +295,10 @@ std::vector<std::size_t> MultiSolver::detect_shares(const std::function<std::siz
     std::vector<StepStats> share_stats(parts);
     std::vector<std::size_t> found(parts, 0);
     DeviceMemoryBudget* const budget = current_budget();  // the backend's, on this thread
+    // A share overwrites its bound arrays (and the offset contact's whole arrays) while another GPU's
+    // stream may still be reading them: the last truncation's reduction across the shares is only
+    // waited for on the first GPU (finish_truncation). Every stream first waits for all the others.
+    join_parts();
     share_failed_ = false;
     share_barrier_ = std::make_unique<std::barrier<>>(static_cast<std::ptrdiff_t>(parts));
     const auto run_share = [&](std::size_t p) {

@@ -68,7 +68,10 @@ void PartMatrix::set_blocks(std::span<const float> global_blocks) {
     int previous = 0;
     WEFT_CUDA_CHECK(cudaGetDevice(&previous));
     WEFT_CUDA_CHECK(cudaSetDevice(device_));
-    if (!host.empty()) WEFT_CUDA_CHECK(cudaMemcpy(blocks_.get(), host.data(), host.size() * sizeof(float), cudaMemcpyHostToDevice));
+    if (!host.empty()) {
+        WEFT_CUDA_CHECK(cudaMemcpy(blocks_.get(), host.data(), host.size() * sizeof(float), cudaMemcpyHostToDevice));
+        wait_for_default_stream();
+    }
     WEFT_CUDA_CHECK(cudaSetDevice(previous));
 }
 
