@@ -77,7 +77,8 @@ struct DeviceStats {
     /// Bits of the largest |x1 − x0| (m, a non-negative float, so its bits order like it) over the
     /// free vertices, recorded by the commit when StepParams::bounded_shape_count > 0, else 0.
     unsigned int largest_move_bits;
-    int swept_hits;  ///< vertices the swept collider test carried along (one per vertex and collider)
+    int swept_hits;      ///< vertices the swept collider test carried along (one per vertex and collider)
+    int overshoot_hits;  ///< slow vertices it put back onto a collider's surface (read with swept_hits)
     int pivot_failures;  ///< Schwarz domain factorisations that met a non-positive pivot
 };
 

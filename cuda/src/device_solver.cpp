@@ -11,6 +11,7 @@
 #include <algorithm>
 #include <bit>
 #include <chrono>
+#include <cstddef>
 #include <cstring>
 
 #include "kernels.h"
@@ -246,7 +247,8 @@ void DeviceSolver::run_substep(const Model& model, double t, double h, StepStats
 
     // After the solve and before CCD, as on the CPU: vertices that an analytic collider ran into
     // during the substep ride along with it (outside the graph, which stays as captured).
-    const int swept_before = stats.collision.swept_collider_hits;
+    const auto moved_by_sweep = [&stats] { return stats.collision.swept_collider_hits + stats.collision.collider_overshoots; };
+    const int swept_before = moved_by_sweep();
     stage_ = "the fast-collider sweep";
     if (ds.non_finite == 0) sweep_colliders(std::bit_cast<float>(ds.largest_move_bits), stream, stats);
 
@@ -255,7 +257,7 @@ void DeviceSolver::run_substep(const Model& model, double t, double h, StepStats
     stage_ = "CCD and the impact zones";
     if (collisions_.active() && ds.non_finite == 0) {
         (void)collisions_.resolve(model, h, view_.x, view_.v, view_.v0, view_.dv_previous,
-                                  stats.collision.swept_collider_hits > swept_before, stream, stats);
+                                  moved_by_sweep() > swept_before, stream, stats);
         ledger_.set("cloth collisions", collisions_.memory_bytes());  // the detection buffers grow on use
     }
 
@@ -306,11 +308,13 @@ void DeviceSolver::sweep_colliders(float largest_move, cudaStream_t stream, Step
     if (!sweep_needed(largest_move)) return;
     const auto start = Clock::now();
     launch_sweep_colliders(view_, stream);
-    WEFT_CUDA_CHECK(cudaMemcpyAsync(&host_stats_[0].swept_hits, &stats_.get()->swept_hits, sizeof(int),
+    static_assert(offsetof(DeviceStats, overshoot_hits) == offsetof(DeviceStats, swept_hits) + sizeof(int));
+    WEFT_CUDA_CHECK(cudaMemcpyAsync(&host_stats_[0].swept_hits, &stats_.get()->swept_hits, 2 * sizeof(int),
                                     cudaMemcpyDeviceToHost, stream));
     WEFT_CUDA_CHECK(cudaStreamSynchronize(stream));
     ++sweep_launches_;
     stats.collision.swept_collider_hits += host_stats_[0].swept_hits;
+    stats.collision.collider_overshoots += host_stats_[0].overshoot_hits;
     stats.ms(Stage::Update) += ms_since(start);
 }
 

@@ -62,7 +62,20 @@ __global__ void commit_kernel(DeviceView d) {
         if (!physics::is_finite(x) || !physics::is_finite(v)) atomicAdd(&d.stats->non_finite, 1);
         // The vertex's own share of the relative motion the swept test measures (swept_collider.h);
         // pinned vertices are never swept, as on the CPU.
-        if (sp.bounded_shape_count > 0 && !d.fixed[i]) moved = physics::length(x - x0);
+        if (sp.bounded_shape_count > 0 && !d.fixed[i]) {
+            moved = physics::length(x - x0);
+            // A slow vertex that ends inside a bounded collider it started outside is put back on
+            // its surface by the sweep (swept_shape_contact's slow case): ask for the sweep.
+            const auto* start = staged<physics::Shape<float>>(d, sp.shape_start_offset);
+            const auto* end = staged<physics::Shape<float>>(d, sp.shape_offset);
+            V3 n{};
+            for (int s = 0; s < sp.shape_count; ++s) {
+                if (!(physics::shape_min_width(start[s]) > 0.0f)) continue;
+                if (physics::shape_distance(end[s], x, n, static_cast<physics::Mat3<float>*>(nullptr)) < 0.0f &&
+                    !(physics::shape_distance(start[s], x0, n, static_cast<physics::Mat3<float>*>(nullptr)) < 0.0f))
+                    moved = 3.0e38f;
+            }
+        }
     }
     // The largest over the grid: one block reduction and one atomic per block (a float ≥ 0 orders
     // like its bits). The condition is the same for the whole grid, so the barrier inside is safe.
@@ -94,20 +107,24 @@ __global__ void sweep_colliders_kernel(DeviceView d) {
     const float thickness = staged<ClothParams>(d, sp.cloth_offset)[d.vertex_cloth[i]].thickness;
     const V3 x0 = load3(d.x0, i, d.n);
     V3 x = load3(d.x, i, d.n);
-    int hits = 0;
+    int hits = 0, overshoots = 0;
     for (int s = 0; s < sp.shape_count; ++s) {
         const physics::SweptContact<float> c = physics::swept_shape_contact(start[s], end[s], sp.h, x0, x, thickness);
         if (!c.hit) continue;
         x = c.position;
-        ++hits;
+        if (c.samples > 0)
+            ++hits;
+        else
+            ++overshoots;  // a slow end inside, put back onto the surface
     }
-    if (hits == 0) return;
+    if (hits + overshoots == 0) return;
     const V3 v = (x - x0) / sp.h;
     store3(d.x, i, d.n, x);
     store3(d.v, i, d.n, v);
     store3(d.dv_previous, i, d.n, v - load3(d.v0, i, d.n));  // the CPU's v − v0 after a sweep
     // Integers, and only the few vertices hit: order-free. A ghost's hits are its owner's to count.
-    if (i < d.rows) atomicAdd(&d.stats->swept_hits, hits);
+    if (i < d.rows && hits > 0) atomicAdd(&d.stats->swept_hits, hits);
+    if (i < d.rows && overshoots > 0) atomicAdd(&d.stats->overshoot_hits, overshoots);
 }
 
 __global__ void write_output_kernel(DeviceView d, unsigned char* out, std::size_t stride, const std::uint32_t* index) {

@@ -46,6 +46,8 @@ RunSummary summarize(std::span<const StepStats> frames) {
         step.push_back(st.step_ms);
         cg.push_back(st.cg_iterations);
         contacts.push_back(st.collider_contacts);
+        s.swept_collider_hits += st.collision.swept_collider_hits;
+        s.collider_overshoots += st.collision.collider_overshoots;
         s.cg_iterations_max_solve = std::max(s.cg_iterations_max_solve, st.cg_iterations_max);
         s.solves += st.newton_iterations;
         s.cg_not_converged += st.cg_not_converged;
@@ -254,6 +256,7 @@ void write_summary_fields(JsonWriter& json, const RunContext& c, const RunSummar
     json.field("line_search_halvings", s.line_search_halvings);
 
     json.key("contacts").begin_object().field("mean", s.contacts.mean).field("max", s.contacts.max).end_object();
+    json.field("swept_collider_hits", s.swept_collider_hits).field("collider_overshoots", s.collider_overshoots);
     const auto& col = s.collisions;
     json.key("collisions").begin_object();
     json.field("active", col.active);

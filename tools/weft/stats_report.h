@@ -53,6 +53,10 @@ struct RunSummary {
     std::size_t non_finite_frames = 0;
     long long first_non_finite_frame = -1;  ///< 1-based frame number, -1 if none
     Distribution contacts;                  ///< collider contacts per frame
+    /// Analytic colliders after the solve (swept_collider.h), over all frames: vertices a fast one
+    /// carried along, and slow vertices that ended inside one and were put back onto its surface.
+    long long swept_collider_hits = 0;
+    long long collider_overshoots = 0;
     /// Energy guard (solver.energy_guard; docs/methods.md §1b), over all frames: substeps whose
     /// energy grew beyond the external work as kept (StepStats::energy_gained), the frames they fell
     /// in, their summed excess (J), the redone substeps and those the guard could not judge.

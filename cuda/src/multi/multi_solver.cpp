@@ -558,11 +558,12 @@ void MultiSolver::substep(const Model& model, double t, double h, StepStats& sta
         stats.non_finite = true;
         for (auto& s : solvers_) s->part_rollback();
     } else {
-        const int hits_before = stats.collision.swept_collider_hits;
+        const auto moved_by_sweep = [&stats] { return stats.collision.swept_collider_hits + stats.collision.collider_overshoots; };
+        const int hits_before = moved_by_sweep();
         bool swept = false;
         for (auto& s : solvers_) swept = s->part_sweep(stats) || swept;
         if (swept) exchange_state();  // a ghost may have been carried along differently from its owner
-        if (colliding) resolve_contacts(model, h, stats.collision.swept_collider_hits > hits_before, stats);
+        if (colliding) resolve_contacts(model, h, moved_by_sweep() > hits_before, stats);
     }
     if (output_ != nullptr) {
         write_output();

@@ -49,6 +49,9 @@ struct CollisionStats {
     int rigid_zones = 0;                ///< zones that fell back to rigid motion (the cap was hit)
     int frozen_vertices = 0;            ///< vertices the last-resort fallback held at their start position
     int swept_collider_hits = 0;        ///< vertices a fast analytic collider hit mid-substep and carried along
+    /// Slow vertices that ended a substep inside a bounded analytic collider they started outside (a
+    /// contact that began within the substep) and were put back onto its surface (swept_collider.h).
+    int collider_overshoots = 0;
     int unresolved_substeps = 0;        ///< substeps that ended with a collision still detected (must be 0)
     /// Offset mode (CollisionSettings::mode): free cloth vertices whose move the bounds shortened,
     /// summed over the updates of the step; detection reruns; substeps sent to the CCD and impact-zone

@@ -2,6 +2,7 @@
 // with the CUDA backend; this file only orders the work and makes it deterministic.
 #include "cpu/cpu_solver.h"
 
+#include <atomic>
 #include <chrono>
 #include <cstring>
 #include <cmath>
@@ -271,12 +272,13 @@ void CpuSolver<T>::assemble() {
 }
 
 template <typename T>
-int CpuSolver<T>::sweep_fast_colliders(T h) {
-    // Vertices a fast collider ran into during the substep ride along with it (swept_collider.h);
-    // slow colliders cost one comparison per vertex.
+std::pair<int, int> CpuSolver<T>::sweep_fast_colliders(T h) {
+    // Vertices a fast collider ran into during the substep ride along with it; slow ones that ended
+    // inside a collider go back onto its surface (swept_collider.h). Slow colliders cost two distance
+    // queries per vertex. Each vertex writes only itself; the counts are integers (any order).
     const FlatModel& f = *flat_;
-    const double hits = deterministic_sum(n_, partials_, [&](std::size_t lo, std::size_t hi) {
-        double count = 0.0;
+    std::atomic<int> carried{0}, overshoots{0};
+    parallel_chunks(n_, [&](std::size_t lo, std::size_t hi) {
         for (std::size_t i = lo; i < hi; ++i) {
             if (fixed_[i]) continue;
             const T thickness = cloth_params_[f.vertex_cloth[i]].thickness;
@@ -286,12 +288,11 @@ int CpuSolver<T>::sweep_fast_colliders(T h) {
                 if (!c.hit) continue;
                 x_[i] = c.position;
                 v_[i] = (x_[i] - x0_[i]) / h;
-                count += 1.0;
+                (c.samples > 0 ? carried : overshoots).fetch_add(1, std::memory_order_relaxed);
             }
         }
-        return count;
     });
-    return static_cast<int>(hits);
+    return {carried.load(), overshoots.load()};
 }
 
 template <typename T>
@@ -402,8 +403,12 @@ void CpuSolver<T>::substep(const Model& model, double t, double h_double, StepSt
         stats.non_finite = true;
     }
     int swept = 0;
-    if (bad == 0.0 && !shapes_.empty()) swept = sweep_fast_colliders(h);
-    stats.collision.swept_collider_hits += swept;
+    if (bad == 0.0 && !shapes_.empty()) {
+        const auto [carried, overshoots] = sweep_fast_colliders(h);
+        stats.collision.swept_collider_hits += carried;
+        stats.collision.collider_overshoots += overshoots;
+        swept = carried + overshoots;  // both moved vertices after the solve
+    }
     stats.ms(Stage::Update) += ms_since(clock);
     // CCD and impact zones from x0 to x1; vertices they move get the velocity of the new motion.
     if (collide && bad == 0.0) collisions_.end_substep(model, h_double, x0_, x_, v_, swept > 0, stats);

@@ -4,6 +4,7 @@
 #include <array>
 #include <cstdint>
 #include <span>
+#include <utility>
 #include <vector>
 
 #include "cpu/bsr_matrix.h"
@@ -77,7 +78,8 @@ private:
     void evaluate_shell_bending(T h);
     int evaluate_vertices(const Model& model, T h);
     void assemble();
-    int sweep_fast_colliders(T h);
+    /// Carried vertices (fast colliders) in .first, overshoots put back on a surface in .second.
+    std::pair<int, int> sweep_fast_colliders(T h);
     /// Implicit Euler's objective at velocities `v`: ½ Σ m|v − v₀|² + Ψ(x₀ + h·v), Ψ the elastic,
     /// gravity and collider potentials (and offset contact's), at time `t1`, J (line_search).
     double incremental_potential(const Model& model, double t1, T h, const std::vector<V3>& v);

@@ -13,8 +13,16 @@
 /// convex solid between two samples unless its chord is shorter than the spacing, so what sampling
 /// misses is a graze of depth ≤ r − √(r² − (w/8)²) ≈ w²/(128·r) — under 1/64 of the radius for a
 /// sphere — which the penalty handles at the end of the substep anyway. Only motions that cover
-/// more than that spacing in one substep are sampled (slower ones cannot tunnel: the solve's
-/// penalty sees them); a plane is a half-space and cannot be tunnelled through.
+/// more than that spacing in one substep are sampled (slower ones cannot tunnel); a plane is a
+/// half-space and cannot be tunnelled through.
+///
+/// A slow motion is checked at its end only: the solve's penalty acts where the vertex is at the
+/// start of the substep, so a contact that begins within the substep is not seen by it, and a heavy
+/// vertex at a long step can end deep inside (a soft 2 kg/m² sheet at 1/24 s: 15–57 mm into a
+/// resting ball). Such an end goes back along the normal onto the surface (distance 0, not the
+/// contact thickness: the velocity (x − x0)/h then points no further out than the surface moved,
+/// so the correction adds no bounce); from there the penalty sees the contact at the next
+/// substep's start.
 
 #include <cmath>
 
@@ -85,7 +93,8 @@ WEFT_HD inline Mat3<T> rotation_of(Vec3<T> w) {
 /// The vertex moving from x0 to x1 (m) over a substep of `h` s, against the collider at its start
 /// pose `s0` and end pose `s1` (same shape; the pose in between: origin interpolated linearly,
 /// rotation turned at s0's angular velocity). A vertex already inside at the start is left to the
-/// penalty contact (returns no hit). `max_samples` caps the work per vertex (the spacing then grows).
+/// penalty contact (returns no hit); a slow one that ends inside goes back onto the surface (hit,
+/// no samples). `max_samples` caps the work per vertex (the spacing then grows).
 template <typename T>
 WEFT_HD inline SweptContact<T> swept_shape_contact(const Shape<T>& s0, const Shape<T>& s1, T h, Vec3<T> x0, Vec3<T> x1,
                                                    T thickness, int max_samples = 256) {
@@ -97,11 +106,20 @@ WEFT_HD inline SweptContact<T> swept_shape_contact(const Shape<T>& s0, const Sha
     const T relative = length(x1 - x0) + length(s1.origin - s0.origin) +
                        length(s0.angular_velocity) * h * shape_bounding_radius(s0);
     const T spacing = T(0.25) * width;
-    if (!(relative > spacing)) return r;  // slow: the penalty at the end of the substep sees it
+    Vec3<T> n{};
+    if (!(relative > spacing)) {
+        // Slow: the path cannot cross the solid between its ends; an end inside it that started
+        // outside overshot a contact that began within the substep.
+        if (shape_distance(s0, x0, n, static_cast<Mat3<T>*>(nullptr)) < T(0)) return r;
+        const T d = shape_distance(s1, x1, n, static_cast<Mat3<T>*>(nullptr));
+        if (!(d < T(0))) return r;
+        r.hit = true;
+        r.position = x1 - d * n;
+        return r;
+    }
     const T wanted = ceil(relative / spacing);
     const int samples = wanted < T(max_samples) ? static_cast<int>(wanted) : max_samples;
     r.samples = samples;
-    Vec3<T> n{};
     if (shape_distance(s0, x0, n, static_cast<Mat3<T>*>(nullptr)) < T(0)) return r;
     for (int k = 1; k <= samples; ++k) {
         const T tau = T(k) / T(samples);
