@@ -20,6 +20,7 @@
 #include "weft/world.h"
 
 #include "collision/broad_phase.h"
+#include "collision/buffer_trim.h"
 #include "broad_phase_soups.h"
 #include "random_geometry.h"
 
@@ -370,6 +371,42 @@ TEST(BroadPhase, SameResultOnOneAndTwoThreads) {
     bp.find(s.input(), again);
     EXPECT_TRUE(again.vf == one.vf);
     EXPECT_TRUE(again.ee == one.ee);
+}
+
+// A frame that floods the hash with pairs (every vertex of a grid crushed into a few centimetres)
+// grows its pair lists; calm frames after it find few pairs. The lists are cut back at the end of the
+// first trim window (buffer_trim.h) that did not hold the flood, instead of keeping the flood's size
+// for the rest of the run, and the calm frames' results do not change.
+TEST(BroadPhase, AFloodOfPairsIsGivenBackAfterATrimWindow) {
+    const Soup calm = grid_soup(1.0, 1.0, 40, 40, 0.001);
+    Soup flood = calm;
+    for (std::size_t i = 0; i < flood.x0.size(); ++i) {
+        flood.x0[i] = 0.01 * flood.x0[i];
+        flood.x1[i] = flood.x0[i];
+    }
+    BroadPhase hash;
+    BroadPhaseResult out;
+    hash.find(flood.input(), out);
+    const std::size_t flooded_pairs = out.vf.size() + out.ee.size();
+    const std::size_t flooded_bytes = hash.scratch_bytes() + out.vf.capacity() * sizeof(VertexFacePair) +
+                                      out.ee.capacity() * sizeof(EdgeEdgePair);
+    hash.find(calm.input(), out);
+    const Reference expected = brute_force(calm.input());
+    const std::size_t calm_pairs = out.vf.size() + out.ee.size();
+    // The flood's window ends at call kTrimPeriod (its peak is the flood's: nothing cut), the next at
+    // 2·kTrimPeriod.
+    for (std::size_t call = 2; call <= 2 * kTrimPeriod; ++call) hash.find(calm.input(), out);
+    EXPECT_EQ(out.vf, expected.vf);
+    EXPECT_EQ(out.ee, expected.ee);
+    const std::size_t trimmed_bytes = hash.scratch_bytes() + out.vf.capacity() * sizeof(VertexFacePair) +
+                                      out.ee.capacity() * sizeof(EdgeEdgePair);
+    std::printf("[ trim     ] flood %zu pairs, %.1f MB; calm %zu pairs; after %zu calls %.1f MB\n", flooded_pairs,
+                static_cast<double>(flooded_bytes) / 1e6, calm_pairs, 2 * kTrimPeriod, static_cast<double>(trimmed_bytes) / 1e6);
+    ASSERT_GT(flooded_pairs, 20 * calm_pairs) << "the flood did not flood: the test tests nothing";
+    EXPECT_LT(trimmed_bytes, flooded_bytes / 4);
+    // One more call, and the next window's first: nothing to cut, the same result.
+    hash.find(calm.input(), out);
+    EXPECT_EQ(out.vf, expected.vf);
 }
 
 TEST(BroadPhase, Timing200KTriangleGrid) {

@@ -15,6 +15,7 @@
 
 #include "weft/error.h"
 
+#include "collision/buffer_trim.h"
 #include "deterministic_parallel.h"
 #include "weft/physics/vec.h"
 
@@ -596,6 +597,40 @@ void BroadPhase::find(const BroadPhaseInput& in, BroadPhaseResult& out) {
     tbb::parallel_sort(out.ee.begin(), out.ee.end());
     c.vf_pairs = out.vf.size();
     c.ee_pairs = out.ee.size();
+    trim_pair_lists(out);
+}
+
+void BroadPhase::trim_pair_lists(BroadPhaseResult& out) {
+    for (Local& l : local_) {
+        l.vf_peak = std::max(l.vf_peak, l.vf.size());
+        l.ee_peak = std::max(l.ee_peak, l.ee.size());
+    }
+    out_vf_peak_ = std::max(out_vf_peak_, out.vf.size());
+    out_ee_peak_ = std::max(out_ee_peak_, out.ee.size());
+    if (++calls_since_trim_ < kTrimPeriod) return;
+    for (Local& l : local_) {
+        (void)trim_to_peak(l.vf, l.vf_peak);
+        (void)trim_to_peak(l.ee, l.ee_peak);
+        l.vf_peak = l.ee_peak = 0;
+    }
+    (void)trim_to_peak(out.vf, out_vf_peak_);
+    (void)trim_to_peak(out.ee, out_ee_peak_);
+    out_vf_peak_ = out_ee_peak_ = 0;
+    calls_since_trim_ = 0;
+}
+
+std::size_t BroadPhase::scratch_bytes() const {
+    std::size_t bytes = box_.capacity() * sizeof(Box) + (cell_lo_.capacity() + cell_hi_.capacity()) * sizeof(std::uint64_t) +
+                        offset_.capacity() * sizeof(std::size_t) +
+                        (oversized_.capacity() + vertex_cloth_.capacity()) * sizeof(std::uint32_t) +
+                        (entries_.capacity() + sorted_.capacity()) * sizeof(Entry) +
+                        (histogram_.capacity() + cell_start_.capacity()) * sizeof(std::size_t) +
+                        extent_.capacity() * sizeof(double) + state_.capacity();
+    for (const Local& l : local_)
+        bytes += l.vf.capacity() * sizeof(VertexFacePair) + l.ee.capacity() * sizeof(EdgeEdgePair) +
+                 l.prim.capacity() * sizeof(std::uint32_t) + l.box.capacity() * sizeof(Box) +
+                 l.cell_lo.capacity() * sizeof(std::uint64_t) + l.occ.capacity() * sizeof(Local::Occupant);
+    return bytes;
 }
 
 }  // namespace weft::collision

@@ -96,6 +96,11 @@ public:
     /// `weft::Error` for mismatched sizes, out-of-range indices or a negative thickness or cell size.
     void find(const BroadPhaseInput& in, BroadPhaseResult& out);
 
+    /// Bytes of scratch the hash keeps between calls (its own buffers and every thread's pair lists).
+    /// Every kTrimPeriod calls (buffer_trim.h) the pair lists, and `out`'s, that stayed far larger than
+    /// what those calls found are cut back: one frame's flood of pairs is not kept for the whole run.
+    [[nodiscard]] std::size_t scratch_bytes() const;
+
     /// A primitive overlapping more cells than this is not hashed but tested against every partner
     /// directly, so that one exploding vertex cannot flood the hash (the result is the same).
     static constexpr std::uint64_t kMaxCellsPerPrimitive = 512;
@@ -119,6 +124,7 @@ private:
         std::size_t tested = 0;
         std::size_t candidates = 0;
         std::size_t culled = 0;
+        std::size_t vf_peak = 0, ee_peak = 0;  // the largest lists of the trim window
         // The current cell's occupants.
         std::vector<std::uint32_t> prim;
         std::vector<Box> box;
@@ -144,6 +150,11 @@ private:
     std::vector<double> extent_;       // edge bound extents, for the automatic cell size
     std::vector<std::uint8_t> state_;  // per primitive: hashed, non-finite or oversized
     tbb::enumerable_thread_specific<Local> local_;
+    // The trim window (buffer_trim.h): calls since the last trim, and the largest merged lists.
+    std::size_t calls_since_trim_ = 0;
+    std::size_t out_vf_peak_ = 0, out_ee_peak_ = 0;
+    /// Notes this call's list sizes and, at the end of a window, cuts the oversized lists back.
+    void trim_pair_lists(BroadPhaseResult& out);
 };
 
 }  // namespace weft::collision

@@ -6,11 +6,13 @@
 // pairs touching it (a fixed incidence list in pair order: deterministic, no atomics; the GPU port
 // uses the same two passes).
 
+#include <algorithm>
 #include <array>
 #include <cstdint>
 #include <span>
 #include <vector>
 
+#include "collision/buffer_trim.h"
 #include "collision/proximity_contacts.h"
 #include "cpu/bsr_matrix.h"
 #include "deterministic_parallel.h"
@@ -58,6 +60,7 @@ public:
         active_.assign(m, 1);
         build_incidence();
         diagonal_.assign(n_, M3{});
+        trim_after_flood(m);
     }
 
     [[nodiscard]] std::size_t size() const { return ids_.size(); }
@@ -170,6 +173,26 @@ public:
     }
 
 private:
+    // The trim window (collision/buffer_trim.h): lists that one frame's flood of contacts grew are
+    // cut back once a whole window of calls needed far less.
+    std::size_t sets_since_trim_ = 0, peak_pairs_ = 0, peak_entries_ = 0;
+    void trim_after_flood(std::size_t pairs) {
+        peak_pairs_ = std::max(peak_pairs_, pairs);
+        peak_entries_ = std::max(peak_entries_, entry_.size());
+        if (++sets_since_trim_ < collision::kTrimPeriod) return;
+        (void)collision::trim_to_peak(ids_, peak_pairs_);
+        (void)collision::trim_to_peak(weight_, peak_pairs_);
+        (void)collision::trim_to_peak(normal_, peak_pairs_);
+        (void)collision::trim_to_peak(params_, peak_pairs_);
+        (void)collision::trim_to_peak(edge_edge_, peak_pairs_);
+        (void)collision::trim_to_peak(active_, peak_pairs_);
+        (void)collision::trim_to_peak(block_, peak_pairs_);
+        (void)collision::trim_to_peak(rhs_, peak_pairs_);
+        (void)collision::trim_to_peak(scratch_, peak_pairs_);
+        (void)collision::trim_to_peak(entry_, peak_entries_);
+        sets_since_trim_ = peak_pairs_ = peak_entries_ = 0;
+    }
+
     /// Incidence of cloth vertices over the active pairs, counting sort in pair order.
     void build_incidence() {
         start_.assign(n_ + 1, 0);

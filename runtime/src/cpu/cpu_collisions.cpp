@@ -382,7 +382,10 @@ std::size_t CpuCollisions<T>::memory_bytes() const {
            bounds_.partner_start.capacity() * sizeof(std::uint32_t) +
            bounds_.partners.capacity() * sizeof(collision::PartnerLimit) +
            bounds_.pairs.vf.capacity() * sizeof(collision::VertexFacePair) +
-           bounds_.pairs.ee.capacity() * sizeof(collision::EdgeEdgePair);
+           bounds_.pairs.ee.capacity() * sizeof(collision::EdgeEdgePair) +
+           // The hash's scratch and the pair lists: the largest buffers where a frame folds a lot.
+           broad_.scratch_bytes() + pairs_.vf.capacity() * sizeof(collision::VertexFacePair) +
+           pairs_.ee.capacity() * sizeof(collision::EdgeEdgePair);
 }
 
 template class CpuCollisions<float>;
