@@ -373,6 +373,43 @@ TEST(BroadPhase, SameResultOnOneAndTwoThreads) {
     EXPECT_TRUE(again.ee == one.ee);
 }
 
+// A common motion taken out of the bounds (BroadPhaseInput::frame_motion): a soup moving 30 cm as a
+// whole pairs as if it stood still (the brute force on x1 − T, the same arithmetic), and the world
+// frame's swept bounds give a strict superset of those pairs.
+TEST(BroadPhase, AMovingFrameTakesACommonMotionOutOfTheBounds) {
+    Soup s = random_soup(21, 10, 600, 0.01, 0.0);
+    s.thickness = 0.01;
+    const Vec3d motion{0.3, -0.2, 0.1};
+    std::vector<Vec3d> moved = s.x1, in_frame(s.x1.size());
+    for (std::size_t i = 0; i < moved.size(); ++i) {
+        moved[i] = s.x1[i] + motion;
+        in_frame[i] = moved[i] - motion;
+    }
+    BroadPhaseInput world = s.input();
+    world.x1 = moved;
+    BroadPhaseInput framed = world;
+    framed.frame_motion = motion;
+    BroadPhaseInput still = s.input();
+    still.x1 = in_frame;
+
+    BroadPhase hash;
+    BroadPhaseResult in_world, with_frame;
+    hash.find(world, in_world);
+    hash.find(framed, with_frame);
+    const Reference want = brute_force(still);
+    expect_same(with_frame.vf, want.vf, "vertex-face in the moving frame");
+    expect_same(with_frame.ee, want.ee, "edge-edge in the moving frame");
+    EXPECT_TRUE(std::includes(in_world.vf.begin(), in_world.vf.end(), with_frame.vf.begin(), with_frame.vf.end()));
+    EXPECT_TRUE(std::includes(in_world.ee.begin(), in_world.ee.end(), with_frame.ee.begin(), with_frame.ee.end()));
+    std::printf("[ frame    ] %zu pairs in the world frame, %zu in the moving frame\n", in_world.vf.size() + in_world.ee.size(),
+                with_frame.vf.size() + with_frame.ee.size());
+    EXPECT_LT(3 * (with_frame.vf.size() + with_frame.ee.size()), 2 * (in_world.vf.size() + in_world.ee.size()))
+        << "the common motion should have made a third of the world frame's pairs or more";
+
+    framed.frame_motion = {std::numeric_limits<double>::infinity(), 0.0, 0.0};
+    EXPECT_THROW(hash.find(framed, with_frame), Error);
+}
+
 // A frame that floods the hash with pairs (every vertex of a grid crushed into a few centimetres)
 // grows its pair lists; calm frames after it find few pairs. The lists are cut back at the end of the
 // first trim window (buffer_trim.h) that did not hold the flood, instead of keeping the flood's size

@@ -157,6 +157,7 @@ void BroadPhase::find(const BroadPhaseInput& in, BroadPhaseResult& out) {
     if (!std::isfinite(in.cell_size) || in.cell_size < 0.0)
         throw Error("broad phase: cell size must be finite and non-negative (got " + std::to_string(in.cell_size) +
                     ")");
+    if (!physics::is_finite(in.frame_motion)) throw Error("broad phase: the frame's motion is not finite");
     for (std::size_t t = 0; t < nt; ++t)
         for (std::uint32_t v : in.triangles[t].v)
             if (v >= n) throw Error("broad phase: triangle " + std::to_string(t) + " uses vertex " + std::to_string(v));
@@ -229,6 +230,7 @@ void BroadPhase::find(const BroadPhaseInput& in, BroadPhaseResult& out) {
     state_.resize(prims);
     const double nan = std::numeric_limits<double>::quiet_NaN();
     const double th = in.thickness;
+    const Vec3d shift = in.frame_motion;
     const auto finite_box = [](const Box& b) { return physics::is_finite(b.lo) && physics::is_finite(b.hi); };
     parallel_chunks(n, [&](std::size_t b, std::size_t e) {
         for (std::size_t i = b; i < e; ++i) {
@@ -238,8 +240,9 @@ void BroadPhase::find(const BroadPhaseInput& in, BroadPhaseResult& out) {
                 box.lo = box.hi = {nan, nan, nan};
                 continue;
             }
-            box.lo = min3(in.x0[i], in.x1[i]) - Vec3d{th, th, th};
-            box.hi = max3(in.x0[i], in.x1[i]) + Vec3d{th, th, th};
+            const Vec3d x1 = in.x1[i] - shift;  // in the moving frame (BroadPhaseInput::frame_motion)
+            box.lo = min3(in.x0[i], x1) - Vec3d{th, th, th};
+            box.hi = max3(in.x0[i], x1) + Vec3d{th, th, th};
             if (!finite_box(box)) box.lo = box.hi = {nan, nan, nan};  // overflowed
         }
     });

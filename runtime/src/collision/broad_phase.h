@@ -36,6 +36,13 @@ struct BroadPhaseInput {
     /// as large as the primitives keep both the entries per primitive and the occupants per cell
     /// small).
     double cell_size = 0.0;
+    /// The bounds are taken in a frame that moves by this much over the step (each x1 read as
+    /// x1 − frame_motion), m. Whether two primitives come close depends only on their relative
+    /// motion, which a common translation does not change, so the pairs are the same superset of
+    /// every pair that comes within 2·thickness at some time of the step; what shrinks is the
+    /// false candidates of a common motion (a stack of sheets falling together, a running body and
+    /// its cape). 0: the world frame.
+    Vec3d frame_motion{};
     /// Extra growth per vertex, m (optional: empty, or one entry per vertex, each finite and ≥ 0). A
     /// vertex's bound grows by thickness + its padding; an edge's or triangle's by thickness + the
     /// largest padding of its vertices. So two primitives within max(p_a, p_b) of each other always

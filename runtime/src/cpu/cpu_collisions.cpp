@@ -129,6 +129,7 @@ void CpuCollisions<T>::begin_substep(const Model& model, double t, double h, con
     in.triangle_cloth = g.triangle_group;
     in.thickness = g.gap(settings);
     in.self_pairs = g.self;
+    in.frame_motion = common_motion();
     stats.ms(Stage::BroadPhase) += ms_since(clock);
     // The proximity stage culls only on request (CollisionSettings::cull_contacts says why).
     if (settings.cull_contacts) cull(model, x0_, x1_, in, stats);
@@ -329,6 +330,7 @@ void CpuCollisions<T>::end_substep(const Model& model, double h, const std::vect
     in.triangle_cloth = g.triangle_group;
     in.self_pairs = g.self;
     in.thickness = g.gap(settings);
+    in.broad_phase.frame_motion = common_motion();
     in.max_iterations = settings.max_impact_iterations;
     if (settings.impact_tolerance > 0.0) in.qp_tolerance_ratio = settings.impact_tolerance;
     if (settings.max_impact_sweeps > 0) in.qp_max_sweeps = settings.max_impact_sweeps;
@@ -365,6 +367,23 @@ void CpuCollisions<T>::cull(const Model& model, std::span<const Vec3d> x0, std::
     in.edge_patch = front_->edge_patch();
     in.triangle_patch = front_->triangle_patch();
     stats.ms(Stage::Culling) += ms_since(clock);
+}
+
+template <typename T>
+Vec3d CpuCollisions<T>::common_motion() const {
+    // The mass-weighted mean of the free cloth vertices' moves x1_ − x0_, in vertex order (the same
+    // bits on any thread count): the broad phase's frame (BroadPhaseInput::frame_motion).
+    const collision::CollisionGeometry& g = geometry_;
+    Vec3d momentum{};
+    double mass = 0.0;
+    for (std::size_t i = 0; i < g.cloth_vertices; ++i) {
+        if (!(g.inverse_mass[i] > 0.0)) continue;
+        const double m = 1.0 / g.inverse_mass[i];
+        momentum += m * (x1_[i] - x0_[i]);
+        mass += m;
+    }
+    const Vec3d motion = mass > 0.0 ? (1.0 / mass) * momentum : Vec3d{};
+    return physics::is_finite(motion) ? motion : Vec3d{};  // a non-finite vertex is the broad phase's to skip
 }
 
 template <typename T>

@@ -91,6 +91,8 @@ private:
     std::unique_ptr<collision::NormalConeFront> front_;
     void cull(const Model& model, std::span<const Vec3d> x0, std::span<const Vec3d> x1,
               collision::BroadPhaseInput& in, StepStats& stats);
+    /// The cloth's common move over the substep (x0_ → x1_), m: the broad phase's moving frame.
+    [[nodiscard]] Vec3d common_motion() const;
     ContactTerms<T> terms_;
 
     // Offset mode: the last detection (collision vertices, kinematic ones at the tail), the frame shift
