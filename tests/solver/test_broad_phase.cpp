@@ -373,6 +373,52 @@ TEST(BroadPhase, SameResultOnOneAndTwoThreads) {
     EXPECT_TRUE(again.ee == one.ee);
 }
 
+// Mesh colliders are kinematic groups (BroadPhaseInput::first_kinematic_group): three overlapping
+// grids, a cloth and two colliders, 1 mm apart. No pair lies within or between the colliders (nothing
+// there can move); every pair that involves the cloth is the unfiltered run's.
+TEST(BroadPhase, KinematicGroupsDoNotPairAmongThemselves) {
+    Soup s;
+    std::vector<std::uint32_t> group;
+    for (std::uint32_t g = 0; g < 3; ++g) {
+        Soup layer = grid_soup(0.5, 0.5, 12, 12, 0.002);
+        const auto base = static_cast<std::uint32_t>(s.x0.size());
+        for (Vec3d p : layer.x0) {
+            p.y += 0.001 * g;
+            s.x0.push_back(p);
+            s.x1.push_back(p);
+        }
+        for (Triangle t : layer.triangles) {
+            for (std::uint32_t& v : t.v) v += base;
+            s.triangles.push_back(t);
+            group.push_back(g);
+        }
+    }
+    s.edges = build_edges(s.triangles);
+    s.thickness = 0.002;
+    const std::size_t per_layer = s.x0.size() / 3;
+    const auto layer_of_vertex = [&](std::uint32_t v) { return static_cast<std::uint32_t>(v / per_layer); };
+
+    BroadPhaseInput all = s.input();
+    all.triangle_cloth = group;
+    BroadPhaseInput filtered = all;
+    filtered.first_kinematic_group = 1;
+    BroadPhase hash;
+    BroadPhaseResult every, kept;
+    hash.find(all, every);
+    hash.find(filtered, kept);
+
+    std::vector<VertexFacePair> vf_want;
+    for (const VertexFacePair& p : every.vf)
+        if (layer_of_vertex(p.vertex) == 0 || group[p.triangle] == 0) vf_want.push_back(p);
+    std::vector<EdgeEdgePair> ee_want;
+    for (const EdgeEdgePair& p : every.ee)
+        if (layer_of_vertex(s.edges[p.a].v[0]) == 0 || layer_of_vertex(s.edges[p.b].v[0]) == 0) ee_want.push_back(p);
+    ASSERT_LT(vf_want.size() + ee_want.size(), every.vf.size() + every.ee.size()) << "no collider pairs: the test tests nothing";
+    ASSERT_FALSE(vf_want.empty());
+    expect_same(kept.vf, vf_want, "vertex-face");
+    expect_same(kept.ee, ee_want, "edge-edge");
+}
+
 // A common motion taken out of the bounds (BroadPhaseInput::frame_motion): a soup moving 30 cm as a
 // whole pairs as if it stood still (the brute force on x1 − T, the same arithmetic), and the world
 // frame's swept bounds give a strict superset of those pairs.

@@ -173,7 +173,9 @@ void BroadPhase::find(const BroadPhaseInput& in, BroadPhaseResult& out) {
             throw Error("broad phase: vertex " + std::to_string(i) + " has padding " +
                         std::to_string(in.vertex_padding[i]) + " (must be finite and non-negative)");
     const bool filter_cloth = !in.self_pairs;
-    if (filter_cloth && !in.triangle_cloth.empty() && in.triangle_cloth.size() != nt)
+    const bool filter_kinematic =
+        in.first_kinematic_group != std::numeric_limits<std::uint32_t>::max() && !in.triangle_cloth.empty();
+    if ((filter_cloth || filter_kinematic) && !in.triangle_cloth.empty() && in.triangle_cloth.size() != nt)
         throw Error("broad phase: " + std::to_string(in.triangle_cloth.size()) + " triangle cloth ids for " +
                     std::to_string(nt) + " triangles");
 
@@ -189,8 +191,8 @@ void BroadPhase::find(const BroadPhaseInput& in, BroadPhaseResult& out) {
     const auto edge_of = [&](std::uint32_t p) -> const Edge& { return in.edges[p - edge0]; };
     const auto triangle_of = [&](std::uint32_t p) -> const Triangle& { return in.triangles[p - tri0]; };
 
-    // ---- Cloth of each primitive, for the optional cloth–cloth filter ----------------------------
-    if (filter_cloth) {
+    // ---- Cloth of each primitive, for the optional cloth–cloth and kinematic filters --------------
+    if (filter_cloth || filter_kinematic) {
         // A vertex takes the cloth of the first triangle that uses it (a vertex belongs to one cloth).
         vertex_cloth_.assign(n, in.triangle_cloth.empty() ? 0U : kNoCloth);
         if (!in.triangle_cloth.empty())
@@ -205,9 +207,12 @@ void BroadPhase::find(const BroadPhaseInput& in, BroadPhaseResult& out) {
     };
     // True when the pair must be dropped because both primitives belong to the same cloth.
     const auto filtered = [&](std::uint32_t a, std::uint32_t b) {
-        if (!filter_cloth) return false;
-        const std::uint32_t ca = cloth_of(a);
-        return ca != kNoCloth && ca == cloth_of(b);
+        if (!filter_cloth && !filter_kinematic) return false;
+        const std::uint32_t ca = cloth_of(a), cb = cloth_of(b);
+        if (filter_kinematic && ca != kNoCloth && cb != kNoCloth && ca >= in.first_kinematic_group &&
+            cb >= in.first_kinematic_group)
+            return true;
+        return filter_cloth && ca != kNoCloth && ca == cb;
     };
 
     // Patch of each primitive for the optional culling (only read when `cull`).

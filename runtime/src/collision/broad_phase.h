@@ -11,6 +11,7 @@
 #include <compare>
 #include <cstddef>
 #include <cstdint>
+#include <limits>
 #include <span>
 #include <vector>
 
@@ -43,6 +44,11 @@ struct BroadPhaseInput {
     /// false candidates of a common motion (a stack of sheets falling together, a running body and
     /// its cape). 0: the world frame.
     Vec3d frame_motion{};
+    /// Triangle groups (`triangle_cloth`) from this id on are kinematic: mesh colliders, moved as
+    /// prescribed. A pair whose two primitives both lie in such groups is never a candidate (nothing
+    /// in it can move, so no later stage can use it): a body mesh's pairs with itself are skipped.
+    /// Needs `triangle_cloth`; the largest value (default) marks no group kinematic.
+    std::uint32_t first_kinematic_group = std::numeric_limits<std::uint32_t>::max();
     /// Extra growth per vertex, m (optional: empty, or one entry per vertex, each finite and ≥ 0). A
     /// vertex's bound grows by thickness + its padding; an edge's or triangle's by thickness + the
     /// largest padding of its vertices. So two primitives within max(p_a, p_b) of each other always

@@ -23,6 +23,7 @@ CollisionGeometry build_collision_geometry(const FlatModel& flat, const Model& m
     g.triangle_group.resize(flat.triangle_count());
     for (std::size_t t = 0; t < flat.triangle_count(); ++t) g.triangle_group[t] = g.self ? flat.triangle_cloth[t] : 0;
     const std::size_t cloths = model.cloths.size();
+    g.first_kinematic_group = static_cast<std::uint32_t>(cloths);
     for (std::size_t m = 0; m < g.meshes.size(); ++m) {
         const MeshData& mesh = *model.colliders[g.meshes[m].collider].mesh;
         const auto base = static_cast<std::uint32_t>(g.cloth_vertices) + g.meshes[m].first_vertex;

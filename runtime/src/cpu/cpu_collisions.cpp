@@ -130,6 +130,7 @@ void CpuCollisions<T>::begin_substep(const Model& model, double t, double h, con
     in.thickness = g.gap(settings);
     in.self_pairs = g.self;
     in.frame_motion = common_motion();
+    in.first_kinematic_group = g.first_kinematic_group;
     stats.ms(Stage::BroadPhase) += ms_since(clock);
     // The proximity stage culls only on request (CollisionSettings::cull_contacts says why).
     if (settings.cull_contacts) cull(model, x0_, x1_, in, stats);
@@ -331,6 +332,7 @@ void CpuCollisions<T>::end_substep(const Model& model, double h, const std::vect
     in.self_pairs = g.self;
     in.thickness = g.gap(settings);
     in.broad_phase.frame_motion = common_motion();
+    in.broad_phase.first_kinematic_group = g.first_kinematic_group;
     in.max_iterations = settings.max_impact_iterations;
     if (settings.impact_tolerance > 0.0) in.qp_tolerance_ratio = settings.impact_tolerance;
     if (settings.max_impact_sweeps > 0) in.qp_max_sweeps = settings.max_impact_sweeps;

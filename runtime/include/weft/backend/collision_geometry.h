@@ -29,6 +29,8 @@ struct CollisionGeometry {
     /// Broad-phase group of each triangle: with self-collision each cloth its own group, without it
     /// all cloth one group (so only cloth–collider pairs form); each mesh collider its own group.
     std::vector<std::uint32_t> triangle_group;
+    /// The first mesh collider's group: groups from here on are kinematic (no pair among them matters).
+    std::uint32_t first_kinematic_group = 0;
     std::vector<Edge> edges;             ///< build_edges(triangles)
     std::vector<double> inverse_mass;    ///< 1/kg; 0 for pinned and kinematic vertices
     std::vector<double> thickness;       ///< m: the cloth's contact thickness, 0 for kinematic vertices
