@@ -205,7 +205,8 @@ void BroadPhase::find(const BroadPhaseInput& in, BroadPhaseResult& out) {
         if (p < tri0) return vertex_cloth_[edge_of(p).v[0]];
         return in.triangle_cloth.empty() ? 0U : in.triangle_cloth[p - tri0];
     };
-    // True when the pair must be dropped because both primitives belong to the same cloth.
+    // True when the pair must be dropped: both primitives in one cloth (without self pairs), or both
+    // in mesh colliders (BroadPhaseInput::first_kinematic_group).
     const auto filtered = [&](std::uint32_t a, std::uint32_t b) {
         if (!filter_cloth && !filter_kinematic) return false;
         const std::uint32_t ca = cloth_of(a), cb = cloth_of(b);
