@@ -215,6 +215,20 @@ void BroadPhase::find(const BroadPhaseInput& in, BroadPhaseResult& out) {
             return true;
         return filter_cloth && ca != kNoCloth && ca == cb;
     };
+    // Where the mesh colliders' occupants of a cell start: they come last among the occupants of their
+    // kind (their ids follow the cloth's, and the culled order puts their kNoPatch last), so pairs
+    // among them can be skipped by range instead of tested and filtered one by one. Only a speed-up:
+    // a kinematic occupant before that point is still dropped by `filtered`.
+    const auto kinematic_from = [&](const auto& prim_at, std::size_t begin, std::size_t end) {
+        if (!filter_kinematic) return end;
+        std::size_t k = end;
+        while (k > begin) {
+            const std::uint32_t c = cloth_of(prim_at(k - 1));
+            if (c == kNoCloth || c < in.first_kinematic_group) break;
+            --k;
+        }
+        return k;
+    };
 
     // Patch of each primitive for the optional culling (only read when `cull`).
     const auto patch_of = [&](std::uint32_t p) -> std::uint32_t {
@@ -470,6 +484,10 @@ void BroadPhase::find(const BroadPhaseInput& in, BroadPhaseResult& out) {
                 packing.max(occ[i].cell_lo, occ[j].cell_lo) == key)
                 add_ee(l, occ[i].prim, occ[j].prim);
         };
+        const auto occupant = [&](std::size_t i) { return occ[i].prim; };
+        const std::size_t kinematic_vertices = kinematic_from(occupant, 0, first_edge);
+        const std::size_t kinematic_edges = kinematic_from(occupant, first_edge, first_tri);
+        const std::size_t kinematic_triangles = kinematic_from(occupant, first_tri, count);
         // Vertex–face: triangles [group_begin, group_end) share the vertex's patch.
         std::size_t group_begin = first_tri;
         for (std::size_t i = 0; i < first_edge; ++i) {
@@ -478,14 +496,16 @@ void BroadPhase::find(const BroadPhaseInput& in, BroadPhaseResult& out) {
             std::size_t group_end = group_begin;
             if (p != kNoPatch)
                 while (group_end < count && occ[group_end].patch == p) ++group_end;
-            for (std::size_t j = first_tri; j < group_begin; ++j) vf(i, j);
-            for (std::size_t j = group_end; j < count; ++j) vf(i, j);
-            for (std::size_t j = group_begin; j < group_end; ++j)
+            const std::size_t last = i < kinematic_vertices ? count : kinematic_triangles;
+            for (std::size_t j = first_tri; j < std::min(group_begin, last); ++j) vf(i, j);
+            for (std::size_t j = group_end; j < last; ++j) vf(i, j);
+            for (std::size_t j = group_begin; j < std::min(group_end, last); ++j)
                 vf_culled(l, occ[i].prim, occ[j].prim, occ[i].box, occ[j].box);
         }
-        // Edge–edge: edges [i + 1, group_end) share edge i's patch.
+        // Edge–edge: edges [i + 1, group_end) share edge i's patch; from the first mesh collider edge on,
+        // every later edge is a collider's too.
         std::size_t group_end = first_edge;
-        for (std::size_t i = first_edge; i < first_tri; ++i) {
+        for (std::size_t i = first_edge; i < kinematic_edges; ++i) {
             const std::uint32_t p = occ[i].patch;
             if (p == kNoPatch) {
                 group_end = i + 1;
@@ -526,12 +546,18 @@ void BroadPhase::find(const BroadPhaseInput& in, BroadPhaseResult& out) {
             // Overlapping bounds share every cell of their intersection; the pair is reported only
             // in the cell of the intersection's minimum corner, the per-axis max of the two minimum
             // cells (cell_coord is monotone).
-            for (std::size_t i = 0; i < first_edge; ++i)
-                for (std::size_t j = first_tri; j < count; ++j)
+            const auto occupant = [&](std::size_t i) { return l.prim[i]; };
+            const std::size_t kinematic_vertices = kinematic_from(occupant, 0, first_edge);
+            const std::size_t kinematic_edges = kinematic_from(occupant, first_edge, first_tri);
+            const std::size_t kinematic_triangles = kinematic_from(occupant, first_tri, count);
+            for (std::size_t i = 0; i < first_edge; ++i) {
+                const std::size_t last = i < kinematic_vertices ? count : kinematic_triangles;
+                for (std::size_t j = first_tri; j < last; ++j)
                     if (vf_candidate(l, l.prim[i], l.prim[j], l.box[i], l.box[j]) &&
                         packing.max(l.cell_lo[i], l.cell_lo[j]) == key)
                         add_vf(l, l.prim[i], l.prim[j]);
-            for (std::size_t i = first_edge; i < first_tri; ++i)
+            }
+            for (std::size_t i = first_edge; i < kinematic_edges; ++i)
                 for (std::size_t j = i + 1; j < first_tri; ++j)
                     if (ee_candidate(l, l.prim[i], l.prim[j], l.box[i], l.box[j]) &&
                         packing.max(l.cell_lo[i], l.cell_lo[j]) == key)
