@@ -35,6 +35,10 @@ struct StepParams {
     /// there are any, the commit records the largest displacement of a free vertex, from which the
     /// host decides whether the swept collider test has to run (DeviceStats::largest_move_bits).
     int bounded_shape_count = 0;
+    /// 1: a slow vertex that ends inside a bounded collider it started outside goes back onto its
+    /// surface (swept_collider.h). 0 under offset contact, whose moves must stay within their
+    /// displacement bounds: the next substep's penalty pushes it out (CpuSolver::sweep_fast_colliders).
+    int correct_overshoots = 1;
     int pin_count = 0;
     int cg_max_iterations = 0;
     int cg_warm_start = 0;

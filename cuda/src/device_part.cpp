@@ -47,8 +47,9 @@ void DeviceSolver::build_part(const FlatModel& whole, const PartModel& part, con
     persistent_grid_ = 0;
 }
 
-void DeviceSolver::part_begin_substep(const Model& model, double t, double h) {
+void DeviceSolver::part_begin_substep(const Model& model, double t, double h, bool moves_bounded) {
     WEFT_CUDA_CHECK(cudaSetDevice(device_));
+    moves_bounded_ = moves_bounded;
     cudaStream_t stream = active_stream();
     stage_substep(model, t, h, stream);
     if (schwarz_on_) schwarz_factored_ = true;

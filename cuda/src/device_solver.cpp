@@ -192,6 +192,7 @@ void DeviceSolver::run_substep(const Model& model, double t, double h, StepStats
     }
 
     offset_model_ = collisions_.active() && collisions_.offset() ? &model : nullptr;
+    moves_bounded_ = offset_model_ != nullptr;
     stage_ = "the solve";
     launch_substep(stream, model.settings.solver.newton_iterations);
     if (schwarz_on_) schwarz_factored_ = true;

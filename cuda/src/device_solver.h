@@ -125,7 +125,8 @@ public:
     void build_part(const FlatModel& whole, const PartModel& part, const Model& model);
     [[nodiscard]] bool part_mode() const { return part_ != nullptr; }
     /// Stages the substep's parameters and enqueues its start (x0, v0, the pins' velocities).
-    void part_begin_substep(const Model& model, double t, double h);
+    /// `moves_bounded`: the substep's contacts are offset contacts (StepParams::correct_overshoots).
+    void part_begin_substep(const Model& model, double t, double h, bool moves_bounded);
     /// Enqueues one Newton iteration's system: every row's forces and blocks, then the owned rows'
     /// block-Jacobi inverse (with Schwarz: the diagonal blocks it aggregates) and Δv's start
     /// (`first_newton`: the warm start may apply). `offset_contacts`: the contacts are offset contacts,
@@ -316,6 +317,9 @@ private:
     /// The model of the substep being recorded when its contacts are offset contacts (the
     /// truncation reads its settings); null otherwise.
     const Model* offset_model_ = nullptr;
+    /// The substep being staged keeps every move within a displacement bound (offset contact), so
+    /// the sweep leaves slow overshoots alone (StepParams::correct_overshoots).
+    bool moves_bounded_ = false;
     /// The truncation the graph was captured with (DeviceCollisions::truncation_key; 0: none).
     std::uint64_t graph_truncation_key_ = 0;
 

@@ -69,7 +69,7 @@ __global__ void commit_kernel(DeviceView d) {
             const auto* start = staged<physics::Shape<float>>(d, sp.shape_start_offset);
             const auto* end = staged<physics::Shape<float>>(d, sp.shape_offset);
             V3 n{};
-            for (int s = 0; s < sp.shape_count; ++s) {
+            for (int s = 0; s < sp.shape_count && sp.correct_overshoots != 0; ++s) {
                 if (!(physics::shape_min_width(start[s]) > 0.0f)) continue;
                 if (physics::shape_distance(end[s], x, n, static_cast<physics::Mat3<float>*>(nullptr)) < 0.0f &&
                     !(physics::shape_distance(start[s], x0, n, static_cast<physics::Mat3<float>*>(nullptr)) < 0.0f))
@@ -110,7 +110,7 @@ __global__ void sweep_colliders_kernel(DeviceView d) {
     int hits = 0, overshoots = 0;
     for (int s = 0; s < sp.shape_count; ++s) {
         const physics::SweptContact<float> c = physics::swept_shape_contact(start[s], end[s], sp.h, x0, x, thickness);
-        if (!c.hit) continue;
+        if (!c.hit || (c.samples == 0 && sp.correct_overshoots == 0)) continue;
         x = c.position;
         if (c.samples > 0)
             ++hits;

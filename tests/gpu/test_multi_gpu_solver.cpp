@@ -386,7 +386,7 @@ TEST(MultiGpuSolver, CollisionScenesStayIntersectionFreeAcrossParts) {
         {"falling", {}, 45},
         {"layers", {}, 45},
         {"garment", {}, 45},
-        {"sphere", {}, 45},
+        {"sphere", {}, 90},  // at 45 frames the sheet has not yet folded onto itself
     };
     for (const Case& c : cases) {
         std::vector<std::string> o = c.overrides;

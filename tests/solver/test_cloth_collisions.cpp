@@ -114,7 +114,7 @@ TEST_P(StackedLayers, StayInOrderOverABall) {
     world.add_collider(ball);
     world.add_collider(floor_plane());
     std::int64_t truncated = 0;
-    int contacts = 0;
+    int contacts = 0, overshoots = 0, fallbacks = 0;
     for (int frame = 0; frame < 60; ++frame) {
         const StepStats& s = world.step();
         ASSERT_FALSE(s.non_finite) << "frame " << frame;
@@ -123,10 +123,19 @@ TEST_P(StackedLayers, StayInOrderOverABall) {
         ASSERT_EQ(s.collision.frozen_vertices, 0) << "frame " << frame;
         truncated += s.collision.truncated_vertices;
         contacts = std::max(contacts, s.collision.contacts);
+        overshoots += s.collision.collider_overshoots;
+        fallbacks += s.collision.bound_fallbacks;
     }
+    std::printf("[ layers   ] %s: %lld truncated moves, %d ball overshoots put back, %d CCD fallbacks\n",
+                GetParam() == CollisionMode::Offset ? "offset" : "ccd_zones", static_cast<long long>(truncated), overshoots,
+                fallbacks);
     EXPECT_GT(contacts, 0);
     if (GetParam() == CollisionMode::Offset) {
         EXPECT_GT(truncated, 0) << "the bounds never acted: the test does not test them";
+        // The bounded moves are not overridden after the truncation: a slow overshoot into the ball is
+        // left to the penalty, so nothing sends a substep to the CCD fallback.
+        EXPECT_EQ(overshoots, 0);
+        EXPECT_EQ(fallbacks, 0);
     } else {
         EXPECT_EQ(truncated, 0);
     }

@@ -502,11 +502,11 @@ void MultiSolver::substep(const Model& model, double t, double h, StepStats& sta
     if (colliding) detect_contacts(model, t, h, stats);
     const double detection = detection_ms(stats) - detection_before;
     const auto host_start = Clock::now();
-    for (auto& s : solvers_) s->part_begin_substep(model, t, h);
+    if (!colliding) offset_ = false;
+    for (auto& s : solvers_) s->part_begin_substep(model, t, h, offset_);
     const double host_ms = ms_since(host_start);
     mark(e++);
     const SolverSettings& settings = model.settings.solver;
-    if (!colliding) offset_ = false;
     for (int it = 0; it < settings.newton_iterations; ++it) newton_iteration(model, it, stats, &e);
     for (auto& s : solvers_) s->part_commit();
     mark(e++);

@@ -79,7 +79,9 @@ private:
     int evaluate_vertices(const Model& model, T h);
     void assemble();
     /// Carried vertices (fast colliders) in .first, overshoots put back on a surface in .second.
-    std::pair<int, int> sweep_fast_colliders(T h);
+    /// `correct_overshoots` false (offset contact): slow overshoots are left to the next substep's
+    /// penalty, because the correction would move a vertex past its displacement bound.
+    std::pair<int, int> sweep_fast_colliders(T h, bool correct_overshoots);
     /// Implicit Euler's objective at velocities `v`: ½ Σ m|v − v₀|² + Ψ(x₀ + h·v), Ψ the elastic,
     /// gravity and collider potentials (and offset contact's), at time `t1`, J (line_search).
     double incremental_potential(const Model& model, double t1, T h, const std::vector<V3>& v);

@@ -22,7 +22,9 @@
 /// resting ball). Such an end goes back along the normal onto the surface (distance 0, not the
 /// contact thickness: the velocity (x − x0)/h then points no further out than the surface moved,
 /// so the correction adds no bounce); from there the penalty sees the contact at the next
-/// substep's start.
+/// substep's start. Under offset contact the solvers skip this correction: it would move the vertex
+/// past the displacement bound that keeps the cloth free of intersections (and send the substep to
+/// the CCD fallback), so there the penalty alone pushes the vertex out at the next substep.
 
 #include <cmath>
 
