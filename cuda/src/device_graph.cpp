@@ -112,6 +112,7 @@ void DeviceSolver::record(cudaStream_t stream, bool capturing) {
         record_pcg_loop(stream, capturing, it);
         launch_pcg_finish(view_, stream);
         mark();
+        if (line_search_model_ != nullptr && !capturing) line_search_halvings_ += line_search(stream);
         launch_newton_update(view_, stream);
         record_truncation(stream);
         mark();
@@ -145,6 +146,7 @@ void DeviceSolver::record_extra_newton(cudaStream_t stream) {
     if (schwarz_on_) launch_schwarz_factor(view_, 1, stream);
     record_pcg_loop(stream, false, 1);
     launch_pcg_finish(view_, stream);
+    if (line_search_model_ != nullptr) line_search_halvings_ += line_search(stream);
     launch_newton_update(view_, stream);
     record_truncation(stream);
     launch_commit(view_, stream);
@@ -189,7 +191,9 @@ void DeviceSolver::launch_substep(cudaStream_t stream, int newton_iterations) {
     // Offset contact's truncation is captured too; the graph is captured again when its buffers grew
     // or its settings changed (DeviceCollisions::truncation_key), or when offset contact is switched.
     const std::uint64_t truncation_key = offset_model_ != nullptr ? collisions_.truncation_key(*offset_model_) | 1U : 0U;
-    const bool want_graph = use_graph_ && !graph_unsupported_ && warm_;
+    // A substep that line-searches reads energies back between the kernels: host-driven, while the
+    // graph (if any) stays for the substeps that do not.
+    const bool want_graph = use_graph_ && !graph_unsupported_ && warm_ && line_search_model_ == nullptr;
     if (want_graph &&
         (graph_exec_ == nullptr || graph_newton_ != recorded_newton_ || graph_truncation_key_ != truncation_key)) {
         try {

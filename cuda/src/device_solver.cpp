@@ -175,6 +175,9 @@ void DeviceSolver::run_substep(const Model& model, double t, double h, StepStats
     const auto host_start = Clock::now();
     cudaStream_t stream = active_stream();
     stage_ = "the parameter upload";
+    // Whether this substep's contacts are offset contacts (as `offset_model_` below, known before
+    // the detection): the staged parameters say so to the sweep.
+    moves_bounded_ = needs_cloth_collisions(model) && model.settings.collision.mode == CollisionMode::Offset;
     stage_substep(model, t, h, stream);
     const double host_ms = ms_since(host_start);
 
@@ -192,8 +195,11 @@ void DeviceSolver::run_substep(const Model& model, double t, double h, StepStats
     }
 
     offset_model_ = collisions_.active() && collisions_.offset() ? &model : nullptr;
-    moves_bounded_ = offset_model_ != nullptr;
     stage_ = "the solve";
+    line_search_model_ = model.settings.solver.line_search ? &model : nullptr;
+    line_search_t1_ = t + h;
+    line_search_h_ = h;
+    line_search_halvings_ = 0;
     launch_substep(stream, model.settings.solver.newton_iterations);
     if (schwarz_on_) schwarz_factored_ = true;
     if (offset_model_ != nullptr) {
@@ -212,6 +218,8 @@ void DeviceSolver::run_substep(const Model& model, double t, double h, StepStats
         }
         offset_model_ = nullptr;
     }
+    stats.line_search_halvings += line_search_halvings_;
+    line_search_model_ = nullptr;
     stage_ = "the solve";
     WEFT_CUDA_CHECK(cudaMemcpyAsync(host_stats_.get(), stats_.get(), sizeof(DeviceStats), cudaMemcpyDeviceToHost, stream));
     WEFT_CUDA_CHECK(cudaStreamSynchronize(stream));
@@ -333,27 +341,14 @@ EnergyAudit DeviceSolver::energy_audit(const Model& model, double t, double h, b
     if (view_.n == 0) return a;
     WEFT_CUDA_CHECK(cudaSetDevice(device_));
     cudaStream_t stream = active_stream();
-    if (audit_staging_.size() != staging_.size()) {  // first audit since the build
-        WEFT_CUDA_CHECK(cudaStreamSynchronize(stream));
-        audit_host_staging_.allocate(host_staging_.size());
-        std::memset(audit_host_staging_.get(), 0, audit_host_staging_.size());
-        audit_staging_.allocate(staging_.size(), ledger_, "energy audit");
-        audit_partials_.allocate(static_cast<std::size_t>(kEnergySums) * energy_partial_stride(view_) + kEnergySums, ledger_,
-                                 "energy audit");
-        audit_sums_.allocate(kEnergySums);
-    }
+    ensure_audit_buffers(stream);
     // The audit's own copy of the parameters at t (the solver's block belongs to its substeps).
     fill_staging(model, t, h, audit_host_staging_.get());
     WEFT_CUDA_CHECK(cudaMemcpyAsync(audit_staging_.get(), audit_host_staging_.get(), audit_host_staging_.size(),
                                     cudaMemcpyHostToDevice, stream));
     DeviceView view = view_;
     view.staging = audit_staging_.get();
-    double* sums = audit_partials_.get() + static_cast<std::size_t>(kEnergySums) * energy_partial_stride(view_);
-    launch_energy_audit(view, with_wind, audit_partials_.get(), sums, stream, whole_x,
-                        whole_ != nullptr ? static_cast<std::uint32_t>(whole_->vertex_count) : 0);
-    WEFT_CUDA_CHECK(cudaMemcpyAsync(audit_sums_.get(), sums, kEnergySums * sizeof(double), cudaMemcpyDeviceToHost, stream));
-    WEFT_CUDA_CHECK(cudaStreamSynchronize(stream));
-    const double* s = audit_sums_.get();
+    const double* s = audit_sums(view, with_wind, whole_x, stream);
     a.kinetic = s[kEnergyKinetic];
     a.gravity = s[kEnergyGravity];
     a.contact = s[kEnergyContact] + s[kEnergyOffsetContact];
@@ -361,6 +356,63 @@ EnergyAudit DeviceSolver::energy_audit(const Model& model, double t, double h, b
     a.external_power =
         s[kEnergyColliderPower] + s[kEnergyGrabPower] + s[kEnergyWindPower] + std::max(0.0, s[kEnergyPinPower]);
     return a;
+}
+
+void DeviceSolver::ensure_audit_buffers(cudaStream_t stream) {
+    if (audit_staging_.size() == staging_.size()) return;  // allocated since the build
+    WEFT_CUDA_CHECK(cudaStreamSynchronize(stream));
+    audit_host_staging_.allocate(host_staging_.size());
+    std::memset(audit_host_staging_.get(), 0, audit_host_staging_.size());
+    audit_staging_.allocate(staging_.size(), ledger_, "energy audit");
+    audit_partials_.allocate(static_cast<std::size_t>(kEnergySums) * energy_partial_stride(view_) + kEnergySums, ledger_,
+                             "energy audit");
+    audit_sums_.allocate(kEnergySums);
+}
+
+const double* DeviceSolver::audit_sums(const DeviceView& view, bool with_wind, const float* whole_x, cudaStream_t stream) {
+    double* sums = audit_partials_.get() + static_cast<std::size_t>(kEnergySums) * energy_partial_stride(view_);
+    launch_energy_audit(view, with_wind, audit_partials_.get(), sums, stream, whole_x,
+                        whole_ != nullptr ? static_cast<std::uint32_t>(whole_->vertex_count) : 0);
+    WEFT_CUDA_CHECK(cudaMemcpyAsync(audit_sums_.get(), sums, kEnergySums * sizeof(double), cudaMemcpyDeviceToHost, stream));
+    WEFT_CUDA_CHECK(cudaStreamSynchronize(stream));
+    return audit_sums_.get();
+}
+
+// Backtracking on the Newton update (CpuSolver::line_search, with its reasons): the objective at
+// v_k + α·Δv for α = 0 (the start: only the pins' prescribed change), then 1, ½, … until it is not
+// higher. Damping and wind are not in the objective, so there is no sufficient-decrease condition.
+int DeviceSolver::line_search(cudaStream_t stream) {
+    constexpr int kLineSearchHalvings = 8;  // the update is then 1/256 of Newton's, as on the CPU
+    const std::size_t n = view_.n;
+    ensure_audit_buffers(stream);
+    if (trial_x_.size() != 3 * n) {
+        trial_x_.allocate(3 * n, ledger_, "line search");
+        trial_dv_.allocate(3 * n, ledger_, "line search");
+    }
+    // The potentials at the substep's end, t + h (the colliders' pose there), as the CPU's.
+    fill_staging(*line_search_model_, line_search_t1_, line_search_h_, audit_host_staging_.get());
+    WEFT_CUDA_CHECK(cudaMemcpyAsync(audit_staging_.get(), audit_host_staging_.get(), audit_host_staging_.size(),
+                                    cudaMemcpyHostToDevice, stream));
+    // The audit's kinetic sum over v = v − v0 is the inertia term ½·m·|v − v0|².
+    DeviceView trial = view_;
+    trial.staging = audit_staging_.get();
+    trial.x = trial_x_.get();
+    trial.v = trial_dv_.get();
+    const auto objective = [&](float alpha) {
+        launch_line_search_trial(view_, alpha, trial_x_.get(), trial_dv_.get(), stream);
+        const double* s = audit_sums(trial, false, nullptr, stream);
+        return s[kEnergyKinetic] + s[kEnergyGravity] + s[kEnergyContact] + s[kEnergyMembrane] + s[kEnergyBending] +
+               s[kEnergyOffsetContact];
+    };
+    const double start = objective(0.0f);
+    float alpha = 1.0f;
+    int halvings = 0;
+    for (; halvings < kLineSearchHalvings; ++halvings) {
+        if (!(objective(alpha) > start)) break;  // not higher (a NaN is left to the commit's check)
+        alpha *= 0.5f;
+    }
+    if (halvings > 0) launch_scale_update(view_, alpha, stream);
+    return halvings;
 }
 
 void DeviceSolver::set_stream(cudaStream_t stream) {

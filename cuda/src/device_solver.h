@@ -197,6 +197,16 @@ private:
     /// Offset contact: one more Newton iteration after a rerun of the detection (recorded directly,
     /// never in the graph), then the commit again.
     void record_extra_newton(cudaStream_t stream);
+    /// Backtracking on the Newton update just solved (SolverSettings::line_search, as
+    /// CpuSolver::line_search): Δv is scaled by the first of 1, ½, ¼, … (8 halvings at most) at which
+    /// implicit Euler's objective (inertia, gravity, elastic, collider and offset contact potentials
+    /// at t + h, summed by the audit's kernels) is not above the update's start. Host-driven: one
+    /// read-back per trial, so a substep that searches runs outside the graph. Returns the halvings.
+    int line_search(cudaStream_t stream);
+    /// The audit's parameter block and sums (allocated on first use).
+    void ensure_audit_buffers(cudaStream_t stream);
+    /// The audit's sums over `view` (its staging the audit's), read back (synchronises `stream`).
+    const double* audit_sums(const DeviceView& view, bool with_wind, const float* whole_x, cudaStream_t stream);
     /// The contacts' evaluation at the Newton iterate, and in offset mode the incidence of the pairs in
     /// contact.
     void record_contact_evaluation(cudaStream_t stream);
@@ -287,6 +297,12 @@ private:
     DeviceArray<unsigned char> audit_staging_;
     DeviceArray<double> audit_partials_;
     PinnedArray<double> audit_sums_;
+    // The line search's trial positions and velocity changes (3n floats each, allocated on first use),
+    // the model and end time of the substep that searches (null: none) and its halvings so far.
+    DeviceArray<float> trial_x_, trial_dv_;
+    const Model* line_search_model_ = nullptr;
+    double line_search_t1_ = 0.0, line_search_h_ = 0.0;
+    int line_search_halvings_ = 0;
     PinnedArray<DeviceStats> host_stats_;
     PinnedArray<int> host_running_;
     StepParams layout_params_{};  // offsets of the arrays in the staging block

@@ -25,6 +25,12 @@ void launch_pin_velocities(const DeviceView& d, cudaStream_t stream);
 void launch_begin_newton(const DeviceView& d, cudaStream_t stream);
 /// v_k += Δv, w_k = v_k.
 void launch_newton_update(const DeviceView& d, cudaStream_t stream);
+/// The line search's trial (SolverSettings::line_search): v = v_k + α·Δv (a pinned vertex takes its
+/// whole prescribed Δv), written as the positions x0 + h·v and the velocity change v − v0 (the
+/// inertia term's), component-major like the state, 3·n floats each.
+void launch_line_search_trial(const DeviceView& d, float alpha, float* trial_x, float* trial_dv, cudaStream_t stream);
+/// Δv ← α·Δv over the free vertices: the step the line search accepted.
+void launch_scale_update(const DeviceView& d, float alpha, cudaStream_t stream);
 /// x = x0 + h·v_k, v = v_k; counts non-finite values and restores x0, v0 if there are any. With
 /// bounded analytic colliders it also records the largest free-vertex displacement in the stats.
 void launch_commit(const DeviceView& d, cudaStream_t stream);

@@ -47,6 +47,21 @@ __global__ void newton_update_kernel(DeviceView d) {
     d.wk[i] = v;
 }
 
+__global__ void line_search_trial_kernel(DeviceView d, float alpha, float* trial_x, float* trial_dv) {
+    const std::uint32_t i = blockIdx.x * blockDim.x + threadIdx.x;
+    if (i >= d.n) return;
+    const float a = d.fixed[i] ? 1.0f : alpha;
+    const V3 v = load3(d.vk, i, d.n) + a * load3(d.dv, i, d.n);
+    store3(trial_x, i, d.n, load3(d.x0, i, d.n) + step_params(d).h * v);
+    store3(trial_dv, i, d.n, v - load3(d.v0, i, d.n));
+}
+
+__global__ void scale_update_kernel(DeviceView d, float alpha) {
+    const std::uint32_t i = blockIdx.x * blockDim.x + threadIdx.x;
+    if (i >= d.n || d.fixed[i]) return;
+    for (int c = 0; c < 3; ++c) d.dv[c * d.n + i] *= alpha;
+}
+
 __global__ void commit_kernel(DeviceView d) {
     const std::uint32_t i = blockIdx.x * blockDim.x + threadIdx.x;
     const StepParams& sp = step_params(d);
@@ -173,6 +188,16 @@ void launch_begin_newton(const DeviceView& d, cudaStream_t stream) {
 void launch_newton_update(const DeviceView& d, cudaStream_t stream) {
     newton_update_kernel<<<grid_for(3 * d.n), kBlockSize, 0, stream>>>(d);
     WEFT_CUDA_CHECK_LAUNCH("newton_update_kernel");
+}
+
+void launch_line_search_trial(const DeviceView& d, float alpha, float* trial_x, float* trial_dv, cudaStream_t stream) {
+    line_search_trial_kernel<<<grid_for(d.n), kBlockSize, 0, stream>>>(d, alpha, trial_x, trial_dv);
+    WEFT_CUDA_CHECK_LAUNCH("line_search_trial_kernel");
+}
+
+void launch_scale_update(const DeviceView& d, float alpha, cudaStream_t stream) {
+    scale_update_kernel<<<grid_for(d.n), kBlockSize, 0, stream>>>(d, alpha);
+    WEFT_CUDA_CHECK_LAUNCH("scale_update_kernel");
 }
 
 void launch_commit(const DeviceView& d, cudaStream_t stream) {

@@ -206,7 +206,8 @@ constexpr Parameter kTable[] = {
     {.section = "solver", .name = "line_search", .type = T::Boolean,
      .doc = "halve a Newton update while it raises implicit Euler's objective (elastic, gravity and collider "
             "potentials): keeps stiff, light cloth from diverging over long steps; one energy evaluation per Newton "
-            "iteration; cpu backend only (the cuda backend ignores it); the energy guard's redo turns it on",
+            "iteration; cpu backend and cuda on one GPU (across GPUs it is not applied yet; a substep that searches runs outside "
+            "the CUDA graph); the energy guard's redo turns it on",
      .label = "line search", .panel = "solver", .access = field<&WorldDesc::solver, &SolverSettings::line_search>()},
     {.section = "solver", .name = "energy_guard", .type = T::Choice,
      .doc = "check every substep for energy gained beyond the external work (an inexact solve): `off`; `report`: "

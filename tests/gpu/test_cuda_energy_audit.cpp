@@ -13,6 +13,7 @@
 #include "weft/grab.h"
 
 #include "gpu_test_util.h"
+#include "stability_matrix.h"
 
 namespace weft {
 namespace {
@@ -92,6 +93,47 @@ TEST(CudaEnergyAudit, GuardCatchesTheLooseDrapeOnTheGpu) {
     int false_alarms = 0;
     for (int f = 0; f < 45; ++f) false_alarms += converged->step().energy_gained;
     EXPECT_EQ(false_alarms, 0);
+}
+
+// The line search on the device (DeviceSolver::line_search): the stiff (1e7 N/m), light (0.01 kg/m²)
+// sheet at 1/24 s gains energy under plain Newton on the GPU as on the CPU; with the search, no
+// substep gains and the run is stable (the matrix's criterion), and the search did halve updates.
+TEST(CudaLineSearch, KeepsPlainNewtonFromGainingEnergyOnAStiffLightSheet) {
+    WEFT_REQUIRE_GPU();
+    const test::StabilityCase* corner = nullptr;
+    static const std::vector<test::StabilityCase> cases = test::stability_cases(true);
+    for (const test::StabilityCase& k : cases)
+        if (k.name == "corner stiff no-bending light dt 1/24") corner = &k;
+    ASSERT_NE(corner, nullptr) << "the stability matrix lost its stiff light corner";
+    const test::StabilityResult plain = test::run_stability_case(*corner, "cuda", BendingModel::Hinge, 300, EnergyGuard::Report, false);
+    const test::StabilityResult searched = test::run_stability_case(*corner, "cuda", BendingModel::Hinge, 300, EnergyGuard::Report, true);
+    std::printf("[ search   ] stiff light sheet at 1/24 s on cuda: plain Newton %d substeps gained %.3g J; with the line "
+                "search %d gained %.3g J (%s)\n",
+                plain.energy_gained, plain.energy_gain, searched.energy_gained, searched.energy_gain,
+                test::outcome_name(searched.outcome));
+    EXPECT_GT(plain.energy_gained, 0) << "plain Newton no longer gains energy here: the test lost its point";
+    EXPECT_EQ(searched.energy_gained, 0) << searched.energy_gain << " J gained with the line search";
+    EXPECT_EQ(searched.outcome, test::StabilityOutcome::Stable) << searched.detail;
+}
+
+// The search's halvings reach the stats: a stiff light sheet over a long step backtracks with the
+// search on, and the same world with it off reports none.
+TEST(CudaLineSearch, HalvingsReachTheStats) {
+    WEFT_REQUIRE_GPU();
+    const std::vector<std::string> stiff{"solver.dt=0.041666667", "solver.substeps=1", "cloth.0.material.stretch_stiffness=1e7",
+                                         "cloth.0.density=0.01"};
+    std::vector<std::string> searching = stiff;
+    searching.push_back("solver.line_search=true");
+    const auto on = make_world("drape", "cuda", searching);
+    const auto off = make_world("drape", "cuda", stiff);
+    int halvings_on = 0, halvings_off = 0;
+    for (int f = 0; f < 12; ++f) {
+        halvings_on += on->step().line_search_halvings;
+        halvings_off += off->step().line_search_halvings;
+    }
+    std::printf("[ search   ] stiff light drape at 1/24 s on cuda, 12 frames: %d halvings\n", halvings_on);
+    EXPECT_GT(halvings_on, 0) << "a stiff light sheet over a long step never backtracked";
+    EXPECT_EQ(halvings_off, 0);
 }
 
 }  // namespace

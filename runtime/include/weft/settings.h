@@ -107,7 +107,7 @@ struct SolverSettings {
     /// Energy check after every substep (a cost of two host reads of the state per substep on a device
     /// backend; docs/tuning.md measures it on the CPU).
     EnergyGuard energy_guard = EnergyGuard::Report;
-    /// A backtracking line search on every Newton update (CPU backend; the cuda backend ignores it):
+    /// A backtracking line search on every Newton update (CPU backend, and CUDA on one GPU; across GPUs not applied yet):
     /// the update is halved, up to 8 times, while it raises implicit Euler's
     /// objective ½‖v − v₀‖²_M + Ψ(x₀ + h·v) (elastic, gravity and collider potentials). Costs one
     /// energy evaluation per Newton iteration, and more where it backtracks; it keeps plain Newton
