@@ -39,6 +39,10 @@ run memcheck "$weft" run twist --backend cuda --frames 3 --quiet --set 'solver.c
 # per-kernel loop (flag at 1.2K vertices is one-launch too: WEFT_CUDA_PCG=kernels forces the other).
 run memcheck "$weft" run drape --backend cuda --frames 3 --quiet --set 'solver.preconditioner=mas' --set 'solver.cg_max_iterations=200'
 WEFT_CUDA_PCG=kernels run memcheck "$weft" run flag --backend cuda --frames 3 --quiet --set 'solver.preconditioner=mas' --set 'solver.cg_max_iterations=200'
+# The line search (host-driven, outside the graph): its trial kernel, the audit's kernels at the trial
+# state and the update's scaling; the flag halves updates within its first frames.
+run memcheck "$weft" run flag --backend cuda --frames 3 --quiet --set 'solver.line_search=true' --set 'solver.cg_max_iterations=200'
+run initcheck "$weft" run flag --backend cuda --frames 2 --quiet --set 'solver.line_search=true' --set 'solver.cg_max_iterations=100'
 # Offset contact (collision.mode = offset): the padded broad phase, the bounds, the offset contacts and
 # the truncation after every Newton update; the sheets of layers start 2 cm apart, within the radius cap.
 run memcheck "$weft" run layers --backend cuda --frames 3 --quiet --set 'collision.mode=offset' --set 'solver.cg_max_iterations=200'
