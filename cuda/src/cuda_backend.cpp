@@ -103,7 +103,10 @@ public:
     void substep(const Model& model, double t, double h, StepStats& stats) override {
         require_device_support(model.settings.solver);
         const BudgetScope scope(&budget_);
+        const long long launches_before = thread_kernel_launches;
         solver_->substep(model, t, h, stats);
+        stats.kernels_launched += thread_kernel_launches - launches_before + audit_kernels_;
+        audit_kernels_ = 0;
     }
 
     std::vector<std::uint8_t> solver_state() const override { return solver_->solver_state(); }
@@ -122,7 +125,10 @@ public:
     // The energy guard sums on the device (energy_kernels.cu): no state is read back.
     EnergyAudit energy_audit(const Model& model, double t, double h, bool with_wind) const override {
         const BudgetScope scope(&budget_);
-        return solver_->energy_audit(model, t, h, with_wind);
+        const long long launches_before = thread_kernel_launches;
+        const EnergyAudit audit = solver_->energy_audit(model, t, h, with_wind);
+        audit_kernels_ += thread_kernel_launches - launches_before;  // reported with the next substep
+        return audit;
     }
 
     std::size_t memory_bytes() const override { return solver_->memory_bytes(); }
@@ -149,6 +155,8 @@ private:
     DeviceInfo info_;
     FlatModel flat_;
     mutable DeviceMemoryBudget budget_;  // before the solver: its arrays give their bytes back to it
+    /// Kernels of the energy guard's audits since the last substep (StepStats::kernels_launched).
+    mutable long long audit_kernels_ = 0;
     std::unique_ptr<DeviceSolver> solver_;
 };
 

@@ -18,6 +18,11 @@ namespace weft::cuda {
 /// record with graphs off (WEFT_CUDA_GRAPHS=0, CudaBackendApi::set_use_graph) to see every launch.
 /// For the stage-pruning test and benchmark: which kernels a scene launches.
 inline std::atomic<bool> launch_record_on{false};
+/// Kernels this thread has enqueued: every checked launch, and each CUDA graph launch adds the kernel
+/// nodes it holds (a graph's capture is taken back out). The backends report the difference over a
+/// step as StepStats::kernels_launched. Per thread, so that worlds stepped side by side on several
+/// threads each count their own.
+inline thread_local long long thread_kernel_launches = 0;
 void note_launch(const char* file, const char* name);
 /// Starts counting (clears the counts).
 void start_launch_record();
@@ -43,5 +48,6 @@ void start_launch_record();
     do {                                                                                          \
         const cudaError_t weft_cuda_err_ = cudaGetLastError();                                    \
         if (weft_cuda_err_ != cudaSuccess) ::weft::cuda::throw_cuda_error(weft_cuda_err_, "launch of " name, __FILE__, __LINE__); \
+        ++::weft::cuda::thread_kernel_launches;                                                   \
         if (::weft::cuda::launch_record_on.load(std::memory_order_relaxed)) ::weft::cuda::note_launch(__FILE__, name);       \
     } while (0)

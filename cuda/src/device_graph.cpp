@@ -156,10 +156,15 @@ void DeviceSolver::capture_graph() {
     destroy_graph();
     cudaStream_t stream = active_stream();
     cudaGraph_t graph = nullptr;
+    // The capture enqueues nothing: its launches are counted per replay instead (graph_kernels_).
+    const long long launches_before = thread_kernel_launches;
     WEFT_CUDA_CHECK(cudaStreamBeginCapture(stream, cudaStreamCaptureModeThreadLocal));
     try {
         record(stream, true);
+        graph_kernels_ = thread_kernel_launches - launches_before;
+        thread_kernel_launches = launches_before;
     } catch (...) {
+        thread_kernel_launches = launches_before;
         cudaStreamEndCapture(stream, &graph);
         if (graph != nullptr) cudaGraphDestroy(graph);
         throw;
@@ -208,6 +213,7 @@ void DeviceSolver::launch_substep(cudaStream_t stream, int newton_iterations) {
     }
     if (want_graph && graph_exec_ != nullptr) {
         WEFT_CUDA_CHECK(cudaGraphLaunch(graph_exec_, stream));
+        thread_kernel_launches += graph_kernels_;
         substep_started_ = true;  // the graph's first kernel writes x0 and v0
         graph_active_ = true;
     } else {

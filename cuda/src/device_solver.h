@@ -336,6 +336,8 @@ private:
     /// The substep being staged keeps every move within a displacement bound (offset contact), so
     /// the sweep leaves slow overshoots alone (StepParams::correct_overshoots).
     bool moves_bounded_ = false;
+    /// Kernel nodes of the captured graph (counted per launch in thread_kernel_launches).
+    long long graph_kernels_ = 0;
     /// The truncation the graph was captured with (DeviceCollisions::truncation_key; 0: none).
     std::uint64_t graph_truncation_key_ = 0;
 

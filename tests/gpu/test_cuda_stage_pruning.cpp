@@ -10,6 +10,7 @@
 #include <cstdio>
 #include <map>
 #include <string>
+#include <vector>
 
 #include "cuda_check.h"
 #include "gpu_test_util.h"
@@ -61,6 +62,52 @@ TEST(CudaStagePruning, HangingLaunchesNoCollisionOrContactKernel) {
     const long long n = count_collision_launches(with_contact, false);
     std::printf("[ launches ] hanging with self-collision: %lld launches of the collision stages in 3 steps\n", n);
     EXPECT_GT(n, 0) << "the record must see the collision stages where the scene has them";
+}
+
+/// StepStats::kernels_launched over `steps` steps after one warm-up step (graphs as `graphs`).
+std::vector<long long> kernels_per_step(World& world, int steps, bool graphs) {
+    cuda::CudaBackendApi* api = cuda::as_cuda(world.backend());
+    EXPECT_NE(api, nullptr);
+    if (api != nullptr) api->set_use_graph(graphs);
+    (void)world.step();
+    std::vector<long long> out;
+    for (int k = 0; k < steps; ++k) out.push_back(world.step().kernels_launched);
+    return out;
+}
+
+// The stats' kernels per step: with graphs off, the launch record's count exactly; with the graph
+// (hanging's CG is the one-launch kernel, so the graph holds every kernel of the substep once), the
+// same count from the graph's nodes, the capture not counted as launches; and more with the
+// collision stages switched on.
+TEST(CudaStagePruning, TheStatsCountTheKernelsOfEachStep) {
+    WEFT_REQUIRE_GPU();
+    auto direct = test::make_world("hanging", "cuda");
+    cuda::CudaBackendApi* api = cuda::as_cuda(direct->backend());
+    ASSERT_NE(api, nullptr);
+    api->set_use_graph(false);
+    (void)direct->step();
+    cuda::start_launch_record();
+    const long long counted = direct->step().kernels_launched;
+    long long recorded = 0;
+    for (const auto& [key, count] : cuda::stop_launch_record()) recorded += count;
+    std::printf("[ kernels  ] hanging, graphs off: %lld kernels in the step's stats, %lld in the launch record\n", counted,
+                recorded);
+    EXPECT_GT(counted, 0);
+    EXPECT_EQ(counted, recorded);
+
+    auto graphed = test::make_world("hanging", "cuda");
+    const std::vector<long long> with_graph = kernels_per_step(*graphed, 4, true);
+    const std::vector<long long> without = kernels_per_step(*direct, 4, false);
+    ASSERT_TRUE(cuda::as_cuda(graphed->backend())->graph_active()) << "the graph did not run: the test compares nothing";
+    for (std::size_t k = 0; k < with_graph.size(); ++k) {
+        std::printf("[ kernels  ] hanging step %zu: %lld with the graph, %lld without\n", k, with_graph[k], without[k]);
+        EXPECT_EQ(with_graph[k], without[k]) << "step " << k;
+    }
+
+    auto colliding = test::make_world("hanging", "cuda", {"collision.self=true"});
+    const std::vector<long long> with_contact = kernels_per_step(*colliding, 2, false);
+    std::printf("[ kernels  ] hanging with self-collision: %lld kernels a step\n", with_contact.back());
+    EXPECT_GT(with_contact.back(), without.back());
 }
 
 }  // namespace

@@ -35,7 +35,7 @@ RunSummary summarize(std::span<const StepStats> frames) {
     RunSummary s;
     s.frames = frames.size();
     std::array<std::vector<double>, kStageCount> stage;
-    std::vector<double> step, cg, contacts, pairs, culled, pair_contacts, part_contacts;
+    std::vector<double> step, cg, kernels, contacts, pairs, culled, pair_contacts, part_contacts;
     for (auto& v : stage) v.reserve(frames.size());
     step.reserve(frames.size());
     cg.reserve(frames.size());
@@ -45,6 +45,7 @@ RunSummary summarize(std::span<const StepStats> frames) {
         for (std::size_t k = 0; k < kStageCount; ++k) stage[k].push_back(st.stage_ms[k]);
         step.push_back(st.step_ms);
         cg.push_back(st.cg_iterations);
+        kernels.push_back(static_cast<double>(st.kernels_launched));
         contacts.push_back(st.collider_contacts);
         s.swept_collider_hits += st.collision.swept_collider_hits;
         s.collider_overshoots += st.collision.collider_overshoots;
@@ -106,6 +107,7 @@ RunSummary summarize(std::span<const StepStats> frames) {
     for (std::size_t k = 0; k < kStageCount; ++k) s.stage_ms[k] = distribution(std::move(stage[k]));
     s.step_ms = distribution(std::move(step));
     s.cg_iterations = distribution(std::move(cg));
+    s.kernels = distribution(std::move(kernels));
     s.contacts = distribution(std::move(contacts));
     s.simulation_seconds = s.step_ms.total / 1000.0;
     s.fps = s.simulation_seconds > 0.0 ? static_cast<double>(s.frames) / s.simulation_seconds : 0.0;
@@ -254,6 +256,10 @@ void write_summary_fields(JsonWriter& json, const RunContext& c, const RunSummar
     json.field("unchecked_substeps", s.energy_unchecked);
     json.end_object();
     json.field("line_search_halvings", s.line_search_halvings);
+    // GPU kernels enqueued per frame (a graph's kernel nodes count at each launch; 0 on the cpu).
+    json.key("kernels_per_frame").begin_object();
+    json.field("median", s.kernels.median).field("max", s.kernels.max).field("mean", s.kernels.mean);
+    json.end_object();
 
     json.key("contacts").begin_object().field("mean", s.contacts.mean).field("max", s.contacts.max).end_object();
     json.field("swept_collider_hits", s.swept_collider_hits).field("collider_overshoots", s.collider_overshoots);
@@ -365,6 +371,9 @@ void print_run_summary(std::ostream& out, const RunContext& c, const RunSummary&
     out << "\n  CG iterations  per frame: mean " << format_fixed(s.cg_iterations.mean, 1) << ", max "
         << format_fixed(s.cg_iterations.max, 0) << "; largest solve " << s.cg_iterations_max_solve << "; "
         << s.cg_not_converged << " of " << s.solves << " solves not converged\n";
+    if (s.kernels.max > 0.0)
+        out << "  GPU kernels    per frame: median " << format_fixed(s.kernels.median, 0) << ", max "
+            << format_fixed(s.kernels.max, 0) << " (a CUDA graph's nodes counted at each launch)\n";
     out << "  NaN/Inf        " << s.non_finite_frames << " frames\n";
     if (c.energy_guard != "off") {
         out << "  energy guard   " << c.energy_guard << ": " << s.energy_gained << " of " << s.substeps

@@ -45,6 +45,7 @@ struct RunSummary {
     std::array<Distribution, kStageCount> stage_ms{};  ///< per frame (summed over its substeps)
     Distribution step_ms;
     Distribution cg_iterations;       ///< per frame, summed over its solves
+    Distribution kernels;             ///< GPU kernels enqueued per frame (StepStats::kernels_launched; 0 on the cpu)
     int cg_iterations_max_solve = 0;  ///< largest single solve
     long long solves = 0;             ///< linear solves (Newton iterations) in all frames
     long long cg_not_converged = 0;   ///< solves that hit the iteration cap

@@ -8,6 +8,7 @@
 #include <string_view>
 #include <vector>
 
+#include "cuda_check.h"
 #include "device_memory_budget.h"
 #include "multi/multi_solver.h"
 #include "shared_output.h"
@@ -45,7 +46,10 @@ public:
     void substep(const Model& model, double t, double h, StepStats& stats) override {
         require_device_support(model.settings.solver);
         const BudgetScope scope(&budget_);
+        const long long launches_before = thread_kernel_launches;  // the shares' threads add theirs
         solver_.substep(model, t, h, stats);
+        stats.kernels_launched += thread_kernel_launches - launches_before + audit_kernels_;
+        audit_kernels_ = 0;
     }
 
     // The warm start, in the one-GPU layout: a checkpoint moves between part counts and one GPU.
@@ -65,7 +69,10 @@ public:
     // Summed on the devices (energy_kernels.cu, each part counting what it owns): no state read back.
     EnergyAudit energy_audit(const Model& model, double t, double h, bool with_wind) const override {
         const BudgetScope scope(&budget_);
-        return solver_.energy_audit(model, t, h, with_wind);
+        const long long launches_before = thread_kernel_launches;
+        const EnergyAudit audit = solver_.energy_audit(model, t, h, with_wind);
+        audit_kernels_ += thread_kernel_launches - launches_before;  // reported with the next substep
+        return audit;
     }
 
     std::size_t memory_bytes() const override { return solver_.memory_bytes(); }
@@ -93,6 +100,8 @@ public:
 
 private:
     mutable DeviceMemoryBudget budget_;  // before the solver: its arrays give their bytes back to it
+    /// Kernels of the energy guard's audits since the last substep (StepStats::kernels_launched).
+    mutable long long audit_kernels_ = 0;
     mutable MultiSolver solver_;  // the audit enqueues work on the parts' streams
     FlatModel flat_;
     DeviceInfo display_;          // the first GPU: where the output lives

@@ -303,10 +303,12 @@ std::vector<std::size_t> MultiSolver::detect_shares(const std::function<std::siz
     share_barrier_ = std::make_unique<std::barrier<>>(static_cast<std::ptrdiff_t>(parts));
     const auto run_share = [&](std::size_t p) {
         const BudgetScope scope(budget);  // the same on the share's thread: its buffers grow there
+        const long long launches_before = thread_kernel_launches;  // this thread's (p > 0: its own)
         try {
             WEFT_CUDA_CHECK(cudaSetDevice(solvers_[p]->device()));
             found[p] = detect_share(p, share_stats[p]);
             if (p > 0) collisions_[p]->count_buffer_growths(share_stats[p]);
+            share_stats[p].kernels_launched = thread_kernel_launches - launches_before;
         } catch (...) {
             // The other shares must not wait for this one at the barrier (reduce_bounds_across).
             share_failed_ = true;
@@ -339,6 +341,8 @@ std::vector<std::size_t> MultiSolver::detect_shares(const std::function<std::siz
         const StepStats& a = share_stats[p];
         stats.collision.candidate_pairs += a.collision.candidate_pairs;
         stats.collision.buffer_growths += a.collision.buffer_growths;
+        // Share 0 ran on this thread, whose count the backend takes; the others' threads add theirs.
+        if (p > 0) stats.kernels_launched += a.kernels_launched;
         stats.collision.query_radius_max = std::max(stats.collision.query_radius_max, a.collision.query_radius_max);
         contacts += found[p];
     }

@@ -492,6 +492,7 @@ PartPcgResult PartPcg::solve(std::span<const float* const> b, std::span<float* c
         }
         WEFT_CUDA_CHECK(cudaSetDevice(origin.system.device));
         WEFT_CUDA_CHECK(cudaStreamSynchronize(origin.system.stream));
+        const long long launches_before = thread_kernel_launches;  // a capture enqueues nothing
         WEFT_CUDA_CHECK(cudaStreamBeginCapture(origin.system.stream, cudaStreamCaptureModeGlobal));
         WEFT_CUDA_CHECK(cudaEventRecord(fork[0], origin.system.stream));
         for (std::size_t k = 1; k < part_.size(); ++k) {
@@ -508,6 +509,8 @@ PartPcgResult PartPcg::solve(std::span<const float* const> b, std::span<float* c
         WEFT_CUDA_CHECK(cudaSetDevice(origin.system.device));
         cudaGraph_t graph = nullptr;
         WEFT_CUDA_CHECK(cudaStreamEndCapture(origin.system.stream, &graph));
+        graph_kernels_ = thread_kernel_launches - launches_before;
+        thread_kernel_launches = launches_before;
         WEFT_CUDA_CHECK(cudaGraphInstantiate(&graph_, graph, 0));
         WEFT_CUDA_CHECK(cudaGraphDestroy(graph));
         for (std::size_t k = 0; k < part_.size(); ++k) {
@@ -533,6 +536,7 @@ PartPcgResult PartPcg::solve(std::span<const float* const> b, std::span<float* c
     while (s.running != 0) {
         if (use_graph_) {
             WEFT_CUDA_CHECK(cudaGraphLaunch(graph_, origin.system.stream));
+            thread_kernel_launches += graph_kernels_;
         } else {
             for (int it = 0; it < batch; ++it) enqueue_iteration(x, it % 2);
             // The origin's read below must follow every part's batch.

@@ -112,6 +112,7 @@ private:
     cudaGraphExec_t graph_ = nullptr;
     std::vector<float*> graph_x_;  // the vectors the graph was captured with
     int graph_batch_ = 0;
+    long long graph_kernels_ = 0;  // kernel nodes of the captured batch (counted per launch)
     bool use_graph_ = true;
     ContactMirror* contacts_ = nullptr;
 };

@@ -94,6 +94,12 @@ struct StepStats {
     int energy_retries = 0;
     /// Halvings of Newton updates by the line search (SolverSettings::line_search), over the step.
     int line_search_halvings = 0;
+    /// GPU kernels the backend enqueued over the step (cuda backend; 0 on the cpu backend): direct
+    /// launches, plus the kernel nodes of each CUDA graph launched. A graph's CG loop is a while node
+    /// whose body (two CG iterations) counts once per solve, however often it turns; the one-launch
+    /// CG is one kernel whatever its iterations. The energy guard's audits count with the substep
+    /// that follows them.
+    long long kernels_launched = 0;
     /// Substeps the guard could not judge: a moving mesh collider, or a fast analytic collider that
     /// carried cloth along (work it cannot bound).
     int energy_unchecked = 0;
