@@ -15,32 +15,11 @@
 #include "weft/error.h"
 #include "weft/world_limits.h"
 #include "weft/mesh.h"
+#include "file_signature.h"
 #include "obj_scan.h"
 #include "ply_scan.h"
 
 namespace weft::assets {
-namespace {
-
-/// Throws when the first bytes of `path` cannot start a file of extension `ext` (lower case):
-/// glTF JSON opens with '{', a GLB with "glTF", a PLY with "ply", an OBJ is text (no NUL byte in
-/// its first 4 KiB). Other extensions are left to assimp. Returns whether the file starts with the
-/// PLY magic line, whatever its extension.
-bool check_signature(const std::filesystem::path& path, const std::string& ext) {
-    std::ifstream in(path, std::ios::binary);
-    std::string head(4096, '\0');
-    in.read(head.data(), static_cast<std::streamsize>(head.size()));
-    head.resize(static_cast<std::size_t>(in.gcount()));
-    const std::string file = path.string();
-    const auto first = head.find_first_not_of(" \t\r\n\xEF\xBB\xBF");  // a UTF-8 byte-order mark too
-    if (ext == ".gltf" && (first == std::string::npos || head[first] != '{'))
-        throw Error(file + ": not a glTF file (its JSON does not start with '{')");
-    if (ext == ".glb" && head.rfind("glTF", 0) != 0) throw Error(file + ": not a GLB file (no 'glTF' magic)");
-    if (ext == ".ply" && head.rfind("ply", 0) != 0) throw Error(file + ": not a PLY file (no 'ply' on the first line)");
-    if (ext == ".obj" && head.find('\0') != std::string::npos) throw Error(file + ": not an OBJ file (it holds binary data)");
-    return head.size() >= 4 && head.rfind("ply", 0) == 0 && (head[3] == '\n' || head[3] == '\r');
-}
-
-}  // namespace
 
 MeshData import_mesh(const std::filesystem::path& path, ImportReport* report) {
     const std::string file = path.string();

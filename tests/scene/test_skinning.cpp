@@ -1,0 +1,187 @@
+// Skinned meshes (weft/skinning.h): linear blend skinning against hand-computed poses, clip sampling,
+// the checks on bad skins, and (with weft::assets) the shipped character imported through assimp.
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <string>
+#include <vector>
+
+#include "weft/error.h"
+#include "weft/skinning.h"
+#if WEFT_TEST_HAVE_ASSETS
+#include "weft/assets/skinned_import.h"
+#endif
+
+namespace weft {
+namespace {
+
+constexpr double kPi = 3.14159265358979323846;
+
+Quatd about_z(double radians) { return {std::cos(radians / 2), 0.0, 0.0, std::sin(radians / 2)}; }
+
+/// A bar along +X from 0 to 2 m: joint 0 at the origin, joint 1 (its child) at x = 1. Vertices at
+/// x = 0.5 (joint 0 only), 1 (half each) and 1.5, 2 (joint 1 only).
+SkinnedMesh bar() {
+    SkinnedMesh m;
+    m.mesh.source = "bar";
+    m.mesh.positions = {{0.5, 0, 0}, {1.0, 0, 0}, {1.5, 0, 0}, {2.0, 0, 0}};
+    m.mesh.triangles = {{{0, 1, 2}}, {{1, 2, 3}}};
+    m.vertex_joints = {{0, 0, 0, 0}, {0, 1, 0, 0}, {1, 0, 0, 0}, {1, 0, 0, 0}};
+    m.vertex_weights = {{1, 0, 0, 0}, {0.5, 0.5, 0, 0}, {1, 0, 0, 0}, {1, 0, 0, 0}};
+    Joint root{.name = "root"};
+    Joint elbow{.name = "elbow", .parent = 0};
+    elbow.rest.translation = {1, 0, 0};
+    elbow.inverse_bind.translation = {-1, 0, 0};
+    m.joints = {root, elbow};
+    return m;
+}
+
+void expect_near(Vec3d a, Vec3d b, const std::string& what) {
+    EXPECT_NEAR(a.x, b.x, 1e-12) << what;
+    EXPECT_NEAR(a.y, b.y, 1e-12) << what;
+    EXPECT_NEAR(a.z, b.z, 1e-12) << what;
+}
+
+TEST(Skinning, TheBindPoseGivesBackTheMeshAndABentElbowMovesTheForearm) {
+    SkinnedMesh m = bar();
+    validate(m);
+    std::vector<Vec3d> x(4);
+    skin(m, skinning_transforms(m, rest_poses(m)), x);
+    for (std::size_t i = 0; i < 4; ++i) expect_near(x[i], m.mesh.positions[i], "bind pose, vertex " + std::to_string(i));
+
+    // The elbow turned 90° about z: the forearm points up (+Y) from (1, 0, 0).
+    std::vector<JointPose> poses = rest_poses(m);
+    poses[1].rotation = about_z(kPi / 2);
+    skin(m, skinning_transforms(m, poses), x);
+    expect_near(x[0], {0.5, 0, 0}, "upper arm");
+    expect_near(x[2], {1.0, 0.5, 0}, "forearm");
+    expect_near(x[3], {1.0, 1.0, 0}, "hand");
+    expect_near(x[1], {1.0, 0, 0}, "the elbow itself (half each, both at the joint)");
+
+    // The root turned too: the whole chain follows its parent.
+    poses[0].rotation = about_z(kPi / 2);
+    skin(m, skinning_transforms(m, poses), x);
+    expect_near(x[0], {0, 0.5, 0}, "upper arm, root turned");
+    expect_near(x[3], {-1.0, 1.0, 0}, "hand, root and elbow turned");
+}
+
+TEST(Skinning, ClipsInterpolateBetweenKeysAndLoop) {
+    SkinnedMesh m = bar();
+    AnimationClip clip{.name = "wave", .duration = 1.0};
+    JointTrack t{.joint = 1};
+    t.rotation_times = {0.0, 1.0};
+    t.rotations = {about_z(0.0), about_z(kPi / 2)};
+    t.translation_times = {0.0, 1.0};
+    t.translations = {{1, 0, 0}, {1, 2, 0}};
+    clip.tracks.push_back(t);
+    m.clips.push_back(clip);
+    validate(m);
+    const std::vector<JointPose> half = sample_clip(m, m.clip("wave"), 0.5, false);
+    const Mat3d r = rotation_matrix(half[1].rotation), expected = rotation_matrix(about_z(kPi / 4));
+    for (int a = 0; a < 3; ++a)
+        for (int b = 0; b < 3; ++b) EXPECT_NEAR(r.m[a][b], expected.m[a][b], 1e-12) << "slerp halfway is 45 degrees";
+    expect_near(half[1].translation, {1, 1, 0}, "translation halfway");
+    expect_near(sample_clip(m, m.clip("wave"), 1.25, true)[1].translation, {1, 0.5, 0}, "looped: 1.25 s is 0.25 s");
+    expect_near(sample_clip(m, m.clip("wave"), 7.0, false)[1].translation, {1, 2, 0}, "held at the last key");
+    expect_near(sample_clip(m, m.clip("wave"), 0.5, false)[0].translation, {0, 0, 0}, "no track: the rest pose");
+    try {
+        (void)m.clip("run");
+        FAIL() << "an unknown clip was accepted";
+    } catch (const Error& e) {
+        EXPECT_NE(std::string(e.what()).find("'wave'"), std::string::npos) << e.what();
+    }
+}
+
+/// `edit` breaks `bar()`; validate must throw naming the mesh and `expected`.
+template <typename Edit>
+void expect_refused(Edit&& edit, const std::string& expected) {
+    SkinnedMesh m = bar();
+    edit(m);
+    try {
+        validate(m);
+        FAIL() << "accepted: " << expected;
+    } catch (const Error& e) {
+        const std::string what = e.what();
+        EXPECT_EQ(what.rfind("bar: ", 0), 0U) << what;
+        EXPECT_NE(what.find(expected), std::string::npos) << what;
+    }
+}
+
+TEST(Skinning, BadSkinsAreRefusedByName) {
+    expect_refused([](SkinnedMesh& m) { m.vertex_weights[2] = {0.7, 0, 0, 0}; }, "vertex 2's skin weights sum to 0.7");
+    expect_refused([](SkinnedMesh& m) { m.vertex_joints[3] = {5, 0, 0, 0}; }, "vertex 3 is bound to joint 5 of 2");
+    expect_refused([](SkinnedMesh& m) { m.vertex_weights[0] = {-1, 2, 0, 0}; }, "vertex 0 has skin weight");
+    expect_refused([](SkinnedMesh& m) { m.joints[0].parent = 1; }, "parents must come before their children");
+    expect_refused([](SkinnedMesh& m) { m.vertex_weights.pop_back(); }, "4 vertices but 4 joint lists and 3 weight lists");
+    expect_refused(
+        [](SkinnedMesh& m) {
+            AnimationClip c{.name = "bad"};
+            JointTrack t{.joint = 1};
+            t.rotation_times = {0.5, 0.25};
+            t.rotations = {Quatd{}, Quatd{}};
+            c.tracks.push_back(t);
+            m.clips.push_back(c);
+        },
+        "clip 'bad', track of joint 1: key times are not increasing");
+    SkinnedMesh unweighted = bar();
+    unweighted.vertex_weights[1] = {0, 0, 0, 0};
+    EXPECT_THROW(normalize_weights(unweighted), Error);
+}
+
+#if WEFT_TEST_HAVE_ASSETS
+// The shipped character (tools/make_character.py) through assimp: its skeleton and clips arrive, the
+// bind pose gives back its mesh, and the run clip moves its feet and not its head's height by much.
+TEST(SkinnedImport, TheShippedRunnerHasItsSkeletonAndClips) {
+    const std::filesystem::path file = std::filesystem::path(WEFT_SOURCE_DIR) / "assets/characters/runner.gltf";
+    const SkinnedMesh m = assets::import_skinned_mesh(file);
+    EXPECT_EQ(m.mesh.positions.size(), 176U);
+    EXPECT_EQ(m.mesh.triangles.size(), 304U);
+    ASSERT_GE(m.joints.size(), 12U);
+    EXPECT_NO_THROW((void)m.clip("run"));
+    EXPECT_NEAR(m.clip("run").duration, 0.8, 1e-6);
+    EXPECT_NEAR(m.clip("jump").duration, 1.0, 1e-6);
+    std::vector<Vec3d> x(m.mesh.positions.size());
+    skin(m, skinning_transforms(m, rest_poses(m)), x);
+    double worst = 0.0;
+    for (std::size_t i = 0; i < x.size(); ++i) worst = std::max(worst, length(x[i] - m.mesh.positions[i]));
+    EXPECT_LT(worst, 1e-6) << "the bind pose moved the mesh";
+    // A quarter of the run: the left thigh swings back, the right forward; the lowest point rises
+    // off the ground and the forward-most vertex changes.
+    double lowest_rest = 1e9, lowest_run = 1e9;
+    for (const Vec3d& p : m.mesh.positions) lowest_rest = std::min(lowest_rest, p.y);
+    skin(m, skinning_transforms(m, sample_clip(m, m.clip("run"), 0.0, true)), x);
+    for (const Vec3d& p : x) lowest_run = std::min(lowest_run, p.y);
+    EXPECT_GT(lowest_run, lowest_rest + 0.05) << "the run's first key should have both feet off the ground";
+}
+
+TEST(SkinnedImport, FilesThatHoldNoCharacterAreRefusedByName) {
+    const std::filesystem::path dir = std::filesystem::temp_directory_path() / "weft_skinned_import_test";
+    std::filesystem::create_directories(dir);
+    const auto expect_error = [](const std::filesystem::path& p, const std::string& expected) {
+        try {
+            (void)assets::import_skinned_mesh(p);
+            FAIL() << p << " accepted";
+        } catch (const Error& e) {
+            const std::string what = e.what();
+            EXPECT_NE(what.find(p.string()), std::string::npos) << what;
+            EXPECT_NE(what.find(expected), std::string::npos) << what;
+        }
+    };
+    expect_error(dir / "missing.gltf", "not found");
+    expect_error(std::filesystem::path(WEFT_SOURCE_DIR) / "assets/meshes/body.obj", "glTF 2.0 (.gltf, .glb) or FBX");
+    const std::filesystem::path text = dir / "text.gltf";
+    {
+        std::FILE* f = std::fopen(text.string().c_str(), "w");
+        ASSERT_NE(f, nullptr);
+        std::fputs("not json at all\n", f);
+        std::fclose(f);
+    }
+    expect_error(text, "not a glTF file");
+}
+#endif
+
+}  // namespace
+}  // namespace weft
