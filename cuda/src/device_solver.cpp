@@ -332,7 +332,7 @@ EnergyAudit DeviceSolver::energy_audit(const Model& model, double t, double h, b
     a.with_wind = with_wind;
     // A moving mesh collider's work is not bounded (as in host_energy_audit).
     for (const ColliderDesc& c : model.colliders)
-        if (!c.is_analytic() && !c.motion.is_static()) a.bounded = false;
+        if (!c.is_analytic() && c.moves()) a.bounded = false;
     if (!device_lost_.empty())
         throw Error("CUDA backend: GPU " + std::to_string(device_) + " was lost in an earlier substep (" + device_lost_ +
                     "); its state cannot be audited");

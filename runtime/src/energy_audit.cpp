@@ -53,7 +53,7 @@ EnergyAudit host_energy_audit(const Model& model, std::span<const std::vector<Ve
         // A mesh collider's contacts are the collision pipeline's springs and impact zones, which
         // hold no energy the audit can see; one that stands still does no work, one that moves does.
         if (!c.is_analytic()) {
-            if (!c.motion.is_static()) a.bounded = false;
+            if (c.moves()) a.bounded = false;
             continue;
         }
         colliders.push_back({shape_at<double>(c, t), c.friction, !c.motion.is_static()});

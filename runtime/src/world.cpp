@@ -8,6 +8,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <memory>
 #include <string>
 
 #include "cpu/energy.h"
@@ -70,8 +71,21 @@ std::size_t World::add_cloth(const ClothDesc& cloth) {
 
 std::size_t World::add_collider(const ColliderDesc& collider) {
     forget_audit();
-    check_parameter_ranges(collider, "collider '" + collider.name + "'");
-    model_->colliders.push_back(collider);
+    const std::string where = "collider '" + collider.name + "'";
+    check_parameter_ranges(collider, where);
+    ColliderDesc c = collider;
+    if (c.skin != nullptr) {
+        if (c.shape != ColliderShape::Mesh) throw Error(where + ": a skin needs shape = mesh");
+        validate(*c.skin);
+        if (!c.mesh) c.mesh = std::make_shared<const MeshData>(c.skin->mesh);
+        if (c.mesh->positions.size() != c.skin->mesh.positions.size())
+            throw Error(where + ": its mesh has " + std::to_string(c.mesh->positions.size()) + " vertices, its skin " +
+                        std::to_string(c.skin->mesh.positions.size()));
+        if (!c.clip.empty()) (void)c.skin->clip(c.clip);  // names the clips there are
+        if (!(c.clip_speed >= 0.0) || !std::isfinite(c.clip_speed))
+            throw Error(where + ": clip_speed " + std::to_string(c.clip_speed) + " (expected a finite speed >= 0)");
+    }
+    model_->colliders.push_back(std::move(c));
     ++model_->topology_version;
     return model_->colliders.size() - 1;
 }

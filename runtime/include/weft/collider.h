@@ -6,8 +6,11 @@
 #include <memory>
 #include <string>
 
+#include <span>
+
 #include "weft/fabric.h"
 #include "weft/motion.h"
+#include "weft/skinning.h"
 
 namespace weft {
 
@@ -31,7 +34,20 @@ struct ColliderDesc {
     /// Mesh colliders only: the triangles in the collider's local frame (m), placed at time t by
     /// `motion.at(t)`. Closed or open; the cloth keeps its contact thickness from either side.
     std::shared_ptr<const MeshData> mesh;
+    /// Mesh colliders only: an animated character (weft/skinning.h). Its clip `clip` bends the mesh
+    /// (the skin's bind-pose mesh, which `mesh` then is) in the collider's local frame, which
+    /// `motion` places in the world as for a rigid mesh (the character's root motion).
+    std::shared_ptr<const SkinnedMesh> skin;
+    std::string clip;          ///< the skin's clip to play; empty: the bind pose
+    double clip_speed = 1.0;   ///< clip seconds per simulated second (≥ 0)
+    bool clip_loop = true;     ///< wrap the clip; otherwise hold its last key
     [[nodiscard]] bool is_analytic() const { return shape != ColliderShape::Mesh; }
+    /// Whether the collider can move: its motion is not static, or its skin plays a clip.
+    [[nodiscard]] bool moves() const { return !motion.is_static() || (skin != nullptr && !clip.empty()); }
 };
+
+/// A mesh collider's vertices in the world at time `t` (s): skinned by its clip where it has a skin,
+/// then placed by its motion. `out` holds one position a mesh vertex (m).
+void collider_mesh_positions(const ColliderDesc& collider, double t, std::span<Vec3d> out);
 
 }  // namespace weft

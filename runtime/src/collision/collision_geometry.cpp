@@ -60,8 +60,13 @@ CollisionGeometry build_collision_geometry(const FlatModel& flat, const Model& m
 
 void CollisionGeometry::place_kinematic(const Model& model, double t, std::span<Vec3d> out) const {
     for (std::size_t m = 0; m < meshes.size(); ++m) {
-        const Transform frame = model.colliders[meshes[m].collider].motion.at(t);
+        const ColliderDesc& c = model.colliders[meshes[m].collider];
         const std::size_t last = m + 1 < meshes.size() ? meshes[m + 1].first_vertex : kinematic_local.size();
+        if (c.skin != nullptr) {  // a character: its clip bends the mesh before its motion places it
+            collider_mesh_positions(c, t, out.subspan(meshes[m].first_vertex, last - meshes[m].first_vertex));
+            continue;
+        }
+        const Transform frame = c.motion.at(t);
         for (std::size_t j = meshes[m].first_vertex; j < last; ++j) out[j] = frame.apply(kinematic_local[j]);
     }
 }

@@ -25,9 +25,9 @@ IntersectionReport check_world_intersections(const Model& model, std::span<const
     std::vector<Triangle> collider_triangles;
     for (const ColliderDesc& c : model.colliders) {
         if (c.is_analytic() || !c.mesh) continue;
-        const Transform frame = c.motion.at(t);
         const auto base = static_cast<std::uint32_t>(collider_positions.size());
-        for (const Vec3d& p : c.mesh->positions) collider_positions.push_back(frame.apply(p));
+        collider_positions.resize(base + c.mesh->positions.size());
+        collider_mesh_positions(c, t, std::span<Vec3d>(collider_positions).subspan(base));
         for (const Triangle& tri : c.mesh->triangles)
             collider_triangles.push_back({{base + tri.v[0], base + tri.v[1], base + tri.v[2]}});
     }
