@@ -16,6 +16,7 @@
 #include "weft/world_limits.h"
 #include "weft/mesh.h"
 #include "file_signature.h"
+#include "weft/assets/skinned_import.h"
 #include "obj_scan.h"
 #include "ply_scan.h"
 
@@ -127,6 +128,7 @@ MeshData import_mesh(const std::filesystem::path& path, ImportReport* report) {
 
 void install_mesh_loader() {
     set_mesh_file_loader([](const std::filesystem::path& path) { return import_mesh(path); });
+    set_skinned_mesh_file_loader([](const std::filesystem::path& path) { return import_skinned_mesh(path); });
 }
 
 }  // namespace weft::assets

@@ -17,6 +17,7 @@ namespace {
 struct LoaderSlot {
     std::mutex mutex;
     MeshFileLoader loader;
+    SkinnedMeshFileLoader skinned;
 };
 
 LoaderSlot& loader_slot() {
@@ -75,6 +76,23 @@ void set_mesh_file_loader(MeshFileLoader loader) {
     LoaderSlot& slot = loader_slot();
     const std::lock_guard lock(slot.mutex);
     slot.loader = std::move(loader);
+}
+
+void set_skinned_mesh_file_loader(SkinnedMeshFileLoader loader) {
+    LoaderSlot& slot = loader_slot();
+    const std::lock_guard lock(slot.mutex);
+    slot.skinned = std::move(loader);
+}
+
+SkinnedMesh load_skinned_mesh_file(const std::filesystem::path& path) {
+    SkinnedMeshFileLoader loader;
+    {
+        LoaderSlot& slot = loader_slot();
+        const std::lock_guard lock(slot.mutex);
+        loader = slot.skinned;
+    }
+    if (!loader) throw Error(path.string() + ": character import not built (configure with -DWEFT_ASSETS=ON)");
+    return loader(path);
 }
 
 bool has_mesh_file_loader() {

@@ -219,6 +219,26 @@ std::unique_ptr<World> build_world(const SceneDesc& scene, std::string_view back
             if (k >= scene.collider_meshes.size() || scene.collider_meshes[k].file.empty())
                 throw Error(where + ": a mesh collider without a mesh file");
             const ColliderMeshSource& src = scene.collider_meshes[k];
+            if (!src.clip.empty()) {  // an animated character: its bind-pose mesh is the collider's
+                if (src.scale != 1.0)
+                    throw Error(where + ": scale " + std::to_string(src.scale) +
+                                " with a clip (a skinned character is taken at its file's size; scale it where it is made)");
+                std::shared_ptr<const SkinnedMesh> skin;
+                try {
+                    skin = std::make_shared<const SkinnedMesh>(load_skinned_mesh_file(src.file));
+                } catch (const Error& e) {
+                    throw Error(where + ": " + e.what());
+                }
+                collider.skin = skin;
+                collider.clip = src.clip;
+                collider.mesh = std::make_shared<const MeshData>(skin->mesh);
+                try {
+                    world->add_collider(collider);  // checks the clip (naming the file's clips)
+                } catch (const Error& e) {
+                    throw Error(where + ": " + e.what());
+                }
+                continue;
+            }
             auto& mesh = meshes[{src.file, src.scale}];
             if (!mesh) mesh = load_collider_mesh(src, where);
             collider.mesh = mesh;

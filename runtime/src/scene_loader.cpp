@@ -390,6 +390,8 @@ void read_colliders(Table& root, SceneDesc& scene) {
             } else if (p.name == "file") {
                 // The triangles are read by build_world(), as a cloth's mesh file is; the file must exist now.
                 mesh.file = mesh_file(t, "file", scene.path);
+            } else if (p.name == "clip") {
+                mesh.clip = t.optional_string("clip").value_or("");
             } else if (holds<ColliderDesc>(p)) {
                 read_value(t, p, c);
             } else if (holds<ColliderMeshSource>(p)) {

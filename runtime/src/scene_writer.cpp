@@ -177,6 +177,8 @@ void write_collider(std::ostream& out, const SceneDesc& scene, std::size_t k, co
         if (p.section != "collider" || !p.applies_to(c.shape) || p.name == "position") continue;
         if (p.name == "file") {
             out << "file = " << toml_string(mesh_path(mesh.file, directory)) << "\n";
+        } else if (p.name == "clip") {
+            if (!mesh.clip.empty()) out << "clip = " << toml_string(mesh.clip) << "\n";
         } else if (holds<ColliderDesc>(p)) {
             if (!(p.unset_when_negative && parameter_number(p, c) < 0.0)) out << p.name << " = " << value_text(p, c) << "\n";
         } else if (holds<ColliderMeshSource>(p)) {

@@ -473,5 +473,37 @@ TEST(SceneRepeatErrors, NamesStayUnique) {
                 {"key 'cloth[1].name'", "duplicate name 'a'"});
 }
 
+// A mesh collider with a `clip` is an animated character: the file is read as a skinned mesh, the
+// collider plays the clip (speed and loop from the scene), the scene writes it back; a clip the file
+// does not hold and a scale with a clip are refused naming the scene, the collider and the clips.
+TEST(SceneSkinnedCollider, AClipMakesTheMeshACharacter) {
+    if (!test::install_loader()) GTEST_SKIP() << "weft::assets not built";
+    const std::string runner = (test::source_dir() / "assets/characters/runner.gltf").generic_string();
+    const std::string text = kSheet + "[[collider]]\nname = \"runner\"\nshape = \"mesh\"\nfile = \"" + runner +
+                             "\"\nclip = \"run\"\nclip_speed = 1.5\nclip_loop = false\n";
+    const SceneDesc s = parse_scene(text, "runner.toml");
+    ASSERT_EQ(s.collider_meshes.size(), 1U);
+    EXPECT_EQ(s.collider_meshes[0].clip, "run");
+    const auto world = build_world(s);
+    const ColliderDesc& c = world->model().colliders.at(0);
+    ASSERT_NE(c.skin, nullptr);
+    EXPECT_EQ(c.clip, "run");
+    EXPECT_EQ(c.clip_speed, 1.5);
+    EXPECT_FALSE(c.clip_loop);
+    EXPECT_EQ(c.mesh->positions.size(), c.skin->mesh.positions.size());
+    EXPECT_TRUE(c.moves());
+    const SceneDesc again = parse_scene(scene_to_toml(s, test::source_dir()), test::source_dir() / "again.toml");
+    EXPECT_EQ(again.collider_meshes.at(0).clip, "run");
+    EXPECT_EQ(again.colliders.at(0).clip_speed, 1.5);
+    EXPECT_FALSE(again.colliders.at(0).clip_loop);
+
+    std::string wrong = text;
+    wrong.replace(wrong.find("\"run\""), 5, "\"walk\"");
+    expect_error([&] { (void)build_world(parse_scene(wrong, "walk.toml")); },
+                 {"walk.toml", "collider[0] 'runner'", "no animation clip 'walk'", "'run', 'jump'"});
+    expect_error([&] { (void)build_world(parse_scene(text + "scale = 2.0\n", "scaled.toml")); },
+                 {"scaled.toml", "collider[0] 'runner'", "scale 2", "with a clip"});
+}
+
 }  // namespace
 }  // namespace weft

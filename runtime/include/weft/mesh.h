@@ -8,6 +8,7 @@
 #include <string>
 
 #include "weft/fabric.h"
+#include "weft/skinning.h"
 
 namespace weft {
 
@@ -40,6 +41,12 @@ using MeshFileLoader = std::function<MeshData(const std::filesystem::path&)>;
 void set_mesh_file_loader(MeshFileLoader loader);
 [[nodiscard]] bool has_mesh_file_loader();
 [[nodiscard]] MeshData load_mesh_file(const std::filesystem::path& path);
+
+/// Loads a skinned character (glTF 2.0, FBX … whatever the installed loader reads: weft::assets
+/// installs one). Throws `weft::Error` naming the file on failure, or saying that import was not built.
+using SkinnedMeshFileLoader = std::function<SkinnedMesh(const std::filesystem::path&)>;
+void set_skinned_mesh_file_loader(SkinnedMeshFileLoader loader);
+[[nodiscard]] SkinnedMesh load_skinned_mesh_file(const std::filesystem::path& path);
 
 /// Writes a triangle mesh as PLY (binary little-endian) or OBJ (text), chosen by the extension.
 void write_mesh(const std::filesystem::path& path, std::span<const Vec3d> positions, std::span<const Triangle> triangles);

@@ -48,6 +48,8 @@ struct SceneCloth {
 struct ColliderMeshSource {
     std::filesystem::path file;  ///< resolved relative to the scene file; empty for analytic shapes
     double scale = 1.0;          ///< applied to file positions, giving the collider's local frame (m)
+    /// The clip a skinned character plays (`clip` key); non-empty: the file is read as a character.
+    std::string clip;
 };
 
 struct CameraDesc {

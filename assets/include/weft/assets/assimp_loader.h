@@ -34,7 +34,8 @@ struct ImportReport {
 /// Thread-safe (each call uses its own importer).
 [[nodiscard]] MeshData import_mesh(const std::filesystem::path& path, ImportReport* report = nullptr);
 
-/// Installs `import_mesh` as the loader behind `weft::load_mesh_file()`. Call once at start-up.
+/// Installs `import_mesh` as the loader behind `weft::load_mesh_file()`, and `import_skinned_mesh`
+/// behind `weft::load_skinned_mesh_file()` (a collider's `clip` key). Call once at start-up.
 void install_mesh_loader();
 
 }  // namespace weft::assets
