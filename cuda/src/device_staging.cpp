@@ -102,11 +102,9 @@ void DeviceSolver::fill_staging(const Model& model, double t, double h, unsigned
     // Pin targets at t + h, evaluated in double on the host (a handful of vertices).
     auto* targets = reinterpret_cast<V3*>(base + p.pin_target_offset);
     const FlatModel& f = *flat_;
-    for (std::size_t q = 0; q < f.pin_vertex.size(); ++q) {
-        Vec3d target = f.pin_local[q];
-        if (f.pin_motion[q] >= 0) target = model.motions[static_cast<std::size_t>(f.pin_motion[q])].at(t1).apply(target);
-        targets[q] = to_float(target);
-    }
+    std::vector<Vec3d> host(f.pin_vertex.size());
+    pin_targets(model, f, t1, host);
+    for (std::size_t q = 0; q < host.size(); ++q) targets[q] = to_float(host[q]);
 }
 
 }  // namespace weft::cuda

@@ -2,7 +2,9 @@
 #include "weft/backend/flat_model.h"
 
 #include <string>
+#include <vector>
 
+#include "weft/collider.h"
 #include "weft/error.h"
 
 namespace weft {
@@ -122,7 +124,21 @@ FlatModel flatten(const Model& model) {
             const std::uint32_t v = vo + pin.vertex;
             if (f.vertex_pin[v] >= 0) continue;  // pinned twice: keep the first
             Vec3d local = pin.position ? *pin.position : f.initial_positions[v];
-            if (pin.motion >= 0) {
+            if (pin.collider >= 0) {
+                const std::string where = "cloth '" + cloth.name + "': pin of vertex " + std::to_string(pin.vertex);
+                if (pin.motion >= 0) throw Error(where + ": follows both a motion and a collider (expected one)");
+                if (static_cast<std::size_t>(pin.collider) >= model.colliders.size())
+                    throw Error(where + ": follows collider " + std::to_string(pin.collider) + " of " +
+                                std::to_string(model.colliders.size()));
+                const ColliderDesc& followed = model.colliders[static_cast<std::size_t>(pin.collider)];
+                if (followed.is_analytic() || !followed.mesh || pin.collider_vertex >= followed.mesh->positions.size())
+                    throw Error(where + ": follows vertex " + std::to_string(pin.collider_vertex) + " of collider '" + followed.name +
+                                "', which " + (followed.is_analytic() || !followed.mesh ? std::string("is not a mesh") :
+                                               "has " + std::to_string(followed.mesh->positions.size()) + " vertices"));
+                std::vector<Vec3d> at_start(followed.mesh->positions.size());
+                collider_mesh_positions(followed, 0.0, at_start);
+                local = local - at_start[pin.collider_vertex];  // the offset the pin keeps
+            } else if (pin.motion >= 0) {
                 const Transform frame = model.motions.at(static_cast<std::size_t>(pin.motion)).at(0.0);
                 local = math::transpose(frame.rotation) * (local - frame.translation);
             }
@@ -130,6 +146,8 @@ FlatModel flatten(const Model& model) {
             f.pin_vertex.push_back(v);
             f.pin_motion.push_back(pin.motion);
             f.pin_local.push_back(local);
+            f.pin_collider.push_back(pin.collider);
+            f.pin_collider_vertex.push_back(pin.collider_vertex);
         }
     }
 
@@ -147,7 +165,8 @@ std::size_t FlatModel::memory_bytes() const {
            shell_rest.capacity() * sizeof(physics::ShellBendingRest<double>) + u32(pattern.row_start) + u32(pattern.column) + u32(pattern.diagonal) +
            u32(pattern.triangle_slots) + u32(pattern.hinge_slots) + u32(vertex_force_start) +
            u32(vertex_force_index) + u32(slot_block_start) + u32(slot_block_index) + u32(pin_vertex) +
-           pin_motion.capacity() * sizeof(int) + vertex_pin.capacity() * sizeof(std::int32_t);
+           (pin_motion.capacity() + pin_collider.capacity()) * sizeof(int) + pin_collider_vertex.capacity() * sizeof(std::uint32_t) +
+           vertex_pin.capacity() * sizeof(std::int32_t);
 }
 
 std::pair<std::size_t, std::size_t> FlatModel::cloth_vertices(std::size_t cloth, std::size_t positions,
@@ -160,6 +179,29 @@ std::pair<std::size_t, std::size_t> FlatModel::cloth_vertices(std::size_t cloth,
                     " vertices, got " + std::to_string(positions) + " positions and " + std::to_string(velocities) +
                     " velocities)");
     return {first, count};
+}
+
+void pin_targets(const Model& model, const FlatModel& f, double t, std::span<Vec3d> out) {
+    if (out.size() != f.pin_vertex.size())
+        throw Error("pin_targets: " + std::to_string(out.size()) + " outputs for " + std::to_string(f.pin_vertex.size()) + " pins");
+    // A character's vertices are skinned once per collider, not once per pin.
+    std::vector<std::vector<Vec3d>> skinned(model.colliders.size());
+    for (std::size_t q = 0; q < f.pin_vertex.size(); ++q) {
+        const int c = q < f.pin_collider.size() ? f.pin_collider[q] : -1;
+        if (c >= 0) {
+            std::vector<Vec3d>& x = skinned[static_cast<std::size_t>(c)];
+            const ColliderDesc& collider = model.colliders[static_cast<std::size_t>(c)];
+            if (x.empty()) {
+                x.resize(collider.mesh->positions.size());
+                collider_mesh_positions(collider, t, x);
+            }
+            out[q] = x[f.pin_collider_vertex[q]] + f.pin_local[q];
+        } else if (f.pin_motion[q] >= 0) {
+            out[q] = model.motions[static_cast<std::size_t>(f.pin_motion[q])].at(t).apply(f.pin_local[q]);
+        } else {
+            out[q] = f.pin_local[q];
+        }
+    }
 }
 
 }  // namespace weft

@@ -119,6 +119,8 @@ PartModel extract_part(const FlatModel& flat, const VertexPartition& partition, 
         m.pin_vertex.push_back(v);
         m.pin_motion.push_back(flat.pin_motion[k]);
         m.pin_local.push_back(flat.pin_local[k]);
+        m.pin_collider.push_back(flat.pin_collider[k]);
+        m.pin_collider_vertex.push_back(flat.pin_collider_vertex[k]);
     }
     build_gather_tables(m);
     return out;

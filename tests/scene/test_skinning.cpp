@@ -213,6 +213,76 @@ TEST(SkinnedImport, ACharacterPlayingAClipIsACollider) {
     EXPECT_GT(lowest_top, lowest_crouch + 0.2) << "the head did not carry the cloth up";
 }
 
+// A cape pinned to the running character's skin: its pinned vertices stay on their skin vertices
+// (plus the offset they started with) frame after frame; a pin to an analytic collider, to a vertex
+// the mesh lacks, or to a collider and a motion at once is refused naming the cloth and the pin.
+TEST(SkinnedImport, ACapePinnedToTheSkinFollowsTheRunCycle) {
+    const auto skin = std::make_shared<const SkinnedMesh>(
+        assets::import_skinned_mesh(std::filesystem::path(WEFT_SOURCE_DIR) / "assets/characters/runner.gltf"));
+    // Two skin vertices at the back of the chest's top ring: the highest, most backward ones.
+    std::vector<std::uint32_t> shoulders;
+    for (std::uint32_t i = 0; i < skin->mesh.positions.size(); ++i) {
+        const Vec3d p = skin->mesh.positions[i];
+        if (std::abs(p.y - 1.59) < 1e-3 && p.z < -0.1 && std::abs(p.x) > 0.15) shoulders.push_back(i);  // not the head's
+    }
+    ASSERT_EQ(shoulders.size(), 2U) << "the chest's top back corners";
+    const Vec3d left = skin->mesh.positions[shoulders[0]], right = skin->mesh.positions[shoulders[1]];
+    const double width = std::abs(left.x - right.x);
+
+    WorldDesc desc;
+    World world(desc);
+    ColliderDesc runner{.name = "runner", .shape = ColliderShape::Mesh};
+    runner.skin = skin;
+    runner.clip = "run";
+    const std::size_t collider = world.add_collider(runner);
+    ClothDesc cape{.name = "cape", .fabric = Fabric::cook(make_grid(width, 0.6, 4, 8, GridPlane::XY), {.density = 0.2})};
+    cape.transform.translation = {std::min(left.x, right.x), 1.59 - 0.6, -0.13};  // hanging from the corners, behind
+    // The grid's top corners (row 8 of 9, columns 0 and 4) follow the two skin vertices.
+    const std::uint32_t top_left = 8 * 5, top_right = 8 * 5 + 4;
+    const bool left_first = left.x < right.x;
+    cape.pins.push_back({.vertex = top_left, .collider = static_cast<int>(collider),
+                         .collider_vertex = left_first ? shoulders[0] : shoulders[1]});
+    cape.pins.push_back({.vertex = top_right, .collider = static_cast<int>(collider),
+                         .collider_vertex = left_first ? shoulders[1] : shoulders[0]});
+    world.add_cloth(cape);
+    const std::vector<Vec3d> start = world.positions(0);
+    const Vec3d offset_l = start[top_left] - skin->mesh.positions[cape.pins[0].collider_vertex];
+    std::vector<Vec3d> skinned(skin->mesh.positions.size());
+    double worst = 0.0, travel = 0.0;
+    for (int frame = 1; frame <= 30; ++frame) {
+        ASSERT_FALSE(world.step().non_finite) << "frame " << frame;
+        collider_mesh_positions(world.model().colliders[0], world.time(), skinned);
+        const Vec3d target = skinned[cape.pins[0].collider_vertex] + offset_l;
+        worst = std::max(worst, length(world.positions(0)[top_left] - target));
+        travel = std::max(travel, length(world.positions(0)[top_left] - start[top_left]));
+    }
+    std::printf("[ skinned  ] cape pinned to the running chest: pin %.2e m off its skin vertex at worst, moved up to %.3f m\n",
+                worst, travel);
+    EXPECT_LT(worst, 1e-6);  // to rounding: the pin velocity (target − x)/h lands it there
+    EXPECT_GT(travel, 0.01) << "the chest did not move the pin: the test proves nothing";
+
+    const auto refused = [&](PinDesc pin, const std::string& expected) {
+        World w(desc);
+        ColliderDesc ball{.name = "ball", .shape = ColliderShape::Sphere};
+        w.add_collider(runner);
+        w.add_collider(ball);
+        ClothDesc c{.name = "bad", .fabric = cape.fabric};
+        c.pins.push_back(pin);
+        w.add_cloth(c);
+        try {
+            (void)w.step();
+            FAIL() << "accepted: " << expected;
+        } catch (const Error& e) {
+            const std::string what = e.what();
+            EXPECT_NE(what.find("cloth 'bad': pin of vertex 0"), std::string::npos) << what;
+            EXPECT_NE(what.find(expected), std::string::npos) << what;
+        }
+    };
+    refused({.vertex = 0, .collider = 1}, "collider 'ball', which is not a mesh");
+    refused({.vertex = 0, .collider = 0, .collider_vertex = 9999}, "has 176 vertices");
+    refused({.vertex = 0, .collider = 5}, "follows collider 5 of 2");
+}
+
 TEST(SkinnedImport, FilesThatHoldNoCharacterAreRefusedByName) {
     const std::filesystem::path dir = std::filesystem::temp_directory_path() / "weft_skinned_import_test";
     std::filesystem::create_directories(dir);

@@ -20,6 +20,12 @@ namespace weft {
 struct PinDesc {
     std::uint32_t vertex = 0;
     int motion = -1;
+    /// Or follow vertex `collider_vertex` of mesh collider `collider` (an animated character's skin,
+    /// weft/skinning.h), keeping the world offset it had from that vertex at time 0 (translation
+    /// only: the offset does not turn with the body, so pin at or near the skin). −1: no collider.
+    /// Not together with `motion`.
+    int collider = -1;
+    std::uint32_t collider_vertex = 0;
     /// Where the pin holds the vertex (m, world; for a pin that follows a motion, where it is at
     /// time 0). Unset: where the vertex starts (the fabric's rest shape placed by the transform).
     /// World::pin sets it to where the vertex is when pinned.

@@ -132,12 +132,12 @@ void CpuSolver<T>::prepare_parameters(const Model& model, double t, double h) {
 
     // Pins: the velocity that lands each pinned vertex on its target at t + h.
     const FlatModel& f = *flat_;
+    pin_targets_.resize(f.pin_vertex.size());
+    pin_targets(model, f, t1, pin_targets_);
     for (std::size_t p = 0; p < f.pin_vertex.size(); ++p) {
         const std::uint32_t v = f.pin_vertex[p];
-        Vec3d target = f.pin_local[p];
-        if (f.pin_motion[p] >= 0) target = model.motions[static_cast<std::size_t>(f.pin_motion[p])].at(t1).apply(target);
         const Vec3d x = x_[v].template cast<double>();
-        pin_velocity_[v] = to<T>((target - x) / h);
+        pin_velocity_[v] = to<T>((pin_targets_[p] - x) / h);
     }
 }
 

@@ -112,6 +112,7 @@ private:
     std::vector<V3> vertex_rhs_;
     std::vector<M3> vertex_blocks_;
     std::vector<V3> b_, dv_, pin_velocity_;
+    std::vector<Vec3d> pin_targets_;  // this substep's, from pin_targets (weft/backend/flat_model.h)
     std::vector<V3> dv_previous_;  // v − v0 of the last substep: the warm start of the next first solve
     std::vector<std::uint8_t> fixed_;
     std::vector<int> contacts_;

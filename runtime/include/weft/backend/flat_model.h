@@ -6,6 +6,7 @@
 /// backends build their state from this; it is rebuilt only when `Model::topology_version` changes.
 
 #include <cstdint>
+#include <span>
 #include <utility>
 #include <vector>
 
@@ -48,6 +49,10 @@ struct FlatModel {
     std::vector<std::uint32_t> pin_vertex;
     std::vector<int> pin_motion;
     std::vector<Vec3d> pin_local;
+    /// Pins that follow a collider vertex (PinDesc::collider; −1: none): the collider, its vertex,
+    /// and in pin_local the pin's world offset from that vertex at t = 0.
+    std::vector<int> pin_collider;
+    std::vector<std::uint32_t> pin_collider_vertex;
     std::vector<std::int32_t> vertex_pin;  ///< pin index of each vertex or −1
 
     [[nodiscard]] std::size_t triangle_count() const { return triangles.size(); }
@@ -64,5 +69,10 @@ void build_gather_tables(FlatModel& f);
 
 /// Flattens `model` (throws `weft::Error` if a cloth has no fabric).
 [[nodiscard]] FlatModel flatten(const Model& model);
+
+/// Every pin's target at time `t` (s; m, world), in `f`'s pin order: its fixed point, its point in a
+/// motion's frame, or its collider vertex (skinned where the collider plays a clip) plus its offset.
+/// Both backends stage the targets from this.
+void pin_targets(const Model& model, const FlatModel& f, double t, std::span<Vec3d> out);
 
 }  // namespace weft
