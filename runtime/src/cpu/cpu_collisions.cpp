@@ -5,6 +5,7 @@
 #include <atomic>
 #include <chrono>
 
+#include "collision/buffer_trim.h"
 #include "weft/backend/timing.h"
 
 namespace weft::cpu {
@@ -141,7 +142,7 @@ void CpuCollisions<T>::begin_substep(const Model& model, double t, double h, con
     stats.ms(Stage::BroadPhase) += ms_since(clock);
 
     clock = Clock::now();
-    collision::find_proximity_contacts(proximity_input(settings, x0_, x1_, pairs_, h), contacts_);
+    find_contacts(proximity_input(settings, x0_, x1_, pairs_, h));
     terms_.set(contacts_, n);
     stats.collision.contacts = static_cast<int>(contacts_.size());
     stats.ms(Stage::NarrowPhase) += ms_since(clock);
@@ -199,13 +200,23 @@ void CpuCollisions<T>::measure_bounds(const Model& model, bool culled) {
 }
 
 template <typename T>
+void CpuCollisions<T>::find_contacts(const collision::ProximityInput& input) {
+    contact_candidates_peak_ = std::max(contact_candidates_peak_, input.vf.size() + input.ee.size());
+    collision::find_proximity_contacts(input, contacts_);
+    if (++contact_calls_ < collision::kTrimPeriod) return;
+    (void)collision::trim_to_peak(contacts_, contact_candidates_peak_);
+    contact_calls_ = 0;
+    contact_candidates_peak_ = 0;
+}
+
+template <typename T>
 void CpuCollisions<T>::find_offset_contacts(const Model& model, double h, StepStats& stats) {
     const auto clock = Clock::now();
     const CollisionSettings& settings = model.settings.collision;
     const collision::CollisionGeometry& g = geometry_;
     collision::ProximityInput p = proximity_input(settings, x_detect_, x_detect_, bounds_.pairs, h);
     p.offset_bound = bounds_.bound;
-    collision::find_proximity_contacts(p, contacts_);
+    find_contacts(p);
     terms_.set(contacts_, g.cloth_vertices, true);
     stats.collision.contacts = static_cast<int>(contacts_.size());
     stats.ms(Stage::NarrowPhase) += ms_since(clock);

@@ -84,6 +84,11 @@ private:
     collision::BroadPhase broad_;
     collision::BroadPhaseResult pairs_;
     std::vector<collision::ProximityContact> contacts_;
+    // The narrow phase sizes contacts_ to its candidate pairs before keeping the contacts, so a
+    // flood of candidates leaves it holding that flood (the projectile soak: 44 MB after a fold).
+    // It is cut back to the window's largest candidate count (collision/buffer_trim.h).
+    std::size_t contact_calls_ = 0, contact_candidates_peak_ = 0;
+    void find_contacts(const collision::ProximityInput& input);
     collision::ImpactZoneSolver zones_;
     // Normal-cone culling of self pairs (PSCC): the hierarchy over the fixed topology, built once,
     // and the test front kept across substeps. Null without self-collision or with culling off.
