@@ -49,6 +49,33 @@ __global__ void collision_scatter_kernel(const float* x1c, const float* x0c, con
     }
 }
 
+/// Linear blend skinning of the mesh colliders (a rigid mesh is one map of weight 1): the maps'
+/// weighted sum applied to the rest position, at t, at t + h and for the velocity.
+__global__ void place_kinematic_kernel(const float* rest, const std::uint32_t* joints, const float* weights,
+                                       const float* maps, std::uint32_t count, float* x0c, float* x1c,
+                                       std::uint32_t stride, float* x1, float* v) {
+    const std::uint32_t i = blockIdx.x * blockDim.x + threadIdx.x;
+    if (i >= count) return;
+    const float p[4] = {rest[i], rest[count + i], rest[2 * count + i], 1.0F};
+    float out[3][3] = {};  // [x(t), x(t + h), v][component]
+    for (std::uint32_t k = 0; k < 4; ++k) {
+        const float w = weights[4 * i + k];
+        if (w == 0.0F) continue;
+        const float* a = maps + kKinematicMapFloats * joints[4 * i + k];
+        for (int m = 0; m < 3; ++m)
+            for (int r = 0; r < 3; ++r) {
+                const float* row = a + 12 * m + 4 * r;
+                out[m][r] += w * (row[0] * p[0] + row[1] * p[1] + row[2] * p[2] + row[3] * p[3]);
+            }
+    }
+    for (int c = 0; c < 3; ++c) {
+        x0c[c * stride + i] = out[0][c];
+        x1c[c * stride + i] = out[1][c];
+        x1[c * count + i] = out[1][c];
+        v[c * count + i] = out[2][c];
+    }
+}
+
 using MomentumReduce = cub::BlockReduce<double, kBlockSize>;
 
 /// Offset mode: Σ m·v and Σ m over the free cloth vertices, for the frame the moves are bounded in.
@@ -164,6 +191,15 @@ void launch_collision_gather(const float* x, std::uint32_t n, float* x1c, std::u
     if (n == 0) return;
     collision_gather_kernel<<<grid_for(n), kBlockSize, 0, stream>>>(x, n, x1c, stride);
     WEFT_CUDA_CHECK_LAUNCH("collision_gather_kernel");
+}
+
+void launch_place_kinematic(const float* rest, const std::uint32_t* joints, const float* weights, const float* maps,
+                            std::uint32_t count, float* x0c, float* x1c, std::uint32_t stride, float* x1, float* v,
+                            cudaStream_t stream) {
+    if (count == 0) return;
+    place_kinematic_kernel<<<grid_for(count), kBlockSize, 0, stream>>>(rest, joints, weights, maps, count, x0c, x1c,
+                                                                        stride, x1, v);
+    WEFT_CUDA_CHECK_LAUNCH("place_kinematic_kernel");
 }
 
 void launch_collision_scatter(const float* x1c, const float* x0c, const std::uint8_t* outcome, std::uint32_t n,

@@ -48,8 +48,6 @@ DeviceCollisions::~DeviceCollisions() = default;
 
 void DeviceCollisions::release() {
     geometry_ = {};
-    kinematic_x0_ = {};
-    kinematic_x1_ = {};
     active_ = false;
     n_ = 0;
     kinematic_count_ = 0;
@@ -65,7 +63,7 @@ void DeviceCollisions::release() {
     friction_ = {};
     rest_ = {};
     vertex_cloth_ = {};
-    kinematic_host_.allocate(0);
+    kinematics_.release();
     cones_.release();
 }
 
@@ -98,9 +96,7 @@ void DeviceCollisions::build(const FlatModel& flat, const Model& model) {
     inverse_mass_.upload(to_float(g.inverse_mass), ledger_, "collision vertex attributes");
     thickness_.upload(to_float(g.thickness), ledger_, "collision vertex attributes");
     friction_.upload(to_float(g.friction), ledger_, "collision vertex attributes");
-    kinematic_host_.allocate(4 * 3 * kinematic_count_);
-    kinematic_x0_.resize(kinematic_count_);
-    kinematic_x1_.resize(kinematic_count_);
+    kinematics_.build(model, g, ledger_);
     if (g.self && n_ > 0) {
         // Rest exclusion (CollisionSettings::rest_exclusion) only concerns pairs inside one cloth.
         std::vector<float> rest(3 * static_cast<std::size_t>(n_));
@@ -185,28 +181,8 @@ std::size_t DeviceCollisions::detect(const Model& model, double t, double h, con
     float* x0c = positions_.get();
     float* x1c = x0c + 3 * static_cast<std::size_t>(vertices_);
     launch_collision_predict(x, v, n_, static_cast<float>(h), x0c, x1c, vertices_, stream);
-    if (nk > 0) {
-        // Kinematic poses at t and t + h in double on the host (as the CPU), and the solve's copies:
-        // pose at t + h and velocity. Four SoA blocks of 3·nk floats in pinned memory (the stream is
-        // idle here: every substep ends with a synchronisation, so the buffer is free to rewrite).
-        geometry_.place_kinematic(model, t, kinematic_x0_);
-        geometry_.place_kinematic(model, t + h, kinematic_x1_);
-        float* k = kinematic_host_.get();
-        for (std::size_t j = 0; j < nk; ++j)
-            for (int c = 0; c < 3; ++c) {
-                const std::size_t cc = static_cast<std::size_t>(c);
-                k[cc * nk + j] = static_cast<float>(kinematic_x0_[j][c]);
-                k[(3 + cc) * nk + j] = static_cast<float>(kinematic_x1_[j][c]);
-                k[(6 + cc) * nk + j] = static_cast<float>(kinematic_x1_[j][c]);
-                k[(9 + cc) * nk + j] = static_cast<float>((kinematic_x1_[j][c] - kinematic_x0_[j][c]) / h);
-            }
-        for (std::size_t c = 0; c < 3; ++c) {
-            WEFT_CUDA_CHECK(cudaMemcpyAsync(x0c + c * vertices_ + n_, k + c * nk, nk * sizeof(float),
-                                            cudaMemcpyHostToDevice, stream));
-            WEFT_CUDA_CHECK(cudaMemcpyAsync(x1c + c * vertices_ + n_, k + (3 + c) * nk, nk * sizeof(float),
-                                            cudaMemcpyHostToDevice, stream));
-        }
-    }
+    // The mesh colliders at t and t + h, skinned and placed on the device (device_kinematics.h).
+    kinematics_.place(model, t, h, x0c, x1c, vertices_, n_, stream);
 
     offset_ = settings.mode == CollisionMode::Offset;
     if (offset_) {
@@ -399,14 +375,11 @@ void DeviceCollisions::publish(const ContactInputs& list, cudaStream_t stream, S
         WEFT_CUDA_CHECK(cudaMemcpyAsync(list.list, proximity_.contacts(), count * sizeof(DeviceContact),
                                         cudaMemcpyDeviceToDevice, stream));
     const std::size_t nk = kinematic_count_;
-    if (nk > 0) {
-        const float* k = kinematic_host_.get();
-        for (std::size_t c = 0; c < 3; ++c) {
-            WEFT_CUDA_CHECK(cudaMemcpyAsync(list.kinematic_x1 + c * list.kinematic_capacity, k + (6 + c) * nk,
-                                            nk * sizeof(float), cudaMemcpyHostToDevice, stream));
-            WEFT_CUDA_CHECK(cudaMemcpyAsync(list.kinematic_v + c * list.kinematic_capacity, k + (9 + c) * nk,
-                                            nk * sizeof(float), cudaMemcpyHostToDevice, stream));
-        }
+    for (std::size_t c = 0; c < 3 && nk > 0; ++c) {
+        WEFT_CUDA_CHECK(cudaMemcpyAsync(list.kinematic_x1 + c * list.kinematic_capacity, kinematics_.end_positions() + c * nk,
+                                        nk * sizeof(float), cudaMemcpyDeviceToDevice, stream));
+        WEFT_CUDA_CHECK(cudaMemcpyAsync(list.kinematic_v + c * list.kinematic_capacity, kinematics_.velocities() + c * nk,
+                                        nk * sizeof(float), cudaMemcpyDeviceToDevice, stream));
     }
     stats.ms(Stage::NarrowPhase) += ms_since(clock);
 }

@@ -6,7 +6,8 @@
 //
 // Before the solve (outside the solver's CUDA graph, on the same stream: the detection reads its
 // overflow counters back to the host):
-//   - kinematic vertices placed at t and t + h on the host, in double, and uploaded;
+//   - kinematic vertices placed at t and t + h on the device (device_kinematics.h: the host sends
+//     each mesh collider's map, or each joint's where a character plays a clip);
 //   - the GPU broad phase over the predicted motion x0 → x0 + h·v0;
 //   - the GPU proximity contacts, copied device to device into the solver's contact list (same
 //     64-byte layout, asserted in device_collisions.cpp), with the kinematic poses at t + h and
@@ -38,6 +39,7 @@
 #include "collision/proximity_gpu.h"
 #include "device_array.h"
 #include "device_contacts.h"
+#include "device_kinematics.h"
 #include "weft/backend/flat_model.h"
 #include "weft/backend/model.h"
 #include "weft/stats.h"
@@ -163,7 +165,6 @@ private:
     void cull(const Model& model, collision::GpuBroadPhaseInput& in, cudaStream_t stream);
 
     weft::collision::CollisionGeometry geometry_;  // the index space, as the CPU backend builds it
-    std::vector<Vec3d> kinematic_x0_, kinematic_x1_;  // kinematic poses at t and t + h, m
     bool active_ = false;
     std::uint32_t n_ = 0;               // cloth vertices
     std::size_t kinematic_count_ = 0;   // mesh collider vertices
@@ -178,7 +179,7 @@ private:
     DeviceArray<float> inverse_mass_, thickness_, friction_;
     DeviceArray<float> rest_;                 // with self-collision: cloth rest positions, SoA stride n_
     DeviceArray<std::uint32_t> vertex_cloth_;  // with self-collision: owning cloth of each cloth vertex
-    PinnedArray<float> kinematic_host_;  // x(t), x(t + h), x(t + h) again for the solve, v: 3·nk each
+    DeviceKinematics kinematics_;  // the mesh colliders' vertices, skinned and placed on the device
     collision::GpuNormalConeCulling cones_;  // built with self-collision
     collision::GpuBroadPhase broad_;  // over the predicted motion (proximity)
     collision::GpuProximityContacts proximity_;

@@ -92,6 +92,14 @@ void launch_offset_detect_positions(const float* x0, const float* vk, std::uint3
                                     std::uint32_t vertices, float* detect, cudaStream_t stream);
 void launch_collision_predict(const float* x, const float* v, std::uint32_t n, float h, float* x0c, float* x1c,
                               std::uint32_t stride, cudaStream_t stream);
+/// Mesh colliders (device_kinematics.h): each of the `count` vertices is placed by the weighted maps
+/// of its 4 (joint id, weight) entries; a map is kKinematicMapFloats floats: A(t), A(t + h) and
+/// (A(t + h) − A(t))/h, each row-major 3×4. Writes x(t) to x0c, x(t + h) to x1c (stride `stride`),
+/// and x(t + h) and the velocity to x1 and v (stride count).
+inline constexpr std::size_t kKinematicMapFloats = 36;
+void launch_place_kinematic(const float* rest, const std::uint32_t* joints, const float* weights, const float* maps,
+                            std::uint32_t count, float* x0c, float* x1c, std::uint32_t stride, float* x1, float* v,
+                            cudaStream_t stream);
 /// x1c = x for the n cloth vertices (the solved end of the substep).
 void launch_collision_gather(const float* x, std::uint32_t n, float* x1c, std::uint32_t stride, cudaStream_t stream);
 /// After the impact zones: cloth vertices with a zone outcome (weft::collision::VertexOutcome per

@@ -12,13 +12,25 @@ void collider_mesh_positions(const ColliderDesc& c, double t, std::span<Vec3d> o
         throw Error("collider '" + c.name + "': " + std::to_string(out.size()) + " positions asked of a mesh of " +
                     std::to_string(c.mesh ? c.mesh->positions.size() : 0));
     const Transform frame = c.motion.at(t);
-    if (c.skin == nullptr || c.clip.empty()) {
+    if (!plays_clip(c)) {
         for (std::size_t i = 0; i < out.size(); ++i) out[i] = frame.apply(c.mesh->positions[i]);
         return;
     }
     const std::vector<JointPose> poses = sample_clip(*c.skin, c.skin->clip(c.clip), c.clip_speed * t, c.clip_loop);
     skin(*c.skin, skinning_transforms(*c.skin, poses), out);
     for (Vec3d& p : out) p = frame.apply(p);
+}
+
+void collider_mesh_transforms(const ColliderDesc& c, double t, std::vector<Affine>& out) {
+    const Transform frame = c.motion.at(t);
+    const Affine placed{frame.rotation, frame.translation};
+    if (!plays_clip(c)) {
+        out.assign(1, placed);
+        return;
+    }
+    const std::vector<JointPose> poses = sample_clip(*c.skin, c.skin->clip(c.clip), c.clip_speed * t, c.clip_loop);
+    out = skinning_transforms(*c.skin, poses);
+    for (Affine& a : out) a = placed * a;
 }
 
 }  // namespace weft

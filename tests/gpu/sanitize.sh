@@ -47,6 +47,10 @@ run initcheck "$weft" run flag --backend cuda --frames 2 --quiet --set 'solver.l
 # the truncation after every Newton update; the sheets of layers start 2 cm apart, within the radius cap.
 run memcheck "$weft" run layers --backend cuda --frames 3 --quiet --set 'collision.mode=offset' --set 'solver.cg_max_iterations=200'
 run initcheck "$weft" run layers --backend cuda --frames 2 --quiet --set 'collision.mode=offset' --set 'solver.cg_max_iterations=100'
+# Mesh colliders placed on the device: the garment's rigid body, the runner skinned each substep.
+run memcheck "$weft" run garment --backend cuda --frames 2 --quiet --set 'solver.cg_max_iterations=100'
+run memcheck "$weft" run runner --backend cuda --frames 2 --quiet --set 'solver.cg_max_iterations=100'
+run initcheck "$weft" run runner --backend cuda --frames 1 --quiet --set 'solver.cg_max_iterations=100'
 # The multi-GPU building blocks (halo exchange, parts' products): the test binary beside weft, every
 # ghost filled before it is read (initcheck) and no write outside a receiver's ghost range (memcheck).
 parts_test="$(dirname "$weft")/test_multi_gpu_parts"

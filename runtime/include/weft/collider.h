@@ -4,9 +4,9 @@
 
 #include <cstdint>
 #include <memory>
-#include <string>
-
 #include <span>
+#include <string>
+#include <vector>
 
 #include "weft/fabric.h"
 #include "weft/motion.h"
@@ -49,5 +49,15 @@ struct ColliderDesc {
 /// A mesh collider's vertices in the world at time `t` (s): skinned by its clip where it has a skin,
 /// then placed by its motion. `out` holds one position a mesh vertex (m).
 void collider_mesh_positions(const ColliderDesc& collider, double t, std::span<Vec3d> out);
+
+/// Whether a mesh collider is bent by a clip (it has a skin and plays a clip); otherwise its mesh
+/// moves rigidly with its motion.
+[[nodiscard]] inline bool plays_clip(const ColliderDesc& c) { return c.skin != nullptr && !c.clip.empty(); }
+
+/// The maps that place a mesh collider's vertices in the world at time `t` (s), for backends that
+/// skin on their own: one a joint, A_j = F(t)·G_j(t)·B_j (F the motion's frame), where it plays a
+/// clip, so that vertex i is Σ_k w_ik·A_{j_ik}·X_i (X_i its bind-pose position); otherwise the one
+/// map F(t), applied to every vertex. `out` is resized.
+void collider_mesh_transforms(const ColliderDesc& collider, double t, std::vector<Affine>& out);
 
 }  // namespace weft

@@ -62,7 +62,7 @@ void CollisionGeometry::place_kinematic(const Model& model, double t, std::span<
     for (std::size_t m = 0; m < meshes.size(); ++m) {
         const ColliderDesc& c = model.colliders[meshes[m].collider];
         const std::size_t last = m + 1 < meshes.size() ? meshes[m + 1].first_vertex : kinematic_local.size();
-        if (c.skin != nullptr) {  // a character: its clip bends the mesh before its motion places it
+        if (plays_clip(c)) {  // a character: its clip bends the mesh before its motion places it
             collider_mesh_positions(c, t, out.subspan(meshes[m].first_vertex, last - meshes[m].first_vertex));
             continue;
         }
