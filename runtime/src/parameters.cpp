@@ -462,6 +462,10 @@ constexpr Parameter kTable[] = {
     {.section = "cloth.pin", .name = "motion", .type = T::String,
      .doc = "a `[[motion]]` the pins follow; without it they stay where they start", .effect = E::Rebuild,
      .constraint = "a `[[motion]]` name", .default_text = "none"},
+    {.section = "cloth.pin", .name = "follow", .type = T::String,
+     .doc = "a mesh collider (a character's skin) the pins follow: each selected vertex keeps its offset from the "
+            "collider vertex nearest to it at t = 0 (not with `motion`)",
+     .effect = E::Rebuild, .constraint = "a mesh `[[collider]]` name", .default_text = "none"},
 
     // ---- [[collider]]
     {.section = "collider", .name = "name", .type = T::String, .doc = "used by `--set collider.NAME…` and in messages",

@@ -2,6 +2,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <limits>
 #include <map>
 #include <set>
 
@@ -149,7 +150,8 @@ std::shared_ptr<const MeshData> load_collider_mesh(const ColliderMeshSource& src
 
 }  // namespace
 
-std::vector<PinDesc> scene_pins(const SceneDesc& scene, std::size_t cloth_index, const Fabric& fabric) {
+std::vector<PinDesc> scene_pins(const SceneDesc& scene, std::size_t cloth_index, const Fabric& fabric,
+                                std::span<const ColliderDesc> colliders) {
     const SceneCloth& cloth = scene.cloths.at(cloth_index);
     const std::string where =
         scene.path.string() + ": cloth[" + std::to_string(cloth.entry) + "] '" + cloth.desc.name + "'";
@@ -167,7 +169,30 @@ std::vector<PinDesc> scene_pins(const SceneDesc& scene, std::size_t cloth_index,
             if (it == scene.motions.end()) throw Error(pin_where + ": unknown motion '" + name + "'");
             motion = static_cast<int>(it - scene.motions.begin());
         }
-        for (std::uint32_t v : select(cloth.pins[k], cloth, fabric, pin_where))
+        const std::vector<std::uint32_t> selected = select(cloth.pins[k], cloth, fabric, pin_where);
+        if (const std::string& name = cloth.pins[k].follow; !name.empty()) {
+            // A character's skin: each vertex follows the skin vertex nearest to where it starts.
+            const auto it = std::find_if(colliders.begin(), colliders.end(), [&](const ColliderDesc& c) { return c.name == name; });
+            if (it == colliders.end() || !it->mesh)
+                throw Error(pin_where + ": follows collider '" + name + "', whose mesh is not loaded (build_world loads it)");
+            std::vector<Vec3d> skin(it->mesh->positions.size());
+            collider_mesh_positions(*it, 0.0, skin);
+            const auto rest = fabric.rest_positions();
+            for (std::uint32_t v : selected) {
+                if (!pinned.insert(v).second) continue;
+                const Vec3d start = cloth.desc.transform.apply(rest[v]);
+                std::uint32_t nearest = 0;
+                double best = std::numeric_limits<double>::infinity();
+                for (std::uint32_t j = 0; j < skin.size(); ++j)
+                    if (const double d = length_squared(skin[j] - start); d < best) {
+                        best = d;
+                        nearest = j;
+                    }
+                pins.push_back({.vertex = v, .collider = static_cast<int>(it - colliders.begin()), .collider_vertex = nearest});
+            }
+            continue;
+        }
+        for (std::uint32_t v : selected)
             if (pinned.insert(v).second) pins.push_back({v, motion});
     }
     return pins;
@@ -180,6 +205,45 @@ std::unique_ptr<World> build_world(const SceneDesc& scene, std::string_view back
     // In the scene's order: scene_pins() relies on it to index a pin's motion.
     for (const SceneMotion& m : scene.motions) (void)world->add_motion(m.motion);
 
+    // Colliders before cloths: a cloth's pins may follow a mesh collider's skin. Colliders that name
+    // the same file at the same scale share one mesh.
+    std::vector<ColliderDesc> placed;  // as added, meshes loaded
+    std::map<std::pair<std::filesystem::path, double>, std::shared_ptr<const MeshData>> meshes;
+    for (std::size_t k = 0; k < scene.colliders.size(); ++k) {
+        ColliderDesc collider = scene.colliders[k];
+        if (collider.shape == ColliderShape::Mesh && !collider.mesh) {
+            const std::string where = file + ": collider[" + std::to_string(k) + "] '" + collider.name + "'";
+            if (k >= scene.collider_meshes.size() || scene.collider_meshes[k].file.empty())
+                throw Error(where + ": a mesh collider without a mesh file");
+            const ColliderMeshSource& src = scene.collider_meshes[k];
+            if (!src.clip.empty()) {  // an animated character: its bind-pose mesh is the collider's
+                if (src.scale != 1.0)
+                    throw Error(where + ": scale " + std::to_string(src.scale) +
+                                " with a clip (a skinned character is taken at its file's size; scale it where it is made)");
+                std::shared_ptr<const SkinnedMesh> skin;
+                try {
+                    skin = std::make_shared<const SkinnedMesh>(load_skinned_mesh_file(src.file));
+                } catch (const Error& e) {
+                    throw Error(where + ": " + e.what());
+                }
+                collider.skin = skin;
+                collider.clip = src.clip;
+                collider.mesh = std::make_shared<const MeshData>(skin->mesh);
+                try {
+                    world->add_collider(collider);  // checks the clip (naming the file's clips)
+                } catch (const Error& e) {
+                    throw Error(where + ": " + e.what());
+                }
+                placed.push_back(std::move(collider));
+                continue;
+            }
+            auto& mesh = meshes[{src.file, src.scale}];
+            if (!mesh) mesh = load_collider_mesh(src, where);
+            collider.mesh = mesh;
+        }
+        world->add_collider(collider);
+        placed.push_back(std::move(collider));
+    }
     // Copies made by `repeat` are adjacent and identical up to their placement: they share one fabric.
     std::shared_ptr<const Fabric> shared;
     std::size_t vertices = 0;  // in the world so far, against kMaxWorldVertices
@@ -207,43 +271,8 @@ std::unique_ptr<World> build_world(const SceneDesc& scene, std::string_view back
                             " a world may hold (weft/world_limits.h; check the grid cells and the repeat count)");
         }
         vertices += desc.fabric->vertex_count();
-        desc.pins = scene_pins(scene, c, *desc.fabric);
+        desc.pins = scene_pins(scene, c, *desc.fabric, placed);
         world->add_cloth(desc);
-    }
-    // Colliders that name the same file at the same scale share one mesh.
-    std::map<std::pair<std::filesystem::path, double>, std::shared_ptr<const MeshData>> meshes;
-    for (std::size_t k = 0; k < scene.colliders.size(); ++k) {
-        ColliderDesc collider = scene.colliders[k];
-        if (collider.shape == ColliderShape::Mesh && !collider.mesh) {
-            const std::string where = file + ": collider[" + std::to_string(k) + "] '" + collider.name + "'";
-            if (k >= scene.collider_meshes.size() || scene.collider_meshes[k].file.empty())
-                throw Error(where + ": a mesh collider without a mesh file");
-            const ColliderMeshSource& src = scene.collider_meshes[k];
-            if (!src.clip.empty()) {  // an animated character: its bind-pose mesh is the collider's
-                if (src.scale != 1.0)
-                    throw Error(where + ": scale " + std::to_string(src.scale) +
-                                " with a clip (a skinned character is taken at its file's size; scale it where it is made)");
-                std::shared_ptr<const SkinnedMesh> skin;
-                try {
-                    skin = std::make_shared<const SkinnedMesh>(load_skinned_mesh_file(src.file));
-                } catch (const Error& e) {
-                    throw Error(where + ": " + e.what());
-                }
-                collider.skin = skin;
-                collider.clip = src.clip;
-                collider.mesh = std::make_shared<const MeshData>(skin->mesh);
-                try {
-                    world->add_collider(collider);  // checks the clip (naming the file's clips)
-                } catch (const Error& e) {
-                    throw Error(where + ": " + e.what());
-                }
-                continue;
-            }
-            auto& mesh = meshes[{src.file, src.scale}];
-            if (!mesh) mesh = load_collider_mesh(src, where);
-            collider.mesh = mesh;
-        }
-        world->add_collider(collider);
     }
     return world;
 }

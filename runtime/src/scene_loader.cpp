@@ -245,7 +245,31 @@ void read_mesh(Table& cloth, ClothSource& src, const std::filesystem::path& scen
     mesh->finish();
 }
 
-PinSelection read_pin(Table& t, const ClothSource& src, const std::vector<SceneMotion>& motions) {
+// `follow = "NAME"`: a mesh collider of the scene (read before the cloths) whose skin the pins follow.
+std::string follow_reference(Table& t, const std::vector<ColliderDesc>& colliders) {
+    const toml::node* node = t.find("follow");
+    auto name = t.optional_string("follow");
+    if (!name) return {};
+    if (t.has("motion"))
+        t.fail("follow", node, "follow and motion together (expected one: a pin follows a motion or a collider's skin)");
+    std::vector<std::string> meshes;
+    for (const ColliderDesc& c : colliders) {
+        if (c.name == *name && c.shape == ColliderShape::Mesh) return *name;
+        if (c.name == *name)
+            t.fail("follow", node, "collider '" + *name + "' is not a mesh (expected a mesh collider, whose vertices pins can follow)");
+        if (c.shape == ColliderShape::Mesh) meshes.push_back(c.name);
+    }
+    std::string expected;
+    for (const std::string& n : meshes) expected += (expected.empty() ? "'" : ", '") + n + "'";
+    const std::string guess = scene_toml::closest(*name, meshes);
+    t.fail("follow", node,
+           "unknown collider '" + *name + "'" + (guess.empty() ? "" : " (did you mean '" + guess + "'?)") +
+               (meshes.empty() ? " (expected the name of a mesh [[collider]]; the scene has none)"
+                               : " (expected one of " + expected + ")"));
+}
+
+PinSelection read_pin(Table& t, const ClothSource& src, const SceneDesc& scene) {
+    const std::vector<SceneMotion>& motions = scene.motions;
     constexpr std::string_view expected =
         "exactly one of vertices = [...], box = { min = [...], max = [...] }, edge = \"top\", corners = \"top\"";
     PinSelection pin;
@@ -301,6 +325,7 @@ PinSelection read_pin(Table& t, const ClothSource& src, const std::vector<SceneM
         pin.edge = n->as_string()->get();
         (void)which;
     }
+    pin.follow = follow_reference(t, scene.colliders);
     pin.motion = motion_reference(t, motions);
     t.finish();
     return pin;
@@ -340,7 +365,7 @@ void read_cloths(Table& root, SceneDesc& scene) {
         read_mesh(t, c.source, scene.path);
         read_parameters(t, "cloth", placement, c.desc, c.fabric);  // position … flat_rest_bending
         read_material(t, c.desc.material);
-        for (Table& p : t.array_of_tables("pin")) c.pins.push_back(read_pin(p, c.source, scene.motions));
+        for (Table& p : t.array_of_tables("pin")) c.pins.push_back(read_pin(p, c.source, scene));
         read_repeat(t, placement);
         scene.cloth_placements.push_back(placement);
         // Copy k is named NAME<k> and placed at position + k·offset, turned by rotation + k·rotation_step;
@@ -448,9 +473,9 @@ SceneDesc parse_scene(std::string_view toml_text, const std::filesystem::path& n
     Table root(document, "", file);
     read_scene_section(root, scene);
     read_world(root, scene.world);
-    read_motions(root, scene);  // before cloths and colliders, which refer to motions by name
+    read_motions(root, scene);    // before cloths and colliders, which refer to motions by name
+    read_colliders(root, scene);  // before cloths, whose pins may follow a mesh collider by name
     read_cloths(root, scene);
-    read_colliders(root, scene);
     read_camera(root, scene.camera);
     root.finish();
     return scene;

@@ -6,6 +6,7 @@
 #include <charconv>
 #include <fstream>
 #include <sstream>
+#include <tuple>
 #include <utility>
 #include <vector>
 
@@ -136,6 +137,7 @@ void write_pin(std::ostream& out, const PinSelection& pin) {
         case PinSelection::Kind::Corners: out << "corners = " << toml_string(pin.edge) << "\n"; break;
     }
     if (!pin.motion.empty()) out << "motion = " << toml_string(pin.motion) << "\n";
+    if (!pin.follow.empty()) out << "follow = " << toml_string(pin.follow) << "\n";
 }
 
 void write_cloth(std::ostream& out, const SceneDesc& scene, std::size_t entry, const std::filesystem::path& directory) {
@@ -262,10 +264,10 @@ void update_scene_from_world(SceneDesc& scene, const World& world) {
 
     // Pins: the scene's rules while they still say what the world pins, vertex lists once pins were
     // added or removed live (World::pin/unpin).
-    using PinKey = std::pair<std::uint32_t, int>;  // vertex, motion index
+    using PinKey = std::tuple<std::uint32_t, int, int>;  // vertex, motion index, collider index
     const auto pin_set = [](const std::vector<PinDesc>& pins) {
         std::vector<PinKey> keys;
-        for (const PinDesc& p : pins) keys.emplace_back(p.vertex, p.motion);
+        for (const PinDesc& p : pins) keys.emplace_back(p.vertex, p.motion, p.collider);
         std::sort(keys.begin(), keys.end());
         return keys;
     };
@@ -279,18 +281,23 @@ void update_scene_from_world(SceneDesc& scene, const World& world) {
     }
     for (std::size_t i = 0; i < scene.cloths.size(); ++i) {
         SceneCloth& cloth = scene.cloths[i];
-        if (pin_set(scene_pins(scene, i, *model.cloths[i].fabric)) == live_pins[i]) continue;
+        if (pin_set(scene_pins(scene, i, *model.cloths[i].fabric, model.colliders)) == live_pins[i]) continue;
         cloth.desc.pins.clear();
         cloth.pins.clear();
-        for (const auto& [vertex, motion] : live_pins[i]) {
+        // One vertex list per motion or followed collider. A vertex that follows a collider is written
+        // with `follow`, which pins it again to the skin vertex nearest to where it starts.
+        for (const auto& [vertex, motion, collider] : live_pins[i]) {
             const std::string name =
                 motion >= 0 && static_cast<std::size_t>(motion) < scene.motions.size() ? scene.motions[motion].name : "";
+            const std::string follow =
+                collider >= 0 && static_cast<std::size_t>(collider) < model.colliders.size() ? model.colliders[collider].name : "";
             auto rule = std::find_if(cloth.pins.begin(), cloth.pins.end(),
-                                     [&](const PinSelection& s) { return s.motion == name; });
+                                     [&](const PinSelection& s) { return s.motion == name && s.follow == follow; });
             if (rule == cloth.pins.end()) {
                 PinSelection s;
                 s.kind = PinSelection::Kind::Vertices;
                 s.motion = name;
+                s.follow = follow;
                 rule = cloth.pins.insert(cloth.pins.end(), std::move(s));
             }
             rule->vertices.push_back(vertex);  // ascending: live_pins is sorted

@@ -168,15 +168,27 @@ struct Soup {
     }
 };
 
+/// The pairs a mesh collider makes with itself at t = 0 (a character built of overlapping boxes
+/// intersects itself; the cloth pipeline never tests kinematic triangles against each other).
+std::size_t collider_self_pairs(const World& world) {
+    std::size_t pairs = 0;
+    for (const ColliderDesc& c : world.model().colliders) {
+        if (!c.mesh) continue;
+        std::vector<Vec3d> p(c.mesh->positions.size());
+        collider_mesh_positions(c, 0.0, p);
+        pairs += collision::check_intersections(p, c.mesh->triangles).intersecting_pairs;
+    }
+    return pairs;
+}
+
 Soup world_at_start(const World& world) {
     Soup soup;
     const Model& m = world.model();
     for (std::size_t c = 0; c < m.cloths.size(); ++c) soup.add(world.positions(c), m.cloths[c].fabric->triangles());
     for (const ColliderDesc& c : m.colliders) {
         if (!c.mesh) continue;
-        const Transform frame = c.motion.at(0.0);
-        std::vector<Vec3d> p;
-        for (const Vec3d& x : c.mesh->positions) p.push_back(frame.apply(x));
+        std::vector<Vec3d> p(c.mesh->positions.size());
+        collider_mesh_positions(c, 0.0, p);  // a character in its clip's first pose
         soup.add(p, c.mesh->triangles);
     }
     return soup;
@@ -186,7 +198,7 @@ TEST(ShippedScenes, StartFreeOfIntersections) {
     // The collision pipeline keeps a state free of intersections; it cannot repair one it starts
     // from, so every scene must start clean (copies made by repeat, skirt against body included).
     const bool loader = test::install_loader();
-    for (const char* name : {"sphere", "twist", "falling", "layers", "projectile", "garment", "skirt", "drape"}) {
+    for (const char* name : {"sphere", "twist", "falling", "layers", "projectile", "garment", "skirt", "drape", "runner"}) {
         SCOPED_TRACE(name);
         const SceneDesc s = load_scene(scene_file(name));
         bool needs_loader = false;
@@ -196,7 +208,7 @@ TEST(ShippedScenes, StartFreeOfIntersections) {
         const auto world = build_world(s);
         const Soup soup = world_at_start(*world);
         const collision::IntersectionReport r = collision::check_intersections(soup.positions, soup.triangles);
-        EXPECT_EQ(r.intersecting_pairs, 0U);
+        EXPECT_EQ(r.intersecting_pairs, collider_self_pairs(*world)) << "pairs with a cloth in them";
         EXPECT_EQ(r.triangles_checked, soup.triangles.size());
     }
     // The check can fail: two copies placed on top of each other, turned, do intersect.

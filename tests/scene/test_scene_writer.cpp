@@ -44,7 +44,11 @@ void expect_same_scene(const SceneDesc& a, const SceneDesc& b) {
         EXPECT_EQ(x.fabric.density, y.fabric.density);
         EXPECT_EQ(x.source.cells_x, y.source.cells_x);
         EXPECT_EQ(x.source.file, y.source.file);
-        EXPECT_EQ(x.pins.size(), y.pins.size());
+        ASSERT_EQ(x.pins.size(), y.pins.size());
+        for (std::size_t p = 0; p < x.pins.size(); ++p) {
+            EXPECT_EQ(x.pins[p].motion, y.pins[p].motion);
+            EXPECT_EQ(x.pins[p].follow, y.pins[p].follow);
+        }
         EXPECT_EQ(x.entry, y.entry);
     }
     ASSERT_EQ(a.colliders.size(), b.colliders.size());

@@ -14,9 +14,11 @@
 #include "weft/collider.h"
 #include "weft/error.h"
 #include "weft/mesh.h"
-#include "weft/world.h"
+#include "weft/scene.h"
 #include "weft/skinning.h"
+#include "weft/world.h"
 #if WEFT_TEST_HAVE_ASSETS
+#include "weft/assets/assimp_loader.h"
 #include "weft/assets/skinned_import.h"
 #endif
 
@@ -306,6 +308,87 @@ TEST(SkinnedImport, FilesThatHoldNoCharacterAreRefusedByName) {
         std::fclose(f);
     }
     expect_error(text, "not a glTF file");
+}
+// The shipped runner scene: `[[cloth.pin]] follow = "runner"` pins the cape's top edge to the skin
+// vertices nearest to it at the start, and they stay on them (plus their starting offsets) while the
+// character runs; saved and loaded again, the scene pins the same vertices to the same skin vertices.
+TEST(SkinnedImport, TheRunnerScenesCapeFollowsTheSkin) {
+    assets::install_mesh_loader();
+    const std::filesystem::path file = std::filesystem::path(WEFT_SOURCE_DIR) / "assets/scenes/runner.toml";
+    const SceneDesc scene = load_scene(file);
+    const auto world = build_world(scene);
+    const Model& model = world->model();
+    ASSERT_EQ(model.colliders[0].name, "runner");
+    const ColliderDesc& runner = model.colliders[0];
+    ASSERT_TRUE(plays_clip(runner));
+    std::vector<Vec3d> skin(runner.mesh->positions.size());
+    collider_mesh_positions(runner, 0.0, skin);
+    const std::vector<Vec3d> start = world->positions(0);
+    const std::vector<PinDesc>& pins = model.cloths[0].pins;
+    ASSERT_EQ(pins.size(), 13U) << "the top edge of a 12-cell-wide grid";
+    std::vector<Vec3d> offsets;
+    for (const PinDesc& p : pins) {
+        EXPECT_EQ(p.collider, 0);
+        EXPECT_EQ(p.motion, -1);
+        // The nearest skin vertex, found here by brute force.
+        double best = 1e9;
+        for (const Vec3d& x : skin) best = std::min(best, length(x - start[p.vertex]));
+        EXPECT_DOUBLE_EQ(length(skin[p.collider_vertex] - start[p.vertex]), best) << "pin of vertex " << p.vertex;
+        EXPECT_LT(best, 0.2) << "the cape starts on the shoulders";
+        offsets.push_back(start[p.vertex] - skin[p.collider_vertex]);
+    }
+    double worst = 0.0, travel = 0.0;
+    for (int frame = 1; frame <= 20; ++frame) {
+        ASSERT_FALSE(world->step().non_finite) << "frame " << frame;
+        collider_mesh_positions(runner, world->time(), skin);
+        const std::vector<Vec3d> x = world->positions(0);
+        for (std::size_t k = 0; k < pins.size(); ++k) {
+            worst = std::max(worst, length(x[pins[k].vertex] - (skin[pins[k].collider_vertex] + offsets[k])));
+            travel = std::max(travel, length(x[pins[k].vertex] - start[pins[k].vertex]));
+        }
+    }
+    std::printf("[ skinned  ] runner scene: cape pins %.2e m off their skin vertices at worst, moved up to %.3f m\n", worst,
+                travel);
+    EXPECT_LT(worst, 1e-6);
+    EXPECT_GT(travel, 0.01) << "the run did not move the shoulders: the test proves nothing";
+
+    const SceneDesc again = parse_scene(scene_to_toml(scene, file.parent_path()), file.parent_path() / "saved.toml");
+    const auto rebuilt = build_world(again);
+    const std::vector<PinDesc>& pins_again = rebuilt->model().cloths[0].pins;
+    ASSERT_EQ(pins_again.size(), pins.size());
+    for (std::size_t k = 0; k < pins.size(); ++k) {
+        EXPECT_EQ(pins_again[k].vertex, pins[k].vertex);
+        EXPECT_EQ(pins_again[k].collider, pins[k].collider);
+        EXPECT_EQ(pins_again[k].collider_vertex, pins[k].collider_vertex);
+    }
+}
+
+// `follow` names a mesh collider of the scene and excludes `motion`; each mistake is an error that
+// names the file, the line and what was expected.
+TEST(SkinnedImport, FollowPinsThatCannotBeResolvedAreRefusedByName) {
+    const std::filesystem::path file = std::filesystem::path(WEFT_SOURCE_DIR) / "assets/scenes/bad_follow.toml";
+    const auto text = [](const std::string& pin) {
+        return "[[motion]]\nname = \"sway\"\n"
+               "[[collider]]\nname = \"runner\"\nshape = \"mesh\"\nfile = \"../characters/runner.gltf\"\nclip = \"run\"\n"
+               "[[collider]]\nname = \"floor\"\nshape = \"plane\"\n"
+               "[[cloth]]\nname = \"cape\"\nmesh = { grid = { width = 0.3, height = 0.7, cells = [4, 4] } }\n"
+               "[[cloth.pin]]\nedge = \"top\"\n" + pin;
+    };
+    const auto refused = [&](const std::string& pin, const std::vector<std::string>& parts) {
+        try {
+            (void)parse_scene(text(pin), file);
+            FAIL() << "accepted: " << pin;
+        } catch (const Error& e) {
+            const std::string what = e.what();
+            EXPECT_NE(what.find("bad_follow.toml:"), std::string::npos) << what;
+            for (const std::string& p : parts) EXPECT_NE(what.find(p), std::string::npos) << what;
+        }
+    };
+    refused("follow = \"runer\"\n", {"unknown collider 'runer'", "did you mean 'runner'"});
+    refused("follow = \"floor\"\n", {"collider 'floor' is not a mesh"});
+    refused("follow = \"runner\"\nmotion = \"sway\"\n", {"follow and motion together"});
+    refused("follow = 3\n", {"follow"});
+    EXPECT_NO_THROW((void)parse_scene(text("follow = \"runner\"\n"), file));
 }
 #endif
 

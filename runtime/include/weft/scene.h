@@ -30,6 +30,10 @@ struct PinSelection {
     Vec3d box_min{}, box_max{};           ///< Box: every vertex inside (m)
     std::string edge;                     ///< Edge/Corners: "top", "bottom", "left", "right" (grid only)
     std::string motion;                   ///< name of the motion the pins follow; empty = fixed
+    /// Name of a mesh collider (an animated character) whose skin the pins follow instead: each
+    /// selected vertex follows the collider vertex nearest to it at t = 0, keeping its offset
+    /// (PinDesc::collider). Empty: none. Not together with `motion`.
+    std::string follow;
 };
 
 struct SceneCloth {
@@ -123,9 +127,13 @@ void update_scene_from_world(SceneDesc& scene, const World& world);
 
 /// The pins of `scene.cloths[cloth]` on its cooked `fabric`: the cloth's own PinDescs, then each
 /// `[[cloth.pin]]` rule's vertices (a vertex chosen by several rules keeps the first rule's motion;
-/// motions indexed in `scene.motions` order, as build_world adds them). Throws `weft::Error` naming
-/// the file, cloth and rule for a rule that selects nothing or names an unknown motion or vertex.
-[[nodiscard]] std::vector<PinDesc> scene_pins(const SceneDesc& scene, std::size_t cloth, const Fabric& fabric);
+/// motions indexed in `scene.motions` order, as build_world adds them). A rule with `follow` pins
+/// each vertex to the nearest vertex at t = 0 of that collider in `colliders` (the scene's colliders
+/// with their meshes loaded, in scene order, as build_world adds them). Throws `weft::Error` naming
+/// the file, cloth and rule for a rule that selects nothing or names an unknown motion, vertex or
+/// collider, or follows a collider whose mesh `colliders` does not hold.
+[[nodiscard]] std::vector<PinDesc> scene_pins(const SceneDesc& scene, std::size_t cloth, const Fabric& fabric,
+                                              std::span<const ColliderDesc> colliders = {});
 
 /// Cooks the fabrics (loading mesh files), loads the meshes of mesh colliders, resolves pins and
 /// motions and creates the world. Copies made by `repeat` share one cooked fabric. Throws
