@@ -80,6 +80,10 @@ RenderFrame ClothFeed::simulate(const std::function<void()>& steps) {
         frame.cloth = vertices_;
     }
     frame.collider_models = collider_models(scene_, world_.model(), world_.time());
+    if (scene_.deforming_vertices > 0) {
+        deforming_collider_vertices(scene_, world_.model(), world_.time(), collider_vertices_);
+        frame.collider_vertices = collider_vertices_;
+    }
     return frame;
 }
 

@@ -116,6 +116,25 @@ RenderMesh plane_mesh(float s) {
     return m;
 }
 
+namespace {
+
+/// `mesh`'s triangles over `positions` as render vertices with smooth, area-weighted normals.
+void smooth_mesh_vertices(const MeshData& mesh, std::span<const Vec3d> positions, std::vector<RenderVertex>& out) {
+    std::vector<glm::vec3> normals(positions.size(), glm::vec3(0.0F));
+    for (const Triangle& t : mesh.triangles) {
+        const glm::vec3 a = to_glm(positions[t.v[0]]), b = to_glm(positions[t.v[1]]), d = to_glm(positions[t.v[2]]);
+        const glm::vec3 n = glm::cross(b - a, d - a);
+        for (const std::uint32_t v : t.v) normals[v] += n;
+    }
+    out.clear();
+    for (std::size_t v = 0; v < normals.size(); ++v) {
+        const float len = glm::length(normals[v]);
+        out.push_back(vertex(to_glm(positions[v]), len > 0.0F ? normals[v] / len : glm::vec3(0.0F, 1.0F, 0.0F)));
+    }
+}
+
+}  // namespace
+
 RenderScene make_render_scene(const World& world, const CameraDesc& camera) {
     const Model& model = world.model();
     RenderScene scene;
@@ -160,26 +179,23 @@ RenderScene make_render_scene(const World& world, const CameraDesc& camera) {
                 break;
             case ColliderShape::Mesh: {
                 if (!c.mesh) throw Error("collider '" + c.name + "': a mesh collider without a mesh");
-                // Smooth normals, area-weighted, from the mesh's own triangles.
-                std::vector<glm::vec3> normals(c.mesh->positions.size(), glm::vec3(0.0F));
-                for (const Triangle& t : c.mesh->triangles) {
-                    const glm::vec3 a = to_glm(c.mesh->positions[t.v[0]]), b = to_glm(c.mesh->positions[t.v[1]]),
-                                    d = to_glm(c.mesh->positions[t.v[2]]);
-                    const glm::vec3 n = glm::cross(b - a, d - a);
-                    for (const std::uint32_t v : t.v) normals[v] += n;
+                // A character playing a clip is drawn as placed (world space, pose at t = 0 until a
+                // frame brings its vertices); a rigid mesh in its own frame, moved by its model matrix.
+                draw.deforms = plays_clip(c);
+                std::vector<Vec3d> placed(c.mesh->positions);
+                if (draw.deforms) {
+                    collider_mesh_positions(c, 0.0, placed);
+                    draw.first_deforming_vertex = scene.deforming_vertices;
+                    scene.deforming_vertices += static_cast<std::uint32_t>(placed.size());
                 }
-                for (std::size_t v = 0; v < normals.size(); ++v) {
-                    const float len = glm::length(normals[v]);
-                    draw.mesh.vertices.push_back(
-                        vertex(to_glm(c.mesh->positions[v]), len > 0.0F ? normals[v] / len : glm::vec3(0.0F, 1.0F, 0.0F)));
-                }
+                smooth_mesh_vertices(*c.mesh, placed, draw.mesh.vertices);
                 for (const Triangle& t : c.mesh->triangles) draw.mesh.indices.insert(draw.mesh.indices.end(), {t.v[0], t.v[1], t.v[2]});
                 draw.colour = {0.62F, 0.58F, 0.55F};
                 break;
             }
         }
         if (c.shape != ColliderShape::Plane) {
-            const glm::mat4 m = to_matrix(c.motion.at(0.0));
+            const glm::mat4 m = draw.deforms ? glm::mat4(1.0F) : to_matrix(c.motion.at(0.0));
             for (const RenderVertex& v : draw.mesh.vertices)
                 grow(lo, hi, glm::vec3(m * glm::vec4(v.position[0], v.position[1], v.position[2], 1.0F)));
         }
@@ -210,9 +226,28 @@ std::vector<glm::mat4> collider_models(const RenderScene& scene, const Model& mo
     std::vector<glm::mat4> out;
     out.reserve(scene.colliders.size());
     for (const ColliderDraw& c : scene.colliders)
-        out.push_back(c.collider < model.colliders.size() ? to_matrix(model.colliders[c.collider].motion.at(t))
-                                                          : glm::mat4(1.0F));
+        out.push_back(c.collider < model.colliders.size() && !c.deforms ? to_matrix(model.colliders[c.collider].motion.at(t))
+                                                                        : glm::mat4(1.0F));
     return out;
+}
+
+void deforming_collider_vertices(const RenderScene& scene, const Model& model, double t, std::vector<RenderVertex>& out) {
+    out.resize(scene.deforming_vertices);
+    std::vector<Vec3d> placed;
+    std::vector<RenderVertex> one;
+    for (const ColliderDraw& c : scene.colliders) {
+        if (!c.deforms) continue;
+        if (c.collider >= model.colliders.size() || !model.colliders[c.collider].mesh)
+            throw Error("render: collider '" + c.name + "' is not in the model (rebuild the render scene after a topology change)");
+        const ColliderDesc& desc = model.colliders[c.collider];
+        placed.resize(desc.mesh->positions.size());
+        if (c.first_deforming_vertex + placed.size() > out.size())
+            throw Error("render: collider '" + c.name + "' has " + std::to_string(placed.size()) +
+                        " vertices, more than the scene made room for (rebuild the render scene after a topology change)");
+        collider_mesh_positions(desc, t, placed);
+        smooth_mesh_vertices(*desc.mesh, placed, one);
+        std::copy(one.begin(), one.end(), out.begin() + c.first_deforming_vertex);
+    }
 }
 
 void cloth_vertices(const World& world, const RenderScene& scene, std::vector<RenderVertex>& out) {

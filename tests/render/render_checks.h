@@ -265,6 +265,43 @@ inline void expect_shows_the_side_facing_the_camera(Renderer& r) {
     EXPECT_EQ(r.validation_messages(), 0);
 }
 
+/// A character playing a clip is drawn where each frame's vertices put it: sliding_box drawn at
+/// t = 0 and at t = 1 (the frame bringing the clip's last pose), the cube's centre at each time
+/// shows the cube (darker or of another hue than the ground grid there) in the picture of that
+/// time and the ground in the other; a frame without vertices keeps the last ones drawn.
+inline void expect_draws_deforming_colliders_where_the_frame_puts_them(Renderer& r) {
+    TestScene t = sliding_box();
+    ASSERT_EQ(t.scene.deforming_vertices, 8U);
+    r.load(t.scene);
+    std::vector<RenderVertex> at_start, at_end;
+    deforming_collider_vertices(t.scene, t.world->model(), 0.0, at_start);
+    deforming_collider_vertices(t.scene, t.world->model(), 1.0, at_end);
+    RenderFrame start = t.frame, end = t.frame;
+    start.collider_vertices = at_start;
+    end.collider_vertices = at_end;
+    const Image first = r.draw(start);
+    const Image second = r.draw(end);
+    RenderFrame keep = t.frame;  // no vertices: the cube stays where `end` put it
+    const Image third = r.draw(keep);
+    save(r.name(), "sliding_box_start", first);
+    save(r.name(), "sliding_box_end", second);
+    const glm::mat4 vp = view_projection(t.scene, first.width, first.height);
+    const auto pixel = [&](glm::vec3 p) {
+        const glm::vec2 q = project(vp, p, first.width, first.height);
+        return glm::ivec2(static_cast<int>(q.x), static_cast<int>(q.y));
+    };
+    const glm::ivec2 left = pixel({-0.5F, 0.2F, 0.2F}), right = pixel({0.5F, 0.2F, 0.2F});  // the front faces' centres
+    const auto differs = [](const Image& a, const Image& b, glm::ivec2 at) {
+        return std::abs(luminance(a, at.x, at.y) - luminance(b, at.x, at.y)) +
+               255.0 * static_cast<double>(glm::length(chromaticity(a, at.x, at.y, 1) - chromaticity(b, at.x, at.y, 1)));
+    };
+    EXPECT_GT(differs(first, second, left), 10.0) << "the cube's place at t = 0 looks the same at t = 1";
+    EXPECT_GT(differs(first, second, right), 10.0) << "the cube's place at t = 1 looks the same at t = 0";
+    EXPECT_LT(differs(second, third, left) + differs(second, third, right), 1.0)
+        << "a frame without collider vertices moved the cube";
+    EXPECT_EQ(r.validation_messages(), 0);
+}
+
 /// The ball's shadow falls on the ground where the light puts it, and nowhere else: sheet_over_ball
 /// drawn with the ball and with the ball 100 m away (outside the view and the shadow map), compared
 /// on the ground around the ball's footprint where the ball itself is not in view (its silhouette

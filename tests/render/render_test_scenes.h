@@ -2,9 +2,11 @@
 // Scenes the renderer tests draw, shared by the Vulkan, EGL and capture tests: small, fixed and
 // without simulation, so that every pixel is reproducible.
 #include <memory>
+#include <vector>
 
 #include "weft/mesh.h"
 #include "weft/render/render_scene.h"
+#include "weft/skinning.h"
 #include "weft/world.h"
 
 namespace weft::render::test {
@@ -43,6 +45,41 @@ inline TestScene sheet_over_ball(bool show_back = false) {
     t.scene = make_render_scene(*t.world, camera);
     cloth_vertices(*t.world, t.scene, t.vertices);
     t.frame.cloth = t.vertices;
+    t.frame.collider_models = collider_models(t.scene, t.world->model(), 0.0);
+    return t;
+}
+
+/// A 0.4 m cube standing on the ground, as a character of one joint whose clip "slide" carries it
+/// from x = −0.5 m (t = 0) to x = +0.5 m (t = 1 s): a collider the renderer must draw from each
+/// frame's vertices (RenderFrame::collider_vertices), not from its mesh and a model matrix.
+/// `frame` holds the pose at t = 0.
+inline TestScene sliding_box() {
+    auto skin = std::make_shared<SkinnedMesh>();
+    skin->mesh.source = "sliding box";
+    for (int k = 0; k < 8; ++k)  // vertex k: x, y, z from its bits 0, 1, 2
+        skin->mesh.positions.push_back({(k & 1) ? 0.2 : -0.2, (k & 2) ? 0.4 : 0.0, (k & 4) ? 0.2 : -0.2});
+    skin->mesh.triangles = {{{0, 4, 6}}, {{0, 6, 2}}, {{1, 3, 7}}, {{1, 7, 5}}, {{0, 1, 5}}, {{0, 5, 4}},
+                            {{2, 6, 7}}, {{2, 7, 3}}, {{0, 2, 3}}, {{0, 3, 1}}, {{4, 5, 7}}, {{4, 7, 6}}};  // outward
+    skin->vertex_joints.assign(8, {0, 0, 0, 0});
+    skin->vertex_weights.assign(8, {1.0, 0.0, 0.0, 0.0});
+    skin->joints = {Joint{.name = "root"}};
+    AnimationClip slide{.name = "slide", .duration = 1.0};
+    slide.tracks.push_back({.joint = 0, .translation_times = {0.0, 1.0}, .translations = {{-0.5, 0.0, 0.0}, {0.5, 0.0, 0.0}}});
+    skin->clips.push_back(slide);
+    TestScene t;
+    t.world = std::make_unique<World>();
+    ColliderDesc box{.name = "box", .shape = ColliderShape::Mesh};
+    box.mesh = std::make_shared<const MeshData>(skin->mesh);
+    box.skin = skin;
+    box.clip = "slide";
+    box.clip_loop = false;
+    t.world->add_collider(box);
+    t.world->add_collider(ColliderDesc{.name = "floor", .shape = ColliderShape::Plane});
+    CameraDesc camera;
+    camera.position = {0.0, 1.2, 2.4};
+    camera.target = {0.0, 0.2, 0.0};
+    camera.fov_degrees = 45.0;
+    t.scene = make_render_scene(*t.world, camera);
     t.frame.collider_models = collider_models(t.scene, t.world->model(), 0.0);
     return t;
 }

@@ -56,6 +56,12 @@ TEST(EglRenderer, BallShadowsTheGroundWhereTheLightPutsIt) {
     test::expect_ball_shadow_where_the_light_puts_it(*c.renderer);
 }
 
+TEST(EglRenderer, DrawsAnAnimatedCharacterWhereEachFramePutsIt) {
+    const test::Created c = create(test::small_options());
+    if (!c.renderer) GTEST_SKIP() << c.skip;
+    test::expect_draws_deforming_colliders_where_the_frame_puts_them(*c.renderer);
+}
+
 TEST(EglRenderer, MultisamplingSmoothsEdgesOnly) {
     const test::Created c1 = create(test::small_options(1));
     if (!c1.renderer) GTEST_SKIP() << c1.skip;

@@ -12,6 +12,7 @@
 #include <unistd.h>
 
 #include "render_test_scenes.h"
+#include "weft/backend/model.h"
 #include "weft/error.h"
 #include "weft/render/frame_sequence.h"
 #include "weft/render/image.h"
@@ -188,6 +189,32 @@ void expect_outward(const RenderMesh& m, glm::vec3 half_axis_extent) {
         if (glm::dot(area, c - axis_point) > 0.0F) ++outward;
     }
     EXPECT_EQ(outward + degenerate, static_cast<int>(m.indices.size() / 3));
+}
+
+// A character playing a clip is a deforming collider: its mesh is drawn in world space with an
+// identity model matrix, and each frame's vertices are the collision pipeline's placement of it.
+TEST(RenderScene, ACharacterPlayingAClipDeformsEachFrame) {
+    const test::TestScene t = test::sliding_box();
+    const RenderScene& s = t.scene;
+    ASSERT_EQ(s.colliders.size(), 2U);  // the box, then the floor (the ground grid)
+    const std::size_t box = 0;
+    ASSERT_EQ(s.colliders[box].name, "box");
+    ASSERT_TRUE(s.colliders[box].deforms);
+    EXPECT_FALSE(s.colliders[1].deforms);
+    EXPECT_EQ(s.deforming_vertices, 8U);
+    const std::vector<glm::mat4> models = collider_models(s, t.world->model(), 0.7);
+    EXPECT_EQ(models[box], glm::mat4(1.0F));
+    std::vector<RenderVertex> v;
+    deforming_collider_vertices(s, t.world->model(), 0.7, v);
+    ASSERT_EQ(v.size(), 8U);
+    std::vector<Vec3d> placed(8);
+    collider_mesh_positions(t.world->model().colliders[0], 0.7, placed);
+    for (std::size_t i = 0; i < 8; ++i)
+        for (int c = 0; c < 3; ++c) EXPECT_NEAR(v[i].position[c], placed[i][c], 1e-6) << "vertex " << i;
+    EXPECT_NEAR(v[0].position[0], -0.2 + 0.2, 1e-6);  // x = −0.2 slid 0.7 of the way from −0.5 to +0.5
+    // The pose at t = 0 is the scene's own mesh (what a renderer draws before the first frame).
+    deforming_collider_vertices(s, t.world->model(), 0.0, v);
+    for (std::size_t i = 0; i < 8; ++i) EXPECT_EQ(v[i].position[0], s.colliders[box].mesh.vertices[i].position[0]);
 }
 
 TEST(RenderScene, ColliderMeshesFaceOutwards) {

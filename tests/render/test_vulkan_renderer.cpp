@@ -108,6 +108,12 @@ TEST(VulkanRenderer, BallShadowsTheGroundWhereTheLightPutsIt) {
     test::expect_ball_shadow_where_the_light_puts_it(*c.renderer);
 }
 
+TEST(VulkanRenderer, DrawsAnAnimatedCharacterWhereEachFramePutsIt) {
+    const test::Created c = create(small_options());
+    if (!c.renderer) GTEST_SKIP() << c.skip;
+    test::expect_draws_deforming_colliders_where_the_frame_puts_them(*c.renderer);
+}
+
 TEST(VulkanRenderer, MultisamplingSmoothsEdgesOnly) {
     const test::Created c1 = create(small_options(1));
     if (!c1.renderer) GTEST_SKIP() << c1.skip;

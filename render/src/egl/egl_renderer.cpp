@@ -357,7 +357,8 @@ void EglRenderer::load(const RenderScene& scene) {
     const std::vector<RenderVertex> zeros(scene.cloth_vertices, RenderVertex{});
     o.cloth = make_mesh(zeros, scene.cloth_indices, GL_DYNAMIC_STORAGE_BIT);
     o.colliders.reserve(scene.colliders.size());
-    for (const ColliderDraw& c : scene.colliders) o.colliders.push_back(make_mesh(c.mesh.vertices, c.mesh.indices, 0));
+    for (const ColliderDraw& c : scene.colliders)  // a deforming collider's vertices are rewritten each frame
+        o.colliders.push_back(make_mesh(c.mesh.vertices, c.mesh.indices, c.deforms ? GL_DYNAMIC_STORAGE_BIT : 0));
 
     // One buffer holds every draw's uniforms; each draw binds its range, which must start on the
     // device's offset alignment.
@@ -508,6 +509,18 @@ void EglRenderer::submit(const RenderFrame& frame) {
         glNamedBufferSubData(cloth_buffer, 0, static_cast<GLsizeiptr>(frame.cloth.size_bytes()),
                              frame.cloth.data());
         transfer_.bytes_uploaded = frame.cloth.size_bytes();
+    }
+    if (!frame.collider_vertices.empty()) {  // characters playing a clip: their new pose
+        if (frame.collider_vertices.size() != o.scene.deforming_vertices)
+            throw Error("egl renderer: the frame has " + std::to_string(frame.collider_vertices.size()) +
+                        " deforming collider vertices, the scene " + std::to_string(o.scene.deforming_vertices));
+        for (std::size_t k = 0; k < o.scene.colliders.size(); ++k) {
+            const ColliderDraw& c = o.scene.colliders[k];
+            if (!c.deforms || o.colliders[k].index_count == 0) continue;
+            glNamedBufferSubData(o.colliders[k].vertices.get(), 0,
+                                 static_cast<GLsizeiptr>(c.mesh.vertices.size() * sizeof(RenderVertex)),
+                                 frame.collider_vertices.data() + c.first_deforming_vertex);
+        }
     }
 
     const FrameUniforms frame_data = frame_uniforms(o.scene, options_.width, options_.height, options_.shadow_map_size);

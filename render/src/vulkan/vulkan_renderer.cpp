@@ -327,11 +327,20 @@ void VulkanRenderer::load(const RenderScene& scene) {
     // indices and the colliders' indices (4-byte aligned, as the index buffer offset must be).
     std::vector<RenderVertex> vertices;
     std::vector<std::uint32_t> indices(scene_.cloth_indices);
+    // A deforming collider's vertices live in their own host-visible buffer instead.
     for (const ColliderDraw& c : scene_.colliders) {
-        collider_first_vertex_.push_back(static_cast<std::int32_t>(vertices.size()));
+        collider_first_vertex_.push_back(static_cast<std::int32_t>(c.deforms ? c.first_deforming_vertex : vertices.size()));
         collider_first_index_.push_back(static_cast<std::uint32_t>(indices.size()));
-        vertices.insert(vertices.end(), c.mesh.vertices.begin(), c.mesh.vertices.end());
+        if (!c.deforms) vertices.insert(vertices.end(), c.mesh.vertices.begin(), c.mesh.vertices.end());
         indices.insert(indices.end(), c.mesh.indices.begin(), c.mesh.indices.end());
+    }
+    if (scene_.deforming_vertices > 0) {
+        deforming_ = create_buffer(context_, VkDeviceSize{scene_.deforming_vertices} * sizeof(RenderVertex),
+                                   VK_BUFFER_USAGE_VERTEX_BUFFER_BIT, MemoryUse::upload);
+        for (const ColliderDraw& c : scene_.colliders)
+            if (c.deforms)
+                std::memcpy(static_cast<RenderVertex*>(deforming_.mapped) + c.first_deforming_vertex, c.mesh.vertices.data(),
+                            c.mesh.vertices.size() * sizeof(RenderVertex));
     }
     const VkDeviceSize vertex_bytes = vertices.size() * sizeof(RenderVertex);
     const VkDeviceSize index_bytes = indices.size() * sizeof(std::uint32_t);
@@ -432,6 +441,12 @@ bool VulkanRenderer::record_frame(const RenderFrame& frame, bool& external,
     frame_slot_ = frame.cloth_slot;
     frame_reads_stamps_ = !slots_.empty();
 
+    if (!frame.collider_vertices.empty()) {  // characters playing a clip: their new pose
+        if (frame.collider_vertices.size() != scene_.deforming_vertices)
+            throw Error("vulkan renderer: the frame has " + std::to_string(frame.collider_vertices.size()) +
+                        " deforming collider vertices, the scene " + std::to_string(scene_.deforming_vertices));
+        std::memcpy(deforming_.mapped, frame.collider_vertices.data(), frame.collider_vertices.size_bytes());
+    }
     if (upload) {
         std::memcpy(cloth_staging_.mapped, frame.cloth.data(), frame.cloth.size_bytes());
         const std::uint64_t stamps[2] = {frame.stamp, frame.stamp};
@@ -585,8 +600,9 @@ void VulkanRenderer::draw_all(VkCommandBuffer commands, const std::vector<DrawUn
                                         ? scene_.cloths[i].index_count
                                         : static_cast<std::uint32_t>(scene_.colliders[i - cloths].mesh.indices.size());
         if (count == 0) continue;
-        const VkBuffer vertices =
-            cloth ? slots_[static_cast<std::size_t>(frame_slot_)].buffer.buffer : static_geometry_.buffer;
+        const VkBuffer vertices = cloth ? slots_[static_cast<std::size_t>(frame_slot_)].buffer.buffer
+                                  : scene_.colliders[i - cloths].deforms ? deforming_.buffer
+                                                                         : static_geometry_.buffer;
         if (vertices != bound) {
             vkCmdBindVertexBuffers(commands, 0, 1, &vertices, &zero);
             bound = vertices;
@@ -605,6 +621,7 @@ void VulkanRenderer::draw_all(VkCommandBuffer commands, const std::vector<DrawUn
 void VulkanRenderer::destroy_scene() noexcept {
     const VkDevice device = context_.device();
     destroy_buffer(device, static_geometry_);
+    destroy_buffer(device, deforming_);
     // Exported slots go with their scene: a writer that imported them must import the new ones
     // (export_cloth after the next load()).
     for (ClothSlot& slot : slots_) {

@@ -142,7 +142,8 @@ private:
     DeviceBuffer static_geometry_;   ///< the colliders' vertices, then the cloth indices, then the colliders'
     VkDeviceSize index_offset_ = 0;  ///< of the first index in static_geometry_
     std::vector<std::uint32_t> collider_first_index_;  ///< into the index range, per collider
-    std::vector<std::int32_t> collider_first_vertex_;  ///< into the colliders' vertices, per collider
+    std::vector<std::int32_t> collider_first_vertex_;  ///< into the colliders' vertices (static or deforming), per collider
+    DeviceBuffer deforming_;  ///< the deforming colliders' vertices, host-visible: rewritten by a frame that brings them
     /// A cloth vertex buffer: RenderScene::cloth_vertices vertices, then kSlotStampBytes of stamps.
     /// One until export_cloth(); then kSharedSlots, exported, each with a timeline that orders the
     /// writer's writes against this renderer's reads.

@@ -71,6 +71,7 @@ private:
     std::string why_;
     std::vector<std::uint64_t> values_;  ///< per slot: the last timeline value asked for
     std::vector<RenderVertex> vertices_;  ///< the upload path's frame
+    std::vector<RenderVertex> collider_vertices_;  ///< the deforming colliders' vertices of the frame
     std::int64_t frames_ = 0, checked_ = 0, torn_ = 0;
 };
 

@@ -53,6 +53,11 @@ struct ColliderDraw {
     glm::vec3 line_colour{0.3F, 0.3F, 0.32F};  ///< grid lines (ground only)
     float grid_spacing = 0.0F;             ///< m; > 0 draws the ground's grid lines
     std::size_t collider = SIZE_MAX;       ///< index in Model::colliders, SIZE_MAX for the ground
+    /// A character playing a clip: `mesh` holds its pose at t = 0 and each frame brings new vertices
+    /// (RenderFrame::collider_vertices, world space, from `first_deforming_vertex`); its model
+    /// matrix is the identity.
+    bool deforms = false;
+    std::uint32_t first_deforming_vertex = 0;
 };
 
 /// A perspective camera, Y up.
@@ -78,6 +83,7 @@ struct RenderScene {
     std::vector<std::uint32_t> cloth_indices;  ///< all cloths' triangles, indices into the cloth buffer
     std::uint32_t cloth_vertices = 0;          ///< size of the shared cloth vertex buffer
     std::vector<ColliderDraw> colliders;       ///< the model's drawable colliders, then the ground
+    std::uint32_t deforming_vertices = 0;      ///< the deforming colliders' vertices, all together
     Camera camera{};
     Light light{};
     glm::vec3 background{0.62F, 0.68F, 0.76F};  ///< linear RGB
@@ -92,6 +98,9 @@ struct RenderFrame {
     std::span<const RenderVertex> cloth;
     /// Local → world of each RenderScene::colliders entry at the frame's time.
     std::vector<glm::mat4> collider_models;
+    /// The deforming colliders' vertices (RenderScene::deforming_vertices, world space) at the
+    /// frame's time; empty: the last ones given (the pose at t = 0 until then).
+    std::span<const RenderVertex> collider_vertices;
     /// Zero-copy (Renderer::export_cloth): the frame's reads of the cloth buffer wait until the
     /// timeline reaches `wait_value` (0: no wait), and the timeline is set to `signal_value` once
     /// they are done (0: no signal; otherwise larger than any value signalled before).
@@ -110,6 +119,10 @@ struct RenderFrame {
 
 /// Collider poses of `scene` at time `t` (s), from the motions of `model`.
 [[nodiscard]] std::vector<glm::mat4> collider_models(const RenderScene& scene, const Model& model, double t);
+
+/// The deforming colliders' vertices of `scene` (characters playing a clip) at time `t` (s), world
+/// space, with area-weighted normals, into `out` (resized to scene.deforming_vertices).
+void deforming_collider_vertices(const RenderScene& scene, const Model& model, double t, std::vector<RenderVertex>& out);
 
 /// Positions of every cloth of `world` with area-weighted vertex normals (the sum of the incident
 /// triangles' cross products, in a fixed order: the CUDA output kernel's rule), into `out`
