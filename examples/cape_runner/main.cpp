@@ -12,6 +12,7 @@
 // W/Up and S/Down run forward and back, A/Left and D/Right turn, Space jumps, Shift runs faster; a
 // gamepad's left stick, A and right bumper do the same. Esc quits. The window's title shows the
 // frame time and the cloth's share of it. examples/README.md walks through this file.
+#include <algorithm>
 #include <array>
 #include <chrono>
 #include <cstdio>
@@ -282,6 +283,10 @@ int play(const Options& options) {
     double cloth_ms_sum = 0.0, frame_ms_sum = 0.0;
     std::array<double, weft::kStageNames.size()> stage_ms_sum{};  // where the cloth's time goes
     long long cg_iterations = 0, capped_solves = 0;
+    // Hitches: the slowest cloth step, and the collision work that makes one.
+    double slowest_ms = 0.0;
+    int slowest_frame = 0, most_zone_rounds = 0, hitches = 0;
+    long long frozen_vertices = 0, unresolved = 0;
     Clock::time_point last = Clock::now();
     weft::render::RenderFrame previous;
     weft::render::Image last_picture;  // --offscreen: the frame just drawn
@@ -323,7 +328,7 @@ int play(const Options& options) {
             const double from_shoulders = weft::math::length(cape - Vec3d{0.0, kShoulderHeight, -0.25});
             if (cape.z > 0.05 || from_shoulders > kCapeHeight) ++cape_lost;
         }
-    if (frame == 0 && stats.collision.remaining_intersections > 0) std::printf("cape_runner: the level starts intersecting\n");
+        if (frame == 0 && stats.collision.remaining_intersections > 0) std::printf("cape_runner: the level starts intersecting\n");
         if (stats.collision.remaining_intersections > 0) ++intersections;
         if (stats.non_finite) ++failed_steps;
 
@@ -331,6 +336,15 @@ int play(const Options& options) {
         const double frame_ms = std::chrono::duration<double, std::milli>(now - last).count();
         last = now;
         cloth_ms_sum += stats.step_ms;
+        if (stats.step_ms > slowest_ms) slowest_ms = stats.step_ms, slowest_frame = frame;
+        most_zone_rounds = std::max(most_zone_rounds, stats.collision.impact_iterations);
+        frozen_vertices += stats.collision.frozen_vertices;
+        unresolved += stats.collision.unresolved_substeps;
+        if (stats.step_ms > 4.0 * dt * 1000.0 && ++hitches <= 5)  // a cloth step of four frames' time
+            std::printf("cape_runner: frame %d: cloth step %.0f ms (impact zones %.0f, CCD %.0f, broad phase %.0f ms; %d zone "
+                        "rounds, %d vertices frozen)\n",
+                        frame, stats.step_ms, stats.ms(weft::Stage::ImpactZones), stats.ms(weft::Stage::Ccd),
+                        stats.ms(weft::Stage::BroadPhase), stats.collision.impact_iterations, stats.collision.frozen_vertices);
         for (std::size_t k = 0; k < stage_ms_sum.size(); ++k) stage_ms_sum[k] += stats.stage_ms[k];
         cg_iterations += stats.cg_iterations;
         capped_solves += stats.cg_not_converged;
@@ -354,6 +368,9 @@ int play(const Options& options) {
         if (frame > 0 && stage_ms_sum[k] > 0.0) std::printf(" %s %.2f", std::string(weft::kStageNames[k]).c_str(), stage_ms_sum[k] / frame);
     std::printf("; CG %.0f iterations a frame, %lld solves capped\n", frame > 0 ? static_cast<double>(cg_iterations) / frame : 0.0,
                 capped_solves);
+    std::printf("cape_runner: slowest cloth step %.1f ms (frame %d); collisions: at most %d impact-zone rounds in a substep, "
+                "%lld vertices frozen, %lld substeps unresolved\n",
+                slowest_ms, slowest_frame, most_zone_rounds, frozen_vertices, unresolved);
     std::printf("cape_runner: cape away from the shoulders in %d frames%s, intersections after %d, failed steps %d, "
                 "torn frames %lld, validation messages %d\n",
                 cape_lost, options.check ? "" : " (not checked; --check does)", intersections, failed_steps, static_cast<long long>(feed.torn_frames()), renderer.validation_messages());

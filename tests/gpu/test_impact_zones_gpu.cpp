@@ -56,7 +56,7 @@ Resolved resolve_gpu(const Scene& s, int max_iterations, GpuImpactZones& zones, 
     for (const Edge& e : s.edges) edges.insert(edges.end(), {e.v[0], e.v[1]});
     MemoryLedger ledger;
     DeviceArray<float> d0, d1, dim;
-    DeviceArray<std::uint32_t> dt, de;
+    DeviceArray<std::uint32_t> dt, de, dg;
     d0.upload(x0, ledger, "x0");
     d1.upload(x1, ledger, "x1");
     dim.upload(im, ledger, "inverse mass");
@@ -71,6 +71,10 @@ Resolved resolve_gpu(const Scene& s, int max_iterations, GpuImpactZones& zones, 
     in.triangle_count = static_cast<std::uint32_t>(s.triangles.size());
     in.edges = de.get();
     in.edge_count = static_cast<std::uint32_t>(s.edges.size());
+    if (!s.triangle_group.empty()) {
+        dg.upload(s.triangle_group, ledger, "triangle groups");
+        in.triangle_group = dg.get();
+    }
     in.thickness = s.thickness;
     in.max_iterations = max_iterations;
     in.giant_zone_constraints = giant;
@@ -224,6 +228,23 @@ TEST(GpuImpactZones, FreezingZonesThatTouchFixedVertices) {
     EXPECT_EQ(r.report.iterations, 0);
     EXPECT_EQ(r.report.rigid_zones, 0);
     EXPECT_GT(r.report.frozen_vertices, 0);
+}
+
+TEST(GpuImpactZones, AStackFrozenLayerByLayerIsHeldWholeAfterAFewRounds) {
+    WEFT_REQUIRE_GPU();
+    const test::StackScene c = test::falling_stack(12);
+    const Scene s = rounded(c.scene);
+    const Resolved r = resolve_gpu(s, 0);
+    print("stack of 12 frozen (GPU)", r);
+    expect_clean(s, r);
+    EXPECT_EQ(r.report.frozen_vertices, static_cast<int>(c.fixed)) << "every sheet of the stack ends held at x0";
+    EXPECT_LE(r.report.detections, weft::collision::kImpactZoneRigidRounds + weft::collision::kImpactZoneFreezeRounds + 2);
+    for (std::uint32_t v = c.lone; v < s.x0.size(); ++v)
+        ASSERT_EQ(r.outcome[v], VertexOutcome::Untouched) << "the lone sheet, in no hit, was frozen with the stack";
+    // The CPU reference takes the same rounds.
+    const Resolved cpu = test::resolve_cpu(s, 0);
+    EXPECT_EQ(r.report.detections, cpu.report.detections);
+    EXPECT_EQ(r.report.frozen_vertices, cpu.report.frozen_vertices);
 }
 
 TEST(GpuImpactZones, KinematicMeshCarriesFrozenCloth) {

@@ -226,6 +226,37 @@ TEST(ImpactZones, FreezingZonesThatTouchFixedVertices) {
     EXPECT_GT(r.report.frozen_vertices, 0);
 }
 
+TEST(ImpactZones, AStackFrozenLayerByLayerIsHeldWholeAfterAFewRounds) {
+    // 12 sheets falling onto a fixed patch freeze one layer a fallback round; after
+    // kImpactZoneFreezeRounds such rounds the rest of the stack (its cloth) is held at x0 at once, so
+    // the substep ends after a handful of detections, not one per layer, and clean; a sheet that no
+    // hit touches falls on.
+    const test::StackScene c = test::falling_stack(12);
+    const Scene& s = c.scene;
+    expect_meaningful(s, false);
+    const Resolved r = test::resolve_cpu(s, 0, nullptr, 0);
+    print("stack of 12 frozen", r);
+    expect_clean(s, r);
+    EXPECT_TRUE(r.report.froze_all);
+    EXPECT_EQ(r.report.frozen_vertices, static_cast<int>(c.fixed)) << "every sheet of the stack ends held at x0";
+    EXPECT_LE(r.report.detections, kImpactZoneFreezeRounds + 2) << "one detection a layer";
+    // Only the cloths a hit touches: the lone sheet falls on, untouched.
+    for (std::uint32_t v = c.lone; v < s.x0.size(); ++v) {
+        ASSERT_EQ(r.outcome[v], VertexOutcome::Untouched) << "vertex " << v;
+        ASSERT_TRUE(test::same_bits(r.x1[v], s.x1[v])) << "vertex " << v;
+    }
+    // As one cloth (no groups), the lone sheet is held with the stack.
+    Scene one = s;
+    one.triangle_group.clear();
+    const Resolved whole = test::resolve_cpu(one, 0, nullptr, 0);
+    expect_clean(one, whole);
+    EXPECT_EQ(whole.report.frozen_vertices, static_cast<int>(s.x0.size() - (c.lone - c.fixed)));
+    // With the rigid rounds, the same: the zones touch the fixed patch or frozen cloth.
+    const Resolved rigid = test::resolve_cpu(s, 0);
+    expect_clean(s, rigid);
+    EXPECT_LE(rigid.report.detections, kImpactZoneRigidRounds + kImpactZoneFreezeRounds + 2);
+}
+
 TEST(ImpactZones, KinematicMeshCarriesFrozenCloth) {
     // A collider plate (inverse mass 0) rises 3 cm through a cloth at rest, with no projection round:
     // the cloth is frozen at x0, the plate still drives into it, so the cloth it meets moves with it.

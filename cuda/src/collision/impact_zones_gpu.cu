@@ -976,10 +976,47 @@ void GpuImpactZones::project_giant_zones(const GpuImpactZoneInput& in, double to
     }
 }
 
+namespace {
+
+/// Each vertex's broad-phase group (its cloth), from its triangles' (zero where none is given).
+__global__ void vertex_group_kernel(const std::uint32_t* triangles, const std::uint32_t* triangle_group,
+                                    std::uint32_t triangle_count, std::uint32_t* vertex_group) {
+    const std::uint32_t t = blockIdx.x * blockDim.x + threadIdx.x;
+    if (t >= triangle_count) return;
+    for (int j = 0; j < 3; ++j) vertex_group[triangles[3 * t + j]] = triangle_group[t];  // one value a vertex
+}
+
+/// Flags the groups of the vertices of the round's hits (group ids are below the triangle count:
+/// every group has a triangle).
+__global__ void hit_groups_kernel(const GpuCcdHit* hits, std::uint32_t count, const std::uint32_t* vertex_group,
+                                  std::uint32_t groups, std::uint8_t* hit_group) {
+    const std::uint32_t h = blockIdx.x * blockDim.x + threadIdx.x;
+    if (h >= count) return;
+    for (int j = 0; j < 4; ++j) {
+        const std::uint32_t g = vertex_group[hits[h].vertex[j]];
+        if (g < groups) hit_group[g] = 1;
+    }
+}
+
+/// The last fallback before the round cap: every movable vertex of a flagged group, not frozen or
+/// carried, is held at x0.
+__global__ void freeze_all_kernel(std::uint32_t n, const float* inverse_mass, const std::uint32_t* vertex_group,
+                                  std::uint32_t groups, const std::uint8_t* hit_group, const float* x0, float* x1,
+                                  std::uint8_t* outcome, GpuImpactZones::Counters* counters) {
+    const std::uint32_t v = blockIdx.x * blockDim.x + threadIdx.x;
+    if (v >= n || !(inverse_mass[v] > 0.0F) || outcome[v] == kFrozen || outcome[v] == kCarried) return;
+    if (vertex_group[v] >= groups || hit_group[vertex_group[v]] == 0) return;
+    for (int a = 0; a < 3; ++a) x1[static_cast<std::size_t>(a) * n + v] = load(x0, v, n, a);
+    outcome[v] = kFrozen;
+    counters->progress = 1;
+}
+
+}  // namespace
+
 void GpuImpactZones::fallbacks(const GpuImpactZoneInput& in, std::uint32_t hits,
                                weft::collision::ImpactZoneReport& report, cudaStream_t stream) {
     const std::uint32_t n = in.vertex_count;
-    for (int round = 0;; ++round) {
+    for (int round = 0; round < weft::collision::kImpactZoneMaxFallbackRounds; ++round) {
         const auto clock = Clock::now();
         grow(hit_free_, hits);
         grow(carry_, 3 * static_cast<std::size_t>(hits));
@@ -1006,6 +1043,26 @@ void GpuImpactZones::fallbacks(const GpuImpactZoneInput& in, std::uint32_t hits,
         rigid_freeze_kernel<<<zones_, kZoneThreads, 0, stream>>>(z, in.x0, in.x1, in.inverse_mass, n, action_.get(),
                                                                  outcome_.get());
         WEFT_CUDA_CHECK_LAUNCH("impact zones: rigid/freeze");
+        if (round == in.max_rigid_rounds + weft::collision::kImpactZoneFreezeRounds) {
+            // Whole cloths at x0 at once (kImpactZoneFreezeRounds), after the zones' actions and before
+            // the carries, as on the CPU.
+            // The cloths (broad-phase groups) this round's hits touch; one group when none is given.
+            const std::uint32_t groups = std::max<std::uint32_t>(in.triangle_count, 1);
+            grow(vertex_group_, n);
+            grow(hit_group_, groups);
+            WEFT_CUDA_CHECK(cudaMemsetAsync(vertex_group_.get(), 0, n * sizeof(std::uint32_t), stream));
+            WEFT_CUDA_CHECK(cudaMemsetAsync(hit_group_.get(), 0, groups, stream));
+            if (in.triangle_group != nullptr)
+                vertex_group_kernel<<<blocks_for(in.triangle_count, kThreads), kThreads, 0, stream>>>(
+                    in.triangles, in.triangle_group, in.triangle_count, vertex_group_.get());
+            hit_groups_kernel<<<blocks_for(hits, kThreads), kThreads, 0, stream>>>(ccd_.hits(), hits, vertex_group_.get(),
+                                                                                   groups, hit_group_.get());
+            freeze_all_kernel<<<blocks_for(n, kThreads), kThreads, 0, stream>>>(
+                n, in.inverse_mass, vertex_group_.get(), groups, hit_group_.get(), in.x0, in.x1, outcome_.get(),
+                counters_.get());
+            WEFT_CUDA_CHECK_LAUNCH("impact zones: freeze all");
+            report.froze_all = true;
+        }
         carry_claim_kernel<<<blocks_for(hits, kThreads), kThreads, 0, stream>>>(
             ccd_.hits(), hits, hit_free_.get(), in.x0, in.x1, in.inverse_mass, n, outcome_.get(), claim_.get(),
             carry_.get());

@@ -169,6 +169,8 @@ private:
     DeviceArray<std::uint32_t> ckey_[2], cvalue_[2], zone_label_, zone_ccount_, zone_coffset_;
     DeviceArray<std::uint32_t> vkey_[2], vvalue_[2], zone_label2_, zone_vcount_, zone_voffset_;
     DeviceArray<std::uint8_t> hit_free_;  // fallbacks, per hit of the round
+    DeviceArray<std::uint32_t> vertex_group_;  // fallbacks' whole-cloth freeze: each vertex's group
+    DeviceArray<std::uint8_t> hit_group_;      // and the groups the round's hits touch
     DeviceArray<float> carry_;            // fallbacks, per hit: the displacement it carries frozen cloth by
     // Scratch.
     DeviceArray<unsigned char> temp_;

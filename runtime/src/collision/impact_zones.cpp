@@ -409,10 +409,11 @@ void ImpactZoneSolver::rigid_zone(const ImpactZoneInput& in, std::size_t z) {
 
 void ImpactZoneSolver::fallbacks(const ImpactZoneInput& in, ImpactZoneReport& report) {
     const auto im = in.inverse_mass;
+    const std::size_t n = in.x0.size();
     const auto stuck = [&](std::uint32_t v) {
         return outcome_[v] == VertexOutcome::Frozen || outcome_[v] == VertexOutcome::Carried;
     };
-    for (int round = 0;; ++round) {
+    for (int round = 0; round < kImpactZoneMaxFallbackRounds; ++round) {
         const auto t_begin = Clock::now();
         // Hits whose movable vertices are all frozen or carried already cannot be helped by moving
         // their zone again: something with inverse mass 0 (a collider) drives into frozen cloth.
@@ -474,6 +475,29 @@ void ImpactZoneSolver::fallbacks(const ImpactZoneInput& in, ImpactZoneReport& re
                           });
         for (std::size_t z = 0; z < zone_root_.size() && !progress; ++z)
             if (zone_action_[z] == kFreeze) progress = true;  // a new zone, or one grown by free vertices
+        if (round == in.max_rigid_rounds + kImpactZoneFreezeRounds) {
+            // The cloths a hit of this round touches, whole, at x0 (kImpactZoneFreezeRounds). A
+            // vertex's cloth is its triangles' broad-phase group (one group when none is given).
+            report.froze_all = true;
+            std::vector<std::uint32_t> group(n, 0);
+            std::uint32_t groups = 1;
+            if (!in.triangle_cloth.empty())
+                for (std::size_t t = 0; t < in.triangles.size(); ++t)
+                    for (const std::uint32_t v : in.triangles[t].v) {
+                        group[v] = in.triangle_cloth[t];
+                        groups = std::max(groups, group[v] + 1);
+                    }
+            std::vector<std::uint8_t> hit_group(groups, 0);
+            for (const Constraint& h : hits_)
+                for (const std::uint32_t v : h.v) hit_group[group[v]] = 1;
+            for (std::size_t v = 0; v < n; ++v) {
+                if (!(im[v] > 0.0) || stuck(static_cast<std::uint32_t>(v)) || hit_group[group[v]] == 0) continue;
+                in.x1[v] = in.x0[v];
+                outcome_[v] = VertexOutcome::Frozen;
+                stale_[v] = 1;
+                progress = true;
+            }
+        }
         // Kinematic geometry driving into frozen cloth: the frozen vertices of the hit move with the
         // kinematic (or already carried) points of the pair, weighted by the pair's |w| (the
         // barycentric interpolation at the contact), so the pair keeps its start configuration along

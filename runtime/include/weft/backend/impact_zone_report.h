@@ -13,6 +13,14 @@ namespace weft::collision {
 inline constexpr double kImpactZoneSeparationRatio = 0.1;
 /// Rounds of rigid impact zones before the last resort, freezing (the default of both backends).
 inline constexpr int kImpactZoneRigidRounds = 8;
+/// Fallback rounds after the rigid ones that freeze zone by zone. Past them every movable vertex not
+/// yet carried of each cloth (broad-phase group) that a hit still touches is held at x0 at once:
+/// freezing one zone lets the next layer of cloth run into it, one detection per layer, and a float
+/// run through a fold took thousands of rounds a substep.
+inline constexpr int kImpactZoneFreezeRounds = 4;
+/// Fallback rounds at most: past them the substep ends with its hits left (reported unresolved)
+/// rather than loop on (carried vertices meeting frozen cloth, one ring a round).
+inline constexpr int kImpactZoneMaxFallbackRounds = 64;
 
 /// Outcome and work of one `resolve` call (for CollisionStats).
 struct ImpactZoneReport {
@@ -24,6 +32,9 @@ struct ImpactZoneReport {
     int rigid_rounds = 0;              ///< fallback rounds that applied rigid motion
     int frozen_vertices = 0;           ///< movable vertices held at x0 by the last resort
     int carried_vertices = 0;          ///< frozen vertices carried along by kinematic geometry driving into them
+    /// The fallbacks held whole cloths at x0 at once (kImpactZoneFreezeRounds); the vertices frozen
+    /// that way belong to no zone.
+    bool froze_all = false;
     bool resolved = false;             ///< no collision left at the final detection
     int remaining_hits = 0;            ///< CCD hits at the final detection (0 when resolved)
     int qp_unconverged = 0;            ///< zone projections that reached qp_max_sweeps
