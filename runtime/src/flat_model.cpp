@@ -131,13 +131,24 @@ FlatModel flatten(const Model& model) {
                     throw Error(where + ": follows collider " + std::to_string(pin.collider) + " of " +
                                 std::to_string(model.colliders.size()));
                 const ColliderDesc& followed = model.colliders[static_cast<std::size_t>(pin.collider)];
-                if (followed.is_analytic() || !followed.mesh || pin.collider_vertex >= followed.mesh->positions.size())
+                if (pin.collider_joint >= 0) {  // a bone: the pin's place in the joint's frame at t = 0
+                    const std::size_t joints = followed.skin ? followed.skin->joints.size() : 0;
+                    if (static_cast<std::size_t>(pin.collider_joint) >= joints)
+                        throw Error(where + ": follows joint " + std::to_string(pin.collider_joint) + " of collider '" +
+                                    followed.name + "', which has " +
+                                    (joints == 0 ? std::string("no skin") : std::to_string(joints) + " joints"));
+                    std::vector<Affine> maps;
+                    collider_mesh_transforms(followed, 0.0, maps);
+                    local = inverse(maps[maps.size() == 1 ? 0 : static_cast<std::size_t>(pin.collider_joint)]).apply(local);
+                } else if (followed.is_analytic() || !followed.mesh || pin.collider_vertex >= followed.mesh->positions.size())
                     throw Error(where + ": follows vertex " + std::to_string(pin.collider_vertex) + " of collider '" + followed.name +
                                 "', which " + (followed.is_analytic() || !followed.mesh ? std::string("is not a mesh") :
                                                "has " + std::to_string(followed.mesh->positions.size()) + " vertices"));
-                std::vector<Vec3d> at_start(followed.mesh->positions.size());
-                collider_mesh_positions(followed, 0.0, at_start);
-                local = local - at_start[pin.collider_vertex];  // the offset the pin keeps
+                if (pin.collider_joint < 0) {
+                    std::vector<Vec3d> at_start(followed.mesh->positions.size());
+                    collider_mesh_positions(followed, 0.0, at_start);
+                    local = local - at_start[pin.collider_vertex];  // the offset the pin keeps
+                }
             } else if (pin.motion >= 0) {
                 const Transform frame = model.motions.at(static_cast<std::size_t>(pin.motion)).at(0.0);
                 local = math::transpose(frame.rotation) * (local - frame.translation);
@@ -148,6 +159,7 @@ FlatModel flatten(const Model& model) {
             f.pin_local.push_back(local);
             f.pin_collider.push_back(pin.collider);
             f.pin_collider_vertex.push_back(pin.collider_vertex);
+            f.pin_collider_joint.push_back(pin.collider >= 0 ? pin.collider_joint : -1);
         }
     }
 
@@ -165,7 +177,7 @@ std::size_t FlatModel::memory_bytes() const {
            shell_rest.capacity() * sizeof(physics::ShellBendingRest<double>) + u32(pattern.row_start) + u32(pattern.column) + u32(pattern.diagonal) +
            u32(pattern.triangle_slots) + u32(pattern.hinge_slots) + u32(vertex_force_start) +
            u32(vertex_force_index) + u32(slot_block_start) + u32(slot_block_index) + u32(pin_vertex) +
-           (pin_motion.capacity() + pin_collider.capacity()) * sizeof(int) + pin_collider_vertex.capacity() * sizeof(std::uint32_t) +
+           (pin_motion.capacity() + pin_collider.capacity() + pin_collider_joint.capacity()) * sizeof(int) + pin_collider_vertex.capacity() * sizeof(std::uint32_t) +
            vertex_pin.capacity() * sizeof(std::int32_t);
 }
 
@@ -184,11 +196,17 @@ std::pair<std::size_t, std::size_t> FlatModel::cloth_vertices(std::size_t cloth,
 void pin_targets(const Model& model, const FlatModel& f, double t, std::span<Vec3d> out) {
     if (out.size() != f.pin_vertex.size())
         throw Error("pin_targets: " + std::to_string(out.size()) + " outputs for " + std::to_string(f.pin_vertex.size()) + " pins");
-    // A character's vertices are skinned once per collider, not once per pin.
+    // A character's vertices are skinned (or its joint maps formed) once per collider, not once per pin.
     std::vector<std::vector<Vec3d>> skinned(model.colliders.size());
+    std::vector<std::vector<Affine>> maps(model.colliders.size());
     for (std::size_t q = 0; q < f.pin_vertex.size(); ++q) {
         const int c = q < f.pin_collider.size() ? f.pin_collider[q] : -1;
-        if (c >= 0) {
+        const int joint = q < f.pin_collider_joint.size() ? f.pin_collider_joint[q] : -1;
+        if (c >= 0 && joint >= 0) {
+            std::vector<Affine>& a = maps[static_cast<std::size_t>(c)];
+            if (a.empty()) collider_mesh_transforms(model.colliders[static_cast<std::size_t>(c)], t, a);
+            out[q] = a[a.size() == 1 ? 0 : static_cast<std::size_t>(joint)].apply(f.pin_local[q]);
+        } else if (c >= 0) {
             std::vector<Vec3d>& x = skinned[static_cast<std::size_t>(c)];
             const ColliderDesc& collider = model.colliders[static_cast<std::size_t>(c)];
             if (x.empty()) {

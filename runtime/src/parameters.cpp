@@ -466,6 +466,10 @@ constexpr Parameter kTable[] = {
      .doc = "a mesh collider (a character's skin) the pins follow: each selected vertex keeps its offset from the "
             "collider vertex nearest to it at t = 0 (not with `motion`)",
      .effect = E::Rebuild, .constraint = "a mesh `[[collider]]` name", .default_text = "none"},
+    {.section = "cloth.pin", .name = "joint", .type = T::String,
+     .doc = "with `follow`: a joint (bone) of the character's skeleton the pins follow rigidly, keeping their place in "
+            "its frame from t = 0, so they turn with it (instead of the nearest skin vertex)",
+     .effect = E::Rebuild, .constraint = "a joint name of the followed character", .default_text = "none"},
 
     // ---- [[collider]]
     {.section = "collider", .name = "name", .type = T::String, .doc = "used by `--set collider.NAME…` and in messages",

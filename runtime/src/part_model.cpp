@@ -121,6 +121,7 @@ PartModel extract_part(const FlatModel& flat, const VertexPartition& partition, 
         m.pin_local.push_back(flat.pin_local[k]);
         m.pin_collider.push_back(flat.pin_collider[k]);
         m.pin_collider_vertex.push_back(flat.pin_collider_vertex[k]);
+        m.pin_collider_joint.push_back(flat.pin_collider_joint[k]);
     }
     build_gather_tables(m);
     return out;

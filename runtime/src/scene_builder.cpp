@@ -175,6 +175,22 @@ std::vector<PinDesc> scene_pins(const SceneDesc& scene, std::size_t cloth_index,
             const auto it = std::find_if(colliders.begin(), colliders.end(), [&](const ColliderDesc& c) { return c.name == name; });
             if (it == colliders.end() || !it->mesh)
                 throw Error(pin_where + ": follows collider '" + name + "', whose mesh is not loaded (build_world loads it)");
+            const int collider = static_cast<int>(it - colliders.begin());
+            if (const std::string& joint = cloth.pins[k].joint; !joint.empty()) {  // a bone: rigidly
+                if (!it->skin) throw Error(pin_where + ": joint '" + joint + "' of collider '" + name + "', which has no skeleton");
+                std::string names;
+                int index = -1;
+                for (std::size_t j = 0; j < it->skin->joints.size(); ++j) {
+                    if (it->skin->joints[j].name == joint) index = static_cast<int>(j);
+                    names += (j > 0 ? ", '" : "'") + it->skin->joints[j].name + "'";
+                }
+                if (index < 0)
+                    throw Error(pin_where + ": unknown joint '" + joint + "' of collider '" + name + "' (expected one of " +
+                                names + ")");
+                for (std::uint32_t v : selected)
+                    if (pinned.insert(v).second) pins.push_back({.vertex = v, .collider = collider, .collider_joint = index});
+                continue;
+            }
             std::vector<Vec3d> skin(it->mesh->positions.size());
             collider_mesh_positions(*it, 0.0, skin);
             const auto rest = fabric.rest_positions();
@@ -188,7 +204,7 @@ std::vector<PinDesc> scene_pins(const SceneDesc& scene, std::size_t cloth_index,
                         best = d;
                         nearest = j;
                     }
-                pins.push_back({.vertex = v, .collider = static_cast<int>(it - colliders.begin()), .collider_vertex = nearest});
+                pins.push_back({.vertex = v, .collider = collider, .collider_vertex = nearest});
             }
             continue;
         }

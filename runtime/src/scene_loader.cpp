@@ -118,6 +118,19 @@ std::string unique_name(Table& t, const std::string& fallback, std::set<std::str
     return name;
 }
 
+// Fails `key` for a name that is none of `names`: the closest one as a guess, and all of them (or
+// `none`, the sentence for a scene without any).
+[[noreturn]] void fail_unknown_name(Table& t, const char* key, const toml::node* node, const std::string& what,
+                                    const std::string& name, const std::vector<std::string>& names,
+                                    const std::string& none) {
+    std::string expected;
+    for (const std::string& n : names) expected += (expected.empty() ? "'" : ", '") + n + "'";
+    const std::string guess = scene_toml::closest(name, names);
+    t.fail(key, node,
+           "unknown " + what + " '" + name + "'" + (guess.empty() ? "" : " (did you mean '" + guess + "'?)") +
+               (names.empty() ? " (" + none + ")" : " (expected one of " + expected + ")"));
+}
+
 // A reference to a `[[motion]]` by name.
 std::string motion_reference(Table& t, const std::vector<SceneMotion>& motions) {
     const toml::node* node = t.find("motion");
@@ -128,13 +141,8 @@ std::string motion_reference(Table& t, const std::vector<SceneMotion>& motions) 
         if (m.name == *name) return *name;
         names.push_back(m.name);
     }
-    std::string expected;
-    for (const std::string& n : names) expected += (expected.empty() ? "'" : ", '") + n + "'";
-    const std::string guess = scene_toml::closest(*name, names);
-    t.fail("motion", node,
-           "unknown motion '" + *name + "'" + (guess.empty() ? "" : " (did you mean '" + guess + "'?)") +
-               (names.empty() ? " (expected the name of a [[motion]]; the scene defines none)"
-                              : " (expected one of " + expected + ")"));
+    fail_unknown_name(t, "motion", node, "motion", *name, names,
+                      "expected the name of a [[motion]]; the scene defines none");
 }
 
 // `shape = "sphere" or "capsule"`: the collider shapes that have key `p`.
@@ -259,13 +267,8 @@ std::string follow_reference(Table& t, const std::vector<ColliderDesc>& collider
             t.fail("follow", node, "collider '" + *name + "' is not a mesh (expected a mesh collider, whose vertices pins can follow)");
         if (c.shape == ColliderShape::Mesh) meshes.push_back(c.name);
     }
-    std::string expected;
-    for (const std::string& n : meshes) expected += (expected.empty() ? "'" : ", '") + n + "'";
-    const std::string guess = scene_toml::closest(*name, meshes);
-    t.fail("follow", node,
-           "unknown collider '" + *name + "'" + (guess.empty() ? "" : " (did you mean '" + guess + "'?)") +
-               (meshes.empty() ? " (expected the name of a mesh [[collider]]; the scene has none)"
-                               : " (expected one of " + expected + ")"));
+    fail_unknown_name(t, "follow", node, "collider", *name, meshes,
+                      "expected the name of a mesh [[collider]]; the scene has none");
 }
 
 PinSelection read_pin(Table& t, const ClothSource& src, const SceneDesc& scene) {
@@ -326,6 +329,13 @@ PinSelection read_pin(Table& t, const ClothSource& src, const SceneDesc& scene) 
         (void)which;
     }
     pin.follow = follow_reference(t, scene.colliders);
+    if (const toml::node* n = t.find("joint")) {
+        const auto joint = t.optional_string("joint");
+        if (pin.follow.empty())
+            t.fail("joint", n, "joint without follow (expected follow = \"COLLIDER\" naming the character the joint belongs to)");
+        if (joint->empty()) t.fail("joint", n, "empty joint name (expected the name of a joint of the character's skeleton)");
+        pin.joint = *joint;  // checked against the skeleton when build_world loads the character
+    }
     pin.motion = motion_reference(t, motions);
     t.finish();
     return pin;

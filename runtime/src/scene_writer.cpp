@@ -138,6 +138,7 @@ void write_pin(std::ostream& out, const PinSelection& pin) {
     }
     if (!pin.motion.empty()) out << "motion = " << toml_string(pin.motion) << "\n";
     if (!pin.follow.empty()) out << "follow = " << toml_string(pin.follow) << "\n";
+    if (!pin.joint.empty()) out << "joint = " << toml_string(pin.joint) << "\n";
 }
 
 void write_cloth(std::ostream& out, const SceneDesc& scene, std::size_t entry, const std::filesystem::path& directory) {
@@ -264,10 +265,10 @@ void update_scene_from_world(SceneDesc& scene, const World& world) {
 
     // Pins: the scene's rules while they still say what the world pins, vertex lists once pins were
     // added or removed live (World::pin/unpin).
-    using PinKey = std::tuple<std::uint32_t, int, int>;  // vertex, motion index, collider index
+    using PinKey = std::tuple<std::uint32_t, int, int, int>;  // vertex, motion, collider and joint indices
     const auto pin_set = [](const std::vector<PinDesc>& pins) {
         std::vector<PinKey> keys;
-        for (const PinDesc& p : pins) keys.emplace_back(p.vertex, p.motion, p.collider);
+        for (const PinDesc& p : pins) keys.emplace_back(p.vertex, p.motion, p.collider, p.collider >= 0 ? p.collider_joint : -1);
         std::sort(keys.begin(), keys.end());
         return keys;
     };
@@ -286,18 +287,25 @@ void update_scene_from_world(SceneDesc& scene, const World& world) {
         cloth.pins.clear();
         // One vertex list per motion or followed collider. A vertex that follows a collider is written
         // with `follow`, which pins it again to the skin vertex nearest to where it starts.
-        for (const auto& [vertex, motion, collider] : live_pins[i]) {
+        for (const auto& [vertex, motion, collider, joint] : live_pins[i]) {
             const std::string name =
                 motion >= 0 && static_cast<std::size_t>(motion) < scene.motions.size() ? scene.motions[motion].name : "";
-            const std::string follow =
-                collider >= 0 && static_cast<std::size_t>(collider) < model.colliders.size() ? model.colliders[collider].name : "";
-            auto rule = std::find_if(cloth.pins.begin(), cloth.pins.end(),
-                                     [&](const PinSelection& s) { return s.motion == name && s.follow == follow; });
+            const ColliderDesc* followed =
+                collider >= 0 && static_cast<std::size_t>(collider) < model.colliders.size() ? &model.colliders[collider] : nullptr;
+            const std::string follow = followed ? followed->name : "";
+            const std::string joint_name = followed && followed->skin && joint >= 0 &&
+                                                   static_cast<std::size_t>(joint) < followed->skin->joints.size()
+                                               ? followed->skin->joints[static_cast<std::size_t>(joint)].name
+                                               : "";
+            auto rule = std::find_if(cloth.pins.begin(), cloth.pins.end(), [&](const PinSelection& s) {
+                return s.motion == name && s.follow == follow && s.joint == joint_name;
+            });
             if (rule == cloth.pins.end()) {
                 PinSelection s;
                 s.kind = PinSelection::Kind::Vertices;
                 s.motion = name;
                 s.follow = follow;
+                s.joint = joint_name;
                 rule = cloth.pins.insert(cloth.pins.end(), std::move(s));
             }
             rule->vertices.push_back(vertex);  // ascending: live_pins is sorted

@@ -390,6 +390,103 @@ TEST(SkinnedImport, FollowPinsThatCannotBeResolvedAreRefusedByName) {
     refused("follow = 3\n", {"follow"});
     EXPECT_NO_THROW((void)parse_scene(text("follow = \"runner\"\n"), file));
 }
+// A cape pinned to the runner's chest bone (PinDesc::collider_joint) while the runner turns on the
+// spot: the pins keep their place in the bone's frame, so they swing round the body with it (a
+// vertex pin keeps a fixed world offset and would not turn); a joint the skin lacks is refused.
+TEST(SkinnedImport, PinsOnABoneTurnWithIt) {
+    const auto skin = std::make_shared<const SkinnedMesh>(
+        assets::import_skinned_mesh(std::filesystem::path(WEFT_SOURCE_DIR) / "assets/characters/runner.gltf"));
+    std::uint32_t chest = 0;
+    while (chest < skin->joints.size() && skin->joints[chest].name != "chest") ++chest;
+    ASSERT_LT(chest, skin->joints.size());
+    World world{WorldDesc{}};
+    ColliderDesc runner{.name = "runner", .shape = ColliderShape::Mesh};
+    runner.skin = skin;
+    runner.mesh = std::make_shared<const MeshData>(skin->mesh);
+    runner.clip = "run";
+    runner.motion.angular_velocity = {0.0, 1.0, 0.0};  // turning on the spot: 1 rad/s about +y
+    const std::size_t collider = world.add_collider(runner);
+    ClothDesc cape{.name = "cape", .fabric = Fabric::cook(make_grid(0.3, 0.6, 4, 8, GridPlane::XY), {.density = 0.2})};
+    cape.transform.translation = {0.0, 1.28, -0.15};  // behind the back, its top edge at 1.58 m
+    for (std::uint32_t i = 0; i <= 4; ++i)
+        cape.pins.push_back({.vertex = 8 * 5 + i, .collider = static_cast<int>(collider), .collider_joint = static_cast<int>(chest)});
+    world.add_cloth(cape);
+    const std::vector<Vec3d> start = world.positions(0);
+    const auto radius = [](Vec3d p) { return std::sqrt(p.x * p.x + p.z * p.z); };
+    double worst = 0.0, turned = 0.0;
+    std::vector<Affine> maps0, maps;
+    collider_mesh_transforms(world.model().colliders[0], 0.0, maps0);
+    for (int frame = 1; frame <= 60; ++frame) {
+        ASSERT_FALSE(world.step().non_finite) << "frame " << frame;
+        collider_mesh_transforms(world.model().colliders[0], world.time(), maps);
+        const std::vector<Vec3d> x = world.positions(0);
+        for (std::uint32_t i = 0; i <= 4; ++i) {
+            const std::uint32_t v = 8 * 5 + i;
+            const Vec3d target = maps[chest].apply(inverse(maps0[chest]).apply(start[v]));
+            worst = std::max(worst, length(x[v] - target));
+        }
+        const Vec3d a = start[8 * 5 + 2], b = x[8 * 5 + 2];  // the top edge's middle, round the axis
+        turned = std::atan2(a.x * b.z - a.z * b.x, a.x * b.x + a.z * b.z);
+        EXPECT_NEAR(radius(b), radius(a), 0.05) << "frame " << frame << ": the pin left the body's circle";
+    }
+    std::printf("[ skinned  ] cape on the chest bone: pins %.2e m off the bone's frame at worst, turned %.2f rad in 1 s\n",
+                worst, -turned);
+    EXPECT_LT(worst, 1e-6);
+    EXPECT_NEAR(-turned, 1.0, 0.05) << "the pins did not turn with the body";
+
+    World bad{WorldDesc{}};
+    bad.add_collider(runner);
+    ClothDesc c{.name = "bad", .fabric = cape.fabric};
+    c.pins.push_back({.vertex = 0, .collider = 0, .collider_joint = 99});
+    bad.add_cloth(c);
+    try {
+        (void)bad.step();
+        FAIL() << "a pin on joint 99 was accepted";
+    } catch (const Error& e) {
+        EXPECT_NE(std::string(e.what()).find("follows joint 99 of collider 'runner', which has"), std::string::npos) << e.what();
+    }
+}
+
+// `[[cloth.pin]] follow = "runner"` with `joint = "chest"` pins to the bone; a joint without follow
+// and a joint the skeleton lacks are errors naming the file, cloth and pin (and the joints there are).
+TEST(SkinnedImport, SceneJointPinsAreResolvedAgainstTheSkeleton) {
+    assets::install_mesh_loader();
+    const std::filesystem::path file = std::filesystem::path(WEFT_SOURCE_DIR) / "assets/scenes/joint_pins.toml";
+    const auto text = [](const std::string& pin) {
+        return "[[collider]]\nname = \"runner\"\nshape = \"mesh\"\nfile = \"../characters/runner.gltf\"\nclip = \"run\"\n"
+               "[[cloth]]\nname = \"cape\"\nmesh = { grid = { width = 0.3, height = 0.6, cells = [4, 8] } }\n"
+               "position = [0.0, 1.28, -0.15]\n"
+               "[[cloth.pin]]\nedge = \"top\"\n" + pin;
+    };
+    const SceneDesc scene = parse_scene(text("follow = \"runner\"\njoint = \"chest\"\n"), file);
+    const auto world = build_world(scene);
+    const std::vector<PinDesc>& pins = world->model().cloths[0].pins;
+    ASSERT_EQ(pins.size(), 5U);
+    const SkinnedMesh& skin = *world->model().colliders[0].skin;
+    for (const PinDesc& p : pins) {
+        EXPECT_EQ(p.collider, 0);
+        ASSERT_GE(p.collider_joint, 0);
+        EXPECT_EQ(skin.joints[static_cast<std::size_t>(p.collider_joint)].name, "chest");
+    }
+    const std::string saved = scene_to_toml(scene, file.parent_path());
+    EXPECT_NE(saved.find("joint = \"chest\""), std::string::npos) << saved;
+
+    try {
+        (void)parse_scene(text("joint = \"chest\"\n"), file);
+        FAIL() << "a joint without follow was accepted";
+    } catch (const Error& e) {
+        EXPECT_NE(std::string(e.what()).find("joint without follow"), std::string::npos) << e.what();
+        EXPECT_NE(std::string(e.what()).find("joint_pins.toml:"), std::string::npos) << e.what();
+    }
+    try {
+        (void)build_world(parse_scene(text("follow = \"runner\"\njoint = \"chst\"\n"), file));
+        FAIL() << "an unknown joint was accepted";
+    } catch (const Error& e) {
+        const std::string what = e.what();
+        EXPECT_NE(what.find("cloth[0] 'cape' pin[0]: unknown joint 'chst'"), std::string::npos) << what;
+        EXPECT_NE(what.find("'chest'"), std::string::npos) << what;
+    }
+}
 #endif
 
 }  // namespace

@@ -26,6 +26,10 @@ struct PinDesc {
     /// Not together with `motion`.
     int collider = -1;
     std::uint32_t collider_vertex = 0;
+    /// Or, with `collider`, follow joint `collider_joint` of the collider's skin (a bone) rigidly: the
+    /// pin keeps its place in the joint's frame from time 0, so it turns with the bone (a cape held
+    /// at the shoulders as the chest leans). −1: follow `collider_vertex` instead.
+    int collider_joint = -1;
     /// Where the pin holds the vertex (m, world; for a pin that follows a motion, where it is at
     /// time 0). Unset: where the vertex starts (the fabric's rest shape placed by the transform).
     /// World::pin sets it to where the vertex is when pinned.

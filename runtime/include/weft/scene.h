@@ -34,6 +34,9 @@ struct PinSelection {
     /// selected vertex follows the collider vertex nearest to it at t = 0, keeping its offset
     /// (PinDesc::collider). Empty: none. Not together with `motion`.
     std::string follow;
+    /// With `follow`: the name of a joint of that character's skeleton (a bone) the pins follow
+    /// rigidly, turning with it (PinDesc::collider_joint). Empty: the nearest skin vertex.
+    std::string joint;
 };
 
 struct SceneCloth {

@@ -50,9 +50,12 @@ struct FlatModel {
     std::vector<int> pin_motion;
     std::vector<Vec3d> pin_local;
     /// Pins that follow a collider vertex (PinDesc::collider; −1: none): the collider, its vertex,
-    /// and in pin_local the pin's world offset from that vertex at t = 0.
+    /// and in pin_local the pin's world offset from that vertex at t = 0. Pins that follow a joint
+    /// of its skin (pin_collider_joint ≥ 0): pin_local is the pin's place in the joint's frame at
+    /// t = 0 (the inverse of collider_mesh_transforms' map applied to it).
     std::vector<int> pin_collider;
     std::vector<std::uint32_t> pin_collider_vertex;
+    std::vector<int> pin_collider_joint;
     std::vector<std::int32_t> vertex_pin;  ///< pin index of each vertex or −1
 
     [[nodiscard]] std::size_t triangle_count() const { return triangles.size(); }
