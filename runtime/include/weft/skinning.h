@@ -8,7 +8,9 @@
 /// clip holding the bind pose gives back X_i. File import (glTF 2.0, FBX) is in weft::assets
 /// (`import_skinned_mesh`); libweft itself reads no file format here.
 ///
-/// Not yet: the skinned collider in the collision pipeline, skinning on the device, pins to bones.
+/// A mesh collider with a skin and a clip (weft/collider.h) is a character: both backends collide
+/// cloth with it (the CUDA backend skins it on the device) and pins can follow its skin vertices or
+/// its joints (PinDesc::collider_vertex, collider_joint).
 
 #include <array>
 #include <cstdint>
