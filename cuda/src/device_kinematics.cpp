@@ -49,7 +49,7 @@ void DeviceKinematics::build(const Model& model, const weft::collision::Collisio
         const auto base = static_cast<std::uint32_t>(map_count_);
         colliders_.push_back(g.meshes[m].collider);
         first_map_.push_back(base);
-        if (!plays_clip(c)) {
+        if (c.skin == nullptr) {  // rigid: one map (a character has its joints' even in its bind pose)
             for (std::size_t j = first; j < last; ++j) {
                 joints[4 * j] = base;
                 weights[4 * j] = 1.0F;
@@ -88,7 +88,7 @@ void DeviceKinematics::place(const Model& model, double t, double h, float* x0c,
         const std::size_t end = m + 1 < colliders_.size() ? first_map_[m + 1] : map_count_;
         if (maps0_.size() != end - first_map_[m] || maps1_.size() != maps0_.size())
             throw Error("collider '" + c.name + "': " + std::to_string(maps0_.size()) + " skinning maps, " +
-                        std::to_string(end - first_map_[m]) + " built (its skin or clip changed after the build)");
+                        std::to_string(end - first_map_[m]) + " built (its skin changed after the build)");
         for (std::size_t j = 0; j < maps0_.size(); ++j) {
             float* a = out + kKinematicMapFloats * (first_map_[m] + j);
             const Affine& a0 = maps0_[j];

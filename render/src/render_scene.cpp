@@ -181,7 +181,7 @@ RenderScene make_render_scene(const World& world, const CameraDesc& camera) {
                 if (!c.mesh) throw Error("collider '" + c.name + "': a mesh collider without a mesh");
                 // A character playing a clip is drawn as placed (world space, pose at t = 0 until a
                 // frame brings its vertices); a rigid mesh in its own frame, moved by its model matrix.
-                draw.deforms = plays_clip(c);
+                draw.deforms = c.skin != nullptr;  // a clip may start later
                 std::vector<Vec3d> placed(c.mesh->positions);
                 if (draw.deforms) {
                     collider_mesh_positions(c, 0.0, placed);

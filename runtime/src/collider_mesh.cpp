@@ -16,7 +16,7 @@ void collider_mesh_positions(const ColliderDesc& c, double t, std::span<Vec3d> o
         for (std::size_t i = 0; i < out.size(); ++i) out[i] = frame.apply(c.mesh->positions[i]);
         return;
     }
-    const std::vector<JointPose> poses = sample_clip(*c.skin, c.skin->clip(c.clip), c.clip_speed * t, c.clip_loop);
+    const std::vector<JointPose> poses = sample_clip(*c.skin, c.skin->clip(c.clip), clip_time(c, t), c.clip_loop);
     skin(*c.skin, skinning_transforms(*c.skin, poses), out);
     for (Vec3d& p : out) p = frame.apply(p);
 }
@@ -24,11 +24,12 @@ void collider_mesh_positions(const ColliderDesc& c, double t, std::span<Vec3d> o
 void collider_mesh_transforms(const ColliderDesc& c, double t, std::vector<Affine>& out) {
     const Transform frame = c.motion.at(t);
     const Affine placed{frame.rotation, frame.translation};
-    if (!plays_clip(c)) {
+    if (c.skin == nullptr) {
         out.assign(1, placed);
         return;
     }
-    const std::vector<JointPose> poses = sample_clip(*c.skin, c.skin->clip(c.clip), c.clip_speed * t, c.clip_loop);
+    const std::vector<JointPose> poses =
+        plays_clip(c) ? sample_clip(*c.skin, c.skin->clip(c.clip), clip_time(c, t), c.clip_loop) : rest_poses(*c.skin);
     out = skinning_transforms(*c.skin, poses);
     for (Affine& a : out) a = placed * a;
 }

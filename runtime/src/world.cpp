@@ -84,6 +84,8 @@ std::size_t World::add_collider(const ColliderDesc& collider) {
         if (!c.clip.empty()) (void)c.skin->clip(c.clip);  // names the clips there are
         if (!(c.clip_speed >= 0.0) || !std::isfinite(c.clip_speed))
             throw Error(where + ": clip_speed " + std::to_string(c.clip_speed) + " (expected a finite speed >= 0)");
+        if (!std::isfinite(c.clip_start))
+            throw Error(where + ": clip_start " + std::to_string(c.clip_start) + " (expected a finite time in s)");
     }
     model_->colliders.push_back(std::move(c));
     ++model_->topology_version;

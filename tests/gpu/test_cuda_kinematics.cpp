@@ -11,6 +11,7 @@
 #include <filesystem>
 #include <memory>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "device_kinematics.h"
@@ -148,6 +149,21 @@ TEST(CudaKinematics, SkinningOnTheDeviceEqualsTheHosts) {
         // The still cube: exactly at rest.
         for (std::size_t j = nk - 8; j < nk; ++j)
             for (std::size_t c = 0; c < 3; ++c) EXPECT_EQ(v[c * nk + j], 0.0F) << "still cube vertex " << j;
+    }
+    // The character switches clips between substeps: its bind pose (no clip), then "bend" from t = 2.
+    for (const auto& [clip, start] : {std::pair<std::string, double>{"", 0.0}, {"bend", 2.0}}) {
+        model.colliders[0].clip = clip;
+        model.colliders[0].clip_start = start;
+        const double t = 2.3;
+        kinematics.place(model, t, h, x0c.get(), x1c.get(), stride, cloth, stream.s);
+        std::vector<float> b(3 * stride);
+        WEFT_CUDA_CHECK(cudaMemcpyAsync(b.data(), x1c.get(), b.size() * sizeof(float), cudaMemcpyDeviceToHost, stream.s));
+        WEFT_CUDA_CHECK(cudaStreamSynchronize(stream.s));
+        std::vector<Vec3d> host(model.colliders[0].mesh->positions.size());
+        collider_mesh_positions(model.colliders[0], t + h, host);
+        for (std::size_t j = 0; j < host.size(); ++j)
+            for (std::size_t c = 0; c < 3; ++c)
+                worst_x = std::max(worst_x, std::abs(static_cast<double>(b[c * stride + cloth + j]) - host[j][static_cast<int>(c)]));
     }
     std::printf("[ kinematics ] device against host: positions %.2e m, velocities %.2e m/s at worst (fastest %.2f m/s)\n",
                 worst_x, worst_v, fastest);

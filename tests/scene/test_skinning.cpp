@@ -487,6 +487,47 @@ TEST(SkinnedImport, SceneJointPinsAreResolvedAgainstTheSkeleton) {
         EXPECT_NE(what.find("'chest'"), std::string::npos) << what;
     }
 }
+// A game switches a character's clip between steps: standing in its bind pose (no clip), then a
+// jump that starts now (clip_start). The collision pipeline places the jump's poses from its start,
+// and the kerchief on the head rises with it, with no intersection.
+TEST(SkinnedImport, ACharacterSwitchesClipsBetweenSteps) {
+    const auto skin = std::make_shared<const SkinnedMesh>(
+        assets::import_skinned_mesh(std::filesystem::path(WEFT_SOURCE_DIR) / "assets/characters/runner.gltf"));
+    WorldDesc desc;
+    desc.collision.check = true;
+    desc.collision.self_collision = true;  // the kerchief folds over the head
+    World world(desc);
+    ClothDesc sheet{.name = "kerchief",
+                    .fabric = Fabric::cook(make_grid(0.4, 0.4, 10, 10, GridPlane::XZ), {.density = 0.1})};
+    sheet.transform.translation = {0.0, 1.92, 0.0};
+    world.add_cloth(sheet);
+    ColliderDesc runner{.name = "runner", .shape = ColliderShape::Mesh};
+    runner.skin = skin;
+    const std::size_t k = world.add_collider(runner);
+    long long intersecting = 0;
+    for (int frame = 1; frame <= 12; ++frame) intersecting += world.step().collision.remaining_intersections;
+    const double start = world.time();
+    world.collider(k).clip = "jump";
+    world.collider(k).clip_loop = false;
+    world.collider(k).clip_start = start;
+    std::vector<Vec3d> placed(skin->mesh.positions.size()), expected(placed.size());
+    double lowest_top = 0.0, worst = 0.0;
+    for (int frame = 1; frame <= 45; ++frame) {
+        const StepStats& s = world.step();
+        ASSERT_FALSE(s.non_finite) << "frame " << frame;
+        intersecting += s.collision.remaining_intersections;
+        collider_mesh_positions(world.model().colliders[k], world.time(), placed);
+        skin_at(*skin, "jump", world.time() - start, expected);
+        for (std::size_t i = 0; i < placed.size(); ++i) worst = std::max(worst, length(placed[i] - expected[i]));
+        if (frame == 42) {  // 0.7 s into the jump: its top
+            lowest_top = 1e9;
+            for (const Vec3d& p : world.positions(0)) lowest_top = std::min(lowest_top, p.y);
+        }
+    }
+    EXPECT_LT(worst, 1e-9) << "the jump was not placed from its start";
+    EXPECT_EQ(intersecting, 0);
+    EXPECT_GT(lowest_top, 1.8) << "the head did not carry the kerchief up";
+}
 #endif
 
 }  // namespace

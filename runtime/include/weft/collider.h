@@ -41,6 +41,9 @@ struct ColliderDesc {
     std::string clip;          ///< the skin's clip to play; empty: the bind pose
     double clip_speed = 1.0;   ///< clip seconds per simulated second (≥ 0)
     bool clip_loop = true;     ///< wrap the clip; otherwise hold its last key
+    /// Simulated time (s) at which the clip's time 0 falls: the clip's time at t is
+    /// clip_speed·max(0, t − clip_start). A game sets it when it switches clips (a jump starts now).
+    double clip_start = 0.0;
     [[nodiscard]] bool is_analytic() const { return shape != ColliderShape::Mesh; }
     /// Whether the collider can move: its motion is not static, or its skin plays a clip.
     [[nodiscard]] bool moves() const { return !motion.is_static() || (skin != nullptr && !clip.empty()); }
@@ -54,10 +57,16 @@ void collider_mesh_positions(const ColliderDesc& collider, double t, std::span<V
 /// moves rigidly with its motion.
 [[nodiscard]] inline bool plays_clip(const ColliderDesc& c) { return c.skin != nullptr && !c.clip.empty(); }
 
+/// The clip time of `collider` at simulated time `t` (s): clip_speed·max(0, t − clip_start).
+[[nodiscard]] inline double clip_time(const ColliderDesc& c, double t) {
+    return c.clip_speed * (t > c.clip_start ? t - c.clip_start : 0.0);
+}
+
 /// The maps that place a mesh collider's vertices in the world at time `t` (s), for backends that
-/// skin on their own: one a joint, A_j = F(t)·G_j(t)·B_j (F the motion's frame), where it plays a
-/// clip, so that vertex i is Σ_k w_ik·A_{j_ik}·X_i (X_i its bind-pose position); otherwise the one
-/// map F(t), applied to every vertex. `out` is resized.
+/// skin on their own: one a joint, A_j = F(t)·G_j(t)·B_j (F the motion's frame), for a collider with
+/// a skin (its clip's pose, or the bind pose while it plays none, so that a game may switch clips
+/// between steps), vertex i then being Σ_k w_ik·A_{j_ik}·X_i (X_i its bind-pose position); for a
+/// rigid mesh the one map F(t), applied to every vertex. `out` is resized.
 void collider_mesh_transforms(const ColliderDesc& collider, double t, std::vector<Affine>& out);
 
 }  // namespace weft

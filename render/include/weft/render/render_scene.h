@@ -53,7 +53,8 @@ struct ColliderDraw {
     glm::vec3 line_colour{0.3F, 0.3F, 0.32F};  ///< grid lines (ground only)
     float grid_spacing = 0.0F;             ///< m; > 0 draws the ground's grid lines
     std::size_t collider = SIZE_MAX;       ///< index in Model::colliders, SIZE_MAX for the ground
-    /// A character playing a clip: `mesh` holds its pose at t = 0 and each frame brings new vertices
+    /// A character (a collider with a skin, which may switch clips at any step): `mesh` holds its pose
+    /// at t = 0 and each frame brings new vertices
     /// (RenderFrame::collider_vertices, world space, from `first_deforming_vertex`); its model
     /// matrix is the identity.
     bool deforms = false;
