@@ -61,3 +61,6 @@ write_basic_package_version_file(${PROJECT_BINARY_DIR}/cmake/WeftConfigVersion.c
                                  VERSION ${PROJECT_VERSION} COMPATIBILITY SameMinorVersion)
 install(FILES ${PROJECT_BINARY_DIR}/cmake/WeftConfig.cmake ${PROJECT_BINARY_DIR}/cmake/WeftConfigVersion.cmake
         DESTINATION ${WEFT_INSTALL_CMAKEDIR})
+# Weft's own assets a program may load: the rigged character (tools/make_character.py), which
+# Weft_DATA_DIR (WeftConfig.cmake) points programs such as examples/cape_runner to.
+install(FILES ${PROJECT_SOURCE_DIR}/assets/characters/runner.gltf DESTINATION ${CMAKE_INSTALL_DATADIR}/weft/characters)

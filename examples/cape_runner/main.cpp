@@ -1,10 +1,12 @@
-// cape_runner: a small game on Weft. The player runs a capsule character, wearing a cape and a
-// skirt, round a level with a flag on a pole and a banner hanging across the way, which the runner
-// can run through. The cloth runs on the GPU when the package has the CUDA backend and a device
+// cape_runner: a small game on Weft. The player runs a character, wearing a cape and a skirt, round
+// a level with a flag on a pole and a banner hanging across the way, which the runner can run
+// through. The runner is capsules, or (--character, where the package has the asset importer) Weft's
+// rigged runner playing its run and jump clips: an experiment for now, see examples/README.md. The cloth runs on the GPU when the package has the CUDA backend and a device
 // answers (drawn straight from the solver's buffer, no copy through the host), on the CPU otherwise.
 //
 //   cape_runner [--cpu] [--detail N] [--script FILE] [--frames N] [--check] [--screenshot FILE.png]
 //               [--validation] [--offscreen] [--cg-tolerance EPS] [--preset NAME]
+//               [--character [FILE.gltf]]
 //
 // --offscreen draws every frame with the Vulkan renderer but into no window (a fixed camera): for
 // timing on a machine without a display.
@@ -15,6 +17,7 @@
 #include <algorithm>
 #include <array>
 #include <chrono>
+#include <cmath>
 #include <cstdio>
 #include <cstdlib>
 #include <memory>
@@ -37,6 +40,9 @@
 #include "weft/render/renderer.h"
 #include "weft/render/window.h"
 #include "weft/world.h"
+#if WEFT_HAVE_ASSETS
+#include "weft/assets/skinned_import.h"
+#endif
 #if WEFT_HAVE_CUDA_BACKEND
 #include "weft/cuda/cuda_backend.h"
 #endif
@@ -46,6 +52,12 @@ namespace {
 using weft::Vec3d;
 using namespace cape_runner;
 
+#ifdef CAPE_RUNNER_CHARACTER
+constexpr const char* kShippedCharacter = CAPE_RUNNER_CHARACTER;  // assets/characters/runner.gltf, built or installed
+#else
+constexpr const char* kShippedCharacter = "";
+#endif
+
 struct Options {
     bool cpu = false;
     int detail = 0;  // cloth resolution: 1 coarse … 4 fine; 0 = 3 on the GPU, 1 on the CPU
@@ -54,6 +66,7 @@ struct Options {
     bool check = false, validation = false, offscreen = false;
     double cg_tolerance = 0.0;  // 0: the engine's default (SolverSettings::cg_tolerance)
     std::string preset;         // a solver preset (weft/presets.h); empty: "game" on the CPU, the defaults on the GPU
+    std::string character;  // a rigged character file (--character); empty: capsules
 };
 
 Options parse(int argc, char** argv) {
@@ -74,9 +87,17 @@ Options parse(int argc, char** argv) {
         else if (a == "--offscreen") o.offscreen = true;
         else if (a == "--cg-tolerance") o.cg_tolerance = std::stod(value());
         else if (a == "--preset") o.preset = value();
+        else if (a == "--character") {
+            // The file that follows, or the shipped runner (found where the package installs it).
+            o.character = i + 1 < argc && argv[i + 1][0] != '-' ? argv[++i] : kShippedCharacter;
+            if (o.character.empty()) throw std::runtime_error("--character needs a file (this build does not know where the runner is)");
+        }
         else throw std::runtime_error("unknown option " + std::string(a) + " (see the comment at the top of main.cpp)");
     }
     if (o.detail < 0 || o.detail > 4) throw std::runtime_error("--detail takes 1 to 4");
+#if !WEFT_HAVE_ASSETS
+    if (!o.character.empty()) throw std::runtime_error("--character needs Weft's asset importer (Weft::assets), which this build lacks");
+#endif
     if (o.offscreen && o.script.empty() && o.frames == 0) throw std::runtime_error("--offscreen needs --script or --frames");
     return o;
 }
@@ -88,10 +109,18 @@ constexpr double kCapeHeight = 0.85;      // m
 
 /// What the game keeps of the world it built: the runner's motion and body colliders, the cape.
 struct Level {
-    int runner_motion = -1;  // the cape's and the skirt's pins follow it
+    int runner_motion = -1;  // the cape's and the skirt's pins follow it (capsules)
     std::size_t body = 0, head = 0;
+    std::optional<std::size_t> character;  // the rigged runner: a mesh collider playing clips
     std::size_t cape = 0;
 };
+
+/// The runner's skeleton joint called `name` (the pins hold on to the chest and the hips).
+int joint_index(const weft::SkinnedMesh& skin, const char* name) {
+    for (std::size_t j = 0; j < skin.joints.size(); ++j)
+        if (skin.joints[j].name == name) return static_cast<int>(j);
+    throw std::runtime_error(std::string("the character has no joint '") + name + "' (the runner's joints are expected)");
+}
 
 /// A static analytic collider.
 weft::ColliderDesc collider(const char* name, weft::ColliderShape shape, Vec3d at) {
@@ -126,21 +155,38 @@ weft::MeshData skirt_mesh(int segments, int rings, double top, double bottom, do
     return m;
 }
 
-Level build_level(weft::World& world, const Runner& runner, int detail) {
+Level build_level(weft::World& world, const Runner& runner, int detail, std::shared_ptr<const weft::SkinnedMesh> skin) {
     Level level;
     world.add_collider(collider("ground", weft::ColliderShape::Plane, {}));
 
-    // The runner: a capsule body and a sphere head on the motion the game rewrites every frame.
+    // The runner, on the motion the game rewrites every frame: the rigged character (its clips
+    // chosen by drive()), or a capsule body and a sphere head.
     level.runner_motion = world.add_motion(runner.motion(0.0, 1.0));
-    auto body = collider("body", weft::ColliderShape::Capsule, {0.0, 0.95, 0.0});
-    body.radius = 0.2;
-    body.half_height = 0.35;
-    body.friction = 0.1;  // the banner slides over the runner rather than being carried along
-    level.body = world.add_collider(body);
-    auto head = collider("head", weft::ColliderShape::Sphere, {0.0, 1.72, 0.0});
-    head.radius = 0.14;
-    head.friction = 0.1;
-    level.head = world.add_collider(head);
+    int chest = -1, hips = -1;
+    if (skin) {
+        weft::ColliderDesc character{.name = "runner", .shape = weft::ColliderShape::Mesh};
+        character.motion = runner.motion(0.0, 1.0);
+        character.skin = skin;
+        character.friction = 0.1;  // the banner slides over the runner rather than being carried along
+        level.character = world.add_collider(character);
+        chest = joint_index(*skin, "chest");
+        hips = joint_index(*skin, "hips");
+    } else {
+        auto body = collider("body", weft::ColliderShape::Capsule, {0.0, 0.95, 0.0});
+        body.radius = 0.2;
+        body.half_height = 0.35;
+        body.friction = 0.1;
+        level.body = world.add_collider(body);
+        auto head = collider("head", weft::ColliderShape::Sphere, {0.0, 1.72, 0.0});
+        head.radius = 0.14;
+        head.friction = 0.1;
+        level.head = world.add_collider(head);
+    }
+    // A pin held by the character's joint (it turns and bobs with the bone), or by the motion.
+    const auto pin = [&](std::uint32_t vertex, int joint) {
+        return level.character ? weft::PinDesc{.vertex = vertex, .collider = static_cast<int>(*level.character), .collider_joint = joint}
+                               : weft::PinDesc{.vertex = vertex, .motion = level.runner_motion};
+    };
 
     // The cape: hanging behind the back, its top row pinned to the runner's shoulders.
     const int cx = 14 * detail, cy = 20 * detail;
@@ -148,16 +194,16 @@ Level build_level(weft::World& world, const Runner& runner, int detail) {
     // Tilted so that it falls clear of the skirt: its top 2 cm behind the back, its hem 16 cm.
     cape.transform.rotation = weft::rotation_from_vector({0.165, 0.0, 0.0});
     cape.transform.translation = runner.position() + Vec3d{0.0, kShoulderHeight - kCapeHeight / 2, -0.29};
-    for (int i = 0; i <= cx; ++i)
-        cape.pins.push_back({.vertex = static_cast<std::uint32_t>(cy * (cx + 1) + i), .motion = level.runner_motion});
+    for (int i = 0; i <= cx; ++i) cape.pins.push_back(pin(static_cast<std::uint32_t>(cy * (cx + 1) + i), chest));
     level.cape = world.add_cloth(cape);
 
     // The skirt: a cone round the hips, its waist pinned to the runner.
     const int segments = 28 * detail, rings = 6 * detail;
     weft::ClothDesc skirt{.name = "skirt",
-                          .fabric = weft::Fabric::cook(skirt_mesh(segments, rings, 0.95, 0.5, 0.22, 0.30), {.density = 0.2})};
+                          .fabric = weft::Fabric::cook(skirt_mesh(segments, rings, 0.95, skin ? 0.6 : 0.5, 0.22, skin ? 0.44 : 0.30),
+                                                       {.density = 0.2})};  // the character's knees swing wider than capsules
     skirt.transform.translation = runner.position();
-    for (int s = 0; s < segments; ++s) skirt.pins.push_back({.vertex = static_cast<std::uint32_t>(s), .motion = level.runner_motion});
+    for (int s = 0; s < segments; ++s) skirt.pins.push_back(pin(static_cast<std::uint32_t>(s), hips));
     (void)world.add_cloth(skirt);
 
     // A flag on a pole beside the way, pinned along the pole.
@@ -191,6 +237,22 @@ Level build_level(weft::World& world, const Runner& runner, int detail) {
 void drive(weft::World& world, const Level& level, const Runner& runner, double t, double dt) {
     const weft::Motion m = runner.motion(t, dt);
     world.motion(level.runner_motion) = m;
+    if (level.character) {
+        // The character's root is the runner's frame (feet at the origin, facing +z); its clip
+        // follows what the runner does: in the air the jump (from its push-off, 0.3 s in), on the
+        // ground the run at a pace that follows the speed, standing still its bind pose.
+        weft::ColliderDesc& c = world.collider(*level.character);
+        c.motion = m;
+        const double speed = std::hypot(m.linear_velocity.x, m.linear_velocity.z);
+        const std::string clip = !runner.on_ground() ? "jump" : speed > 0.1 ? "run" : "";
+        if (clip != c.clip) {
+            c.clip = clip;
+            c.clip_loop = clip == "run";
+            c.clip_start = clip == "jump" ? t - 0.3 : t;
+        }
+        c.clip_speed = clip == "run" ? 0.5 + 0.5 * speed / Runner::kRunSpeed : 1.0;
+        return;
+    }
     // The body parts sit on the runner's vertical axis, which its turning leaves in place.
     world.collider(level.body).motion = m;
     world.collider(level.body).motion.origin += Vec3d{0.0, 0.95, 0.0};
@@ -250,7 +312,12 @@ int play(const Options& options) {
     if (options.cg_tolerance > 0.0) desc.solver.cg_tolerance = options.cg_tolerance;
     weft::World world(desc, backend);
     Runner runner({0.0, 0.0, 0.0});
-    const Level level = build_level(world, runner, detail);
+    std::shared_ptr<const weft::SkinnedMesh> skin;
+#if WEFT_HAVE_ASSETS
+    if (!options.character.empty())
+        skin = std::make_shared<const weft::SkinnedMesh>(weft::assets::import_skinned_mesh(options.character));
+#endif
+    const Level level = build_level(world, runner, detail, skin);
     std::optional<InputScript> script;
     if (!options.script.empty()) script.emplace(options.script);
 
