@@ -200,8 +200,8 @@ Level build_level(weft::World& world, const Runner& runner, int detail, std::sha
     // The skirt: a cone round the hips, its waist pinned to the runner.
     const int segments = 28 * detail, rings = 6 * detail;
     weft::ClothDesc skirt{.name = "skirt",
-                          .fabric = weft::Fabric::cook(skirt_mesh(segments, rings, 0.95, skin ? 0.6 : 0.5, 0.22, skin ? 0.44 : 0.30),
-                                                       {.density = 0.2})};  // the character's knees swing wider than capsules
+                          .fabric = weft::Fabric::cook(skirt_mesh(segments, rings, skin ? 0.84 : 0.95, 0.5, skin ? 0.23 : 0.22, skin ? 0.44 : 0.30),
+                                                       {.density = 0.2})};  // on the character: below its hands, wide for its knees
     skirt.transform.translation = runner.position();
     for (int s = 0; s < segments; ++s) skirt.pins.push_back(pin(static_cast<std::uint32_t>(s), hips));
     (void)world.add_cloth(skirt);
