@@ -169,21 +169,33 @@ TEST(SkinnedImport, TheShippedRunnerHasItsSkeletonAndClips) {
     EXPECT_GT(lowest_run, lowest_rest + 0.05) << "the run's first key should have both feet off the ground";
 }
 
+/// The shipped character (tools/make_character.py).
+std::shared_ptr<const SkinnedMesh> runner_skin() {
+    return std::make_shared<const SkinnedMesh>(
+        assets::import_skinned_mesh(std::filesystem::path(WEFT_SOURCE_DIR) / "assets/characters/runner.gltf"));
+}
+
+/// A world with the exact check and self-contact, and a 40 cm kerchief just over the runner's head.
+std::unique_ptr<World> kerchief_world() {
+    WorldDesc desc;
+    desc.collision.check = true;
+    desc.collision.self_collision = true;  // the kerchief folds over the head
+    auto world = std::make_unique<World>(desc);
+    ClothDesc sheet{.name = "kerchief",
+                    .fabric = Fabric::cook(make_grid(0.4, 0.4, 10, 10, GridPlane::XZ), {.density = 0.1})};
+    sheet.transform.translation = {0.0, 1.92, 0.0};
+    world->add_cloth(sheet);
+    return world;
+}
+
 // The runner as a mesh collider playing its jump, a square of cloth dropped on its head: the
 // collision pipeline places the skinned vertices each substep (and the exact check sees them), so the
 // cloth rises with the head at the jump's top and nothing intersects; a clip that does not exist is
 // refused at add_collider, naming the clips there are.
 TEST(SkinnedImport, ACharacterPlayingAClipIsACollider) {
-    const auto skin = std::make_shared<const SkinnedMesh>(
-        assets::import_skinned_mesh(std::filesystem::path(WEFT_SOURCE_DIR) / "assets/characters/runner.gltf"));
-    WorldDesc desc;
-    desc.collision.check = true;
-    desc.collision.self_collision = true;  // the kerchief folds over the head
-    World world(desc);
-    ClothDesc sheet{.name = "kerchief",
-                    .fabric = Fabric::cook(make_grid(0.4, 0.4, 10, 10, GridPlane::XZ), {.density = 0.1})};
-    sheet.transform.translation = {0.0, 1.92, 0.0};
-    world.add_cloth(sheet);
+    const auto skin = runner_skin();
+    const std::unique_ptr<World> kerchief = kerchief_world();
+    World& world = *kerchief;
     ColliderDesc runner{.name = "runner", .shape = ColliderShape::Mesh};
     runner.skin = skin;
     runner.clip = "walk";
@@ -487,20 +499,14 @@ TEST(SkinnedImport, SceneJointPinsAreResolvedAgainstTheSkeleton) {
         EXPECT_NE(what.find("'chest'"), std::string::npos) << what;
     }
 }
+
 // A game switches a character's clip between steps: standing in its bind pose (no clip), then a
 // jump that starts now (clip_start). The collision pipeline places the jump's poses from its start,
 // and the kerchief on the head rises with it, with no intersection.
 TEST(SkinnedImport, ACharacterSwitchesClipsBetweenSteps) {
-    const auto skin = std::make_shared<const SkinnedMesh>(
-        assets::import_skinned_mesh(std::filesystem::path(WEFT_SOURCE_DIR) / "assets/characters/runner.gltf"));
-    WorldDesc desc;
-    desc.collision.check = true;
-    desc.collision.self_collision = true;  // the kerchief folds over the head
-    World world(desc);
-    ClothDesc sheet{.name = "kerchief",
-                    .fabric = Fabric::cook(make_grid(0.4, 0.4, 10, 10, GridPlane::XZ), {.density = 0.1})};
-    sheet.transform.translation = {0.0, 1.92, 0.0};
-    world.add_cloth(sheet);
+    const auto skin = runner_skin();
+    const std::unique_ptr<World> kerchief = kerchief_world();
+    World& world = *kerchief;
     ColliderDesc runner{.name = "runner", .shape = ColliderShape::Mesh};
     runner.skin = skin;
     const std::size_t k = world.add_collider(runner);
