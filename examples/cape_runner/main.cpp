@@ -192,8 +192,9 @@ Level build_level(weft::World& world, const Runner& runner, int detail, std::sha
     const int cx = 14 * detail, cy = 20 * detail;
     weft::ClothDesc cape{.name = "cape", .fabric = weft::Fabric::cook(weft::make_grid(0.56, kCapeHeight, cx, cy), {.density = 0.25})};
     // Tilted so that it falls clear of the skirt: its top 2 cm behind the back, its hem 16 cm.
-    cape.transform.rotation = weft::rotation_from_vector({0.165, 0.0, 0.0});
-    cape.transform.translation = runner.position() + Vec3d{0.0, kShoulderHeight - kCapeHeight / 2, -0.29};
+    // On the character, tilted further: its skirt flares wider (below).
+    cape.transform.rotation = weft::rotation_from_vector({skin ? 0.4 : 0.165, 0.0, 0.0});
+    cape.transform.translation = runner.position() + Vec3d{0.0, kShoulderHeight - kCapeHeight / 2, skin ? -0.31 : -0.29};
     for (int i = 0; i <= cx; ++i) cape.pins.push_back(pin(static_cast<std::uint32_t>(cy * (cx + 1) + i), chest));
     level.cape = world.add_cloth(cape);
 
