@@ -42,6 +42,9 @@ FlatModel flatten(const Model& model) {
     f.cloth_triangle_offset.assign(cloths + 1, 0);
     f.cloth_hinge_offset.assign(cloths + 1, 0);
     std::size_t blocks = 0;
+    // Pins that follow a character: its pose at t = 0, placed once per collider (not once per pin).
+    std::vector<std::vector<Vec3d>> start_positions(model.colliders.size());
+    std::vector<std::vector<Affine>> start_maps(model.colliders.size());
     for (std::size_t c = 0; c < cloths; ++c) {
         const auto& fabric = model.cloths[c].fabric;
         if (!fabric) throw Error("cloth '" + model.cloths[c].name + "' has no fabric");
@@ -130,24 +133,30 @@ FlatModel flatten(const Model& model) {
                 if (static_cast<std::size_t>(pin.collider) >= model.colliders.size())
                     throw Error(where + ": follows collider " + std::to_string(pin.collider) + " of " +
                                 std::to_string(model.colliders.size()));
-                const ColliderDesc& followed = model.colliders[static_cast<std::size_t>(pin.collider)];
+                const auto k = static_cast<std::size_t>(pin.collider);
+                const ColliderDesc& followed = model.colliders[k];
                 if (pin.collider_joint >= 0) {  // a bone: the pin's place in the joint's frame at t = 0
                     const std::size_t joints = followed.skin ? followed.skin->joints.size() : 0;
                     if (static_cast<std::size_t>(pin.collider_joint) >= joints)
                         throw Error(where + ": follows joint " + std::to_string(pin.collider_joint) + " of collider '" +
                                     followed.name + "', which has " +
                                     (joints == 0 ? std::string("no skin") : std::to_string(joints) + " joints"));
-                    std::vector<Affine> maps;
-                    collider_mesh_transforms(followed, 0.0, maps);
+                    std::vector<Affine>& maps = start_maps[k];
+                    if (maps.empty()) collider_mesh_transforms(followed, 0.0, maps);
                     local = inverse(maps[maps.size() == 1 ? 0 : static_cast<std::size_t>(pin.collider_joint)]).apply(local);
-                } else if (followed.is_analytic() || !followed.mesh || pin.collider_vertex >= followed.mesh->positions.size())
-                    throw Error(where + ": follows vertex " + std::to_string(pin.collider_vertex) + " of collider '" + followed.name +
-                                "', which " + (followed.is_analytic() || !followed.mesh ? std::string("is not a mesh") :
-                                               "has " + std::to_string(followed.mesh->positions.size()) + " vertices"));
-                if (pin.collider_joint < 0) {
-                    std::vector<Vec3d> at_start(followed.mesh->positions.size());
-                    collider_mesh_positions(followed, 0.0, at_start);
-                    local = local - at_start[pin.collider_vertex];  // the offset the pin keeps
+                } else {  // a skin vertex: the offset the pin keeps from it
+                    if (followed.is_analytic() || !followed.mesh || pin.collider_vertex >= followed.mesh->positions.size())
+                        throw Error(where + ": follows vertex " + std::to_string(pin.collider_vertex) + " of collider '" +
+                                    followed.name + "', which " +
+                                    (followed.is_analytic() || !followed.mesh
+                                         ? std::string("is not a mesh")
+                                         : "has " + std::to_string(followed.mesh->positions.size()) + " vertices"));
+                    std::vector<Vec3d>& at_start = start_positions[k];
+                    if (at_start.empty()) {
+                        at_start.resize(followed.mesh->positions.size());
+                        collider_mesh_positions(followed, 0.0, at_start);
+                    }
+                    local = local - at_start[pin.collider_vertex];
                 }
             } else if (pin.motion >= 0) {
                 const Transform frame = model.motions.at(static_cast<std::size_t>(pin.motion)).at(0.0);
