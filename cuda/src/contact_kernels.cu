@@ -5,7 +5,7 @@
 //
 // The pair count is read from device memory by every kernel (launches are sized by the capacity), so
 // the narrow phase can change it from one substep to the next under one CUDA graph.
-#include <cub/device/device_scan.cuh>
+#include <cub/device/device_radix_sort.cuh>
 
 #include "contact_terms.cuh"
 #include "cuda_check.h"
@@ -30,7 +30,7 @@ unsigned pair_grid(std::uint64_t items) {
 __device__ inline std::uint32_t first_thread() { return blockIdx.x * blockDim.x + threadIdx.x; }
 __device__ inline std::uint32_t thread_stride() { return gridDim.x * blockDim.x; }
 
-// ---- incidence: a counting sort of (vertex, 4·pair + corner) by vertex, stable ------------------------
+// ---- incidence: a stable radix sort of the corners (4·pair + corner) by their vertex's row ------------
 
 /// The solver row of a pair's vertex v: v itself on one GPU, the part's row (or ~0) in part mode.
 __device__ inline std::uint32_t contact_row(const ContactView& c, std::uint32_t v) {
@@ -38,48 +38,38 @@ __device__ inline std::uint32_t contact_row(const ContactView& c, std::uint32_t 
     return v < c.cloth_vertices ? c.row_of[v] : 0xFFFFFFFFu;
 }
 
-/// Histogram of the cloth corners (integer atomics: the counts do not depend on the order). Also
-/// reports the substep's pair count in the stats.
-__global__ void contact_count_kernel(DeviceView d) {
+/// Key and id of every corner slot of the arrays: the row of a corner in use (active, at a row of
+/// this solver), else n, which sorts after every row. Also reports the substep's pair count.
+__global__ void contact_keys_kernel(DeviceView d, std::uint32_t* keys, std::uint32_t* ids, std::uint32_t corner_slots) {
     const ContactView& c = d.contacts;
     const std::uint32_t m = contact_count(c);
     if (first_thread() == 0) d.stats->proximity_contacts = static_cast<int>(m);
-    for (std::uint32_t e = first_thread(); e < 4 * m; e += thread_stride()) {
-        const DeviceContact& pair = c.list[e >> 2];
-        const std::uint32_t v = contact_row(c, pair.vertex[e & 3u]);
-        if (v < d.n && (pair.pair & kInactiveContactBit) == 0) atomicAdd(&c.fill[v], 1u);
+    for (std::uint32_t e = first_thread(); e < corner_slots; e += thread_stride()) {
+        std::uint32_t key = d.n;
+        if (e < 4 * m) {
+            const DeviceContact& pair = c.list[e >> 2];
+            const std::uint32_t v = contact_row(c, pair.vertex[e & 3u]);
+            if (v < d.n && (pair.pair & kInactiveContactBit) == 0) key = v;
+        }
+        keys[e] = key;
+        ids[e] = e;
     }
 }
 
-/// Each corner takes a slot in its vertex's range, counting `fill` back down to zero (so the next
-/// substep's histogram starts from zeros without a memset). The order within a range is the order
-/// the atomics ran in; contact_order_kernel makes it the pair order.
-__global__ void contact_scatter_kernel(DeviceView d) {
-    const ContactView& c = d.contacts;
-    const std::uint32_t corners = 4 * contact_count(c);
-    for (std::uint32_t e = first_thread(); e < corners; e += thread_stride()) {
-        const DeviceContact& pair = c.list[e >> 2];
-        const std::uint32_t v = contact_row(c, pair.vertex[e & 3u]);
-        if (v >= d.n || (pair.pair & kInactiveContactBit) != 0) continue;
-        const std::uint32_t slot = c.start[v] + atomicSub(&c.fill[v], 1u) - 1u;
-        c.entries[slot] = e;
-    }
-}
-
-/// Sorts each vertex's entries (the pairs one vertex is in: a few, tens where sheets lie stacked) by
-/// insertion: entries are 4·pair + corner, so ascending is pair order, the CPU's order, whatever
-/// order the scatter ran in.
-__global__ void contact_order_kernel(DeviceView d) {
-    const ContactView& c = d.contacts;
+/// start[i] = the first sorted slot whose row is at least i (a binary search): row i's entries are
+/// [start[i], start[i + 1]), and start[n] counts the corners in use.
+__global__ void contact_starts_kernel(DeviceView d, const std::uint32_t* sorted_keys, std::uint32_t corner_slots) {
     const std::uint32_t i = blockIdx.x * blockDim.x + threadIdx.x;
-    if (i >= d.n || contact_count(c) == 0) return;
-    const std::uint32_t first = c.start[i], last = c.start[i + 1];
-    for (std::uint32_t a = first + 1; a < last; ++a) {
-        const std::uint32_t key = c.entries[a];
-        std::uint32_t b = a;
-        for (; b > first && c.entries[b - 1] > key; --b) c.entries[b] = c.entries[b - 1];
-        c.entries[b] = key;
+    if (i > d.n) return;
+    std::uint32_t lo = 0, hi = corner_slots;
+    while (lo < hi) {
+        const std::uint32_t mid = lo + (hi - lo) / 2;
+        if (sorted_keys[mid] < i)
+            lo = mid + 1;
+        else
+            hi = mid;
     }
+    d.contacts.start[i] = lo;
 }
 
 // ---- per Newton iteration -------------------------------------------------------------------------
@@ -201,26 +191,32 @@ __global__ void contact_product_kernel(DeviceView d, const float* x, int in_cg_l
 
 }  // namespace
 
-std::size_t contact_scan_storage_bytes(std::uint32_t n) {
+std::size_t contact_sort_storage_bytes(std::uint32_t corner_slots, int key_bits) {
     std::size_t bytes = 0;
-    WEFT_CUDA_CHECK(cub::DeviceScan::ExclusiveSum(nullptr, bytes, static_cast<const std::uint32_t*>(nullptr),
-                                                  static_cast<std::uint32_t*>(nullptr), static_cast<int>(n) + 1));
+    cub::DoubleBuffer<std::uint32_t> keys(nullptr, nullptr), ids(nullptr, nullptr);
+    WEFT_CUDA_CHECK(cub::DeviceRadixSort::SortPairs(nullptr, bytes, keys, ids, corner_slots, 0, key_bits));
     return bytes;
 }
 
-void launch_contact_incidence(const DeviceView& d, void* scan_storage, std::size_t scan_bytes, cudaStream_t stream) {
+void launch_contact_incidence(const DeviceView& d, const ContactSortScratch& scratch, cudaStream_t stream) {
+    // Why a radix sort: a vertex of a wound or stacked sheet is in hundreds of pairs, and sorting each
+    // vertex's entries on its own thread (an insertion sort after an atomic scatter) cost 12 ms a
+    // substep on the wound 200K twist. The sort is stable, so each row's entries come out in
+    // ascending 4·pair + corner: the pair order of the CPU's ContactTerms, whatever order the narrow
+    // phase wrote the pairs in.
     const ContactView& c = d.contacts;
-    const unsigned corner_blocks = pair_grid(4ull * c.capacity);
-    contact_count_kernel<<<corner_blocks, kBlockSize, 0, stream>>>(d);
-    WEFT_CUDA_CHECK_LAUNCH("contact_count_kernel");
-    // fill[n] is never counted: the scan's last element is the total, start[n].
-    std::size_t bytes = scan_bytes;
-    WEFT_CUDA_CHECK(cub::DeviceScan::ExclusiveSum(scan_storage, bytes, static_cast<const std::uint32_t*>(c.fill),
-                                                  c.start, static_cast<int>(d.n) + 1, stream));
-    contact_scatter_kernel<<<corner_blocks, kBlockSize, 0, stream>>>(d);
-    WEFT_CUDA_CHECK_LAUNCH("contact_scatter_kernel");
-    contact_order_kernel<<<grid_for(d.n), kBlockSize, 0, stream>>>(d);
-    WEFT_CUDA_CHECK_LAUNCH("contact_order_kernel");
+    const std::uint32_t slots = scratch.corner_slots;
+    contact_keys_kernel<<<pair_grid(slots), kBlockSize, 0, stream>>>(d, scratch.keys[0], scratch.ids, slots);
+    WEFT_CUDA_CHECK_LAUNCH("contact_keys_kernel");
+    cub::DoubleBuffer<std::uint32_t> keys(scratch.keys[0], scratch.keys[1]), ids(scratch.ids, c.entries);
+    std::size_t bytes = scratch.storage_bytes;
+    WEFT_CUDA_CHECK(cub::DeviceRadixSort::SortPairs(scratch.storage, bytes, keys, ids, slots, 0, scratch.key_bits, stream));
+    // The passes alternate between the buffers: an even count leaves the ids in the scratch.
+    if (ids.Current() != c.entries)
+        WEFT_CUDA_CHECK(cudaMemcpyAsync(c.entries, ids.Current(), std::size_t{slots} * sizeof(std::uint32_t),
+                                        cudaMemcpyDeviceToDevice, stream));
+    contact_starts_kernel<<<grid_for(d.n + 1), kBlockSize, 0, stream>>>(d, keys.Current(), slots);
+    WEFT_CUDA_CHECK_LAUNCH("contact_starts_kernel");
 }
 
 void launch_contact_evaluate(const DeviceView& d, cudaStream_t stream) {

@@ -44,11 +44,16 @@ bool DeviceContacts::reserve(std::size_t pairs, std::size_t kinematic, std::uint
     WEFT_CUDA_CHECK(cudaMemsetAsync(input_.get(), 0, input_bytes, stream));  // count 0
 
     start_.allocate(n + 1, ledger_, "proximity contacts");
-    fill_.allocate(n + 1, ledger_, "proximity contacts");
-    fill_.zero(stream);  // the incidence build leaves it zero again after every use
     entries_.allocate(4 * capacity, ledger_, "proximity contacts");
     per_pair_.allocate(15 * capacity, ledger_, "proximity contacts");
-    scan_storage_.allocate(std::max<std::size_t>(1, contact_scan_storage_bytes(n)), ledger_, "proximity contacts");
+    const auto corner_slots = static_cast<std::uint32_t>(4 * capacity);
+    const int key_bits = std::max(1, static_cast<int>(std::bit_width(n)));  // n itself keys the unused slots
+    sort_keys_.allocate(2 * std::size_t{corner_slots}, ledger_, "proximity contacts: incidence sort");
+    sort_ids_.allocate(corner_slots, ledger_, "proximity contacts: incidence sort");
+    sort_storage_.allocate(std::max<std::size_t>(1, contact_sort_storage_bytes(corner_slots, key_bits)), ledger_,
+                           "proximity contacts: incidence sort");
+    sort_scratch_ = {{sort_keys_.get(), sort_keys_.get() + corner_slots}, sort_ids_.get(), sort_storage_.get(),
+                     sort_storage_.bytes(), corner_slots, key_bits};
     WEFT_CUDA_CHECK(cudaStreamSynchronize(stream));
 
     ContactView& v = view_;
@@ -60,7 +65,6 @@ bool DeviceContacts::reserve(std::size_t pairs, std::size_t kinematic, std::uint
     v.kinematic_x1 = kinematic_capacity > 0 ? reinterpret_cast<const float*>(base + kinematic_offset_) : nullptr;
     v.kinematic_v = kinematic_capacity > 0 ? v.kinematic_x1 + 3 * kinematic_capacity : nullptr;
     v.start = start_.get();
-    v.fill = fill_.get();
     v.entries = entries_.get();
     v.block = per_pair_.get();
     v.rhs = v.block + 9 * capacity;
@@ -116,10 +120,12 @@ bool DeviceContacts::upload(std::span<const weft::collision::ProximityContact> c
 void DeviceContacts::release() {
     input_ = {};
     start_ = {};
-    fill_ = {};
     entries_ = {};
+    sort_keys_ = {};
+    sort_ids_ = {};
     per_pair_ = {};
-    scan_storage_ = {};
+    sort_storage_ = {};
+    sort_scratch_ = {};
     ledger_.clear();
     view_ = ContactView{};
 }

@@ -72,9 +72,8 @@ struct ContactView {
     const float* kinematic_x1 = nullptr;
     const float* kinematic_v = nullptr;
     // Incidence of the cloth vertices, rebuilt every substep: vertex i's entries 4·pair + corner at
-    // [start[i], start[i + 1]), in pair order. `fill` (n + 1 counters) is zero between substeps.
+    // [start[i], start[i + 1]), in pair order.
     std::uint32_t* start = nullptr;
-    std::uint32_t* fill = nullptr;
     std::uint32_t* entries = nullptr;  ///< 4·capacity
     /// Part mode (the multi-GPU solver): the list names the whole model's vertices (cloth vertices
     /// below `cloth_vertices`, kinematic ones after), and `row_of` maps a whole cloth vertex to this
@@ -88,6 +87,18 @@ struct ContactView {
     float* block = nullptr;
     float* rhs = nullptr;
     float* product = nullptr;
+};
+
+/// The incidence build's scratch (launch_contact_incidence): the corners' row keys, double-buffered
+/// for the radix sort, the ids the sort carries along (its second buffer is ContactView::entries),
+/// and the sort's own storage.
+struct ContactSortScratch {
+    std::uint32_t* keys[2] = {nullptr, nullptr};  ///< 4·capacity each
+    std::uint32_t* ids = nullptr;                 ///< 4·capacity
+    void* storage = nullptr;
+    std::size_t storage_bytes = 0;
+    std::uint32_t corner_slots = 0;  ///< 4·capacity
+    int key_bits = 1;                ///< bits of the largest key, n (the slots not in use)
 };
 
 /// Writable device pointers into the inputs of the contact list, for producers on the device (the GPU
@@ -127,9 +138,8 @@ public:
     }
     [[nodiscard]] std::size_t capacity() const { return view_.capacity; }
     [[nodiscard]] std::size_t bytes() const { return ledger_.total(); }
-    /// Scratch the device-wide scan of the incidence build needs (sized for n + 1 counters).
-    [[nodiscard]] void* scan_storage() const { return scan_storage_.get(); }
-    [[nodiscard]] std::size_t scan_storage_bytes() const { return scan_storage_.bytes(); }
+    /// Scratch of the incidence build (sized for the capacity and the n of the last reserve).
+    [[nodiscard]] const ContactSortScratch& sort_scratch() const { return sort_scratch_; }
 
 private:
     MemoryLedger ledger_;
@@ -139,9 +149,11 @@ private:
     DeviceArray<unsigned char> input_;
     PinnedArray<unsigned char> host_input_;
     std::size_t count_offset_ = 0, kinematic_offset_ = 0;
-    DeviceArray<std::uint32_t> start_, fill_, entries_;
-    DeviceArray<float> per_pair_;  // block, rhs, product: 15 floats a pair
-    DeviceArray<unsigned char> scan_storage_;
+    DeviceArray<std::uint32_t> start_, entries_;
+    DeviceArray<std::uint32_t> sort_keys_, sort_ids_;  // 2 and 1 × 4·capacity
+    DeviceArray<float> per_pair_;                      // block, rhs, product: 15 floats a pair
+    DeviceArray<unsigned char> sort_storage_;
+    ContactSortScratch sort_scratch_{};
 };
 
 }  // namespace weft::cuda

@@ -96,7 +96,7 @@ void DeviceSolver::record(cudaStream_t stream, bool capturing) {
     // after each (record_contact_evaluation), this one only for pair springs.
     const bool offset = offset_model_ != nullptr;
     // The incidence of this substep's contacts (timed with the substep's start, as "kinematics").
-    if (contacts && !offset) launch_contact_incidence(view_, contacts_.scan_storage(), contacts_.scan_storage_bytes(), stream);
+    if (contacts && !offset) launch_contact_incidence(view_, contacts_.sort_scratch(), stream);
     mark();
     for (int it = 0; it < newton; ++it) {
         launch_begin_newton(view_, stream);
@@ -125,7 +125,7 @@ void DeviceSolver::record_contact_evaluation(cudaStream_t stream) {
     launch_contact_evaluate(view_, stream);
     // Offset mode: the incidence of the pairs the evaluation found in contact (kInactiveContactBit).
     if (offset_model_ != nullptr)
-        launch_contact_incidence(view_, contacts_.scan_storage(), contacts_.scan_storage_bytes(), stream);
+        launch_contact_incidence(view_, contacts_.sort_scratch(), stream);
 }
 
 void DeviceSolver::record_truncation(cudaStream_t stream) {

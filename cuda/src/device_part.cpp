@@ -74,7 +74,7 @@ void DeviceSolver::part_assemble(bool first_newton, bool offset_contacts) {
         whole.vk = const_cast<float*>(contact_vk_);
         launch_contact_evaluate(whole, stream);
         // Offset contacts turn active and inactive with each evaluation (kInactiveContactBit).
-        if (offset_contacts) launch_contact_incidence(view_, contacts_.scan_storage(), contacts_.scan_storage_bytes(), stream);
+        if (offset_contacts) launch_contact_incidence(view_, contacts_.sort_scratch(), stream);
     }
     launch_pcg_setup(view_, first_newton, schwarz_on_, stream);
 }
@@ -158,7 +158,7 @@ bool DeviceSolver::part_receive_contacts(std::span<const multi::ContactShare> sh
                                         kinematic_from.kinematic_v + std::size_t(c) * kinematic_from.kinematic_capacity,
                                         kinematic * sizeof(float), cudaMemcpyDefault, stream));
     }
-    launch_contact_incidence(view_, contacts_.scan_storage(), contacts_.scan_storage_bytes(), stream);
+    launch_contact_incidence(view_, contacts_.sort_scratch(), stream);
     return grew;
 }
 

@@ -61,12 +61,14 @@ void launch_assemble_colors(const DeviceView& d, const Coloring& triangles, cons
 // Every launch is sized by the list's capacity (the pair kernels stride, with at most 1024 blocks) and
 // reads the pair count from device memory, so a graph captured once serves any count up to the
 // capacity. None of them is called when the capacity is 0.
-/// Bytes of scratch the incidence build's device-wide scan needs for `n` vertices.
-[[nodiscard]] std::size_t contact_scan_storage_bytes(std::uint32_t n);
-/// Per substep: the incidence of the cloth vertices (vertex → 4·pair + corner, in pair order) by a
-/// counting sort: integer-atomic histogram, exclusive scan, scatter, then each vertex's short list
-/// sorted (the scatter's order depends on scheduling, the sorted list does not).
-void launch_contact_incidence(const DeviceView& d, void* scan_storage, std::size_t scan_bytes, cudaStream_t stream);
+/// Bytes of scratch the incidence build's radix sort needs for `corner_slots` corners (4 a pair of
+/// capacity) whose keys are below 2^key_bits.
+[[nodiscard]] std::size_t contact_sort_storage_bytes(std::uint32_t corner_slots, int key_bits);
+/// Per substep (per evaluation for offset contacts): the incidence of the rows (row → 4·pair +
+/// corner, in pair order, whatever order the pairs were written in) by a stable radix sort of every
+/// corner slot keyed by its row (slots not in use keyed past the last row), then each row's start
+/// by a binary search. No atomics: the result does not depend on scheduling.
+void launch_contact_incidence(const DeviceView& d, const ContactSortScratch& scratch, cudaStream_t stream);
 /// Per Newton iteration: each pair's block C = −h·D − h²·K and right-hand side at the linearisation
 /// point (gathered into b and the diagonal blocks by the PCG setup).
 void launch_contact_evaluate(const DeviceView& d, cudaStream_t stream);
