@@ -337,6 +337,13 @@ constexpr Parameter kTable[] = {
             "fallbacks); 0: the backend's default (cpu 1000, cuda 200)",
      .label = "impact sweeps", .panel = "collision", .log_scale = true,
      .access = field<&WorldDesc::collision, &CollisionSettings::max_impact_sweeps>()},
+    {.section = "collision", .name = "max_impact_work", .type = T::Real, .unit = "constraint updates",
+     .range = R{0.0, 1e12},
+     .doc = "cap on the zone projections' work in one substep (constraint updates over all zones and rounds); "
+            "once spent, the hits left go to the rigid and freezing fallbacks, so a pinch no projection can "
+            "solve costs a bounded time; 0: the default, 2e7 (cpu backend only)",
+     .label = "impact work cap", .panel = "collision", .log_scale = true,
+     .access = field<&WorldDesc::collision, &CollisionSettings::max_impact_work>()},
     {.section = "collision", .name = "check", .type = T::Boolean,
      .doc = "run the exact triangle–triangle intersection check after every step and report the count in the stats "
             "(costly: for tests; also `weft run --check`)",

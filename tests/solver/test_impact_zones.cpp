@@ -315,6 +315,42 @@ TEST(ImpactZones, SameResultOnAnyThreadCount) {
     }
 }
 
+TEST(ImpactZones, AWorkCapSpentHandsTheHitsToTheFallbacksAndEndsClean) {
+    // Where no projection can succeed the rounds re-projected a growing zone for up to
+    // qp_max_sweeps sweeps each; the work cap stops them and the fallbacks end the substep. Here
+    // the projections could succeed (the crumpled sheet in 5 rounds); with a tenth of their work,
+    // and with a cap of 1 (no projection at all), the substep must still end clean, through the
+    // fallbacks, within the cap, the same on any thread count.
+    const Scene s = crumpled_sheet(16, 11);
+    const Resolved full = resolve(s);
+    expect_clean(s, full);
+    EXPECT_FALSE(full.report.qp_work_spent);
+    ASSERT_GT(full.report.qp_work, 1000);
+    EXPECT_EQ(full.report.rigid_rounds, 0);
+    for (const std::int64_t cap : {full.report.qp_work / 10, std::int64_t{1}}) {
+        SCOPED_TRACE("cap " + std::to_string(cap));
+        const auto run = [&](int threads) {
+            Resolved r;
+            tbb::task_arena arena(threads);
+            arena.execute([&] { r = test::resolve_cpu(s, 32, nullptr, kImpactZoneRigidRounds, cap); });
+            return r;
+        };
+        const Resolved capped = run(1);
+        print("crumpled sheet, work capped", capped);
+        expect_clean(s, capped);
+        EXPECT_TRUE(capped.report.qp_work_spent);
+        EXPECT_LE(capped.report.qp_work, cap);
+        EXPECT_LT(capped.report.iterations, full.report.iterations);
+        EXPECT_GT(capped.report.rigid_rounds + capped.report.frozen_vertices, 0) << "the fallbacks took the hits";
+        if (cap == 1) {
+            EXPECT_EQ(capped.report.iterations, 0);
+        }
+        const Resolved two = run(2);
+        EXPECT_EQ(std::memcmp(capped.x1.data(), two.x1.data(), capped.x1.size() * sizeof(Vec3d)), 0);
+        EXPECT_EQ(capped.report.qp_work, two.report.qp_work);
+    }
+}
+
 TEST(ImpactZones, NothingToDoLeavesEverythingAlone) {
     // Two sheets 2 cm apart moving in parallel (and an empty scene): one detection, no zone, x1 kept.
     Scene s = two_sheets(6, 2);
@@ -354,6 +390,9 @@ TEST(ImpactZones, RejectsBadInput) {
     negative[1] = -1.0;
     bad = in;
     bad.inverse_mass = negative;
+    EXPECT_THROW((void)solver.resolve(bad), Error);
+    bad = in;
+    bad.qp_max_work = 0;
     EXPECT_THROW((void)solver.resolve(bad), Error);
 }
 

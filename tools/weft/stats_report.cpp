@@ -83,6 +83,7 @@ RunSummary summarize(std::span<const StepStats> frames) {
         sc.impact_iterations_max = std::max(sc.impact_iterations_max, c.impact_iterations);
         sc.rigid_zones += c.rigid_zones;
         sc.frozen_vertices += c.frozen_vertices;
+        sc.impact_work_spent += c.impact_work_spent;
         sc.unresolved_substeps += c.unresolved_substeps;
         sc.truncated_vertices += c.truncated_vertices;
         sc.redetections += c.redetections;
@@ -278,6 +279,7 @@ void write_summary_fields(JsonWriter& json, const RunContext& c, const RunSummar
     json.field("ccd_tests", col.ccd_tests).field("ccd_hits", col.ccd_hits);
     json.field("impact_zones", col.impact_zones).field("impact_iterations_max", col.impact_iterations_max);
     json.field("rigid_zones", col.rigid_zones).field("frozen_vertices", col.frozen_vertices);
+    json.field("impact_work_spent", col.impact_work_spent);
     json.field("unresolved_substeps", col.unresolved_substeps);
     json.field("truncated_vertices", col.truncated_vertices).field("redetections", col.redetections);
     json.field("bound_fallbacks", col.bound_fallbacks).field("query_radius_max", col.query_radius_max);
@@ -400,7 +402,9 @@ void print_run_summary(std::ostream& out, const RunContext& c, const RunSummary&
             << ", CCD " << col.ccd_hits << " hits in " << col.ccd_tests << " tests\n";
         out << "  impact zones   " << col.impact_zones << " zones, at most " << col.impact_iterations_max
             << " rounds per substep; fallbacks: " << col.rigid_zones << " rigid, " << col.frozen_vertices
-            << " frozen; unresolved substeps " << col.unresolved_substeps << "\n";
+            << " frozen"
+            << (col.impact_work_spent > 0 ? " (work cap spent in " + std::to_string(col.impact_work_spent) + " substeps)" : std::string())
+            << "; unresolved substeps " << col.unresolved_substeps << "\n";
         if (col.query_radius_max > 0.0)
             out << "  offset bounds  " << col.truncated_vertices << " vertex moves truncated, " << col.redetections
                 << " detection reruns, " << col.bound_fallbacks << " substeps sent to the CCD fallback, "

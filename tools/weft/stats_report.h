@@ -80,6 +80,7 @@ struct RunSummary {
         long long impact_zones = 0;
         int impact_iterations_max = 0;
         long long rigid_zones = 0, frozen_vertices = 0;
+        long long impact_work_spent = 0;  ///< substeps whose projections spent collision.max_impact_work
         long long unresolved_substeps = 0;
         /// Offset mode (CollisionStats): truncated vertex moves, detection reruns, CCD fallbacks and
         /// the largest query radius (m).

@@ -192,6 +192,15 @@ struct CollisionSettings {
     /// is faster per round but may need more rounds or the fallbacks. 0: the backend's default (cpu
     /// 1000, cuda 200).
     int max_impact_sweeps = 0;
+    /// Cap on the work of all zone projections in one substep, in constraint updates (a sweep of a
+    /// zone updates each of its constraints once), summed over zones and rounds. Once spent, the
+    /// rounds stop and the hits left go to the fallbacks (rigid zones, then freezing), which always
+    /// end: a pinch no projection can solve (cloth pressed between two colliders, or into a
+    /// collider's own overlapping parts) costs a bounded time instead of seconds. Smaller bounds the
+    /// worst substep tighter and falls back sooner. 0: the default, 2·10⁷ (about 0.2 s on one core
+    /// of the development machine). cpu backend only (the cuda backend's projection is bounded by
+    /// its rounds and sweeps).
+    double max_impact_work = 0.0;
     /// Contact pipeline: CCD with impact zones, or offset contact with displacement bounds.
     CollisionMode mode = CollisionMode::CcdZones;
     /// Offset mode: γ, the share of its distance to the nearest primitive a vertex may move per update

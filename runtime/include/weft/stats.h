@@ -48,6 +48,9 @@ struct CollisionStats {
     int impact_iterations = 0;          ///< largest number of impact-zone rounds one substep needed
     int rigid_zones = 0;                ///< zones that fell back to rigid motion (the cap was hit)
     int frozen_vertices = 0;            ///< vertices the last-resort fallback held at their start position
+    /// Substeps whose zone projections spent their work cap (collision.max_impact_work) and handed
+    /// the hits left to the fallbacks (cpu backend).
+    int impact_work_spent = 0;
     int swept_collider_hits = 0;        ///< vertices a fast analytic collider hit mid-substep and carried along
     /// Slow vertices that ended a substep inside a bounded analytic collider they started outside (a
     /// contact that began within the substep) and were put back onto its surface (swept_collider.h).

@@ -293,7 +293,7 @@ void ImpactZoneSolver::build_zones() {
     zone_sweeps_.assign(zones, 0);
 }
 
-int ImpactZoneSolver::project_zone(const ImpactZoneInput& in, std::size_t z) {
+int ImpactZoneSolver::project_zone(const ImpactZoneInput& in, std::size_t z, int max_sweeps) {
     // Harmon et al. 2008, inelastic projection: minimise ½ Σ_i m_i |x_i − x̂_i|² subject to
     // g_k(x) = J_k x − δ ≥ 0, J_k = (w_k1 n_kᵀ, …, w_k4 n_kᵀ). The KKT conditions give
     // x = x̂ + M⁻¹ Jᵀ λ, λ ≥ 0, g(x) ≥ 0, λ_k g_k(x) = 0, and λ maximises the concave dual
@@ -331,7 +331,7 @@ int ImpactZoneSolver::project_zone(const ImpactZoneInput& in, std::size_t z) {
         const std::uint32_t k = zone_constraints_[i];
         if (lambda_[k] != 0.0) apply(constraints_[k], lambda_[k]);
     }
-    for (int sweep = 1; sweep <= in.qp_max_sweeps; ++sweep) {
+    for (int sweep = 1; sweep <= max_sweeps; ++sweep) {
         double worst = 0.0;  // largest KKT residual of the sweep, each taken before its update
         for (std::size_t i = cb; i < ce; ++i) {
             const std::uint32_t k = zone_constraints_[i];
@@ -351,7 +351,7 @@ int ImpactZoneSolver::project_zone(const ImpactZoneInput& in, std::size_t z) {
         // Every update of the sweep was at most tol: x is within tol of a KKT point.
         if (worst <= tol) return sweep;
     }
-    return -in.qp_max_sweeps;
+    return -max_sweeps;
 }
 
 void ImpactZoneSolver::rigid_zone(const ImpactZoneInput& in, std::size_t z) {
@@ -544,8 +544,8 @@ ImpactZoneReport ImpactZoneSolver::resolve(const ImpactZoneInput& in) {
     if (!(in.separation_ratio > 0.0 && in.separation_ratio < 1.0))
         throw Error("impact zones: separation_ratio must be in (0, 1) (got " + std::to_string(in.separation_ratio) +
                     ")");
-    if (in.max_iterations < 0 || in.max_rigid_rounds < 0 || in.qp_max_sweeps < 1)
-        throw Error("impact zones: max_iterations and max_rigid_rounds must be ≥ 0, qp_max_sweeps ≥ 1");
+    if (in.max_iterations < 0 || in.max_rigid_rounds < 0 || in.qp_max_sweeps < 1 || in.qp_max_work < 1)
+        throw Error("impact zones: max_iterations and max_rigid_rounds must be ≥ 0, qp_max_sweeps and qp_max_work ≥ 1");
     if (!std::isfinite(in.qp_tolerance_ratio) || !(in.qp_tolerance_ratio > 0.0))
         throw Error("impact zones: qp_tolerance_ratio must be finite and > 0");
     for (std::size_t v = 0; v < n; ++v)
@@ -580,6 +580,12 @@ ImpactZoneReport ImpactZoneSolver::resolve(const ImpactZoneInput& in) {
 
     detect(in, report);
     while (!hits_.empty() && report.iterations < in.max_iterations) {
+        // Not one sweep of every constraint the round could project fits what is left of the work
+        // budget (qp_max_work): the fallbacks take the hits.
+        if (in.qp_max_work - report.qp_work < static_cast<std::int64_t>(constraints_.size() + hits_.size())) {
+            report.qp_work_spent = true;
+            break;
+        }
         ++report.iterations;
         const auto t_begin = Clock::now();
         const std::size_t first_new = constraints_.size();
@@ -589,11 +595,18 @@ ImpactZoneReport ImpactZoneSolver::resolve(const ImpactZoneInput& in) {
         for (std::size_t k = first_new; k < constraints_.size(); ++k)
             for (std::uint32_t v : constraints_[k].v)
                 if (member_[v] != 0) zone_action_[zone_index_[zone_label_[v]]] = kProject;
+        // The round's sweep cap: what is left of the work budget over the constraints to project (at
+        // least one sweep: the check above counted every constraint).
+        std::int64_t round_constraints = 0;
+        for (std::size_t z = 0; z < zone_root_.size(); ++z)
+            if (zone_action_[z] == kProject) round_constraints += static_cast<std::int64_t>(zone_cbegin_[z + 1] - zone_cbegin_[z]);
+        const std::int64_t affordable = (in.qp_max_work - report.qp_work) / std::max<std::int64_t>(round_constraints, 1);
+        const int max_sweeps = static_cast<int>(std::min<std::int64_t>(in.qp_max_sweeps, std::max<std::int64_t>(affordable, 1)));
         tbb::parallel_for(tbb::blocked_range<std::size_t>(0, zone_root_.size(), 1),
                           [&](const tbb::blocked_range<std::size_t>& range) {
                               for (std::size_t z = range.begin(); z != range.end(); ++z) {
                                   if (zone_action_[z] != kProject) continue;
-                                  zone_sweeps_[z] = project_zone(in, z);
+                                  zone_sweeps_[z] = project_zone(in, z, max_sweeps);
                                   for (std::size_t i = zone_vbegin_[z]; i < zone_vbegin_[z + 1]; ++i) {
                                       outcome_[zone_vertices_[i]] = VertexOutcome::Projected;
                                       stale_[zone_vertices_[i]] = 1;
@@ -603,6 +616,7 @@ ImpactZoneReport ImpactZoneSolver::resolve(const ImpactZoneInput& in) {
         for (std::size_t z = 0; z < zone_root_.size(); ++z) {
             if (zone_action_[z] != kProject) continue;
             report.qp_sweeps += std::abs(zone_sweeps_[z]);
+            report.qp_work += std::int64_t{std::abs(zone_sweeps_[z])} * static_cast<std::int64_t>(zone_cbegin_[z + 1] - zone_cbegin_[z]);
             if (zone_sweeps_[z] < 0) ++report.qp_unconverged;
         }
         report.zones_ms += ms_since(t_begin);
@@ -634,6 +648,7 @@ void add_to_stats(const ImpactZoneReport& r, StepStats& stats) {
     c.impact_iterations = std::max(c.impact_iterations, r.iterations);
     c.rigid_zones += r.rigid_zones;
     c.frozen_vertices += r.frozen_vertices;
+    if (r.qp_work_spent) ++c.impact_work_spent;
     if (!r.resolved) ++c.unresolved_substeps;
     stats.ms(Stage::BroadPhase) += r.broad_phase_ms;
     stats.ms(Stage::Ccd) += r.ccd_ms;

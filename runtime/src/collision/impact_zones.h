@@ -74,6 +74,14 @@ struct ImpactZoneInput {
     /// The default 1 % keeps every corrected gap ≥ 0.99·δ, far above eta, and costs 10–100× fewer
     /// sweeps than 0.1 % on the nearly redundant rows of stacked contacts (see project_zone).
     double qp_tolerance_ratio = 1e-2;
+    /// Cap on the projections' work in one `resolve`, in constraint updates (each sweep of a zone
+    /// updates its constraints once), summed over every zone and round, ≥ 1. A round's zones get
+    /// sweep caps that fit what is left (the same for every zone of the round, so the result does not
+    /// depend on threads); when not one sweep of each fits, the rounds stop and the hits left go to
+    /// the fallbacks. Why: where no projection can succeed (cloth pinched between two colliders, or
+    /// between a collider's own overlapping parts) every round re-projected a growing zone for up to
+    /// qp_max_sweeps sweeps, and a substep of a 1,500-triangle cape took minutes.
+    std::int64_t qp_max_work = 20'000'000;
 
     // ---- Broad-phase extension point ----------------------------------------------------------------
     /// Template of every broad-phase call: the solver overwrites x0, x1, triangles, edges, self_pairs,
@@ -122,7 +130,7 @@ private:
     void build_zones();
     /// The inelastic projection of zone z from the predicted positions; returns the iterations used,
     /// negated when it stopped before converging.
-    int project_zone(const ImpactZoneInput& in, std::size_t z);
+    int project_zone(const ImpactZoneInput& in, std::size_t z, int max_sweeps);
     /// The rigid motion of zone z that keeps the linear and angular momentum of its displacement.
     void rigid_zone(const ImpactZoneInput& in, std::size_t z);
     /// Rigid zones, then freezing and carrying, until clean or out of options.

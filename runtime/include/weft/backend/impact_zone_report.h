@@ -39,6 +39,8 @@ struct ImpactZoneReport {
     int remaining_hits = 0;            ///< CCD hits at the final detection (0 when resolved)
     int qp_unconverged = 0;            ///< zone projections that reached qp_max_sweeps
     std::int64_t qp_sweeps = 0;        ///< projection sweeps, summed over zone solves
+    std::int64_t qp_work = 0;          ///< constraint updates of the projections (≤ qp_max_work)
+    bool qp_work_spent = false;        ///< the rounds stopped because qp_max_work was spent
     int detections = 0;                ///< broad phase + CCD passes over the whole mesh
     std::int64_t candidate_pairs = 0;  ///< broad-phase pairs, summed over detections
     std::int64_t ccd_tests = 0;        ///< CCD queries run (pairs with a movable vertex), summed
