@@ -246,12 +246,15 @@ void drive(weft::World& world, const Level& level, const Runner& runner, double 
         c.motion = m;
         const double speed = std::hypot(m.linear_velocity.x, m.linear_velocity.z);
         const std::string clip = !runner.on_ground() ? "jump" : speed > 0.1 ? "run" : "";
-        if (clip != c.clip) {
-            c.clip = clip;
-            c.clip_loop = clip == "run";
-            c.clip_start = clip == "jump" ? t - 0.3 : t;
-        }
-        c.clip_speed = clip == "run" ? 0.5 + 0.5 * speed / Runner::kRunSpeed : 1.0;
+        const double pace = clip == "run" ? 0.5 + 0.5 * speed / Runner::kRunSpeed : 1.0;
+        // A cut between two poses moves the body as far in one step as they differ: the skirt pinned
+        // at its hips could not follow. The clips cross-fade, and the pace changes keep the clip
+        // time continuous.
+        constexpr double kClipFade = 0.15;  // s
+        if (clip != c.clip)
+            weft::switch_clip(c, clip, t, kClipFade, clip == "run", pace, clip == "jump" ? 0.3 : 0.0);
+        else
+            weft::set_clip_speed(c, t, pace);
         return;
     }
     // The body parts sit on the runner's vertical axis, which its turning leaves in place.

@@ -179,6 +179,18 @@ std::vector<JointPose> sample_clip(const SkinnedMesh& m, const AnimationClip& cl
     return poses;
 }
 
+std::vector<JointPose> blend_poses(std::span<const JointPose> from, std::span<const JointPose> to, double s) {
+    if (from.size() != to.size())
+        throw Error("blend_poses: " + std::to_string(from.size()) + " and " + std::to_string(to.size()) + " joint poses");
+    std::vector<JointPose> out(to.begin(), to.end());
+    for (std::size_t j = 0; j < out.size(); ++j) {
+        out[j].translation = lerp(from[j].translation, to[j].translation, s);
+        out[j].rotation = slerp(from[j].rotation, to[j].rotation, s);
+        out[j].scale = lerp(from[j].scale, to[j].scale, s);
+    }
+    return out;
+}
+
 std::vector<Affine> skinning_transforms(const SkinnedMesh& m, std::span<const JointPose> poses) {
     if (poses.size() != m.joints.size())
         fail(m, std::to_string(poses.size()) + " joint poses for " + std::to_string(m.joints.size()) + " joints");

@@ -86,6 +86,11 @@ std::size_t World::add_collider(const ColliderDesc& collider) {
             throw Error(where + ": clip_speed " + std::to_string(c.clip_speed) + " (expected a finite speed >= 0)");
         if (!std::isfinite(c.clip_start))
             throw Error(where + ": clip_start " + std::to_string(c.clip_start) + " (expected a finite time in s)");
+        if (!(c.clip_fade >= 0.0) || !std::isfinite(c.clip_fade) || !std::isfinite(c.fade_start) ||
+            !std::isfinite(c.fade_from_start) || !(c.fade_from_speed >= 0.0) || !std::isfinite(c.fade_from_speed))
+            throw Error(where + ": clip_fade " + std::to_string(c.clip_fade) + ", fade_from_speed " +
+                        std::to_string(c.fade_from_speed) + " (expected a finite fade >= 0 s, speed >= 0 and finite times)");
+        if (!c.fade_from_clip.empty()) (void)c.skin->clip(c.fade_from_clip);
     }
     model_->colliders.push_back(std::move(c));
     ++model_->topology_version;

@@ -138,6 +138,76 @@ TEST(Skinning, BadSkinsAreRefusedByName) {
     EXPECT_THROW(normalize_weights(unweighted), Error);
 }
 
+/// The bar with its "wave" clip (the elbow turns 90° about z and rises 2 m over 1 s) as a mesh
+/// collider playing it once from t = 0.
+ColliderDesc waving_bar() {
+    SkinnedMesh m = bar();
+    AnimationClip clip{.name = "wave", .duration = 1.0};
+    JointTrack t{.joint = 1};
+    t.rotation_times = {0.0, 1.0};
+    t.rotations = {about_z(0.0), about_z(kPi / 2)};
+    t.translation_times = {0.0, 1.0};
+    t.translations = {{1, 0, 0}, {1, 2, 0}};
+    clip.tracks.push_back(t);
+    m.clips.push_back(clip);
+    validate(m);
+    ColliderDesc c{.name = "bar", .shape = ColliderShape::Mesh};
+    c.skin = std::make_shared<const SkinnedMesh>(m);
+    c.mesh = std::make_shared<const MeshData>(m.mesh);
+    c.clip = "wave";
+    c.clip_loop = false;
+    return c;
+}
+
+Vec3d hand_at(const ColliderDesc& c, double t) {
+    std::vector<Vec3d> x(4);
+    collider_mesh_positions(c, t, x);
+    return x[3];
+}
+
+TEST(Skinning, ASwitchCrossFadesFromTheOldPoseAndASpeedChangeKeepsTheClipTime) {
+    // Waving until 0.5 s, then back to the bind pose over a 0.2 s fade: at the switch the pose is
+    // the wave's, halfway through the fade the joint's translation and rotation are half of each
+    // (the wave at 0.6 s: up 1.2 m and turned 0.3·90°; the bind pose: 0 and 0), after it the bind pose.
+    ColliderDesc c = waving_bar();
+    const Vec3d waving = hand_at(c, 0.5);
+    switch_clip(c, "", 0.5, 0.2);
+    expect_near(hand_at(c, 0.5), waving, "the fade starts from the pose the switch left");
+    const double half_turn = 0.5 * 0.6 * kPi / 2;
+    expect_near(hand_at(c, 0.6), {1.0 + std::cos(half_turn), 0.6 + std::sin(half_turn), 0.0}, "halfway through the fade");
+    expect_near(hand_at(c, 0.7), {2.0, 0.0, 0.0}, "the fade done: the bind pose");
+    // The fade is continuous: no step of 1 ms moves the hand by more than the blend's rate allows,
+    // where a cut moves it by the whole difference at once.
+    double largest = 0.0;
+    for (double t = 0.45; t < 0.75; t += 1e-3) largest = std::max(largest, math::length(hand_at(c, t + 1e-3) - hand_at(c, t)));
+    EXPECT_LT(largest, 0.02);
+    ColliderDesc cut = waving_bar();
+    switch_clip(cut, "", 0.5, 0.0);
+    EXPECT_GT(math::length(hand_at(cut, 0.5) - waving), 1.0) << "a cut jumps to the bind pose";
+
+    // Halving the speed at 0.4 s keeps the clip at 0.4 s, and from there it runs at half the rate.
+    ColliderDesc slow = waving_bar();
+    set_clip_speed(slow, 0.4, 0.5);
+    EXPECT_NEAR(clip_time(slow, 0.4), 0.4, 1e-12);
+    EXPECT_NEAR(clip_time(slow, 0.6), 0.5, 1e-12);
+    // Setting clip_speed alone would have jumped it to 0.2 s.
+    // A clip entered part-way: the wave from 0.25 s at twice the rate, at t = 2 s.
+    switch_clip(slow, "wave", 2.0, 0.1, false, 2.0, 0.25);
+    EXPECT_NEAR(clip_time(slow, 2.0), 0.25, 1e-12);
+    EXPECT_NEAR(clip_time(slow, 2.1), 0.45, 1e-12);
+    EXPECT_THROW(switch_clip(slow, "run", 3.0, 0.1), Error);  // the bar has no run
+    EXPECT_THROW(switch_clip(slow, "", 3.0, -1.0), Error);
+    EXPECT_THROW(set_clip_speed(slow, 3.0, -1.0), Error);
+    // The world refuses a fade that cannot be played.
+    World world;
+    ColliderDesc bad = waving_bar();
+    bad.clip_fade = 0.2;
+    bad.fade_from_clip = "run";
+    EXPECT_THROW((void)world.add_collider(bad), Error);
+    bad.fade_from_clip = "wave";
+    EXPECT_NO_THROW((void)world.add_collider(bad));
+}
+
 #if WEFT_TEST_HAVE_ASSETS
 /// `skin`'s vertices at time `t` of clip `clip` (played once), in its own frame.
 void skin_at(const SkinnedMesh& skin, const std::string& clip, double t, std::vector<Vec3d>& out) {

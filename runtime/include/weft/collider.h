@@ -44,18 +44,43 @@ struct ColliderDesc {
     /// Simulated time (s) at which the clip's time 0 falls: the clip's time at t is
     /// clip_speed·max(0, t − clip_start). A game sets it when it switches clips (a jump starts now).
     double clip_start = 0.0;
+    /// A cross-fade from the clip that played before (a game switching clips mid-motion): over
+    /// `clip_fade` seconds from `fade_start` (simulated time, s) the pose blends from
+    /// `fade_from_clip` (played on with its own speed, start and loop; empty: the bind pose) to
+    /// `clip`'s. 0: no fade, the switch is a cut, and a cut moves the body as far in one step as the
+    /// two poses differ: cloth pinned to it or held against it cannot follow (switch_clip sets these).
+    double clip_fade = 0.0;
+    double fade_start = 0.0;
+    std::string fade_from_clip;
+    double fade_from_speed = 1.0;
+    bool fade_from_loop = true;
+    double fade_from_start = 0.0;
     [[nodiscard]] bool is_analytic() const { return shape != ColliderShape::Mesh; }
     /// Whether the collider can move: its motion is not static, or its skin plays a clip.
-    [[nodiscard]] bool moves() const { return !motion.is_static() || (skin != nullptr && !clip.empty()); }
+    [[nodiscard]] bool moves() const {
+        return !motion.is_static() || (skin != nullptr && (!clip.empty() || (clip_fade > 0.0 && !fade_from_clip.empty())));
+    }
 };
+
+/// Switches `collider`'s clip at simulated time `t` (s) to `clip` (empty: the bind pose), whose
+/// time at t is `clip_time_now` (s; 0 plays it from its start), cross-fading from what played until
+/// now over `fade` seconds (0: a cut). What played before keeps playing under the fade.
+void switch_clip(ColliderDesc& collider, const std::string& clip, double t, double fade, bool loop = true,
+                 double speed = 1.0, double clip_time_now = 0.0);
+/// Changes the clip's speed at simulated time `t` (s) without a jump in its time: `clip_start` moves
+/// so that the clip is where it was at t. Setting `clip_speed` alone rescales all the time played
+/// since `clip_start`, which jumps the pose by as much as the speed changed times that time.
+void set_clip_speed(ColliderDesc& collider, double t, double speed);
 
 /// A mesh collider's vertices in the world at time `t` (s): skinned by its clip where it has a skin,
 /// then placed by its motion. `out` holds one position a mesh vertex (m).
 void collider_mesh_positions(const ColliderDesc& collider, double t, std::span<Vec3d> out);
 
-/// Whether a mesh collider is bent by a clip (it has a skin and plays a clip); otherwise its mesh
-/// moves rigidly with its motion.
-[[nodiscard]] inline bool plays_clip(const ColliderDesc& c) { return c.skin != nullptr && !c.clip.empty(); }
+/// Whether a mesh collider is bent by a clip (it has a skin and plays a clip, or fades out of one);
+/// otherwise its mesh moves rigidly with its motion.
+[[nodiscard]] inline bool plays_clip(const ColliderDesc& c) {
+    return c.skin != nullptr && (!c.clip.empty() || (c.clip_fade > 0.0 && !c.fade_from_clip.empty()));
+}
 
 /// The clip time of `collider` at simulated time `t` (s): clip_speed·max(0, t − clip_start).
 [[nodiscard]] inline double clip_time(const ColliderDesc& c, double t) {

@@ -100,6 +100,9 @@ void normalize_weights(SkinnedMesh& mesh);
 [[nodiscard]] std::vector<Affine> skinning_transforms(const SkinnedMesh& mesh, std::span<const JointPose> poses);
 /// The skinned positions (m) for `transforms` (skinning_transforms): linear blend skinning.
 void skin(const SkinnedMesh& mesh, std::span<const Affine> transforms, std::span<Vec3d> positions);
+/// Each joint's pose blended from `from` (s = 0) to `to` (s = 1): translations and scales linearly,
+/// rotations along the shorter arc. A cross-fade between two clips' poses.
+[[nodiscard]] std::vector<JointPose> blend_poses(std::span<const JointPose> from, std::span<const JointPose> to, double s);
 /// The bind pose's local poses (every joint at its rest value).
 [[nodiscard]] std::vector<JointPose> rest_poses(const SkinnedMesh& mesh);
 
