@@ -75,7 +75,8 @@ TEST(Skinning, TheBindPoseGivesBackTheMeshAndABentElbowMovesTheForearm) {
     expect_near(x[3], {-1.0, 1.0, 0}, "hand, root and elbow turned");
 }
 
-TEST(Skinning, ClipsInterpolateBetweenKeysAndLoop) {
+/// bar() with the clip "wave": over 1 s the elbow turns 90° about z and rises 2 m.
+SkinnedMesh waving_bar_skin() {
     SkinnedMesh m = bar();
     AnimationClip clip{.name = "wave", .duration = 1.0};
     JointTrack t{.joint = 1};
@@ -86,6 +87,11 @@ TEST(Skinning, ClipsInterpolateBetweenKeysAndLoop) {
     clip.tracks.push_back(t);
     m.clips.push_back(clip);
     validate(m);
+    return m;
+}
+
+TEST(Skinning, ClipsInterpolateBetweenKeysAndLoop) {
+    const SkinnedMesh m = waving_bar_skin();
     const std::vector<JointPose> half = sample_clip(m, m.clip("wave"), 0.5, false);
     const Mat3d r = rotation_matrix(half[1].rotation), expected = rotation_matrix(about_z(kPi / 4));
     for (int a = 0; a < 3; ++a)
@@ -138,19 +144,9 @@ TEST(Skinning, BadSkinsAreRefusedByName) {
     EXPECT_THROW(normalize_weights(unweighted), Error);
 }
 
-/// The bar with its "wave" clip (the elbow turns 90° about z and rises 2 m over 1 s) as a mesh
-/// collider playing it once from t = 0.
+/// The waving bar as a mesh collider playing its clip once from t = 0.
 ColliderDesc waving_bar() {
-    SkinnedMesh m = bar();
-    AnimationClip clip{.name = "wave", .duration = 1.0};
-    JointTrack t{.joint = 1};
-    t.rotation_times = {0.0, 1.0};
-    t.rotations = {about_z(0.0), about_z(kPi / 2)};
-    t.translation_times = {0.0, 1.0};
-    t.translations = {{1, 0, 0}, {1, 2, 0}};
-    clip.tracks.push_back(t);
-    m.clips.push_back(clip);
-    validate(m);
+    const SkinnedMesh m = waving_bar_skin();
     ColliderDesc c{.name = "bar", .shape = ColliderShape::Mesh};
     c.skin = std::make_shared<const SkinnedMesh>(m);
     c.mesh = std::make_shared<const MeshData>(m.mesh);
