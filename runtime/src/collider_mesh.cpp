@@ -32,6 +32,10 @@ void switch_clip(ColliderDesc& c, const std::string& clip, double t, double fade
     if (!(fade >= 0.0) || !std::isfinite(fade) || !(speed >= 0.0) || !std::isfinite(speed) || !std::isfinite(clip_time_now))
         throw Error("collider '" + c.name + "': switch_clip needs a finite fade ≥ 0 s and speed ≥ 0 (got fade " +
                     std::to_string(fade) + ", speed " + std::to_string(speed) + ")");
+    // At speed 0 the clip's time is 0 whatever clip_start says: no later time can be asked for.
+    if (speed == 0.0 && clip_time_now != 0.0)
+        throw Error("collider '" + c.name + "': switch_clip at speed 0 plays the clip's first pose, not " +
+                    std::to_string(clip_time_now) + " s into it");
     if (c.skin != nullptr && !clip.empty()) (void)c.skin->clip(clip);  // names the clips there are
     c.fade_from_clip = c.clip;
     c.fade_from_speed = c.clip_speed;
@@ -46,12 +50,14 @@ void switch_clip(ColliderDesc& c, const std::string& clip, double t, double fade
 }
 
 void set_clip_speed(ColliderDesc& c, double t, double speed) {
-    if (!(speed >= 0.0) || !std::isfinite(speed))
-        throw Error("collider '" + c.name + "': clip speed " + std::to_string(speed) + " (expected a finite speed >= 0)");
+    // Speed 0 would show the clip's first pose, not hold the current one (the clip's time is
+    // speed·(t − clip_start)): refused rather than jump.
+    if (!(speed > 0.0) || !std::isfinite(speed))
+        throw Error("collider '" + c.name + "': clip speed " + std::to_string(speed) + " (expected a finite speed > 0)");
     if (speed == c.clip_speed) return;
     const double now = clip_time(c, t);
     c.clip_speed = speed;
-    if (speed > 0.0) c.clip_start = t - now / speed;
+    c.clip_start = t - now / speed;
 }
 
 

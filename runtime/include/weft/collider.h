@@ -64,12 +64,14 @@ struct ColliderDesc {
 
 /// Switches `collider`'s clip at simulated time `t` (s) to `clip` (empty: the bind pose), whose
 /// time at t is `clip_time_now` (s; 0 plays it from its start), cross-fading from what played until
-/// now over `fade` seconds (0: a cut). What played before keeps playing under the fade.
+/// now over `fade` seconds (0: a cut). What played before keeps playing under the fade. Throws
+/// weft::Error for an unknown clip, a negative fade or speed, or a time into the clip at speed 0.
 void switch_clip(ColliderDesc& collider, const std::string& clip, double t, double fade, bool loop = true,
                  double speed = 1.0, double clip_time_now = 0.0);
 /// Changes the clip's speed at simulated time `t` (s) without a jump in its time: `clip_start` moves
 /// so that the clip is where it was at t. Setting `clip_speed` alone rescales all the time played
 /// since `clip_start`, which jumps the pose by as much as the speed changed times that time.
+/// `speed` > 0 (at 0 the clip's time is 0 whatever the start: its first pose, not a pause).
 void set_clip_speed(ColliderDesc& collider, double t, double speed);
 
 /// A mesh collider's vertices in the world at time `t` (s): skinned by its clip where it has a skin,
