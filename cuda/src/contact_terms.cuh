@@ -41,12 +41,65 @@ __device__ inline float contact_weight(const ContactView& c, std::uint32_t entry
 }
 
 /// acc + Σ w_i·(per-pair vector) over vertex i's incidence, added one entry at a time in pair order
-/// (as the CPU's add_rhs and multiply_add do).
+/// (as the CPU's add_rhs and multiply_add do). A vertex of a wound or stacked sheet is in hundreds of
+/// pairs, and its thread's chain of loads is what a grid-wide step waits for: the loads of a batch
+/// of entries are issued before its additions, which still run one at a time in order (the same
+/// sums, bit for bit).
 __device__ inline V3 contact_gather(const ContactView& c, std::uint32_t i, const float* per_pair, V3 acc) {
+    constexpr std::uint32_t kBatch = 8;
+    std::uint32_t e = c.start[i];
     const std::uint32_t last = c.start[i + 1];
-    for (std::uint32_t e = c.start[i]; e < last; ++e) {
+    for (; e + kBatch <= last; e += kBatch) {
+        float weight[kBatch];
+        V3 value[kBatch];
+#pragma unroll
+        for (std::uint32_t k = 0; k < kBatch; ++k) {
+            const std::uint32_t entry = c.entries[e + k];
+            weight[k] = contact_weight(c, entry);
+            value[k] = load3(per_pair, entry >> 2, c.capacity);
+        }
+#pragma unroll
+        for (std::uint32_t k = 0; k < kBatch; ++k) acc += weight[k] * value[k];
+    }
+    for (; e < last; ++e) {
         const std::uint32_t entry = c.entries[e];
         acc += contact_weight(c, entry) * load3(per_pair, entry >> 2, c.capacity);
+    }
+    return acc;
+}
+
+/// contact_gather for the rows of a whole warp (every lane calls it, converged; `active`: the lane has
+/// a row i to gather). A vertex of a wound or stacked sheet is in hundreds of pairs, and a thread's
+/// serial chain over such a row is what a grid-wide step waits for: a row longer than kLongRow
+/// entries is summed by the whole warp (lane k adds entries k, k + 32, … in order, then a fixed
+/// shuffle tree), and its owner adds that sum to acc. The order depends on the row lengths only: the
+/// same bits on every run, and the CPU's sums up to float rounding (the short rows term for term).
+__device__ inline V3 contact_gather_warp(const ContactView& c, bool active, std::uint32_t i, const float* per_pair, V3 acc) {
+    constexpr std::uint32_t kLongRow = 32;
+    constexpr unsigned kWarp = 0xffffffffu;
+    const std::uint32_t lane = threadIdx.x % 32;
+    std::uint32_t first = 0, last = 0;
+    if (active) {
+        first = c.start[i];
+        last = c.start[i + 1];
+    }
+    const bool long_row = last - first > kLongRow;
+    if (active && !long_row) acc = contact_gather(c, i, per_pair, acc);
+    for (unsigned pending = __ballot_sync(kWarp, long_row); pending != 0; pending &= pending - 1) {
+        const int owner = __ffs(pending) - 1;
+        const std::uint32_t begin = __shfl_sync(kWarp, first, owner), end = __shfl_sync(kWarp, last, owner);
+        V3 part{};
+        for (std::uint32_t e = begin + lane; e < end; e += 32) {
+            const std::uint32_t entry = c.entries[e];
+            part += contact_weight(c, entry) * load3(per_pair, entry >> 2, c.capacity);
+        }
+        for (int offset = 16; offset > 0; offset /= 2) {
+            part.x += __shfl_down_sync(kWarp, part.x, offset);
+            part.y += __shfl_down_sync(kWarp, part.y, offset);
+            part.z += __shfl_down_sync(kWarp, part.z, offset);
+        }
+        const V3 total{__shfl_sync(kWarp, part.x, 0), __shfl_sync(kWarp, part.y, 0), __shfl_sync(kWarp, part.z, 0)};
+        if (static_cast<int>(lane) == owner) acc += total;
     }
     return acc;
 }

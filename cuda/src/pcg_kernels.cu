@@ -111,16 +111,15 @@ __global__ void pcg_spmv_dot_kernel(DeviceView d, unsigned long long handle) {
     if (!d.control->running) return;
     const std::uint32_t i = blockIdx.x * blockDim.x + threadIdx.x;
     double value = 0.0;
-    if (i < d.n) {
-        V3 q{};
-        if (!d.fixed[i]) {
-            q = row_times(d, i, d.c);
-            if constexpr (kContacts) {
-                // An empty list skips the incidence reads (two dependent loads a row, measurable on
-                // small cloth where a CG iteration is a few microseconds).
-                if (contact_count(d.contacts) > 0) q = contact_gather(d.contacts, i, d.contacts.product, q);
-            }
-        }
+    const bool row = i < d.n, free_row = row && !d.fixed[i];
+    V3 q{};
+    if (free_row) q = row_times(d, i, d.c);
+    if constexpr (kContacts) {
+        // An empty list skips the incidence reads (two dependent loads a row, measurable on small
+        // cloth where a CG iteration is a few microseconds). Every lane of the warp takes part.
+        if (contact_count(d.contacts) > 0) q = contact_gather_warp(d.contacts, free_row, i, d.contacts.product, q);
+    }
+    if (row) {
         store3(d.q, i, d.n, q);
         value = static_cast<double>(physics::dot(load3(d.c, i, d.n), q));
     }
@@ -233,16 +232,19 @@ __global__ void pcg_persistent_kernel(DeviceView d) {
             }
         }
         double local = 0.0;
-        for (std::uint32_t i = blockIdx.x * blockDim.x + threadIdx.x; i < d.n; i += stride) {
+        // Whole warps walk the rows (the long contact rows are gathered by a warp).
+        for (std::uint32_t base = blockIdx.x * blockDim.x; base < d.n; base += stride) {
+            const std::uint32_t i = base + threadIdx.x;
+            const bool row = i < d.n, free_row = row && !d.fixed[i];
             V3 q{};
-            if (!d.fixed[i]) {
-                q = row_times(d, i, d.c);
-                if constexpr (kContacts) {
-                    if (pairs > 0) q = contact_gather(d.contacts, i, d.contacts.product, q);
-                }
+            if (free_row) q = row_times(d, i, d.c);
+            if constexpr (kContacts) {
+                if (pairs > 0) q = contact_gather_warp(d.contacts, free_row, i, d.contacts.product, q);
             }
-            store3(d.q, i, d.n, q);
-            local += static_cast<double>(physics::dot(load3(d.c, i, d.n), q));
+            if (row) {
+                store3(d.q, i, d.n, q);
+                local += static_cast<double>(physics::dot(load3(d.c, i, d.n), q));
+            }
         }
         const double cq = persistent_sum(local, partials[0]);
         if (!(cq > 0.0)) break;  // breakdown: reported as not converged

@@ -13,6 +13,7 @@
 #include "multi/halo_exchange.h"
 #include "multi/part_matrix.h"
 #include "multi/part_pcg.h"
+#include "weft/cuda/cuda_backend.h"
 #include "weft/backend/flat_model.h"
 #include "weft/backend/part_model.h"
 #include "weft/backend/vertex_partition.h"
@@ -200,7 +201,8 @@ struct Solve {
 
 // The single-reduction CG across `count` parts on `devices`, from x = 0, in graphs of `batch` iterations.
 Solve solve_by_parts(const FlatModel& flat, const std::vector<float>& blocks, const std::vector<float>& b, std::uint32_t count,
-                     const std::vector<int>& devices, int batch = 16) {
+                     const std::vector<int>& devices, int batch = 16, cuda::PcgLoop loop = cuda::PcgLoop::Auto,
+                     int max_iterations = 2000) {
     const std::size_t n = flat.vertex_count;
     const Parts set(flat, blocks, count, devices);
     const VertexPartition& vp = set.vp;
@@ -213,8 +215,9 @@ Solve solve_by_parts(const FlatModel& flat, const std::vector<float>& blocks, co
     upload_owned(parts, devices, std::vector<float>(3 * n, 0.0F), n, x);
     HaloExchange halo(vp, devices, raw);
     PartPcg pcg(systems, halo);
+    pcg.set_loop(loop);
     Solve out;
-    out.result = pcg.solve(std::vector<const float*>(rhs.x.begin(), rhs.x.end()), x.x, 1e-5, 2000, batch);
+    out.result = pcg.solve(std::vector<const float*>(rhs.x.begin(), rhs.x.end()), x.x, 1e-5, max_iterations, batch);
     out.x.assign(3 * n, std::nanf(""));
     for (std::uint32_t p = 0; p < count; ++p) {
         const PartModel& pm = parts[p];
@@ -282,6 +285,47 @@ TEST(MultiGpuParts, SingleReductionCgAcrossPartsMatchesOnePart) {
     const Solve long_batches = solve_by_parts(problem.flat, blocks, problem.x, 3, {0, 0, 0}, 64);
     EXPECT_EQ(short_batches.result.iterations, long_batches.result.iterations);
     for (std::size_t k = 0; k < short_batches.x.size(); ++k) ASSERT_EQ(short_batches.x[k], long_batches.x[k]) << "entry " << k;
+}
+
+// Where every part has its own GPU the loop runs as one cooperative kernel per GPU, the parts meeting
+// through peer memory; it must give the graph batches' iterations and bits (the same sums in the
+// same order), and parts sharing a GPU must keep the batches.
+TEST(MultiGpuParts, OneLaunchPerGpuGivesTheBatchesBits) {
+    WEFT_REQUIRE_GPU();
+    int devices = 0;
+    WEFT_CUDA_CHECK(cudaGetDeviceCount(&devices));
+    if (devices < 2) GTEST_SKIP() << "one CUDA device: the one-launch loop needs a GPU per part";
+    const Problem problem;
+    const std::vector<float> blocks = stiff_laplacian(problem.flat.pattern, 1.0F, 200.0F);
+    const Solve batches = solve_by_parts(problem.flat, blocks, problem.x, 2, {0, 1}, 16, cuda::PcgLoop::PerKernel);
+    const Solve one_launch = solve_by_parts(problem.flat, blocks, problem.x, 2, {0, 1}, 16, cuda::PcgLoop::OneLaunch);
+    std::printf("[ multi    ] 2 GPUs: %d iterations in batches, %d in one launch per GPU\n", batches.result.iterations,
+                one_launch.result.iterations);
+    ASSERT_TRUE(one_launch.result.converged);
+    EXPECT_GT(one_launch.result.iterations, 20) << "too easy a system to test anything";
+    EXPECT_EQ(one_launch.result.iterations, batches.result.iterations);
+    EXPECT_EQ(one_launch.result.relative_residual, batches.result.relative_residual);
+    for (std::size_t k = 0; k < batches.x.size(); ++k) ASSERT_EQ(one_launch.x[k], batches.x[k]) << "entry " << k;
+    // A cap of a few iterations stops both forms at the same iterate.
+    const Solve capped_batches = solve_by_parts(problem.flat, blocks, problem.x, 2, {0, 1}, 16, cuda::PcgLoop::PerKernel, 7);
+    const Solve capped_one = solve_by_parts(problem.flat, blocks, problem.x, 2, {0, 1}, 16, cuda::PcgLoop::OneLaunch, 7);
+    EXPECT_FALSE(capped_one.result.converged);
+    EXPECT_EQ(capped_one.result.iterations, 7);
+    EXPECT_EQ(capped_batches.result.iterations, 7);
+    for (std::size_t k = 0; k < capped_batches.x.size(); ++k) ASSERT_EQ(capped_one.x[k], capped_batches.x[k]) << "entry " << k;
+    const Parts set(problem.flat, blocks, 2, {0, 1});
+    std::vector<cuda::multi::PartSystem> systems;
+    for (std::size_t p = 0; p < set.matrices.size(); ++p) systems.push_back(set.matrices[p]->system(set.raw[p]));
+    HaloExchange halo(set.vp, std::vector<int>{0, 1}, set.raw);
+    PartPcg pcg(systems, halo);
+    EXPECT_TRUE(pcg.one_launch());
+    pcg.set_loop(cuda::PcgLoop::PerKernel);
+    EXPECT_FALSE(pcg.one_launch());
+    const Parts shared(problem.flat, blocks, 2, {0, 0});
+    std::vector<cuda::multi::PartSystem> on_one;
+    for (std::size_t p = 0; p < shared.matrices.size(); ++p) on_one.push_back(shared.matrices[p]->system(shared.raw[p]));
+    HaloExchange shared_halo(shared.vp, std::vector<int>{0, 0}, shared.raw);
+    EXPECT_FALSE(PartPcg(on_one, shared_halo).one_launch()) << "parts sharing a GPU cannot all be resident at once";
 }
 
 TEST(MultiGpuParts, BadInputIsAnError) {

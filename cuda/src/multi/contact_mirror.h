@@ -52,6 +52,12 @@ public:
     /// Part p's copy `which` (device memory on its GPU): SoA, component stride whole().
     [[nodiscard]] float* copy(std::size_t p, Vector which) const;
     [[nodiscard]] std::uint32_t whole() const { return whole_; }
+    /// What part p's `push_across` sends, for loops that push from inside their own kernels: its
+    /// owned rows that other parts' contacts name (device memory; their count at [owned(p)]), and
+    /// every owned row's whole id.
+    [[nodiscard]] const std::uint32_t* across_rows(std::size_t p) const { return part_.at(p).across.get(); }
+    [[nodiscard]] const std::uint32_t* global_ids(std::size_t p) const { return part_.at(p).global; }
+    [[nodiscard]] std::uint32_t owned(std::size_t p) const { return part_.at(p).owned; }
     [[nodiscard]] std::size_t memory_bytes() const { return ledger_.total(); }
 
 private:

@@ -94,6 +94,17 @@ void HaloExchange::begin(std::span<float* const> vectors) {
     WEFT_CUDA_CHECK(cudaSetDevice(previous));
 }
 
+std::vector<HaloExchange::Route> HaloExchange::routes(std::uint32_t from) const {
+    const Part& sender = part_.at(from);
+    std::vector<Route> out;
+    for (std::uint32_t q = 0; q < parts(); ++q) {
+        const std::uint32_t first = sender.send_start[q], count = sender.send_start[q + 1] - first;
+        if (q == from || count == 0) continue;
+        out.push_back({q, sender.send.get() + first, count, part_[q].owned + part_[q].ghost_start[from]});
+    }
+    return out;
+}
+
 void HaloExchange::finish() {
     int previous = 0;
     WEFT_CUDA_CHECK(cudaGetDevice(&previous));

@@ -48,6 +48,17 @@ public:
         finish();
     }
 
+    /// One run of a part's values that another part reads as ghosts: the sender's owned rows
+    /// send[0, count) land at the receiver's local indices [to_first, to_first + count).
+    struct Route {
+        std::uint32_t to_part = 0;
+        const std::uint32_t* send = nullptr;  ///< on the sender's device
+        std::uint32_t count = 0;
+        std::uint32_t to_first = 0;
+    };
+    /// The runs part `from` sends (none to itself), for loops that push from inside their own kernels.
+    [[nodiscard]] std::vector<Route> routes(std::uint32_t from) const;
+
     [[nodiscard]] std::uint32_t parts() const { return static_cast<std::uint32_t>(part_.size()); }
     /// Local vertices (owned + ghosts) of part p: the component stride of its vectors.
     [[nodiscard]] std::uint32_t local_count(std::uint32_t p) const { return part_[p].local; }

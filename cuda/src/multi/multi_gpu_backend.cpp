@@ -31,7 +31,8 @@ public:
         if (flat_.vertex_count > 0) {
             const PartitionQuality& q = solver_.partition().quality;
             out += " (" + std::to_string(q.halo_vertices) + " ghost vertices, " + std::to_string(solver_.halo_bytes()) +
-                   " bytes between GPUs per exchange), block-Jacobi";
+                   " bytes between GPUs per exchange), " + (solver_.schwarz_active() ? "MAS preconditioner" : "block-Jacobi") +
+                   (solver_.one_launch_cg() ? ", one-launch CG per GPU" : ", CG in graph batches");
         }
         return out;
     }
@@ -95,8 +96,7 @@ public:
     void set_use_graph(bool enabled) override { solver_.set_use_graph(enabled); }
     bool graph_active() const override { return solver_.graph_active(); }
     void set_assembly(AssemblyStrategy strategy) override { solver_.set_assembly(strategy); }
-    // The CG across parts has one form (batches of iterations across the devices): nothing to choose.
-    void set_pcg_loop(PcgLoop /*loop*/) override {}
+    void set_pcg_loop(PcgLoop loop) override { solver_.set_pcg_loop(loop); }
 
 private:
     mutable DeviceMemoryBudget budget_;  // before the solver: its arrays give their bytes back to it
@@ -143,6 +143,16 @@ std::unique_ptr<Backend> make_multi_gpu_backend(const BackendOptions& options) {
     // WEFT_CUDA_GRAPHS=0: the same kernels without graphs, as on one GPU.
     if (const char* graphs = std::getenv("WEFT_CUDA_GRAPHS"); graphs != nullptr && std::string_view(graphs) == "0")
         backend->set_use_graph(false);
+    // WEFT_CUDA_PCG=one|kernels: the one-launch loop per GPU or the graph batches, as on one GPU.
+    if (const char* loop = std::getenv("WEFT_CUDA_PCG"); loop != nullptr) {
+        const std::string_view v(loop);
+        if (v == "one")
+            backend->set_pcg_loop(PcgLoop::OneLaunch);
+        else if (v == "kernels")
+            backend->set_pcg_loop(PcgLoop::PerKernel);
+        else if (v != "auto")
+            throw Error("WEFT_CUDA_PCG='" + std::string(v) + "': expected one, kernels or auto");
+    }
     return backend;
 }
 

@@ -215,6 +215,7 @@ void MultiSolver::make_cg() {
     for (auto& s : solvers_) systems.push_back(s->part_system());
     pcg_ = std::make_unique<PartPcg>(systems, *halo_);
     pcg_->set_use_graph(use_graph_);
+    pcg_->set_loop(pcg_loop_);
     pcg_->set_contact_mirror(mirror_.get());
 }
 
@@ -688,6 +689,13 @@ cudaStream_t MultiSolver::stream() const {
     if (user_stream_ != nullptr) return user_stream_;
     return solvers_.empty() ? nullptr : solvers_.front()->stream();
 }
+
+void MultiSolver::set_pcg_loop(PcgLoop loop) {
+    pcg_loop_ = loop;
+    if (pcg_) pcg_->set_loop(loop);
+}
+
+bool MultiSolver::one_launch_cg() const { return pcg_ != nullptr && pcg_->one_launch(); }
 
 void MultiSolver::set_use_graph(bool enabled) {
     use_graph_ = enabled;

@@ -83,6 +83,10 @@ public:
     void set_use_graph(bool enabled);
     [[nodiscard]] bool graph_active() const { return use_graph_; }
     void set_assembly(AssemblyStrategy strategy);
+    /// How the CG across parts runs (PartPcg::set_loop); takes effect at the next solve.
+    void set_pcg_loop(PcgLoop loop);
+    /// Whether the CG runs as one cooperative kernel per GPU (false before build).
+    [[nodiscard]] bool one_launch_cg() const;
 
     [[nodiscard]] std::size_t parts() const { return devices_.size(); }
     [[nodiscard]] const std::vector<int>& devices() const { return devices_; }
@@ -204,6 +208,7 @@ private:
     cudaEvent_t user_event_ = nullptr;  // on the outside stream's device
     std::vector<cudaEvent_t> part_done_;  // per part: its substep's end, for the outside stream
     bool use_graph_ = true;
+    PcgLoop pcg_loop_ = PcgLoop::Auto;
     AssemblyStrategy assembly_ = AssemblyStrategy::Auto;
     // Re-cutting by contact load: the last detection's contacts per share, the policy, whether the
     // end of this substep re-cuts, and how many re-cuts so far.

@@ -2,12 +2,13 @@
 // (multi/part_pcg.h).
 #include "multi/part_pcg.h"
 
-#include <cub/block/block_reduce.cuh>
-
 #include <algorithm>
 #include <cstddef>
 #include <cmath>
+#include <cstdio>
+#include <cstdlib>
 #include <string>
+#include <string_view>
 
 #include "cuda_check.h"
 #include "device_math.cuh"
@@ -16,41 +17,28 @@
 #include "multi/peer_access.h"
 #include "contact_terms.cuh"
 #include "multi/contact_mirror.h"
+#include "multi/part_pcg_loop.h"
+#include "multi/part_pcg_terms.cuh"
 #include "schwarz_apply.cuh"
 #include "weft/error.h"
 
 namespace weft::cuda::multi {
 namespace {
 
-/// What a reduction's scalar step does with the two sums.
-enum ReductionMode : int {
-    kStart = 0,       ///< (rᵀu, bᵀM⁻¹b) of the start: γ, γ_b and the first convergence test
-    kFirstAlpha = 1,  ///< (−, wᵀu) of the first product: α = γ/δ
-    kIteration = 2,   ///< (γ', δ) of an iteration: the test, then β and α
-};
-
-/// Block b's sum of `value` into partials[2·b + k] (CUB's fixed tree order: deterministic).
+/// Block b's sum of `value` into partials[2·b + k].
 __device__ void block_partial(double value, double* partials, int k) {
-    using Reduce = cub::BlockReduce<double, kBlockSize>;
-    __shared__ typename Reduce::TempStorage storage;
-    const double sum = Reduce(storage).Sum(value);
-    if (threadIdx.x == 0) partials[2 * blockIdx.x + k] = sum;
+    __shared__ PartReduce::TempStorage storage;
+    part_block_partial(value, partials, blockIdx.x, k, storage);
 }
 
-/// The part's two sums of its block partials, in a fixed order, stored into every part's gather
-/// buffer at this part's slot (peer stores): targets[q] = part q's buffer + 2·part.
+/// The part's two sums of its block partials, stored into every part's gather buffer at this part's
+/// slot (peer stores): targets[q] = part q's buffer + 2·part.
 __global__ void share_sums_kernel(const double* partials, unsigned blocks, double* const* targets, unsigned parts,
                                   const PartPcgScalars* scalars, int mode) {
     if (mode == kIteration && scalars->running == 0) return;
-    using Reduce = cub::BlockReduce<double, kBlockSize>;
-    __shared__ typename Reduce::TempStorage storage;
+    __shared__ PartReduce::TempStorage storage;
     double sums[2];
-    for (int k = 0; k < 2; ++k) {
-        double acc = 0.0;
-        for (unsigned b = threadIdx.x; b < blocks; b += blockDim.x) acc += partials[2 * b + k];
-        sums[k] = Reduce(storage).Sum(acc);
-        __syncthreads();  // storage is reused
-    }
+    part_sum_partials(partials, blocks, sums, storage);
     if (threadIdx.x == 0)
         for (unsigned q = 0; q < parts; ++q) {
             targets[q][0] = sums[0];
@@ -61,62 +49,15 @@ __global__ void share_sums_kernel(const double* partials, unsigned blocks, doubl
 /// Every part the same: the G pairs added in part order, then the loop's decision.
 __global__ void scalars_kernel(const double* gathered, unsigned parts, PartPcgScalars* s, int mode) {
     if (mode == kIteration && s->running == 0) return;
-    double first = 0.0, second = 0.0;
-    for (unsigned p = 0; p < parts; ++p) {
-        first += gathered[2 * p];
-        second += gathered[2 * p + 1];
-    }
-    if (mode == kStart) {
-        // As the single-GPU start (pcg_control.cuh, start_solve): measured against the larger of
-        // bᵀM⁻¹b and the start's own residual.
-        s->gamma = first;
-        s->reference = fmax(second, first);
-        s->relative = s->reference > 0.0 ? sqrt(fmax(first, 0.0) / s->reference) : 0.0;
-        s->converged = !(s->reference > 0.0) || first <= s->tolerance2 * s->reference ? 1 : 0;
-        s->running = s->converged || s->max_iterations <= 0 ? 0 : 1;
-        return;
-    }
-    if (mode == kFirstAlpha) {
-        if (s->running == 0) return;
-        if (!(second > 0.0)) {
-            s->running = 0;
-            return;
-        }
-        s->alpha = s->gamma / second;
-        s->beta = 0.0;
-        return;
-    }
-    ++s->iterations;
-    s->relative = sqrt(fmax(first, 0.0) / s->reference);
-    if (first <= s->tolerance2 * s->reference) {
-        s->converged = 1;
-        s->running = 0;
-        return;
-    }
-    const double beta = first / s->gamma;
-    const double denominator = second - beta * first / s->alpha;
-    if (s->iterations >= s->max_iterations || !(denominator > 0.0)) {  // the cap, or not SPD in float
-        s->running = 0;
-        return;
-    }
-    s->beta = beta;
-    s->alpha = first / denominator;
-    s->gamma = first;
-}
-
-/// Entry e of row i's preconditioner block at [e·local + i] (the single-GPU solver's layout).
-__device__ inline M3 load_precond(const float* precond, std::uint32_t i, std::uint32_t local) {
-    M3 m;
-    for (int e = 0; e < 9; ++e) m.m[e / 3][e % 3] = precond[e * local + i];
-    return m;
+    PartPcgScalars next = *s;
+    part_advance_scalars(gathered, parts, next, mode);
+    *s = next;
 }
 
 /// The device address of the loop's running flag (computed without touching device memory).
 const int* check_flag(const PartPcgScalars* scalars) {
     return reinterpret_cast<const int*>(reinterpret_cast<const char*>(scalars) + offsetof(PartPcgScalars, running));
 }
-
-__device__ inline bool is_fixed(const PartSystem& a, std::uint32_t i) { return a.fixed != nullptr && a.fixed[i] != 0; }
 
 __global__ void invert_diagonal_kernel(PartSystem a, float* precond) {
     const std::uint32_t i = blockIdx.x * blockDim.x + threadIdx.x;
@@ -125,57 +66,28 @@ __global__ void invert_diagonal_kernel(PartSystem a, float* precond) {
     for (int e = 0; e < 9; ++e) precond[e * a.local + i] = inverse.m[e / 3][e % 3];
 }
 
-/// w = filter(A·x) over the owned rows (each row's blocks in the order of the single-GPU SpMV,
-/// pcg_kernels.cu); with `dot_with`, the partial wᵀ·dot_with into slot 1. `check`: nothing once the
-/// loop has stopped.
+/// w = filter(A·x) over the owned rows (part_product_row); with `dot_with`, the partial
+/// wᵀ·dot_with into slot 1. `check`: nothing once the loop has stopped.
 __global__ void product_kernel(PartSystem a, const float* x, float* w, const float* dot_with, const PartPcgScalars* scalars,
                                int check, double* partials) {
     if (check != 0 && scalars->running == 0) return;
     const std::uint32_t i = blockIdx.x * blockDim.x + threadIdx.x;
     double value = 0.0;
+    const V3 acc = part_product_row(a, i < a.owned, i, x);
     if (i < a.owned) {
-        V3 acc{};
-        if (!is_fixed(a, i)) {
-            const std::uint32_t slice = i / kSliceRowsDevice;
-            const std::uint32_t first = a.slice_start[slice], width = (a.slice_start[slice + 1] - first) / kSliceRowsDevice;
-            for (std::uint32_t k = 0; k < width; ++k) {
-                const std::uint32_t pos = first + k * kSliceRowsDevice + i % kSliceRowsDevice;
-                acc += load_block(a.blocks, pos) * load3(x, a.column[pos], a.local);
-            }
-            // The contacts at this row, as the single-GPU SpMV gathers them (the pair pass before).
-            if (a.contacts.capacity > 0 && contact_count(a.contacts) > 0)
-                acc = contact_gather(a.contacts, i, a.contacts.product, acc);
-        }
         store3(w, i, a.local, acc);
         if (dot_with != nullptr) value = static_cast<double>(physics::dot(acc, load3(dot_with, i, a.local)));
     }
     if (dot_with != nullptr) block_partial(value, partials, 1);
 }
 
-/// The pair pass of the contact product over this part's contacts (those at its rows): a vertex the
-/// part owns is read from its own vector `x` (stride `local`), another part's from the whole-size
-/// copy its owner pushed (multi/contact_mirror.h). The same values as one GPU's pass reads, in the
-/// same order: contact_pair_product's sum.
+/// The pair pass of the contact product over this part's contacts (part_pair_product).
 __global__ void pair_pass_kernel(ContactView c, const float* x, std::uint32_t local, const float* copy, const PartPcgScalars* scalars,
                                  int check) {
     if (check != 0 && scalars->running == 0) return;
     const std::uint32_t m = contact_count(c);
-    const std::uint32_t whole = c.cloth_vertices;
-    for (std::uint32_t p = blockIdx.x * blockDim.x + threadIdx.x; p < m; p += gridDim.x * blockDim.x) {
-        if ((c.list[p].pair & kInactiveContactBit) != 0) continue;  // not in the incidence
-        const uint4 ids = reinterpret_cast<const uint4*>(c.list)[4 * p];
-        const float4 w = reinterpret_cast<const float4*>(c.list)[4 * p + 1];
-        const std::uint32_t id[4] = {ids.x, ids.y, ids.z, ids.w};
-        const float weight[4] = {w.x, w.y, w.z, w.w};
-        V3 sum{};
-        for (int j = 0; j < 4; ++j) {
-            const std::uint32_t v = id[j];
-            if (v >= whole) continue;  // a kinematic vertex: no unknown
-            const std::uint32_t row = c.row_of[v];
-            sum += weight[j] * (row != ~0U ? load3(x, row, local) : load3(copy, v, whole));
-        }
-        store3(c.product, p, c.capacity, load_contact_block(c, p) * sum);
-    }
+    for (std::uint32_t p = blockIdx.x * blockDim.x + threadIdx.x; p < m; p += gridDim.x * blockDim.x)
+        part_pair_product(c, p, x, local, copy);
 }
 
 /// r = filter(b − w) (w = A·x), u = M⁻¹r, p = s = 0; partials (rᵀu, bᵀM⁻¹b over the free rows).
@@ -187,11 +99,11 @@ __global__ void start_kernel(PartSystem a, const float* precond, int jacobi, con
     double ru = 0.0, bb = 0.0;
     if (i < a.owned) {
         V3 ri{}, ui{};
-        if (!is_fixed(a, i)) {
+        if (!part_is_fixed(a, i)) {
             const V3 bi = load3(b, i, a.local);
             ri = bi - load3(w, i, a.local);
             if (jacobi != 0) {
-                const M3 P = load_precond(precond, i, a.local);
+                const M3 P = part_load_precond(precond, i, a.local);
                 ui = P * ri;
                 ru = static_cast<double>(physics::dot(ri, ui));
                 bb = static_cast<double>(physics::dot(bi, P * bi));
@@ -204,7 +116,6 @@ __global__ void start_kernel(PartSystem a, const float* precond, int jacobi, con
     }
     if (jacobi == 0) return;
     block_partial(ru, partials, 0);
-    __syncthreads();
     block_partial(bb, partials, 1);
 }
 
@@ -223,29 +134,14 @@ __global__ void prolong_kernel(DeviceView v, std::uint32_t owned, float* u, cons
     block_partial(value, partials, slot);
 }
 
-/// p ← u + βp, s ← w + βs, x ← x + αp, r ← r − αs, u ← M⁻¹r; partial rᵀu into slot 0.
-/// `jacobi` 0 (Schwarz): r only; the apply computes u and the partial.
+/// The update (part_update_row); partial rᵀu into slot 0 with block-Jacobi.
 __global__ void update_kernel(PartSystem a, const float* precond, int jacobi, const PartPcgScalars* scalars, float* x, float* r,
                               float* u, const float* w, float* p, float* s, double* partials) {
     if (scalars->running == 0) return;
     const auto alpha = static_cast<float>(scalars->alpha), beta = static_cast<float>(scalars->beta);
     const std::uint32_t i = blockIdx.x * blockDim.x + threadIdx.x;
-    const std::uint32_t local = a.local;
     double ru = 0.0;
-    if (i < a.owned) {
-        const V3 pi = load3(u, i, local) + beta * load3(p, i, local);
-        const V3 si = load3(w, i, local) + beta * load3(s, i, local);
-        store3(p, i, local, pi);
-        store3(s, i, local, si);
-        store3(x, i, local, load3(x, i, local) + alpha * pi);
-        const V3 ri = load3(r, i, local) - alpha * si;
-        store3(r, i, local, ri);
-        if (jacobi != 0) {
-            const V3 ui = load_precond(precond, i, local) * ri;
-            store3(u, i, local, ui);
-            ru = static_cast<double>(physics::dot(ri, ui));
-        }
-    }
+    if (i < a.owned) ru = part_update_row(a, i, precond, jacobi != 0, alpha, beta, x, r, u, w, p, s);
     if (jacobi != 0) block_partial(ru, partials, 0);
 }
 
@@ -263,10 +159,14 @@ struct PartPcg::Part {
     DeviceArray<double*> targets[2];      // per parity: where this part's sums go, one pointer per part
     DeviceArray<PartPcgScalars> scalars;
     PinnedArray<PartPcgScalars> host;
+    DeviceArray<unsigned> flags;          // the one-launch loop's meetings (PartLoopView::flags_of)
+    DeviceArray<long long> clock;         // WEFT_CUDA_PCG_CLOCK=1: the loop's phase cycles (PartLoopView::clock)
+    PinnedArray<unsigned> host_flags;
     cudaEvent_t shared = nullptr;
 };
 
 PartPcg::PartPcg(std::span<const PartSystem> systems, HaloExchange& halo) : halo_(halo) {
+    if (const char* env = std::getenv("WEFT_CUDA_PCG_CLOCK"); env != nullptr && std::string_view(env) == "1") clock_ = true;
     const std::size_t parts = halo.parts();
     if (systems.size() != parts)
         throw Error("PartPcg: " + std::to_string(systems.size()) + " systems for " + std::to_string(parts) + " parts");
@@ -303,6 +203,12 @@ PartPcg::PartPcg(std::span<const PartSystem> systems, HaloExchange& halo) : halo
         part->gather.zero(a.stream);
         part->scalars.allocate(1, part->ledger, "multi-GPU CG scalars");
         part->host.allocate(1);
+        part->flags.allocate(parts + 2, part->ledger, "multi-GPU CG partial sums");
+        part->host_flags.allocate(parts + 2);
+        if (clock_) {
+            part->clock.allocate(kLoopPhases + 1, part->ledger, "multi-GPU CG clock");
+            part->clock.zero(a.stream);
+        }
         WEFT_CUDA_CHECK(cudaEventCreateWithFlags(&part->shared, cudaEventDisableTiming));
         part_.push_back(std::move(part));
     }
@@ -321,6 +227,10 @@ PartPcg::PartPcg(std::span<const PartSystem> systems, HaloExchange& halo) : halo
         }
         level1_ = std::make_unique<AllGather>(devices, streams);
     }
+    std::vector<int> devices;
+    for (const auto& part : part_) devices.push_back(part->system.device);
+    std::sort(devices.begin(), devices.end());
+    one_launch_possible_ = parts > 1 && parts <= kLoopMaxParts && std::adjacent_find(devices.begin(), devices.end()) == devices.end();
     // Every part stores its sums into every other part's gather buffer.
     for (std::size_t k = 0; k < parts; ++k)
         for (std::size_t q = 0; q < parts; ++q) enable_peer_access(part_[k]->system.device, part_[q]->system.device);
@@ -337,9 +247,30 @@ PartPcg::PartPcg(std::span<const PartSystem> systems, HaloExchange& halo) : halo
     WEFT_CUDA_CHECK(cudaSetDevice(previous));
 }
 
+void PartPcg::print_clock() const {
+    static constexpr const char* kNames[kLoopPhases] = {"update", "fine",    "level 1", "coarse",   "prolong", "push",
+                                                        "pairs",  "product", "sums",    "meetings", "(waiting)"};
+    for (std::size_t p = 0; p < part_.size(); ++p) {
+        const Part& part = *part_[p];
+        std::vector<long long> cycles(kLoopPhases + 1);
+        int rate_khz = 0;
+        if (cudaSetDevice(part.system.device) != cudaSuccess || cudaDeviceSynchronize() != cudaSuccess ||
+            cudaMemcpy(cycles.data(), part.clock.get(), cycles.size() * sizeof(long long), cudaMemcpyDeviceToHost) != cudaSuccess ||
+            cudaDeviceGetAttribute(&rate_khz, cudaDevAttrClockRate, part.system.device) != cudaSuccess)
+            return;
+        const long long iterations = std::max(cycles[kLoopPhases], 1LL);
+        std::fprintf(stderr, "multi-GPU CG clock, part %zu (GPU %d), %lld iterations, us per iteration at %.0f MHz:", p,
+                     part.system.device, cycles[kLoopPhases], rate_khz / 1e3);
+        for (int k = 0; k < kLoopPhases; ++k)
+            std::fprintf(stderr, " %s %.2f", kNames[k], static_cast<double>(cycles[k]) / iterations / (rate_khz / 1e3));
+        std::fprintf(stderr, "\n");
+    }
+}
+
 std::size_t PartPcg::memory_bytes(std::size_t p) const { return part_.at(p)->ledger.total(); }
 
 PartPcg::~PartPcg() {
+    if (clock_) print_clock();
     if (graph_ != nullptr) cudaGraphExecDestroy(graph_);
     for (auto& part : part_)
         if (part->shared != nullptr) cudaEventDestroy(part->shared);
@@ -436,6 +367,97 @@ void PartPcg::enqueue_iteration(std::span<float* const> x, int parity) {
     enqueue_reduction(parity, kIteration);
 }
 
+PartPcgScalars PartPcg::run_one_launch(std::span<float* const> x) {
+    // A fault on one GPU must not hang the others: a part waits this long for another at a meeting.
+    constexpr unsigned long long kMeetingTimeoutNs = 20'000'000'000ULL;
+    const auto parts = static_cast<unsigned>(part_.size());
+    std::vector<PartLoopView> views(parts);
+    for (unsigned k = 0; k < parts; ++k) {
+        const Part& part = *part_[k];
+        PartLoopView& v = views[k];
+        v.a = part.system;
+        v.a.schwarz = nullptr;
+        if (schwarz_) {
+            v.schwarz = part.schwarz;
+            v.use_schwarz = 1;
+            v.level1_begin = static_cast<std::uint32_t>(part.system.level1_begin);
+            v.level1_end = static_cast<std::uint32_t>(part.system.level1_end);
+            for (unsigned q = 0; q < parts; ++q)
+                if (q != k && part.schwarz.mas.levels > 1) v.level1_to[q] = part_[q]->schwarz.mas.level[1].values;
+        }
+        v.precond = part.precond;
+        v.x = x[k];
+        v.r = part.r.get();
+        v.u = part.u.get();
+        v.w = part.w.get();
+        v.p = part.p.get();
+        v.s = part.s.get();
+        v.partials = part.partials.get();
+        v.row_blocks = part.blocks;
+        v.scalars = part.scalars.get();
+        v.part = k;
+        v.parts = parts;
+        for (const HaloExchange::Route& route : halo_.routes(k)) {
+            const Part& to = *part_[route.to_part];
+            v.halo[v.halo_routes++] = {route.send, route.count, to.u.get(), to.system.local, route.to_first};
+        }
+        if (contacts_ != nullptr) {
+            v.across = contacts_->across_rows(k);
+            v.global = contacts_->global_ids(k);
+            for (unsigned q = 0; q < parts; ++q)
+                if (q != k) v.mirror_to[v.mirror_targets++] = contacts_->copy(q, ContactMirror::kCg);
+            v.whole = contacts_->whole();
+            v.mirror_copy = contacts_->copy(k, ContactMirror::kCg);
+        }
+        for (unsigned q = 0; q < parts; ++q) {
+            v.gather_of[q] = part_[q]->gather.get();
+            v.flags_of[q] = part_[q]->flags.get();
+        }
+        v.timeout_ns = kMeetingTimeoutNs;
+        v.clock = clock_ ? part.clock.get() : nullptr;
+    }
+    // Every part's start is done and its flags are zero before any loop runs: a loop that began
+    // early could meet a part still in its start, or have its arrival zeroed.
+    for (auto& part : part_) {
+        WEFT_CUDA_CHECK(cudaSetDevice(part->system.device));
+        part->flags.zero(part->system.stream);
+    }
+    for (auto& part : part_) {
+        WEFT_CUDA_CHECK(cudaSetDevice(part->system.device));
+        WEFT_CUDA_CHECK(cudaStreamSynchronize(part->system.stream));
+    }
+    for (unsigned k = 0; k < parts; ++k) {
+        const PartSystem& a = part_[k]->system;
+        WEFT_CUDA_CHECK(cudaSetDevice(a.device));
+        const int grid = part_pcg_loop_grid(views[k], a.device);
+        if (grid <= 0) throw Error("PartPcg: GPU " + std::to_string(a.device) + " cannot launch the one-launch CG loop cooperatively");
+        launch_part_pcg_loop(views[k], grid, a.stream);
+    }
+    for (auto& part : part_) {
+        const PartSystem& a = part->system;
+        WEFT_CUDA_CHECK(cudaSetDevice(a.device));
+        WEFT_CUDA_CHECK(cudaMemcpyAsync(part->host.get(), part->scalars.get(), sizeof(PartPcgScalars), cudaMemcpyDeviceToHost, a.stream));
+        WEFT_CUDA_CHECK(cudaMemcpyAsync(part->host_flags.get(), part->flags.get(), (parts + 2) * sizeof(unsigned),
+                                        cudaMemcpyDeviceToHost, a.stream));
+    }
+    for (auto& part : part_) {
+        WEFT_CUDA_CHECK(cudaSetDevice(part->system.device));
+        WEFT_CUDA_CHECK(cudaStreamSynchronize(part->system.stream));
+    }
+    for (unsigned k = 0; k < parts; ++k) {
+        const unsigned stopped = part_[k]->host_flags.get()[parts + 1];
+        if (stopped != 0)
+            throw Error("multi-GPU CG: part " + std::to_string(k) + " (GPU " + std::to_string(part_[k]->system.device) +
+                        ") stopped waiting for part " + std::to_string(stopped - 1) + " after " +
+                        std::to_string(kMeetingTimeoutNs / 1'000'000'000ULL) + " s (that GPU faulted or hangs)");
+        if (part_[k]->host.get()->iterations != part_[0]->host.get()->iterations)
+            throw Error("multi-GPU CG: part " + std::to_string(k) + " stopped after " +
+                        std::to_string(part_[k]->host.get()->iterations) + " iterations, part 0 after " +
+                        std::to_string(part_[0]->host.get()->iterations) + " (the parts' scalars disagree)");
+    }
+    return *part_[0]->host.get();
+}
+
 PartPcgResult PartPcg::solve(std::span<const float* const> b, std::span<float* const> x, double tolerance, int max_iterations,
                              int batch) {
     if (b.size() != part_.size() || x.size() != part_.size())
@@ -478,9 +500,15 @@ PartPcgResult PartPcg::solve(std::span<const float* const> b, std::span<float* c
     enqueue_product(1);
     enqueue_reduction(1, kFirstAlpha);
 
+    Part& origin = *part_[0];
+    if (one_launch()) {
+        const PartPcgScalars s = run_one_launch(x);
+        halo_.exchange(x);  // the solution's ghosts (the caller's next use of x needs them)
+        WEFT_CUDA_CHECK(cudaSetDevice(previous));
+        return {s.iterations, s.relative, s.converged != 0};
+    }
     // The batches: captured once (part 0's stream forks to the others and joins them), replayed
     // until the scalars say stop.
-    Part& origin = *part_[0];
     const std::vector<float*> xs(x.begin(), x.end());
     if (use_graph_ && (graph_ == nullptr || graph_x_ != xs || graph_batch_ != batch)) {
         if (graph_ != nullptr) WEFT_CUDA_CHECK(cudaGraphExecDestroy(graph_));

@@ -19,9 +19,12 @@
 /// The loop runs on the devices: each part sums its partials in a fixed order, stores its two sums
 /// into every part's gather buffer (peer stores), and every part adds the G pairs in part order and
 /// takes α, β and the convergence test itself, so all parts hold the same scalars and stop together
-/// with no host in the loop. Batches of iterations are captured once as a CUDA graph across the
-/// parts' devices and replayed; a stopped solve's remaining kernels return at once. The host reads
-/// the scalars between batches only. The same bits on every run for a given partition.
+/// with no host in the loop. Two forms of the loop give the same bits (every sum over the same rows
+/// in the same order): where every part has its own GPU, one cooperative kernel per GPU runs the
+/// whole loop, the parts meeting through peer memory (multi/part_pcg_loop.h); otherwise (parts
+/// sharing a GPU, the test mode) batches of iterations are captured once as a CUDA graph across the
+/// parts' devices and replayed, a stopped solve's remaining kernels returning at once, and the host
+/// reads the scalars between batches only. The same bits on every run for a given partition.
 
 #include <cuda_runtime_api.h>
 
@@ -36,6 +39,7 @@
 #include "multi/contact_mirror.h"
 #include "multi/halo_exchange.h"
 #include "multi/part_system.h"
+#include "weft/cuda/cuda_backend.h"
 
 namespace weft::cuda::multi {
 
@@ -83,6 +87,12 @@ public:
     /// Batches of iterations as one multi-device CUDA graph each (default), or launched directly (the
     /// same kernels and results: for tools that cannot follow graphs).
     void set_use_graph(bool enabled) { use_graph_ = enabled; }
+    /// How the loop runs: OneLaunch (one cooperative kernel per GPU) where every part has its own
+    /// GPU and the GPUs launch cooperatively, else the batches; PerKernel always the batches; Auto
+    /// as OneLaunch. Takes effect at the next solve.
+    void set_loop(PcgLoop loop) { loop_ = loop; }
+    /// Whether the next solve runs one launch per GPU.
+    [[nodiscard]] bool one_launch() const { return loop_ != PcgLoop::PerKernel && one_launch_possible_; }
     /// Device memory the solver holds on part p's device, bytes.
     [[nodiscard]] std::size_t memory_bytes(std::size_t p) const;
 
@@ -104,6 +114,11 @@ private:
     /// scalars from them (`mode`: γ and the reference of the start, γ' and δ of an iteration, or the
     /// first α).
     void enqueue_reduction(int parity, int mode);
+    /// The iterations as one cooperative kernel per GPU, from the start's scalars; returns part 0's
+    /// scalars at the end. Throws weft::Error naming the part a GPU stopped waiting for.
+    PartPcgScalars run_one_launch(std::span<float* const> x);
+    /// WEFT_CUDA_PCG_CLOCK=1 (profiling): each part's time per phase of the one-launch loop, to stderr.
+    void print_clock() const;
 
     std::vector<std::unique_ptr<Part>> part_;
     HaloExchange& halo_;
@@ -114,6 +129,9 @@ private:
     int graph_batch_ = 0;
     long long graph_kernels_ = 0;  // kernel nodes of the captured batch (counted per launch)
     bool use_graph_ = true;
+    PcgLoop loop_ = PcgLoop::Auto;
+    bool one_launch_possible_ = false;  // every part on its own device, at most kLoopMaxParts
+    bool clock_ = false;                // WEFT_CUDA_PCG_CLOCK=1: time the one-launch loop's phases
     ContactMirror* contacts_ = nullptr;
 };
 
