@@ -7,6 +7,9 @@
 // the narrow phase can change it from one substep to the next under one CUDA graph.
 #include <cub/device/device_radix_sort.cuh>
 
+#include <algorithm>
+#include <cstddef>
+
 #include "contact_terms.cuh"
 #include "cuda_check.h"
 #include "weft/physics/implicit_terms.h"
@@ -189,7 +192,21 @@ __global__ void contact_product_kernel(DeviceView d, const float* x, int in_cg_l
     for (std::uint32_t p = first_thread(); p < m; p += thread_stride()) contact_pair_product(d.contacts, p, x, d.n);
 }
 
+/// contact_row_sums over the grid's warps; `running`: nothing once the CG loop has stopped.
+__global__ void contact_row_sum_kernel(ContactView c, std::uint32_t rows, const int* running) {
+    if (running != nullptr && *running == 0) return;
+    if (contact_count(c) == 0) return;
+    contact_row_sums(c, rows, c.product, first_thread() / 32, thread_stride() / 32);
+}
+
 }  // namespace
+
+void launch_contact_row_sums(const ContactView& c, std::uint32_t rows, const int* running, cudaStream_t stream) {
+    const unsigned warps = (rows + 31) / 32;
+    contact_row_sum_kernel<<<std::max(1u, std::min(kMaxPairBlocks, blocks_for(warps, kBlockSize / 32))), kBlockSize, 0, stream>>>(
+        c, rows, running);
+    WEFT_CUDA_CHECK_LAUNCH("contact_row_sum_kernel");
+}
 
 std::size_t contact_sort_storage_bytes(std::uint32_t corner_slots, int key_bits) {
     std::size_t bytes = 0;
@@ -227,6 +244,11 @@ void launch_contact_evaluate(const DeviceView& d, cudaStream_t stream) {
 void launch_contact_product(const DeviceView& d, const float* x, bool in_cg_loop, cudaStream_t stream) {
     contact_product_kernel<<<pair_grid(d.contacts.capacity), kBlockSize, 0, stream>>>(d, x, in_cg_loop ? 1 : 0);
     WEFT_CUDA_CHECK_LAUNCH("contact_product_kernel");
+    // The CG's products read each row's contact sum from the spread pass (contact_row_sums).
+    if (in_cg_loop)
+        launch_contact_row_sums(d.contacts, d.n, reinterpret_cast<const int*>(reinterpret_cast<const char*>(d.control) +
+                                                                               offsetof(PcgControl, running)),
+                                stream);
 }
 
 }  // namespace weft::cuda

@@ -89,7 +89,21 @@ __device__ inline V3 contact_gather_warp(const ContactView& c, bool active, std:
         const int owner = __ffs(pending) - 1;
         const std::uint32_t begin = __shfl_sync(kWarp, first, owner), end = __shfl_sync(kWarp, last, owner);
         V3 part{};
-        for (std::uint32_t e = begin + lane; e < end; e += 32) {
+        constexpr std::uint32_t kBatch = 4;  // each lane's loads of a batch go out together
+        std::uint32_t e = begin + lane;
+        for (; e + 32 * (kBatch - 1) < end; e += 32 * kBatch) {
+            float weight[kBatch];
+            V3 value[kBatch];
+#pragma unroll
+            for (std::uint32_t k = 0; k < kBatch; ++k) {
+                const std::uint32_t entry = c.entries[e + 32 * k];
+                weight[k] = contact_weight(c, entry);
+                value[k] = load3(per_pair, entry >> 2, c.capacity);
+            }
+#pragma unroll
+            for (std::uint32_t k = 0; k < kBatch; ++k) part += weight[k] * value[k];
+        }
+        for (; e < end; e += 32) {
             const std::uint32_t entry = c.entries[e];
             part += contact_weight(c, entry) * load3(per_pair, entry >> 2, c.capacity);
         }
@@ -102,6 +116,26 @@ __device__ inline V3 contact_gather_warp(const ContactView& c, bool active, std:
         if (static_cast<int>(lane) == owner) acc += total;
     }
     return acc;
+}
+
+/// The gather half of A_contact·x as a pass of its own: row_sum[i] = Σ w·per_pair over row i's
+/// incidence, for rows [0, rows), by warp `warp` of `warps` (every lane of a warp calls it). The
+/// contacts of a wound or stacked sheet crowd into runs of neighbouring rows; walking the rows in
+/// their own order would hand a whole run to one warp while the others idle at the next grid-wide
+/// step. So the rows are dealt out spread: lane l takes the l-th stripe of ⌈rows/32⌉ rows, warp w
+/// its rows w, w + warps, … of the stripe, and a run of neighbouring rows lands one row to a warp
+/// (long rows summed by the whole warp: contact_gather_warp). The product adds row_sum after the
+/// row's matrix blocks. Fixed by the row lengths alone: the same bits on every run.
+__device__ inline void contact_row_sums(const ContactView& c, std::uint32_t rows, const float* per_pair, std::uint32_t warp,
+                                        std::uint32_t warps) {
+    const std::uint32_t lane = threadIdx.x % 32;
+    const std::uint32_t stripe = (rows + 31) / 32;
+    for (std::uint32_t k = warp; k < stripe; k += warps) {  // the same count for every lane of the warp
+        const std::uint32_t i = lane * stripe + k;
+        const bool active = i < rows;
+        const V3 sum = contact_gather_warp(c, active, i, per_pair, V3{});
+        if (active) store3(c.row_sum, i, c.vertices, sum);
+    }
 }
 
 }  // namespace weft::cuda

@@ -44,6 +44,7 @@ bool DeviceContacts::reserve(std::size_t pairs, std::size_t kinematic, std::uint
     WEFT_CUDA_CHECK(cudaMemsetAsync(input_.get(), 0, input_bytes, stream));  // count 0
 
     start_.allocate(n + 1, ledger_, "proximity contacts");
+    row_sum_.allocate(3 * std::size_t{std::max(n, 1U)}, ledger_, "proximity contacts");
     entries_.allocate(4 * capacity, ledger_, "proximity contacts");
     per_pair_.allocate(15 * capacity, ledger_, "proximity contacts");
     const auto corner_slots = static_cast<std::uint32_t>(4 * capacity);
@@ -66,6 +67,8 @@ bool DeviceContacts::reserve(std::size_t pairs, std::size_t kinematic, std::uint
     v.kinematic_v = kinematic_capacity > 0 ? v.kinematic_x1 + 3 * kinematic_capacity : nullptr;
     v.start = start_.get();
     v.entries = entries_.get();
+    v.row_sum = row_sum_.get();
+    v.vertices = n;
     v.block = per_pair_.get();
     v.rhs = v.block + 9 * capacity;
     v.product = v.rhs + 3 * capacity;
@@ -120,6 +123,7 @@ bool DeviceContacts::upload(std::span<const weft::collision::ProximityContact> c
 void DeviceContacts::release() {
     input_ = {};
     start_ = {};
+    row_sum_ = {};
     entries_ = {};
     sort_keys_ = {};
     sort_ids_ = {};

@@ -87,6 +87,10 @@ struct ContactView {
     float* block = nullptr;
     float* rhs = nullptr;
     float* product = nullptr;
+    /// Per row, written at each SpMV after the pair pass (contact_row_sums): the row's sum of
+    /// w_i·product over its incidence, SoA with component stride `vertices` (the solver's n).
+    float* row_sum = nullptr;
+    std::uint32_t vertices = 0;
 };
 
 /// The incidence build's scratch (launch_contact_incidence): the corners' row keys, double-buffered
@@ -150,6 +154,7 @@ private:
     PinnedArray<unsigned char> host_input_;
     std::size_t count_offset_ = 0, kinematic_offset_ = 0;
     DeviceArray<std::uint32_t> start_, entries_;
+    DeviceArray<float> row_sum_;
     DeviceArray<std::uint32_t> sort_keys_, sort_ids_;  // 2 and 1 × 4·capacity
     DeviceArray<float> per_pair_;                      // block, rhs, product: 15 floats a pair
     DeviceArray<unsigned char> sort_storage_;

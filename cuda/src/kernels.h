@@ -75,6 +75,10 @@ void launch_contact_evaluate(const DeviceView& d, cudaStream_t stream);
 /// First pass of the contact SpMV: per pair C·Σ_j w_j x_j. `in_cg_loop`: do nothing once the CG loop
 /// has stopped (the per-iteration kernels run on after convergence until the host or graph notices).
 void launch_contact_product(const DeviceView& d, const float* x, bool in_cg_loop, cudaStream_t stream);
+/// The gather half as its own pass: each row's contact sum into c.row_sum (contact_row_sums) for
+/// rows [0, rows); `running` (nullable): nothing once the CG loop has stopped. launch_contact_product
+/// runs it after the pair pass inside the CG loop.
+void launch_contact_row_sums(const ContactView& c, std::uint32_t rows, const int* running, cudaStream_t stream);
 
 // ---- collision positions (collision_state_kernels.cu) ----------------------------------------------
 // The collision stages read positions in their own index space (cloth vertices, then kinematic ones;

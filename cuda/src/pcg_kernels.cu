@@ -115,9 +115,9 @@ __global__ void pcg_spmv_dot_kernel(DeviceView d, unsigned long long handle) {
     V3 q{};
     if (free_row) q = row_times(d, i, d.c);
     if constexpr (kContacts) {
-        // An empty list skips the incidence reads (two dependent loads a row, measurable on small
-        // cloth where a CG iteration is a few microseconds). Every lane of the warp takes part.
-        if (contact_count(d.contacts) > 0) q = contact_gather_warp(d.contacts, free_row, i, d.contacts.product, q);
+        // The row's contact sum from the spread pass after the pair pass (launch_contact_product).
+        // An empty list skips the read (measurable on small cloth where an iteration is a few µs).
+        if (free_row && contact_count(d.contacts) > 0) q += load3(d.contacts.row_sum, i, d.contacts.vertices);
     }
     if (row) {
         store3(d.q, i, d.n, q);
@@ -229,22 +229,22 @@ __global__ void pcg_persistent_kernel(DeviceView d) {
                 for (std::uint32_t p = blockIdx.x * blockDim.x + threadIdx.x; p < pairs; p += stride)
                     contact_pair_product(d.contacts, p, d.c, d.n);
                 cg::this_grid().sync();
+                // Each row's sum of its pairs' products, the rows spread over the warps.
+                contact_row_sums(d.contacts, d.n, d.contacts.product, first_warp, warps);
+                cg::this_grid().sync();
             }
         }
         double local = 0.0;
-        // Whole warps walk the rows (the long contact rows are gathered by a warp).
-        for (std::uint32_t base = blockIdx.x * blockDim.x; base < d.n; base += stride) {
-            const std::uint32_t i = base + threadIdx.x;
-            const bool row = i < d.n, free_row = row && !d.fixed[i];
+        for (std::uint32_t i = blockIdx.x * blockDim.x + threadIdx.x; i < d.n; i += stride) {
             V3 q{};
-            if (free_row) q = row_times(d, i, d.c);
-            if constexpr (kContacts) {
-                if (pairs > 0) q = contact_gather_warp(d.contacts, free_row, i, d.contacts.product, q);
+            if (!d.fixed[i]) {
+                q = row_times(d, i, d.c);
+                if constexpr (kContacts) {
+                    if (pairs > 0) q += load3(d.contacts.row_sum, i, d.contacts.vertices);
+                }
             }
-            if (row) {
-                store3(d.q, i, d.n, q);
-                local += static_cast<double>(physics::dot(load3(d.c, i, d.n), q));
-            }
+            store3(d.q, i, d.n, q);
+            local += static_cast<double>(physics::dot(load3(d.c, i, d.n), q));
         }
         const double cq = persistent_sum(local, partials[0]);
         if (!(cq > 0.0)) break;  // breakdown: reported as not converged

@@ -73,8 +73,8 @@ __global__ void product_kernel(PartSystem a, const float* x, float* w, const flo
     if (check != 0 && scalars->running == 0) return;
     const std::uint32_t i = blockIdx.x * blockDim.x + threadIdx.x;
     double value = 0.0;
-    const V3 acc = part_product_row(a, i < a.owned, i, x);
     if (i < a.owned) {
+        const V3 acc = part_product_row(a, i, x);
         store3(w, i, a.local, acc);
         if (dot_with != nullptr) value = static_cast<double>(physics::dot(acc, load3(dot_with, i, a.local)));
     }
@@ -248,8 +248,8 @@ PartPcg::PartPcg(std::span<const PartSystem> systems, HaloExchange& halo) : halo
 }
 
 void PartPcg::print_clock() const {
-    static constexpr const char* kNames[kLoopPhases] = {"update", "fine",    "level 1", "coarse",   "prolong", "push",
-                                                        "pairs",  "product", "sums",    "meetings", "(waiting)"};
+    static constexpr const char* kNames[kLoopPhases] = {"update", "fine",     "level 1", "coarse", "prolong",  "push",
+                                                        "pairs",  "row sums", "product", "sums",   "meetings", "(waiting)"};
     for (std::size_t p = 0; p < part_.size(); ++p) {
         const Part& part = *part_[p];
         std::vector<long long> cycles(kLoopPhases + 1);
@@ -335,6 +335,7 @@ void PartPcg::enqueue_contacts(std::span<float* const> x, int check) {
         pair_pass_kernel<<<blocks, kBlockSize, 0, a.stream>>>(a.contacts, x[k], a.local, contacts_->copy(k, ContactMirror::kCg),
                                                               part_[k]->scalars.get(), check);
         WEFT_CUDA_CHECK_LAUNCH("pair_pass_kernel");
+        launch_contact_row_sums(a.contacts, a.owned, check != 0 ? check_flag(part_[k]->scalars.get()) : nullptr, a.stream);
     }
 }
 

@@ -172,13 +172,16 @@ __global__ void __launch_bounds__(kBlockSize) part_pcg_loop_kernel(const __grid_
                     part_pair_product(a.contacts, pair, v.u, local, v.mirror_copy);
                 cg::this_grid().sync();
                 mark(kPhasePairs);
+                contact_row_sums(a.contacts, owned, a.contacts.product, first_warp, warps);
+                cg::this_grid().sync();
+                mark(kPhaseRowSums);
             }
         }
         for (unsigned b = blockIdx.x; b < v.row_blocks; b += gridDim.x) {
             const std::uint32_t i = b * kBlockSize + threadIdx.x;
             double wu = 0.0;
-            const V3 wi = part_product_row(a, i < owned, i, v.u);
             if (i < owned) {
+                const V3 wi = part_product_row(a, i, v.u);
                 store3(v.w, i, local, wi);
                 wu = static_cast<double>(physics::dot(wi, load3(v.u, i, local)));
             }

@@ -37,6 +37,7 @@ enum LoopPhase : int {
     kPhaseProlong,        ///< u = Σ levels, rᵀu
     kPhasePush,           ///< u's ghosts and contact vertices into the other parts
     kPhasePairs,          ///< the contacts' pair pass
+    kPhaseRowSums,        ///< each row's sum of its contacts (contact_row_sums)
     kPhaseProduct,        ///< w = A·u, wᵀu
     kPhaseSums,           ///< the part's two sums into every part
     kPhaseMeetings,       ///< the three meetings, whole (barriers, fences, waits)

@@ -116,22 +116,18 @@ __device__ inline double part_update_row(const PartSystem& a, std::uint32_t i, c
     return static_cast<double>(physics::dot(ri, ui));
 }
 
-/// Row i of filter(A·x) where `row` (i owned), for the rows of a whole warp (every lane calls it,
-/// converged): its blocks in the order of the single-GPU SpMV (pcg_kernels.cu), then the contacts
-/// at the row as the single-GPU SpMV gathers them (contact_gather_warp; their pair pass before).
-__device__ inline V3 part_product_row(const PartSystem& a, bool row, std::uint32_t i, const float* x) {
-    const bool free_row = row && !part_is_fixed(a, i);
+/// Owned row i of filter(A·x): its blocks in the order of the single-GPU SpMV (pcg_kernels.cu), then
+/// the row's contact sum as the single-GPU SpMV adds it (the pair pass and contact_row_sums before).
+__device__ inline V3 part_product_row(const PartSystem& a, std::uint32_t i, const float* x) {
     V3 acc{};
-    if (free_row) {
-        const std::uint32_t slice = i / kSliceRowsDevice;
-        const std::uint32_t first = a.slice_start[slice], width = (a.slice_start[slice + 1] - first) / kSliceRowsDevice;
-        for (std::uint32_t k = 0; k < width; ++k) {
-            const std::uint32_t pos = first + k * kSliceRowsDevice + i % kSliceRowsDevice;
-            acc += load_block(a.blocks, pos) * load3(x, a.column[pos], a.local);
-        }
+    if (part_is_fixed(a, i)) return acc;
+    const std::uint32_t slice = i / kSliceRowsDevice;
+    const std::uint32_t first = a.slice_start[slice], width = (a.slice_start[slice + 1] - first) / kSliceRowsDevice;
+    for (std::uint32_t k = 0; k < width; ++k) {
+        const std::uint32_t pos = first + k * kSliceRowsDevice + i % kSliceRowsDevice;
+        acc += load_block(a.blocks, pos) * load3(x, a.column[pos], a.local);
     }
-    if (a.contacts.capacity > 0 && contact_count(a.contacts) > 0)
-        acc = contact_gather_warp(a.contacts, free_row, i, a.contacts.product, acc);
+    if (a.contacts.capacity > 0 && contact_count(a.contacts) > 0) acc += load3(a.contacts.row_sum, i, a.contacts.vertices);
     return acc;
 }
 
