@@ -59,10 +59,13 @@ void require_device_support(const SolverSettings& settings) {
 void DeviceSolver::choose_pcg_loop() {
     // Measured on an H200 (docs/results.md, solve ms per frame): one cooperative launch per solve is
     // 1.6× faster than a kernel per step up to 40K vertices and 1.2× at 100K; from 216K vertices on
-    // the two are within 5% either way (bandwidth, not launches, bounds the iteration there).
+    // the two are within 5% either way (bandwidth, not launches, bounds the iteration there) without
+    // contacts. With contacts the one launch wins at any size: the 1.2M flag with self-contact
+    // solves 16% faster in it (H200; docs/results.md, "The CG across GPUs in one launch").
     constexpr std::uint32_t kOneLaunchMaxVertices = 200000;
+    const bool contacts = view_.contacts.capacity > 0;
     int grid = 0;
-    if (pcg_loop_ == PcgLoop::OneLaunch || (pcg_loop_ == PcgLoop::Auto && view_.n <= kOneLaunchMaxVertices))
+    if (pcg_loop_ == PcgLoop::OneLaunch || (pcg_loop_ == PcgLoop::Auto && (view_.n <= kOneLaunchMaxVertices || contacts)))
         grid = view_.n > 0 ? pcg_persistent_grid(view_, device_, schwarz_on_) : 0;
     if (grid != persistent_grid_) destroy_graph();
     persistent_grid_ = grid;

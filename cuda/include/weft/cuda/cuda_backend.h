@@ -62,7 +62,7 @@ enum class AssemblyStrategy : std::uint8_t {
 /// How the CUDA backend drives the CG loop. Same algorithm and stopping rule; the dot products are
 /// summed in a different order, so the two differ in float rounding only.
 enum class PcgLoop : std::uint8_t {
-    Auto,       ///< one launch up to 200,000 vertices, per-iteration kernels above (measured crossover)
+    Auto,       ///< one launch up to 200,000 vertices or wherever contacts enter the solve, per-iteration kernels above (measured); several GPUs: one launch per GPU where each part has its own
     OneLaunch,  ///< the whole loop in one cooperative kernel with grid-wide barriers: least latency
     PerKernel,  ///< three kernels per iteration under a graph while node: most bandwidth on large cloth
 };
