@@ -240,8 +240,9 @@ const StepStats& World::step() {
         const auto check_start = std::chrono::steady_clock::now();
         std::vector<std::vector<Vec3d>> x(model_->cloths.size());
         for (std::size_t c = 0; c < x.size(); ++c) x[c] = positions(c);
-        stats_.collision.remaining_intersections =
-            static_cast<std::int64_t>(collision::check_world_intersections(*model_, x, time_).intersecting_pairs);
+        const collision::WorldIntersections found = collision::check_world_intersections(*model_, x, time_);
+        stats_.collision.remaining_intersections = static_cast<std::int64_t>(found.total());
+        stats_.collision.remaining_collider_intersections = static_cast<std::int64_t>(found.cloth_with_collider);
         stats_.ms(Stage::Check) += ms_since(check_start);
     }
     stats_.step_ms = ms_since(start);

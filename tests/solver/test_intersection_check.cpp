@@ -13,6 +13,9 @@
 #include <vector>
 
 #include "collision/intersection_check.h"
+#include "collision/world_check.h"
+#include "weft/fabric.h"
+#include "weft/world.h"
 #include "weft/error.h"
 #include "weft/mesh.h"
 #include "weft/physics/triangle_intersection.h"
@@ -189,6 +192,53 @@ TEST(IntersectionCheck, RandomSoupsMatchBruteForce) {
         std::printf("%s: %zu intersecting pairs of %zu triangles, %zu candidates tested\n", c.name, expected.size(),
                     s.tris.size(), r.candidate_pairs);
     }
+}
+
+// The world's check says which kind each intersection is: a flat sheet crossed by a second cloth
+// (cloth through cloth) and by a mesh collider (cloth through the body). Each count must be what
+// the plain check finds on that pair of meshes alone, and a pair of two collider triangles (the
+// collider's own mesh crossing itself) is no one's.
+TEST(IntersectionCheck, AWorldsIntersectionsAreSplitIntoClothAndColliderPairs) {
+    World world;
+    world.add_cloth({.name = "floor sheet", .fabric = Fabric::cook(make_grid(1.0, 1.0, 8, 8, GridPlane::XZ))});
+    ClothDesc wall{.name = "wall sheet", .fabric = Fabric::cook(make_grid(0.5, 0.5, 4, 4, GridPlane::XY))};
+    wall.transform.translation = {0.0, 0.0, 0.21};  // stands across the floor sheet
+    world.add_cloth(wall);
+    MeshData fence = make_grid(0.8, 0.6, 4, 4, GridPlane::XY);  // a mesh collider across the floor sheet at z = -0.2
+    const MeshData crossing = make_grid(0.3, 0.3, 2, 2, GridPlane::XY);  // turned into x = 0: through the fence
+    const auto offset = static_cast<std::uint32_t>(fence.positions.size());
+    for (Vec3d p : crossing.positions) fence.positions.push_back({p.z, p.y, p.x});
+    for (Triangle t : crossing.triangles) fence.triangles.push_back({{t.v[0] + offset, t.v[1] + offset, t.v[2] + offset}});
+    for (Vec3d& p : fence.positions) p.z -= 0.2;
+    ColliderDesc body{.name = "fence", .shape = ColliderShape::Mesh};
+    body.mesh = std::make_shared<const MeshData>(fence);
+    world.add_collider(body);
+
+    const std::vector<std::vector<Vec3d>> x{world.positions(0), world.positions(1)};
+    const WorldIntersections found = check_world_intersections(world.model(), x, 0.0);
+
+    // The same pairs by the plain check on two meshes at a time.
+    const auto pairs_of = [](const std::vector<Vec3d>& a, const std::vector<Triangle>& ta, const std::vector<Vec3d>& b,
+                             const std::vector<Triangle>& tb) {
+        std::vector<Vec3d> xs = a;
+        std::vector<Triangle> ts = ta;
+        const auto base = static_cast<std::uint32_t>(xs.size());
+        xs.insert(xs.end(), b.begin(), b.end());
+        for (Triangle t : tb) ts.push_back({{t.v[0] + base, t.v[1] + base, t.v[2] + base}});
+        return check_all(xs, ts).intersecting_pairs - check_all(a, ta).intersecting_pairs - check_all(b, tb).intersecting_pairs;
+    };
+    const std::span<const Triangle> floor_span = world.model().cloths[0].fabric->triangles();
+    const std::span<const Triangle> wall_span = world.model().cloths[1].fabric->triangles();
+    const std::vector<Triangle> floor_tris(floor_span.begin(), floor_span.end()), wall_tris(wall_span.begin(), wall_span.end());
+    const std::size_t cloth_pairs = pairs_of(x[0], floor_tris, x[1], wall_tris);
+    const std::size_t body_pairs = pairs_of(x[0], floor_tris, fence.positions, fence.triangles) +
+                                   pairs_of(x[1], wall_tris, fence.positions, fence.triangles);
+    EXPECT_GT(cloth_pairs, 0U);
+    EXPECT_GT(body_pairs, 0U);
+    EXPECT_GT(check_all(fence.positions, fence.triangles).intersecting_pairs, 0U) << "the fence must cross itself";
+    EXPECT_EQ(found.cloth_with_cloth, cloth_pairs);
+    EXPECT_EQ(found.cloth_with_collider, body_pairs);
+    EXPECT_EQ(found.total(), cloth_pairs + body_pairs);
 }
 
 TEST(IntersectionCheck, RejectsBadIndices) {

@@ -99,6 +99,10 @@ RunSummary summarize(std::span<const StepStats> frames) {
                 if (sc.frames_with_intersections == 0) sc.first_intersecting_frame = static_cast<long long>(f) + 1;
                 ++sc.frames_with_intersections;
             }
+            if (c.remaining_collider_intersections > 0) {
+                ++sc.frames_with_collider_intersections;
+                sc.collider_intersections_max = std::max<long long>(sc.collider_intersections_max, c.remaining_collider_intersections);
+            }
         }
     }
     s.collisions.candidate_pairs = distribution(std::move(pairs));
@@ -192,7 +196,11 @@ std::vector<std::string> run_warnings(const RunContext& context, const RunSummar
         out.push_back("the exact check found intersecting triangles after " +
                       std::to_string(c.frames_with_intersections) + " of " + std::to_string(c.checked_frames) +
                       " frames, first after frame " + std::to_string(c.first_intersecting_frame) + ", at most " +
-                      std::to_string(c.remaining_intersections_max) + " pairs");
+                      std::to_string(c.remaining_intersections_max) + " pairs" +
+                      (c.frames_with_collider_intersections > 0
+                           ? " (cloth through a mesh collider in " + std::to_string(c.frames_with_collider_intersections) +
+                                 " frames, at most " + std::to_string(c.collider_intersections_max) + " pairs)"
+                           : ""));
     }
     if (c.rigid_zones > 0 || c.frozen_vertices > 0) {
         out.push_back("impact-zone fallbacks used: " + std::to_string(c.rigid_zones) + " rigid zones, " +
@@ -289,10 +297,13 @@ void write_summary_fields(JsonWriter& json, const RunContext& c, const RunSummar
     json.end_object();
     json.field("impact_zones", col.impact_zones);
     // null when the exact check did not run: not a misleading 0.
-    if (col.checked_frames > 0)
+    if (col.checked_frames > 0) {
         json.field("remaining_intersections", col.remaining_intersections_max);
-    else
+        json.field("remaining_collider_intersections", col.collider_intersections_max);
+    } else {
         json.key("remaining_intersections").null();
+        json.key("remaining_collider_intersections").null();
+    }
     json.key("memory_bytes").begin_object();
     json.field("backend", c.backend_memory_bytes)
         .field("fabric", c.fabric_memory_bytes)
@@ -413,7 +424,8 @@ void print_run_summary(std::ostream& out, const RunContext& c, const RunSummary&
     }
     if (col.checked_frames > 0) {
         out << "  intersections  " << col.frames_with_intersections << " of " << col.checked_frames
-            << " checked frames intersecting (max " << col.remaining_intersections_max << " pairs)\n";
+            << " checked frames intersecting (max " << col.remaining_intersections_max << " pairs; cloth through a mesh collider in "
+            << col.frames_with_collider_intersections << " frames, max " << col.collider_intersections_max << " pairs)\n";
     }
     out << "  memory         " << format_bytes(static_cast<double>(c.memory_bytes())) << " (backend "
         << format_bytes(static_cast<double>(c.backend_memory_bytes)) << " + fabric "

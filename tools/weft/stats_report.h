@@ -91,6 +91,10 @@ struct RunSummary {
         std::size_t checked_frames = 0;       ///< frames the exact check ran after
         long long remaining_intersections_max = 0;
         std::size_t frames_with_intersections = 0;
+        /// Of the intersections: frames with a cloth triangle through a mesh collider's, and the most
+        /// such pairs in a frame.
+        long long collider_intersections_max = 0;
+        std::size_t frames_with_collider_intersections = 0;
         long long first_intersecting_frame = -1;  ///< 1-based, -1 if none
     } collisions;
     double simulation_seconds = 0.0;        ///< sum of step times, s

@@ -72,6 +72,9 @@ struct CollisionStats {
     /// step, each a rerun of its pass; device memory grows with them (sized from use, not in advance).
     int buffer_growths = 0;
     std::int64_t remaining_intersections = -1;  ///< exact check after the step; −1 when not run
+    /// Of those, the pairs of a cloth triangle through a mesh collider's (the rest are cloth through
+    /// cloth); −1 when not run.
+    std::int64_t remaining_collider_intersections = -1;
 };
 
 struct StepStats {

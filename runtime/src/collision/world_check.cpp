@@ -7,7 +7,7 @@
 
 namespace weft::collision {
 
-IntersectionReport check_world_intersections(const Model& model, std::span<const std::vector<Vec3d>> cloth_positions,
+WorldIntersections check_world_intersections(const Model& model, std::span<const std::vector<Vec3d>> cloth_positions,
                                              double t) {
     if (cloth_positions.size() != model.cloths.size())
         throw Error("check_world_intersections: " + std::to_string(cloth_positions.size()) + " position arrays for " +
@@ -31,20 +31,22 @@ IntersectionReport check_world_intersections(const Model& model, std::span<const
         for (const Triangle& tri : c.mesh->triangles)
             collider_triangles.push_back({{base + tri.v[0], base + tri.v[1], base + tri.v[2]}});
     }
-    if (collider_triangles.empty()) return check_intersections(positions, triangles);
+    IntersectionCheckOptions options;
+    options.max_examples = 0;
+    WorldIntersections out;
+    out.cloth_with_cloth = check_intersections(positions, triangles, options).intersecting_pairs;
+    if (collider_triangles.empty()) return out;
 
-    // Pairs are counted additively: (all) − (collider with collider) leaves every pair that
-    // involves a cloth triangle.
+    // Pairs are counted additively: (all) − (collider with collider) − (cloth with cloth) leaves the
+    // pairs of a cloth triangle with a collider's.
     const auto shift = static_cast<std::uint32_t>(positions.size());
     positions.insert(positions.end(), collider_positions.begin(), collider_positions.end());
     for (const Triangle& tri : collider_triangles)
         triangles.push_back({{shift + tri.v[0], shift + tri.v[1], shift + tri.v[2]}});
-    IntersectionCheckOptions options;
-    options.max_examples = 0;
-    IntersectionReport all = check_intersections(positions, triangles, options);
-    const IntersectionReport colliders_only = check_intersections(collider_positions, collider_triangles, options);
-    all.intersecting_pairs -= colliders_only.intersecting_pairs;
-    return all;
+    const std::size_t all = check_intersections(positions, triangles, options).intersecting_pairs;
+    const std::size_t colliders_only = check_intersections(collider_positions, collider_triangles, options).intersecting_pairs;
+    out.cloth_with_collider = all - colliders_only - out.cloth_with_cloth;
+    return out;
 }
 
 }  // namespace weft::collision

@@ -11,10 +11,18 @@
 
 namespace weft::collision {
 
+/// What the check found, by kind: a fix differs for cloth through cloth (the contacts) and cloth
+/// through a body (the colliders' contacts, or a body whose parts overlap and pinch the cloth).
+struct WorldIntersections {
+    std::size_t cloth_with_cloth = 0;     ///< pairs of cloth triangles (of one cloth or of two)
+    std::size_t cloth_with_collider = 0;  ///< a cloth triangle through a mesh collider's triangle
+    [[nodiscard]] std::size_t total() const { return cloth_with_cloth + cloth_with_collider; }
+};
+
 /// Every intersecting pair of triangles among the cloths (positions given per cloth, in model order)
 /// and the mesh colliders placed at time `t` (s), leaving out pairs that share a vertex and pairs of
 /// two collider triangles (a collider is not ours to fix). Exact (intersection_check.h).
-[[nodiscard]] IntersectionReport check_world_intersections(const Model& model,
+[[nodiscard]] WorldIntersections check_world_intersections(const Model& model,
                                                            std::span<const std::vector<Vec3d>> cloth_positions,
                                                            double t);
 
