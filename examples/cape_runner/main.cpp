@@ -20,6 +20,7 @@
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
+#include <map>
 #include <memory>
 #include <optional>
 #include <stdexcept>
@@ -153,6 +154,24 @@ weft::MeshData skirt_mesh(int segments, int rings, double top, double bottom, do
             }
         }
     return m;
+}
+
+/// Where the cloth is caught in the character (--check): the character's triangles that the exact
+/// check finds a cloth through, counted by cloth and by the joint that moves each triangle most (the
+/// largest summed skin weight over its corners).
+void print_body_pairs(const weft::World& world, std::size_t character, const weft::SkinnedMesh& skin, int frame) {
+    std::map<std::string, int> by_place;
+    for (const weft::IntersectingTriangles& p : world.intersections()) {
+        if (!p.with_collider || p.other != character) continue;
+        std::map<std::uint32_t, double> weight;
+        for (const std::uint32_t v : skin.mesh.triangles[p.other_triangle].v)
+            for (std::size_t k = 0; k < 4; ++k) weight[skin.vertex_joints[v][k]] += skin.vertex_weights[v][k];
+        const auto heaviest = std::max_element(weight.begin(), weight.end(), [](const auto& a, const auto& b) { return a.second < b.second; });
+        ++by_place[world.cloth(p.cloth).name + " through " + skin.joints[heaviest->first].name];
+    }
+    std::printf("cape_runner: frame %d, cloth through the body:", frame);
+    for (const auto& [place, pairs] : by_place) std::printf(" %s %d;", place.c_str(), pairs);
+    std::printf("\n");
 }
 
 Level build_level(weft::World& world, const Runner& runner, int detail, std::shared_ptr<const weft::SkinnedMesh> skin) {
@@ -408,6 +427,9 @@ int play(const Options& options) {
             ++intersections;
             const long long body = stats.collision.remaining_collider_intersections;
             if (body > 0) ++body_intersections;
+            // Where, at the first such frame and every second after it.
+            if (body > 0 && level.character && (body_intersections == 1 || body_intersections % 60 == 0))
+                print_body_pairs(world, *level.character, *skin, frame);
             most_cloth_pairs = std::max(most_cloth_pairs, stats.collision.remaining_intersections - body);
             most_body_pairs = std::max(most_body_pairs, body);
         }

@@ -386,6 +386,12 @@ void World::set_state(std::size_t cloth, std::span<const Vec3d> positions, std::
     backend_->write_state(cloth, positions, velocities);
 }
 
+std::vector<IntersectingTriangles> World::intersections(std::size_t max_pairs) const {
+    std::vector<std::vector<Vec3d>> x(model_->cloths.size());
+    for (std::size_t c = 0; c < x.size(); ++c) x[c] = positions(c);
+    return collision::list_world_intersections(*model_, x, time_, max_pairs);
+}
+
 double World::energy() const {
     double e = 0.0;
     for (std::size_t c = 0; c < model_->cloths.size(); ++c)

@@ -239,6 +239,28 @@ TEST(IntersectionCheck, AWorldsIntersectionsAreSplitIntoClothAndColliderPairs) {
     EXPECT_EQ(found.cloth_with_cloth, cloth_pairs);
     EXPECT_EQ(found.cloth_with_collider, body_pairs);
     EXPECT_EQ(found.total(), cloth_pairs + body_pairs);
+
+    // World::intersections names the same pairs: each one's two triangles do intersect, there are as
+    // many of each kind, and a cap keeps the first ones.
+    const std::vector<IntersectingTriangles> named = world.intersections();
+    std::size_t named_cloth = 0, named_body = 0;
+    for (const IntersectingTriangles& p : named) {
+        ASSERT_LT(p.cloth, 2U);
+        const std::vector<Vec3d>& xa = x[p.cloth];
+        const Triangle ta = world.model().cloths[p.cloth].fabric->triangles()[p.triangle];
+        const std::vector<Vec3d>& xb = p.with_collider ? fence.positions : x[p.other];
+        const Triangle tb = p.with_collider ? fence.triangles[p.other_triangle] : world.model().cloths[p.other].fabric->triangles()[p.other_triangle];
+        const Vec3d a[3] = {xa[ta.v[0]], xa[ta.v[1]], xa[ta.v[2]]};
+        const Vec3d b[3] = {xb[tb.v[0]], xb[tb.v[1]], xb[tb.v[2]]};
+        EXPECT_TRUE(physics::triangles_intersect(a, b)) << "cloth " << p.cloth << " triangle " << p.triangle;
+        EXPECT_EQ(p.other, p.with_collider ? 0U : 1U);  // the fence is collider 0; the wall sheet cloth 1
+        (p.with_collider ? named_body : named_cloth) += 1;
+    }
+    EXPECT_EQ(named_cloth, cloth_pairs);
+    EXPECT_EQ(named_body, body_pairs);
+    const std::vector<IntersectingTriangles> first = world.intersections(3);
+    ASSERT_EQ(first.size(), 3U);
+    for (std::size_t k = 0; k < first.size(); ++k) EXPECT_EQ(first[k].triangle, named[k].triangle);
 }
 
 TEST(IntersectionCheck, RejectsBadIndices) {

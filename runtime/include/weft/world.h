@@ -34,6 +34,16 @@ class Backend;
 struct Model;
 struct EnergyAudit;
 
+/// A pair of triangles going through each other (World::intersections): a cloth's triangle, and
+/// another cloth triangle (of the same cloth or another) or a mesh collider's.
+struct IntersectingTriangles {
+    std::size_t cloth = 0;          ///< the cloth
+    std::uint32_t triangle = 0;     ///< its triangle, in the fabric's order
+    bool with_collider = false;     ///< the other triangle is a mesh collider's
+    std::size_t other = 0;          ///< the other cloth, or the collider (World::collider index)
+    std::uint32_t other_triangle = 0;  ///< in that cloth's fabric, or that collider's mesh
+};
+
 class World {
 public:
     /// Creates a world stepped by the backend called `backend` ("cpu", "cuda", …).
@@ -111,6 +121,12 @@ public:
     /// Throws weft::Error naming the file and the reason for a corrupt, cut or mismatched
     /// checkpoint, before changing anything.
     void load_state(const std::filesystem::path& file);
+
+    /// The pairs of triangles going through each other now, cloth with cloth and cloth with a mesh
+    /// collider (the exact check that `collision.check` runs after every step, here on demand and
+    /// naming the triangles: which part of a body a cloth is caught in). At most `max_pairs`, in a
+    /// fixed order; pairs of two collider triangles are not listed. Costly: for diagnostics.
+    [[nodiscard]] std::vector<IntersectingTriangles> intersections(std::size_t max_pairs = 100000) const;
 
     /// Kinetic + gravitational potential + elastic energy of all cloths, J (diagnostics and tests).
     [[nodiscard]] double energy() const;

@@ -8,6 +8,7 @@
 
 #include "collision/intersection_check.h"
 #include "weft/backend/model.h"
+#include "weft/world.h"
 
 namespace weft::collision {
 
@@ -25,5 +26,11 @@ struct WorldIntersections {
 [[nodiscard]] WorldIntersections check_world_intersections(const Model& model,
                                                            std::span<const std::vector<Vec3d>> cloth_positions,
                                                            double t);
+
+/// The same pairs, named (World::intersections): at most `max_pairs`, ordered by the cloth triangle
+/// (cloths in model order), then the other.
+[[nodiscard]] std::vector<IntersectingTriangles> list_world_intersections(const Model& model,
+                                                                          std::span<const std::vector<Vec3d>> cloth_positions,
+                                                                          double t, std::size_t max_pairs);
 
 }  // namespace weft::collision
