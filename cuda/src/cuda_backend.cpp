@@ -13,6 +13,7 @@
 #include "device_solver.h"
 #include "multi/multi_gpu_backend.h"
 #include "device_memory_budget.h"
+#include "pcg_loop_environment.h"
 #include "shared_output.h"
 #include "weft/error.h"
 #include "weft/backend/flat_model.h"
@@ -66,16 +67,7 @@ public:
             else if (v != "auto")
                 throw Error("WEFT_CUDA_ASSEMBLY='" + std::string(v) + "': expected rows, colors or auto");
         }
-        // WEFT_CUDA_PCG=one|kernels picks how the CG loop runs.
-        if (const char* env = std::getenv("WEFT_CUDA_PCG"); env != nullptr) {
-            const std::string_view v(env);
-            if (v == "one")
-                solver_->set_pcg_loop(PcgLoop::OneLaunch);
-            else if (v == "kernels")
-                solver_->set_pcg_loop(PcgLoop::PerKernel);
-            else if (v != "auto")
-                throw Error("WEFT_CUDA_PCG='" + std::string(v) + "': expected one, kernels or auto");
-        }
+        if (const auto loop = pcg_loop_from_environment()) solver_->set_pcg_loop(*loop);
     }
 
     std::string_view name() const override { return "cuda"; }

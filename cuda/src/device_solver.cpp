@@ -15,6 +15,7 @@
 #include <cstring>
 
 #include "kernels.h"
+#include "loop_clock.h"
 #include "weft/backend/timing.h"
 #include "weft/error.h"
 #include "weft/physics/swept_collider.h"
@@ -35,6 +36,7 @@ DeviceSolver::DeviceSolver(int device) : device_(device) {
 }
 
 DeviceSolver::~DeviceSolver() {
+    if (loop_clock_.size() != 0) print_loop_clock("one GPU", loop_clock_.get(), device_);
     cudaSetDevice(device_);
     destroy_graph();
     for (cudaEvent_t e : events_) cudaEventDestroy(e);

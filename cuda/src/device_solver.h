@@ -284,6 +284,7 @@ private:
     DeviceArray<PcgControl> control_;
     DeviceArray<DeviceStats> stats_;
     DeviceArray<double> partials_;
+    DeviceArray<long long> loop_clock_;  // WEFT_CUDA_PCG_CLOCK=1 (loop_clock.h)
     DeviceContacts contacts_;
     DeviceCollisions collisions_;
     DeviceSchwarz schwarz_;

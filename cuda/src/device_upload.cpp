@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "kernels.h"
+#include "loop_clock.h"
 #include "weft/error.h"
 
 namespace weft::cuda {
@@ -110,6 +111,10 @@ void DeviceSolver::build(const FlatModel& flat, const Model& model) {
     stats_.allocate(1, ledger_, "CG control and stats");
     // Two sets of block partials: the one-launch CG loop alternates between them.
     partials_.allocate(2 * std::max(1u, grid_for(static_cast<std::uint32_t>(n))), ledger_, "CG control and stats");
+    if (loop_clock_requested() && loop_clock_.size() == 0) {  // kept over re-uploads: printed when the solver goes
+        loop_clock_.allocate(kLoopClockEntries, ledger_, "CG loop clock");
+        WEFT_CUDA_CHECK(cudaMemset(loop_clock_.get(), 0, kLoopClockEntries * sizeof(long long)));
+    }
     WEFT_CUDA_CHECK(cudaMemset(control_.get(), 0, sizeof(PcgControl)));
     WEFT_CUDA_CHECK(cudaMemset(stats_.get(), 0, sizeof(DeviceStats)));
     wait_for_default_stream();
@@ -155,6 +160,7 @@ void DeviceSolver::build(const FlatModel& flat, const Model& model) {
     d.control = control_.get();
     d.stats = stats_.get();
     d.partials = partials_.get();
+    d.loop_clock = loop_clock_.size() != 0 ? loop_clock_.get() : nullptr;
     choose_assembly();
     choose_pcg_loop();
     if (part_ == nullptr) build_collisions(model);  // part mode: the MultiSolver detects (docs/multi-gpu.md)

@@ -50,6 +50,7 @@ struct DeviceView {
     PcgControl* control = nullptr;
     DeviceStats* stats = nullptr;
     double* partials = nullptr;
+    long long* loop_clock = nullptr;  ///< WEFT_CUDA_PCG_CLOCK=1: the one-launch loop's clock (loop_clock.h)
     // Proximity contacts (device_contacts.h); capacity 0 leaves the solve as it is without them.
     ContactView contacts;
     // The Schwarz preconditioner's levels (device_schwarz.h); levels 0 until it is first used.

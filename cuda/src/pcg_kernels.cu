@@ -22,6 +22,7 @@
 #include "cuda_check.h"
 #include "device_math.cuh"
 #include "pcg_control.cuh"
+#include "loop_clock.cuh"
 #include "schwarz_apply.cuh"
 
 namespace weft::cuda {
@@ -220,7 +221,9 @@ __global__ void pcg_persistent_kernel(DeviceView d) {
     // Fixed for the whole solve, and the same in every block: the contact phase and its barrier are
     // skipped uniformly when the substep has no pairs.
     const std::uint32_t pairs = kContacts ? contact_count(d.contacts) : 0u;
+    LoopClock clock(d.loop_clock);  // profiling: block 0's first thread times the phases
     for (;;) {
+        clock.iteration();
         if constexpr (kContacts) {
             if (pairs > 0) {
                 // The pair pass of A_contact·c. c is complete (the barrier that ended the last
@@ -229,9 +232,11 @@ __global__ void pcg_persistent_kernel(DeviceView d) {
                 for (std::uint32_t p = blockIdx.x * blockDim.x + threadIdx.x; p < pairs; p += stride)
                     contact_pair_product(d.contacts, p, d.c, d.n);
                 cg::this_grid().sync();
+                clock.mark(kPhasePairs);
                 // Each row's sum of its pairs' products, the rows spread over the warps.
                 contact_row_sums(d.contacts, d.n, d.contacts.product, first_warp, warps);
                 cg::this_grid().sync();
+                clock.mark(kPhaseRowSums);
             }
         }
         double local = 0.0;
@@ -247,6 +252,7 @@ __global__ void pcg_persistent_kernel(DeviceView d) {
             local += static_cast<double>(physics::dot(load3(d.c, i, d.n), q));
         }
         const double cq = persistent_sum(local, partials[0]);
+        clock.mark(kPhaseProduct);
         if (!(cq > 0.0)) break;  // breakdown: reported as not converged
         const float alpha = static_cast<float>(delta / cq);
         local = 0.0;
@@ -256,10 +262,12 @@ __global__ void pcg_persistent_kernel(DeviceView d) {
                 schwarz_fine_domain(d, domain, lane, values[warp], SchwarzInput::Update, alpha);
             for (int l = 1; l < m.levels; ++l) {
                 cg::this_grid().sync();
+                clock.mark(l == 1 ? kPhaseFine : kPhaseCoarse);
                 for (std::uint32_t domain = first_warp; domain < m.level[l].domains; domain += warps)
                     schwarz_coarse_domain(d, l, domain, lane, values[warp]);
             }
             cg::this_grid().sync();
+            clock.mark(m.levels > 1 ? kPhaseCoarse : kPhaseFine);
             for (std::uint32_t i = blockIdx.x * blockDim.x + threadIdx.x; i < d.n; i += stride) {
                 const V3 z = schwarz_correction(d, i);
                 store3(d.s, i, d.n, z);
@@ -276,6 +284,7 @@ __global__ void pcg_persistent_kernel(DeviceView d) {
             }
         }
         const double delta_new = persistent_sum(local, partials[1]);
+        clock.mark(kPhaseProlong);  // with block-Jacobi: the update and u = M⁻¹r
         const float beta = static_cast<float>(delta_new / delta);
         delta = delta_new;
         ++iterations;
@@ -284,7 +293,9 @@ __global__ void pcg_persistent_kernel(DeviceView d) {
         for (std::uint32_t i = blockIdx.x * blockDim.x + threadIdx.x; i < d.n; i += stride)
             store3(d.c, i, d.n, d.fixed[i] ? V3{} : load3(d.s, i, d.n) + beta * load3(d.c, i, d.n));
         cg::this_grid().sync();
+        clock.mark(kPhaseUpdate);
     }
+    clock.flush();
     cg::this_grid().sync();  // every block has read `running` before it is cleared
     if (blockIdx.x == 0 && threadIdx.x == 0) {
         ctl.delta = delta;

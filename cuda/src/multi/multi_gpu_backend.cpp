@@ -10,6 +10,7 @@
 
 #include "cuda_check.h"
 #include "device_memory_budget.h"
+#include "pcg_loop_environment.h"
 #include "multi/multi_solver.h"
 #include "shared_output.h"
 #include "weft/backend/flat_model.h"
@@ -144,15 +145,7 @@ std::unique_ptr<Backend> make_multi_gpu_backend(const BackendOptions& options) {
     if (const char* graphs = std::getenv("WEFT_CUDA_GRAPHS"); graphs != nullptr && std::string_view(graphs) == "0")
         backend->set_use_graph(false);
     // WEFT_CUDA_PCG=one|kernels: the one-launch loop per GPU or the graph batches, as on one GPU.
-    if (const char* loop = std::getenv("WEFT_CUDA_PCG"); loop != nullptr) {
-        const std::string_view v(loop);
-        if (v == "one")
-            backend->set_pcg_loop(PcgLoop::OneLaunch);
-        else if (v == "kernels")
-            backend->set_pcg_loop(PcgLoop::PerKernel);
-        else if (v != "auto")
-            throw Error("WEFT_CUDA_PCG='" + std::string(v) + "': expected one, kernels or auto");
-    }
+    if (const auto loop = pcg_loop_from_environment()) backend->set_pcg_loop(*loop);
     return backend;
 }
 

@@ -5,14 +5,13 @@
 #include <algorithm>
 #include <cstddef>
 #include <cmath>
-#include <cstdio>
 #include <cstdlib>
 #include <string>
-#include <string_view>
 
 #include "cuda_check.h"
 #include "device_math.cuh"
 #include "kernels.h"
+#include "loop_clock.h"
 #include "multi/all_gather.h"
 #include "multi/peer_access.h"
 #include "contact_terms.cuh"
@@ -166,7 +165,7 @@ struct PartPcg::Part {
 };
 
 PartPcg::PartPcg(std::span<const PartSystem> systems, HaloExchange& halo) : halo_(halo) {
-    if (const char* env = std::getenv("WEFT_CUDA_PCG_CLOCK"); env != nullptr && std::string_view(env) == "1") clock_ = true;
+    clock_ = loop_clock_requested();
     const std::size_t parts = halo.parts();
     if (systems.size() != parts)
         throw Error("PartPcg: " + std::to_string(systems.size()) + " systems for " + std::to_string(parts) + " parts");
@@ -206,7 +205,7 @@ PartPcg::PartPcg(std::span<const PartSystem> systems, HaloExchange& halo) : halo
         part->flags.allocate(parts + 2, part->ledger, "multi-GPU CG partial sums");
         part->host_flags.allocate(parts + 2);
         if (clock_) {
-            part->clock.allocate(kLoopPhases + 1, part->ledger, "multi-GPU CG clock");
+            part->clock.allocate(kLoopClockEntries, part->ledger, "multi-GPU CG clock");
             part->clock.zero(a.stream);
         }
         WEFT_CUDA_CHECK(cudaEventCreateWithFlags(&part->shared, cudaEventDisableTiming));
@@ -248,23 +247,8 @@ PartPcg::PartPcg(std::span<const PartSystem> systems, HaloExchange& halo) : halo
 }
 
 void PartPcg::print_clock() const {
-    static constexpr const char* kNames[kLoopPhases] = {"update", "fine",     "level 1", "coarse", "prolong",  "push",
-                                                        "pairs",  "row sums", "product", "sums",   "meetings", "(waiting)"};
-    for (std::size_t p = 0; p < part_.size(); ++p) {
-        const Part& part = *part_[p];
-        std::vector<long long> cycles(kLoopPhases + 1);
-        int rate_khz = 0;
-        if (cudaSetDevice(part.system.device) != cudaSuccess || cudaDeviceSynchronize() != cudaSuccess ||
-            cudaMemcpy(cycles.data(), part.clock.get(), cycles.size() * sizeof(long long), cudaMemcpyDeviceToHost) != cudaSuccess ||
-            cudaDeviceGetAttribute(&rate_khz, cudaDevAttrClockRate, part.system.device) != cudaSuccess)
-            return;
-        const long long iterations = std::max(cycles[kLoopPhases], 1LL);
-        std::fprintf(stderr, "multi-GPU CG clock, part %zu (GPU %d), %lld iterations, us per iteration at %.0f MHz:", p,
-                     part.system.device, cycles[kLoopPhases], rate_khz / 1e3);
-        for (int k = 0; k < kLoopPhases; ++k)
-            std::fprintf(stderr, " %s %.2f", kNames[k], static_cast<double>(cycles[k]) / iterations / (rate_khz / 1e3));
-        std::fprintf(stderr, "\n");
-    }
+    for (std::size_t p = 0; p < part_.size(); ++p)
+        print_loop_clock("part " + std::to_string(p), part_[p]->clock.get(), part_[p]->system.device);
 }
 
 std::size_t PartPcg::memory_bytes(std::size_t p) const { return part_.at(p)->ledger.total(); }

@@ -6,6 +6,7 @@
 #include <algorithm>
 
 #include "cuda_check.h"
+#include "loop_clock.cuh"
 #include "multi/part_pcg_terms.cuh"
 #include "schwarz_apply.cuh"
 
@@ -36,7 +37,7 @@ __device__ inline unsigned long long global_nanoseconds() {
 /// Returns false, in every block, once this part has stopped waiting: a part did not arrive within
 /// the timeout, or another part stopped and said so. Only this part's first thread writes its
 /// decision (flags[parts + 1]), before the barrier every block reads it behind: all blocks agree.
-__device__ bool meet_parts(const PartLoopView& v, unsigned count, long long& waited) {
+__device__ bool meet_parts(const PartLoopView& v, unsigned count, LoopClock& clock) {
     __threadfence_system();  // this thread's peer stores, before the arrival that announces them
     cg::this_grid().sync();
     const long long wait_begin = clock64();
@@ -63,7 +64,7 @@ __device__ bool meet_parts(const PartLoopView& v, unsigned count, long long& wai
             for (unsigned q = 0; q < v.parts; ++q)  // the others stop at their next meeting
                 if (q != v.part) store_release_system(v.flags_of[q] + told, 1 + v.part);
         }
-        waited += clock64() - wait_begin;
+        clock.add(kPhaseWaiting, clock64() - wait_begin);
     }
     cg::this_grid().sync();
     return __ldcg(own + decided) == 0;
@@ -84,23 +85,15 @@ __global__ void __launch_bounds__(kBlockSize) part_pcg_loop_kernel(const __grid_
     const std::uint32_t pairs = kContacts && a.contacts.capacity > 0 ? contact_count(a.contacts) : 0u;
     const std::uint32_t across = kContacts ? __ldcg(&v.across[owned]) : 0u;
     unsigned meetings = 0;
-    // The clock (profiling): block 0's first thread charges the cycles since the last mark to a phase.
-    const bool timing = v.clock != nullptr && blockIdx.x == 0 && threadIdx.x == 0;
-    long long spent[kLoopPhases] = {};
-    long long last = clock64(), timed = 0;
-    const auto mark = [&](int phase) {
-        if (!timing) return;
-        const long long now = clock64();
-        spent[phase] += now - last;
-        last = now;
-    };
+    LoopClock clock(v.clock);  // profiling: block 0's first thread times the phases
+    const auto mark = [&](int phase) { clock.mark(phase); };
     const auto meet = [&] {
-        const bool going = meet_parts(v, ++meetings, spent[kPhaseWaiting]);
+        const bool going = meet_parts(v, ++meetings, clock);
         mark(kPhaseMeetings);
         return going;
     };
     for (int parity = 0;; parity ^= 1) {
-        ++timed;
+        clock.iteration();
         const auto alpha = static_cast<float>(s.alpha), beta = static_cast<float>(s.beta);
         // p, s, x, r (and u = M⁻¹r with block-Jacobi, its rᵀu into slot 0).
         for (unsigned b = blockIdx.x; b < v.row_blocks; b += gridDim.x) {
@@ -207,13 +200,8 @@ __global__ void __launch_bounds__(kBlockSize) part_pcg_loop_kernel(const __grid_
     }
     if (__ldcg(v.flags_of[v.part] + v.parts + 1) != 0) s.running = 0;
     cg::this_grid().sync();  // every block has read the start's scalars
-    if (blockIdx.x == 0 && threadIdx.x == 0) {
-        *v.scalars = s;
-        if (timing) {
-            for (int k = 0; k < kLoopPhases; ++k) v.clock[k] += spent[k];
-            v.clock[kLoopPhases] += timed;
-        }
-    }
+    if (blockIdx.x == 0 && threadIdx.x == 0) *v.scalars = s;
+    clock.flush();
 }
 
 const void* loop_kernel(const PartLoopView& v) {

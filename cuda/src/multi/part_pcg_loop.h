@@ -21,29 +21,13 @@
 #include <cstdint>
 
 #include "device_view.h"
+#include "loop_clock.h"
 #include "multi/part_pcg.h"
 #include "multi/part_system.h"
 
 namespace weft::cuda::multi {
 
 inline constexpr unsigned kLoopMaxParts = 8;
-
-/// The phases of one iteration the loop's clock times (PartLoopView::clock), in order.
-enum LoopPhase : int {
-    kPhaseUpdate = 0,     ///< p, s, x, r (and u with block-Jacobi)
-    kPhaseFine,           ///< Schwarz level 0 over the part's domains
-    kPhaseLevel1,         ///< level 1's run into the other parts
-    kPhaseCoarse,         ///< the coarse levels, whole on every GPU
-    kPhaseProlong,        ///< u = Σ levels, rᵀu
-    kPhasePush,           ///< u's ghosts and contact vertices into the other parts
-    kPhasePairs,          ///< the contacts' pair pass
-    kPhaseRowSums,        ///< each row's sum of its contacts (contact_row_sums)
-    kPhaseProduct,        ///< w = A·u, wᵀu
-    kPhaseSums,           ///< the part's two sums into every part
-    kPhaseMeetings,       ///< the three meetings, whole (barriers, fences, waits)
-    kPhaseWaiting,        ///< of which block 0 waited for other parts' arrivals
-    kLoopPhases,
-};
 
 /// A run of u's ghost values for another part (HaloExchange::Route with the receiver's vector).
 struct LoopHaloRoute {
@@ -85,8 +69,7 @@ struct PartLoopView {
     /// one stopped waiting for (0: it did not stop). Zeroed before each solve.
     unsigned* flags_of[kLoopMaxParts] = {};
     unsigned long long timeout_ns = 0;
-    /// Non-null: SM clock cycles spent in each LoopPhase (as block 0 sees them, summed over the
-    /// iterations; device memory, kLoopPhases entries), then the iterations timed. For profiling.
+    /// Non-null: the loop clock (loop_clock.h, kLoopClockEntries in device memory). For profiling.
     long long* clock = nullptr;
 };
 

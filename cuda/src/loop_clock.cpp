@@ -1,0 +1,38 @@
+// The loop clock's host half (loop_clock.h).
+#include "loop_clock.h"
+
+#include <array>
+#include <cstdio>
+#include <cstdlib>
+#include <string_view>
+
+namespace weft::cuda {
+
+bool loop_clock_requested() {
+    const char* env = std::getenv("WEFT_CUDA_PCG_CLOCK");
+    return env != nullptr && std::string_view(env) == "1";
+}
+
+void print_loop_clock(const std::string& who, const long long* device_cycles, int device) noexcept {
+    static constexpr std::array<const char*, kLoopPhases> kNames = {
+        "update", "fine", "level 1", "coarse", "prolong", "push", "pairs", "row sums", "product", "sums", "meetings", "(waiting)"};
+    std::array<long long, kLoopClockEntries> cycles{};
+    int previous = 0, rate_khz = 0;
+    if (device_cycles == nullptr || cudaGetDevice(&previous) != cudaSuccess) return;
+    const bool read = cudaSetDevice(device) == cudaSuccess && cudaDeviceSynchronize() == cudaSuccess &&
+                      cudaMemcpy(cycles.data(), device_cycles, sizeof(cycles), cudaMemcpyDeviceToHost) == cudaSuccess &&
+                      cudaDeviceGetAttribute(&rate_khz, cudaDevAttrClockRate, device) == cudaSuccess && rate_khz > 0;
+    cudaSetDevice(previous);
+    if (!read || cycles[kLoopPhases] == 0) return;
+    const double iterations = static_cast<double>(cycles[kLoopPhases]), mhz = rate_khz / 1e3;
+    double total = 0.0;
+    for (int k = 0; k < kLoopPhases; ++k)
+        if (k != kPhaseWaiting) total += static_cast<double>(cycles[k]) / iterations / mhz;
+    std::fprintf(stderr, "CG loop clock, %s (GPU %d), %lld iterations, us per iteration at %.0f MHz: total %.2f;",
+                 who.c_str(), device, cycles[kLoopPhases], mhz, total);
+    for (int k = 0; k < kLoopPhases; ++k)
+        if (cycles[k] != 0) std::fprintf(stderr, " %s %.2f", kNames[k], static_cast<double>(cycles[k]) / iterations / mhz);
+    std::fprintf(stderr, "\n");
+}
+
+}  // namespace weft::cuda

@@ -1,0 +1,16 @@
+#pragma once
+/// @file
+/// WEFT_CUDA_PCG=one|kernels|auto: how the CG loop runs, for one GPU and across GPUs alike
+/// (PcgLoop). Read by both backends' factories, so that one spelling means one thing.
+
+#include <optional>
+
+#include "weft/cuda/cuda_backend.h"
+
+namespace weft::cuda {
+
+/// The loop WEFT_CUDA_PCG asks for; empty where it is unset. Throws weft::Error naming the value
+/// where it is none of one, kernels and auto.
+[[nodiscard]] std::optional<PcgLoop> pcg_loop_from_environment();
+
+}  // namespace weft::cuda
