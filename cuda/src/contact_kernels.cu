@@ -75,6 +75,13 @@ __global__ void contact_starts_kernel(DeviceView d, const std::uint32_t* sorted_
     d.contacts.start[i] = lo;
 }
 
+/// entry_weight[e] = the weight of sorted entry e (the rows' entries, [0, start[n])).
+__global__ void contact_entry_weights_kernel(DeviceView d) {
+    const ContactView& c = d.contacts;
+    const std::uint32_t used = c.start[d.n];
+    for (std::uint32_t e = first_thread(); e < used; e += thread_stride()) c.entry_weight[e] = contact_weight(c, c.entries[e]);
+}
+
 // ---- per Newton iteration -------------------------------------------------------------------------
 
 /// Pair p at the linearisation point, as the CPU's ContactTerms::evaluate: cloth vertex j at
@@ -196,7 +203,7 @@ __global__ void contact_product_kernel(DeviceView d, const float* x, int in_cg_l
 __global__ void contact_row_sum_kernel(ContactView c, std::uint32_t rows, const int* running) {
     if (running != nullptr && *running == 0) return;
     if (contact_count(c) == 0) return;
-    contact_row_sums(c, rows, c.product, first_thread() / 32, thread_stride() / 32);
+    contact_row_sums(c, rows, first_thread() / 32, thread_stride() / 32);
 }
 
 }  // namespace
@@ -234,6 +241,8 @@ void launch_contact_incidence(const DeviceView& d, const ContactSortScratch& scr
                                         cudaMemcpyDeviceToDevice, stream));
     contact_starts_kernel<<<grid_for(d.n + 1), kBlockSize, 0, stream>>>(d, keys.Current(), slots);
     WEFT_CUDA_CHECK_LAUNCH("contact_starts_kernel");
+    contact_entry_weights_kernel<<<pair_grid(slots), kBlockSize, 0, stream>>>(d);
+    WEFT_CUDA_CHECK_LAUNCH("contact_entry_weights_kernel");
 }
 
 void launch_contact_evaluate(const DeviceView& d, cudaStream_t stream) {

@@ -21,6 +21,14 @@ __device__ inline M3 load_contact_block(const ContactView& c, std::uint32_t p) {
     return m;
 }
 
+/// A per-pair vector of the product (ContactView::product): one 16-byte load or store, so that the
+/// gathers, which read the pairs in the rows' order (random), touch one memory sector an entry, not 3.
+__device__ inline V3 load_pair_vector(const float4* v, std::uint32_t p) {
+    const float4 t = v[p];
+    return {t.x, t.y, t.z};
+}
+__device__ inline void store_pair_vector(float4* v, std::uint32_t p, V3 value) { v[p] = float4{value.x, value.y, value.z, 0.0f}; }
+
 /// First pass of A_contact·x for pair p: s_p = C_p·Σ_j w_j x_j over its cloth corners (kinematic
 /// vertices are not unknowns of the solve: they add nothing).
 __device__ inline void contact_pair_product(const ContactView& c, std::uint32_t p, const float* x, std::uint32_t n) {
@@ -32,20 +40,21 @@ __device__ inline void contact_pair_product(const ContactView& c, std::uint32_t 
     if (ids.y < n) s += w.y * load3(x, ids.y, n);
     if (ids.z < n) s += w.z * load3(x, ids.z, n);
     if (ids.w < n) s += w.w * load3(x, ids.w, n);
-    store3(c.product, p, c.capacity, load_contact_block(c, p) * s);
+    store_pair_vector(c.product, p, load_contact_block(c, p) * s);
 }
 
-/// The weight of incidence entry 4·pair + corner.
+/// The weight of incidence entry 4·pair + corner, from the list (ContactView::entry_weight holds it
+/// in the incidence's order once the incidence is built).
 __device__ inline float contact_weight(const ContactView& c, std::uint32_t entry) {
     return c.list[entry >> 2].weight[entry & 3u];
 }
 
-/// acc + Σ w_i·(per-pair vector) over vertex i's incidence, added one entry at a time in pair order
+/// acc + Σ w_i·product over vertex i's incidence, added one entry at a time in pair order
 /// (as the CPU's add_rhs and multiply_add do). A vertex of a wound or stacked sheet is in hundreds of
 /// pairs, and its thread's chain of loads is what a grid-wide step waits for: the loads of a batch
 /// of entries are issued before its additions, which still run one at a time in order (the same
 /// sums, bit for bit).
-__device__ inline V3 contact_gather(const ContactView& c, std::uint32_t i, const float* per_pair, V3 acc) {
+__device__ inline V3 contact_gather(const ContactView& c, std::uint32_t i, V3 acc) {
     constexpr std::uint32_t kBatch = 8;
     std::uint32_t e = c.start[i];
     const std::uint32_t last = c.start[i + 1];
@@ -54,17 +63,13 @@ __device__ inline V3 contact_gather(const ContactView& c, std::uint32_t i, const
         V3 value[kBatch];
 #pragma unroll
         for (std::uint32_t k = 0; k < kBatch; ++k) {
-            const std::uint32_t entry = c.entries[e + k];
-            weight[k] = contact_weight(c, entry);
-            value[k] = load3(per_pair, entry >> 2, c.capacity);
+            weight[k] = c.entry_weight[e + k];
+            value[k] = load_pair_vector(c.product, c.entries[e + k] >> 2);
         }
 #pragma unroll
         for (std::uint32_t k = 0; k < kBatch; ++k) acc += weight[k] * value[k];
     }
-    for (; e < last; ++e) {
-        const std::uint32_t entry = c.entries[e];
-        acc += contact_weight(c, entry) * load3(per_pair, entry >> 2, c.capacity);
-    }
+    for (; e < last; ++e) acc += c.entry_weight[e] * load_pair_vector(c.product, c.entries[e] >> 2);
     return acc;
 }
 
@@ -74,7 +79,7 @@ __device__ inline V3 contact_gather(const ContactView& c, std::uint32_t i, const
 /// entries is summed by the whole warp (lane k adds entries k, k + 32, … in order, then a fixed
 /// shuffle tree), and its owner adds that sum to acc. The order depends on the row lengths only: the
 /// same bits on every run, and the CPU's sums up to float rounding (the short rows term for term).
-__device__ inline V3 contact_gather_warp(const ContactView& c, bool active, std::uint32_t i, const float* per_pair, V3 acc) {
+__device__ inline V3 contact_gather_warp(const ContactView& c, bool active, std::uint32_t i, V3 acc) {
     constexpr std::uint32_t kLongRow = 32;
     constexpr unsigned kWarp = 0xffffffffu;
     const std::uint32_t lane = threadIdx.x % 32;
@@ -84,7 +89,7 @@ __device__ inline V3 contact_gather_warp(const ContactView& c, bool active, std:
         last = c.start[i + 1];
     }
     const bool long_row = last - first > kLongRow;
-    if (active && !long_row) acc = contact_gather(c, i, per_pair, acc);
+    if (active && !long_row) acc = contact_gather(c, i, acc);
     for (unsigned pending = __ballot_sync(kWarp, long_row); pending != 0; pending &= pending - 1) {
         const int owner = __ffs(pending) - 1;
         const std::uint32_t begin = __shfl_sync(kWarp, first, owner), end = __shfl_sync(kWarp, last, owner);
@@ -96,17 +101,13 @@ __device__ inline V3 contact_gather_warp(const ContactView& c, bool active, std:
             V3 value[kBatch];
 #pragma unroll
             for (std::uint32_t k = 0; k < kBatch; ++k) {
-                const std::uint32_t entry = c.entries[e + 32 * k];
-                weight[k] = contact_weight(c, entry);
-                value[k] = load3(per_pair, entry >> 2, c.capacity);
+                weight[k] = c.entry_weight[e + 32 * k];
+                value[k] = load_pair_vector(c.product, c.entries[e + 32 * k] >> 2);
             }
 #pragma unroll
             for (std::uint32_t k = 0; k < kBatch; ++k) part += weight[k] * value[k];
         }
-        for (; e < end; e += 32) {
-            const std::uint32_t entry = c.entries[e];
-            part += contact_weight(c, entry) * load3(per_pair, entry >> 2, c.capacity);
-        }
+        for (; e < end; e += 32) part += c.entry_weight[e] * load_pair_vector(c.product, c.entries[e] >> 2);
         for (int offset = 16; offset > 0; offset /= 2) {
             part.x += __shfl_down_sync(kWarp, part.x, offset);
             part.y += __shfl_down_sync(kWarp, part.y, offset);
@@ -126,14 +127,13 @@ __device__ inline V3 contact_gather_warp(const ContactView& c, bool active, std:
 /// its rows w, w + warps, … of the stripe, and a run of neighbouring rows lands one row to a warp
 /// (long rows summed by the whole warp: contact_gather_warp). The product adds row_sum after the
 /// row's matrix blocks. Fixed by the row lengths alone: the same bits on every run.
-__device__ inline void contact_row_sums(const ContactView& c, std::uint32_t rows, const float* per_pair, std::uint32_t warp,
-                                        std::uint32_t warps) {
+__device__ inline void contact_row_sums(const ContactView& c, std::uint32_t rows, std::uint32_t warp, std::uint32_t warps) {
     const std::uint32_t lane = threadIdx.x % 32;
     const std::uint32_t stripe = (rows + 31) / 32;
     for (std::uint32_t k = warp; k < stripe; k += warps) {  // the same count for every lane of the warp
         const std::uint32_t i = lane * stripe + k;
         const bool active = i < rows;
-        const V3 sum = contact_gather_warp(c, active, i, per_pair, V3{});
+        const V3 sum = contact_gather_warp(c, active, i, V3{});
         if (active) store3(c.row_sum, i, c.vertices, sum);
     }
 }

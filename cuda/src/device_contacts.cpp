@@ -46,7 +46,8 @@ bool DeviceContacts::reserve(std::size_t pairs, std::size_t kinematic, std::uint
     start_.allocate(n + 1, ledger_, "proximity contacts");
     row_sum_.allocate(3 * std::size_t{std::max(n, 1U)}, ledger_, "proximity contacts");
     entries_.allocate(4 * capacity, ledger_, "proximity contacts");
-    per_pair_.allocate(15 * capacity, ledger_, "proximity contacts");
+    per_pair_.allocate(16 * capacity, ledger_, "proximity contacts");
+    entry_weight_.allocate(4 * capacity, ledger_, "proximity contacts");
     const auto corner_slots = static_cast<std::uint32_t>(4 * capacity);
     const int key_bits = std::max(1, static_cast<int>(std::bit_width(n)));  // n itself keys the unused slots
     sort_keys_.allocate(2 * std::size_t{corner_slots}, ledger_, "proximity contacts: incidence sort");
@@ -71,7 +72,8 @@ bool DeviceContacts::reserve(std::size_t pairs, std::size_t kinematic, std::uint
     v.vertices = n;
     v.block = per_pair_.get();
     v.rhs = v.block + 9 * capacity;
-    v.product = v.rhs + 3 * capacity;
+    v.product = reinterpret_cast<float4*>(v.rhs + 3 * capacity);  // 12·capacity floats in: 16-byte aligned
+    v.entry_weight = entry_weight_.get();
     return true;
 }
 
@@ -128,6 +130,7 @@ void DeviceContacts::release() {
     sort_keys_ = {};
     sort_ids_ = {};
     per_pair_ = {};
+    entry_weight_ = {};
     sort_storage_ = {};
     sort_scratch_ = {};
     ledger_.clear();

@@ -75,23 +75,36 @@ struct ContactView {
     // [start[i], start[i + 1]), in pair order.
     std::uint32_t* start = nullptr;
     std::uint32_t* entries = nullptr;  ///< 4·capacity
+    /// The weight w_i of each entry, in the incidence's order (filled with it): a row's gathers read
+    /// it in sequence instead of one pair's record at a time.
+    float* entry_weight = nullptr;     ///< 4·capacity
     /// Part mode (the multi-GPU solver): the list names the whole model's vertices (cloth vertices
     /// below `cloth_vertices`, kinematic ones after), and `row_of` maps a whole cloth vertex to this
     /// part's row (~0 where another part owns it); the incidence covers the part's rows. Null on one
     /// GPU, where the list's cloth vertices are the solver's rows.
     const std::uint32_t* row_of = nullptr;
     std::uint32_t cloth_vertices = 0;
+    /// Part mode: per pair, where each corner's value is read in the product's pair pass (row_of
+    /// looked up once a substep instead of four times a pair at every CG iteration): the part's row,
+    /// kCornerFromCopy | the whole vertex (another part's, from the whole-size copy), or kCornerNone
+    /// (a kinematic vertex). Null on one GPU.
+    const uint4* corner_source = nullptr;
     // Per pair, written at each Newton iteration (SoA, stride capacity): C = −h·D − h²·K (9 floats,
-    // row-major), its right-hand side h·F + h²·K·Σ w_j (v_k − w_k)_j (3), and the product
-    // C·Σ_j w_j x_j of the current SpMV (3).
+    // row-major) and its right-hand side h·F + h²·K·Σ w_j (v_k − w_k)_j (3).
     float* block = nullptr;
     float* rhs = nullptr;
-    float* product = nullptr;
+    /// Per pair, the product C·Σ_j w_j x_j of the current SpMV, one float4 (x, y, z, 0) a pair: the
+    /// rows' gathers read it at random, one sector an entry (3 with SoA).
+    float4* product = nullptr;
     /// Per row, written at each SpMV after the pair pass (contact_row_sums): the row's sum of
     /// w_i·product over its incidence, SoA with component stride `vertices` (the solver's n).
     float* row_sum = nullptr;
     std::uint32_t vertices = 0;
 };
+
+/// ContactView::corner_source's markers.
+inline constexpr std::uint32_t kCornerFromCopy = 0x80000000u;
+inline constexpr std::uint32_t kCornerNone = 0xFFFFFFFFu;
 
 /// The incidence build's scratch (launch_contact_incidence): the corners' row keys, double-buffered
 /// for the radix sort, the ids the sort carries along (its second buffer is ContactView::entries),
@@ -156,7 +169,8 @@ private:
     DeviceArray<std::uint32_t> start_, entries_;
     DeviceArray<float> row_sum_;
     DeviceArray<std::uint32_t> sort_keys_, sort_ids_;  // 2 and 1 × 4·capacity
-    DeviceArray<float> per_pair_;                      // block, rhs, product: 15 floats a pair
+    DeviceArray<float> per_pair_;                      // block, rhs (SoA), product (float4): 16 floats a pair
+    DeviceArray<float> entry_weight_;                  // ContactView::entry_weight
     DeviceArray<unsigned char> sort_storage_;
     ContactSortScratch sort_scratch_{};
 };

@@ -119,10 +119,17 @@ bool DeviceSolver::part_receive_contacts(std::span<const multi::ContactShare> sh
         total += share.count;
         largest = std::max(largest, share.count);
     }
-    const bool grew = contacts_.reserve(std::max<std::size_t>(total, 1), kinematic, view_.n, stream);
+    bool grew = contacts_.reserve(std::max<std::size_t>(total, 1), kinematic, view_.n, stream);
+    if (corner_source_.size() != contacts_.view().capacity) {  // with the list's capacity: the views go stale together
+        WEFT_CUDA_CHECK(cudaStreamSynchronize(stream));
+        corner_source_.allocate(contacts_.view().capacity, ledger_, "part contact corners");
+        ledger_.set("part contact corners", corner_source_.bytes());  // grown: replaced, not added
+        grew = true;
+    }
     if (grew) contacts_resized();
     view_.contacts.row_of = row_of_.get();
     view_.contacts.cloth_vertices = contact_whole_;
+    view_.contacts.corner_source = corner_source_.get();
     ContactInputs to = contacts_.inputs();
     // Only the contacts at this part's rows, each share's after the last's: each part evaluates
     // and multiplies its share of the contacts.
@@ -158,6 +165,7 @@ bool DeviceSolver::part_receive_contacts(std::span<const multi::ContactShare> sh
                                         kinematic_from.kinematic_v + std::size_t(c) * kinematic_from.kinematic_capacity,
                                         kinematic * sizeof(float), cudaMemcpyDefault, stream));
     }
+    multi::launch_part_corner_sources(view_.contacts, static_cast<std::uint32_t>(placed), corner_source_.get(), stream);
     launch_contact_incidence(view_, contacts_.sort_scratch(), stream);
     return grew;
 }

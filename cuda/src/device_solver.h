@@ -256,6 +256,7 @@ private:
     DeviceArray<std::uint32_t> output_index_;
     DeviceArray<std::uint32_t> global_index_;  // every local vertex's whole id
     DeviceArray<std::uint32_t> row_of_;        // whole vertex → owned row or ~0 (the contact incidence)
+    DeviceArray<uint4> corner_source_;         // ContactView::corner_source, the contacts' capacity
     const float* contact_x0_ = nullptr;        // whole-size copies the contact evaluation reads
     const float* contact_wk_ = nullptr;
     const float* contact_vk_ = nullptr;

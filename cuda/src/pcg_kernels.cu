@@ -56,7 +56,7 @@ __global__ void pcg_setup_kernel(DeviceView d, int first_newton, int schwarz) {
                 M3 acc{};
                 for (std::uint32_t e = first; e < last; ++e) {
                     const std::uint32_t entry = ct.entries[e];
-                    const float w = contact_weight(ct, entry);
+                    const float w = ct.entry_weight[e];
                     b += w * load3(ct.rhs, entry >> 2, ct.capacity);
                     acc += (w * w) * load_contact_block(ct, entry >> 2);
                 }
@@ -93,7 +93,7 @@ __global__ void pcg_residual_kernel(DeviceView d, unsigned long long handle) {
         if (!d.fixed[i]) {
             V3 product = row_times(d, i, d.dv);
             if constexpr (kContacts) {
-                if (contact_count(d.contacts) > 0) product = contact_gather(d.contacts, i, d.contacts.product, product);
+                if (contact_count(d.contacts) > 0) product = contact_gather(d.contacts, i, product);
             }
             r = load3(d.b, i, d.n) - product;
             if constexpr (!kSchwarz) {
@@ -234,7 +234,7 @@ __global__ void pcg_persistent_kernel(DeviceView d) {
                 cg::this_grid().sync();
                 clock.mark(kPhasePairs);
                 // Each row's sum of its pairs' products, the rows spread over the warps.
-                contact_row_sums(d.contacts, d.n, d.contacts.product, first_warp, warps);
+                contact_row_sums(d.contacts, d.n, first_warp, warps);
                 cg::this_grid().sync();
                 clock.mark(kPhaseRowSums);
             }
@@ -295,7 +295,6 @@ __global__ void pcg_persistent_kernel(DeviceView d) {
         cg::this_grid().sync();
         clock.mark(kPhaseUpdate);
     }
-    clock.flush();
     cg::this_grid().sync();  // every block has read `running` before it is cleared
     if (blockIdx.x == 0 && threadIdx.x == 0) {
         ctl.delta = delta;

@@ -35,7 +35,26 @@ __global__ void count_contacts_at_vertices(const DeviceContact* list, std::size_
     }
 }
 
+__global__ void corner_sources(ContactView c, std::uint32_t count, uint4* out) {
+    const std::uint32_t p = blockIdx.x * blockDim.x + threadIdx.x;
+    if (p >= count) return;
+    std::uint32_t k[4];
+    for (int j = 0; j < 4; ++j) {
+        const std::uint32_t v = c.list[p].vertex[j];
+        const std::uint32_t row = v < c.cloth_vertices ? c.row_of[v] : kCornerNone;
+        k[j] = v >= c.cloth_vertices ? kCornerNone : row != std::numeric_limits<std::uint32_t>::max() ? row : (kCornerFromCopy | v);
+    }
+    out[p] = uint4{k[0], k[1], k[2], k[3]};
+}
+
 }  // namespace
+
+void launch_part_corner_sources(const ContactView& c, std::uint32_t count, uint4* corner_source, cudaStream_t stream) {
+    if (count == 0) return;
+    constexpr unsigned kBlock = 256;
+    corner_sources<<<(count + kBlock - 1) / kBlock, kBlock, 0, stream>>>(c, count, corner_source);
+    WEFT_CUDA_CHECK(cudaGetLastError());
+}
 
 void launch_count_contacts_at_vertices(const DeviceContact* list, std::size_t count, std::uint32_t cloth_vertices,
                                        std::uint32_t* counts, cudaStream_t stream) {

@@ -31,6 +31,10 @@ void launch_select_part_contacts(const DeviceContact* from, std::size_t count, c
                                  std::uint32_t cloth_vertices, DeviceContact* to, std::uint32_t* to_count, void* scratch,
                                  std::size_t scratch_bytes, cudaStream_t stream);
 
+/// c.corner_source for the part's first `count` contacts (ContactView::corner_source), from the
+/// list's vertices and c.row_of.
+void launch_part_corner_sources(const ContactView& c, std::uint32_t count, uint4* corner_source, cudaStream_t stream);
+
 /// counts[v] += the contacts of list[0, count) at cloth vertex v (< cloth_vertices; kinematic
 /// vertices are not counted): the contact load of each row, for a re-cut of the parts.
 void launch_count_contacts_at_vertices(const DeviceContact* list, std::size_t count, std::uint32_t cloth_vertices,

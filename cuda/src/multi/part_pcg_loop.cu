@@ -165,7 +165,7 @@ __global__ void __launch_bounds__(kBlockSize) part_pcg_loop_kernel(const __grid_
                     part_pair_product(a.contacts, pair, v.u, local, v.mirror_copy);
                 cg::this_grid().sync();
                 mark(kPhasePairs);
-                contact_row_sums(a.contacts, owned, a.contacts.product, first_warp, warps);
+                contact_row_sums(a.contacts, owned, first_warp, warps);
                 cg::this_grid().sync();
                 mark(kPhaseRowSums);
             }
@@ -201,7 +201,6 @@ __global__ void __launch_bounds__(kBlockSize) part_pcg_loop_kernel(const __grid_
     if (__ldcg(v.flags_of[v.part] + v.parts + 1) != 0) s.running = 0;
     cg::this_grid().sync();  // every block has read the start's scalars
     if (blockIdx.x == 0 && threadIdx.x == 0) *v.scalars = s;
-    clock.flush();
 }
 
 const void* loop_kernel(const PartLoopView& v) {

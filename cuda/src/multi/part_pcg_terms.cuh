@@ -133,24 +133,23 @@ __device__ inline V3 part_product_row(const PartSystem& a, std::uint32_t i, cons
 
 /// Pair p of the contact product's pair pass over a part's contacts: a vertex the part owns is read
 /// from its own vector `x` (stride `local`), another part's from the whole-size copy its owner pushed
-/// (multi/contact_mirror.h). The same values as one GPU's pass reads, in the same order:
-/// contact_pair_product's sum.
+/// (multi/contact_mirror.h), as ContactView::corner_source says. The same values as one GPU's pass
+/// reads, in the same order: contact_pair_product's sum.
 __device__ inline void part_pair_product(const ContactView& c, std::uint32_t p, const float* x, std::uint32_t local,
                                          const float* copy) {
     if ((c.list[p].pair & kInactiveContactBit) != 0) return;  // not in the incidence
     const std::uint32_t whole = c.cloth_vertices;
-    const uint4 ids = reinterpret_cast<const uint4*>(c.list)[4 * p];
+    const uint4 from = c.corner_source[p];
     const float4 w = reinterpret_cast<const float4*>(c.list)[4 * p + 1];
-    const std::uint32_t id[4] = {ids.x, ids.y, ids.z, ids.w};
+    const std::uint32_t source[4] = {from.x, from.y, from.z, from.w};
     const float weight[4] = {w.x, w.y, w.z, w.w};
     V3 sum{};
     for (int j = 0; j < 4; ++j) {
-        const std::uint32_t v = id[j];
-        if (v >= whole) continue;  // a kinematic vertex: no unknown
-        const std::uint32_t row = c.row_of[v];
-        sum += weight[j] * (row != ~0U ? load3(x, row, local) : load3(copy, v, whole));
+        const std::uint32_t k = source[j];
+        if (k == kCornerNone) continue;  // a kinematic vertex: no unknown
+        sum += weight[j] * ((k & kCornerFromCopy) == 0 ? load3(x, k, local) : load3(copy, k & ~kCornerFromCopy, whole));
     }
-    store3(c.product, p, c.capacity, load_contact_block(c, p) * sum);
+    store_pair_vector(c.product, p, load_contact_block(c, p) * sum);
 }
 
 }  // namespace weft::cuda::multi
