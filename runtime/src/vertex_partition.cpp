@@ -27,6 +27,19 @@ std::vector<double> row_and_contact_work(const BlockPattern& pattern, std::span<
     return work;
 }
 
+double part_work_imbalance(std::span<const double> part_rows, std::span<const std::size_t> part_contacts) {
+    if (part_rows.size() != part_contacts.size())
+        throw Error("part_work_imbalance: " + std::to_string(part_rows.size()) + " parts' rows but " +
+                    std::to_string(part_contacts.size()) + " parts' contacts");
+    double total = 0.0, busiest = 0.0;
+    for (std::size_t p = 0; p < part_rows.size(); ++p) {
+        const double work = part_rows[p] + 4.0 * kContactWorkPerVertex * static_cast<double>(part_contacts[p]);
+        total += work;
+        busiest = std::max(busiest, work);
+    }
+    return total > 0.0 ? busiest * static_cast<double>(part_rows.size()) / total : 1.0;
+}
+
 std::vector<std::uint32_t> cut_order(std::span<const std::uint32_t> order, std::span<const double> work,
                                      std::uint32_t parts, std::uint32_t granule) {
     const std::size_t n = order.size();

@@ -102,6 +102,20 @@ TEST(VertexPartition, CutsAlongThePreconditionerOrderAreConsistentAndBalanced) {
     }
 }
 
+// What the detections weigh: a part's rows plus its contacts in the same units, busiest over mean.
+TEST(VertexPartition, PartWorkImbalanceWeighsContactsAgainstRows) {
+    const std::vector<double> rows = {100.0, 100.0};
+    EXPECT_DOUBLE_EQ(part_work_imbalance(rows, std::vector<std::size_t>{0, 0}), 1.0);
+    // 40 contacts on the first part weigh 4·kContactWorkPerVertex·40 blocks more.
+    const double extra = 4.0 * kContactWorkPerVertex * 40.0;
+    EXPECT_DOUBLE_EQ(part_work_imbalance(rows, std::vector<std::size_t>{40, 0}), (100.0 + extra) * 2.0 / (200.0 + extra));
+    // Fewer rows on the part with the contacts can even it out.
+    EXPECT_DOUBLE_EQ(part_work_imbalance(std::vector<double>{100.0 - extra / 2, 100.0 + extra / 2}, std::vector<std::size_t>{40, 0}),
+                     1.0);
+    EXPECT_DOUBLE_EQ(part_work_imbalance(std::vector<double>{0.0, 0.0}, std::vector<std::size_t>{0, 0}), 1.0);
+    EXPECT_THROW((void)part_work_imbalance(rows, std::vector<std::size_t>{1}), Error);
+}
+
 // A re-cut by contact load: contacts piled on one corner of the cloth move rows off the part that
 // holds it, the parts' row-and-contact work comes out even, and the cut stays consistent.
 TEST(VertexPartition, ContactWorkMovesRowsOffTheBusyPart) {
@@ -111,7 +125,7 @@ TEST(VertexPartition, ContactWorkMovesRowsOffTheBusyPart) {
     const std::vector<Vec3d> rest(g.fabric->rest_positions().begin(), g.fabric->rest_positions().end());
     std::vector<std::uint32_t> contacts_at(n, 0);
     for (std::size_t i = 0; i < n; ++i)
-        if (rest[i].x > 0.25 && rest[i].y > 0.25) contacts_at[i] = 12;  // a fold over a quarter of the cloth
+        if (rest[i].x > 0.25 && rest[i].y > 0.25) contacts_at[i] = 60;  // a fold over a quarter of the cloth
     const std::vector<double> rows = row_work(pattern), loaded = row_and_contact_work(pattern, contacts_at);
     for (std::size_t i = 0; i < n; ++i) EXPECT_EQ(loaded[i], rows[i] + kContactWorkPerVertex * contacts_at[i]);
     for (const std::uint32_t parts : {2U, 4U}) {

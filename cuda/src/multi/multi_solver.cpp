@@ -133,6 +133,10 @@ void MultiSolver::build_parts(const Model& model, const std::vector<double>& wor
     // Throws, naming the count, when there are fewer level-0 domains than parts.
     partition_ =
         build_partition(flat.pattern, cut_order(hierarchy_.order, work, parts, SchwarzHierarchy::kDomainSize), parts, work);
+    // Each part's rows' work (without contacts): what the detections weigh its contacts against.
+    part_row_work_.assign(parts, 0.0);
+    const std::vector<double> rows = row_work(flat.pattern);
+    for (std::size_t v = 0; v < rows.size(); ++v) part_row_work_[partition_.part_of[v]] += rows[v];
     part_models_.reserve(parts);
     for (std::uint32_t p = 0; p < parts; ++p) part_models_.push_back(extract_part(flat, partition_, p));
     std::vector<cudaStream_t> streams;
@@ -388,10 +392,9 @@ void MultiSolver::distribute_contacts(const Model& model, const std::vector<std:
     stats.collision.contacts_largest_part = std::max(stats.collision.contacts_largest_part, largest);
     found_ = found;
     if (parts > 1) {
-        std::size_t on_parts = 0;
-        for (auto& s : solvers_) on_parts += s->part_contact_count();
-        const double mean = static_cast<double>(on_parts) / static_cast<double>(parts);
-        const double imbalance = mean > 0.0 ? static_cast<double>(largest) / mean : 1.0;
+        std::vector<std::size_t> on_part;
+        for (auto& s : solvers_) on_part.push_back(s->part_contact_count());
+        const double imbalance = part_work_imbalance(part_row_work_, on_part);
         recut_due_ = recut_policy_.observe(imbalance, model.settings.solver.gpu_rebalance) || recut_due_;
     }
     mirror_->list_contact_vertices(lists);

@@ -172,6 +172,7 @@ private:
     std::vector<int> devices_;
     const FlatModel* flat_ = nullptr;
     VertexPartition partition_;
+    std::vector<double> part_row_work_;  // each part's row_work, summed (the re-cut's measure)
     std::vector<PartModel> part_models_;
     std::vector<std::unique_ptr<DeviceSolver>> solvers_;
     std::unique_ptr<HaloExchange> halo_;

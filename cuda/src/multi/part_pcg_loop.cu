@@ -71,8 +71,12 @@ __device__ bool meet_parts(const PartLoopView& v, unsigned count, LoopClock& clo
 }
 
 /// The loop of PartPcg::enqueue_iteration, phase by phase, with the batches' values (see the header).
+/// Three blocks an SM at least: left to itself the compiler gives the Schwarz variants 128 registers
+/// a thread, two blocks an SM, and the contact gathers (random loads, bound by the loads in flight)
+/// ran at about half one GPU's rate per contact. Capped at 80 registers (a few spills): the 1.2M flag
+/// with self-contact on 2 × H200 208.7 → 191.9 ms a frame; the wound twist 29.6 → 30.6 ms.
 template <bool kSchwarz, bool kContacts>
-__global__ void __launch_bounds__(kBlockSize) part_pcg_loop_kernel(const __grid_constant__ PartLoopView v) {
+__global__ void __launch_bounds__(kBlockSize, 3) part_pcg_loop_kernel(const __grid_constant__ PartLoopView v) {
     __shared__ float values[kSchwarz ? kSchwarzWarpsPerBlock : 1][kSchwarzDim];
     __shared__ PartReduce::TempStorage storage;
     const PartSystem& a = v.a;

@@ -67,10 +67,18 @@ struct VertexPartition {
 
 /// The cost of one contact's vertex in a row, in the units of row_work (pattern blocks). A contact
 /// costs every CG iteration a pair pass (its four vertices gathered, weighted, multiplied) and a row
-/// gather at each of its cloth vertices. Measured on the 1.2M-triangle flag with self-contact on
-/// one H100: 1.46 ms of contact work an iteration for 4.68M contacts against 176 µs for the 6.6M
-/// blocks of the product, so a contact costs about 11.7 blocks, 2.9 per vertex.
-inline constexpr double kContactWorkPerVertex = 3.0;
+/// gather at each of its cloth vertices. Measured with the one-launch loop's clock on the 1.2M-triangle
+/// flag with self-contact (H200, WEFT_CUDA_PCG_CLOCK=1): on one GPU the contact phases take 264 µs an
+/// iteration for 4.58M contacts and the row phases 288 µs for 6.6M blocks (1.3 blocks a contact);
+/// on each of two GPUs a contact costs about 2.3 blocks (the pair pass reads another part's
+/// vertices from its copy, and a contact across the cut is on both parts): about 0.5 a vertex.
+inline constexpr double kContactWorkPerVertex = 0.5;
+
+/// How uneven the parts' CG work is: the busiest part's over the mean part's (1 is even), a part's
+/// work being its rows' row_work (`part_rows`) plus 4·kContactWorkPerVertex for every contact it
+/// holds (`part_contacts`, a contact across a cut on each part it touches: each part runs its pair
+/// pass). Throws weft::Error when the spans' sizes differ. 1 where there is no work.
+[[nodiscard]] double part_work_imbalance(std::span<const double> part_rows, std::span<const std::size_t> part_contacts);
 
 /// row_work plus kContactWorkPerVertex for every contact at the row's vertex (`contacts_at`, one
 /// count a vertex: a re-cut by contact load balances both).
