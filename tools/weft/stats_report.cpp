@@ -85,6 +85,7 @@ RunSummary summarize(std::span<const StepStats> frames) {
         sc.frozen_vertices += c.frozen_vertices;
         sc.impact_work_spent += c.impact_work_spent;
         sc.unresolved_substeps += c.unresolved_substeps;
+        sc.ejected_vertices += c.ejected_vertices;
         sc.truncated_vertices += c.truncated_vertices;
         sc.redetections += c.redetections;
         sc.bound_fallbacks += c.bound_fallbacks;
@@ -202,6 +203,11 @@ std::vector<std::string> run_warnings(const RunContext& context, const RunSummar
                                  " frames, at most " + std::to_string(c.collider_intersections_max) + " pairs)"
                            : ""));
     }
+    if (c.ejected_vertices > 0) {
+        out.push_back(std::to_string(c.ejected_vertices) +
+                      " cloth vertices were found inside a closed mesh collider and moved out (they got in past the "
+                      "contacts and the CCD: a thicker collision.thickness or more substeps keep them out)");
+    }
     if (c.rigid_zones > 0 || c.frozen_vertices > 0) {
         out.push_back("impact-zone fallbacks used: " + std::to_string(c.rigid_zones) + " rigid zones, " +
                       std::to_string(c.frozen_vertices) + " frozen vertices (the motion there is damped)");
@@ -289,6 +295,7 @@ void write_summary_fields(JsonWriter& json, const RunContext& c, const RunSummar
     json.field("rigid_zones", col.rigid_zones).field("frozen_vertices", col.frozen_vertices);
     json.field("impact_work_spent", col.impact_work_spent);
     json.field("unresolved_substeps", col.unresolved_substeps);
+    json.field("ejected_vertices", col.ejected_vertices);
     json.field("truncated_vertices", col.truncated_vertices).field("redetections", col.redetections);
     json.field("bound_fallbacks", col.bound_fallbacks).field("query_radius_max", col.query_radius_max);
     json.field("uncullings", col.uncullings).field("buffer_growths", col.buffer_growths);
@@ -415,7 +422,10 @@ void print_run_summary(std::ostream& out, const RunContext& c, const RunSummary&
             << " rounds per substep; fallbacks: " << col.rigid_zones << " rigid, " << col.frozen_vertices
             << " frozen"
             << (col.impact_work_spent > 0 ? " (work cap spent in " + std::to_string(col.impact_work_spent) + " substeps)" : std::string())
-            << "; unresolved substeps " << col.unresolved_substeps << "\n";
+            << "; unresolved substeps " << col.unresolved_substeps
+            << (col.ejected_vertices > 0 ? "; moved out of closed colliders " + std::to_string(col.ejected_vertices)
+                                         : std::string())
+            << "\n";
         if (col.query_radius_max > 0.0)
             out << "  offset bounds  " << col.truncated_vertices << " vertex moves truncated, " << col.redetections
                 << " detection reruns, " << col.bound_fallbacks << " substeps sent to the CCD fallback, "

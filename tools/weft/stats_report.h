@@ -82,6 +82,7 @@ struct RunSummary {
         long long rigid_zones = 0, frozen_vertices = 0;
         long long impact_work_spent = 0;  ///< substeps whose projections spent collision.max_impact_work
         long long unresolved_substeps = 0;
+        long long ejected_vertices = 0;  ///< cloth vertices moved out of a closed mesh collider (cpu backend)
         /// Offset mode (CollisionStats): truncated vertex moves, detection reruns, CCD fallbacks and
         /// the largest query radius (m).
         long long truncated_vertices = 0, redetections = 0, bound_fallbacks = 0, uncullings = 0;

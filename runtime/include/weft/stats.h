@@ -56,6 +56,10 @@ struct CollisionStats {
     /// contact that began within the substep) and were put back onto its surface (swept_collider.h).
     int collider_overshoots = 0;
     int unresolved_substeps = 0;        ///< substeps that ended with a collision still detected (must be 0)
+    /// Cloth vertices found inside a closed piece of a mesh collider at a substep's start and moved
+    /// just outside its nearest face (cpu backend; summed over the substeps). Should stay 0: a vertex
+    /// inside got there past the contacts and the CCD, and counting it says so.
+    int ejected_vertices = 0;
     /// Offset mode (CollisionSettings::mode): free cloth vertices whose move the bounds shortened,
     /// summed over the updates of the step; detection reruns; substeps sent to the CCD and impact-zone
     /// fallback because a prescribed move (pin, mesh collider, fast collider) broke a bound; and the

@@ -34,6 +34,7 @@ void CpuCollisions<T>::build(const FlatModel& flat, const Model& model) {
             collision::build_patch_hierarchy(rest, g.triangles, g.edges, g.triangle_group));
         front_ = std::make_unique<collision::NormalConeFront>(*hierarchy_);
     }
+    closed_ = collision::find_closed_pieces(g);
     x0_.resize(g.vertex_count());
     x1_.resize(g.vertex_count());
     kinematic_x1_t_.resize(g.kinematic_vertices());
@@ -65,8 +66,8 @@ collision::ProximityInput CpuCollisions<T>::proximity_input(const CollisionSetti
 }
 
 template <typename T>
-void CpuCollisions<T>::begin_substep(const Model& model, double t, double h, const std::vector<V3>& x0,
-                                     const std::vector<V3>& v0, const std::vector<V3>& dv_previous, StepStats& stats) {
+std::size_t CpuCollisions<T>::begin_substep(const Model& model, double t, double h, std::vector<V3>& x0, std::vector<V3>& v0,
+                                            const std::vector<V3>& dv_previous, StepStats& stats) {
     auto clock = Clock::now();
     const CollisionSettings& settings = model.settings.collision;
     const collision::CollisionGeometry& g = geometry_;
@@ -78,6 +79,23 @@ void CpuCollisions<T>::begin_substep(const Model& model, double t, double h, con
     for (std::size_t j = 0; j < g.kinematic_vertices(); ++j) {
         kinematic_x1_t_[j] = kinematic_x1[j].template cast<T>();
         kinematic_v_t_[j] = ((kinematic_x1[j] - kinematic_x0[j]) / h).template cast<T>();
+    }
+    // Cloth inside a closed piece of a mesh collider: just outside the nearest point of its surface,
+    // with the surface's velocity there plus its own along the surface (collision/closed_colliders.h).
+    std::size_t ejected = 0;
+    if (!closed_.empty()) {
+        for (std::size_t i = 0; i < n; ++i) x0_[i] = x0[i].template cast<double>();
+        std::vector<Vec3d> kinematic_velocity(g.kinematic_vertices());
+        for (std::size_t j = 0; j < kinematic_velocity.size(); ++j) kinematic_velocity[j] = (kinematic_x1[j] - kinematic_x0[j]) / h;
+        for (const collision::Ejection& e : collision::find_ejections(g, closed_, x0_, kinematic_velocity, g.gap(settings))) {
+            Vec3d relative = v0[e.vertex].template cast<double>() - e.surface_velocity;
+            const double into = math::dot(relative, e.normal);
+            if (into < 0.0) relative -= into * e.normal;
+            x0[e.vertex] = e.position.template cast<T>();
+            v0[e.vertex] = (e.surface_velocity + relative).template cast<T>();
+            ++ejected;
+        }
+        stats.collision.ejected_vertices += static_cast<int>(ejected);
     }
     // The predicted end of the substep: x0 + h·v0 for the cloth, the pose at t + h for colliders.
     parallel_chunks(n, [&](std::size_t lo, std::size_t hi) {
@@ -119,7 +137,7 @@ void CpuCollisions<T>::begin_substep(const Model& model, double t, double h, con
         remainder_.assign(n, 0.0);
         stats.ms(Stage::BroadPhase) += ms_since(clock);
         detect_offset(model, h, x1_, stats);
-        return;
+        return ejected;
     }
 
     collision::BroadPhaseInput in;
@@ -146,6 +164,7 @@ void CpuCollisions<T>::begin_substep(const Model& model, double t, double h, con
     terms_.set(contacts_, n);
     stats.collision.contacts = static_cast<int>(contacts_.size());
     stats.ms(Stage::NarrowPhase) += ms_since(clock);
+    return ejected;
 }
 
 template <typename T>

@@ -10,6 +10,7 @@
 #include <vector>
 
 #include "collision/broad_phase.h"
+#include "collision/closed_colliders.h"
 #include "collision/displacement_bounds.h"
 #include "weft/backend/collision_geometry.h"
 #include "collision/impact_zones.h"
@@ -40,8 +41,11 @@ public:
     /// colliders' poses at t and t + h, and hands them to `terms()`.
     /// `dv_previous` (the last substep's velocity change per cloth vertex) sharpens the offset mode's
     /// prediction of each vertex's move, which sizes its query radius.
-    void begin_substep(const Model& model, double t, double h, const std::vector<V3>& x0, const std::vector<V3>& v0,
-                       const std::vector<V3>& dv_previous, StepStats& stats);
+    /// First, cloth vertices inside a closed piece of a mesh collider are moved just outside it in x0
+    /// and v0 (collision/closed_colliders.h); returns how many (the caller's copies of the state are
+    /// then stale), also counted in stats.collision.ejected_vertices.
+    std::size_t begin_substep(const Model& model, double t, double h, std::vector<V3>& x0, std::vector<V3>& v0,
+                              const std::vector<V3>& dv_previous, StepStats& stats);
     /// The contact springs of the current substep (for the solve).
     [[nodiscard]] ContactTerms<T>& terms() { return terms_; }
     [[nodiscard]] const ContactTerms<T>& terms() const { return terms_; }
@@ -78,6 +82,7 @@ public:
 private:
     bool active_ = false;
     collision::CollisionGeometry geometry_;
+    std::vector<collision::ClosedPiece> closed_;  // the mesh colliders' closed pieces (an inside to eject from)
     // Per substep.
     std::vector<Vec3d> x0_, x1_;  // collision vertices (kinematic ones at the tail) at t and t + h
     std::vector<V3> kinematic_x1_t_, kinematic_v_t_;

@@ -308,7 +308,11 @@ void CpuSolver<T>::substep(const Model& model, double t, double h_double, StepSt
     stats.ms(Stage::Kinematics) += ms_since(clock);
     if (collisions_.stale(model)) collisions_.build(*flat_, model);  // self-collision toggled live
     const bool collide = collisions_.active();
-    if (collide) collisions_.begin_substep(model, t, h_double, x0_, v0_, dv_previous_, stats);
+    if (collide && collisions_.begin_substep(model, t, h_double, x0_, v0_, dv_previous_, stats) > 0) {
+        x_ = x0_;  // vertices inside a closed mesh collider were moved out: the substep starts there
+        v_ = v0_;
+        vk_ = v_;
+    }
     ContactTerms<T>* contacts = collide ? &collisions_.terms() : has_test_contacts_ ? &test_contacts_ : nullptr;
     const std::span<const V3> kinematic_x1 = collide ? collisions_.kinematic_x1() : std::span<const V3>(test_kinematic_x1_);
     const std::span<const V3> kinematic_v = collide ? collisions_.kinematic_v() : std::span<const V3>(test_kinematic_v_);
