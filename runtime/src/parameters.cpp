@@ -227,8 +227,9 @@ constexpr Parameter kTable[] = {
             "`BackendOptions::gpus` take precedence when non-zero",
      .effect = E::Rebuild, .access = field<&WorldDesc::solver, &SolverSettings::gpus>()},
     {.section = "solver", .name = "gpu_rebalance", .type = T::Real, .range = R{0.0, 100.0},
-     .doc = "several GPUs with cloth collisions: re-cut the parts by rows and contacts when the busiest holds more "
-            "than this multiple of the mean part's contacts for 3 detections in a row (a rebuild of the parts); 0 never",
+     .doc = "several GPUs with cloth collisions: re-cut the parts by rows and contacts when the busiest part's "
+            "work (its rows' matrix blocks plus its contacts) is more than this multiple of the mean part's for 3 "
+            "detections in a row (a rebuild of the parts); 0 never",
      .label = "GPU rebalance", .panel = "solver",
      .access = field<&WorldDesc::solver, &SolverSettings::gpu_rebalance>()},
 

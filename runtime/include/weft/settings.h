@@ -119,7 +119,8 @@ struct SolverSettings {
     /// BackendOptions::gpus take precedence when non-zero. The CPU backend ignores it.
     int gpus = 1;
     /// Several GPUs with cloth collisions: re-cut the parts by rows and contacts when the busiest
-    /// part holds more than this multiple of the mean part's contacts for a few detections in a
+    /// part's work (its rows' matrix blocks plus its contacts, weft/backend/vertex_partition.h
+    /// part_work_imbalance) is more than this multiple of the mean part's for a few detections in a
     /// row (weft/backend/recut_policy.h; docs/multi-gpu.md, "Re-cutting by contact load"). A re-cut
     /// rebuilds the parts. 0 never re-cuts.
     double gpu_rebalance = 1.1;
