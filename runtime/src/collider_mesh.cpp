@@ -20,7 +20,9 @@ std::vector<JointPose> collider_poses(const ColliderDesc& c, double t) {
     std::vector<JointPose> poses = play(c.clip, c.clip_speed, c.clip_start, c.clip_loop);
     if (c.clip_fade > 0.0 && t < c.fade_start + c.clip_fade) {
         const double s = t > c.fade_start ? (t - c.fade_start) / c.clip_fade : 0.0;
-        poses = blend_poses(play(c.fade_from_clip, c.fade_from_speed, c.fade_from_start, c.fade_from_loop), poses, s);
+        poses = c.fade_from_pose.empty()
+                    ? blend_poses(play(c.fade_from_clip, c.fade_from_speed, c.fade_from_start, c.fade_from_loop), poses, s)
+                    : blend_poses(c.fade_from_pose, poses, s);
     }
     return poses;
 }
@@ -37,6 +39,13 @@ void switch_clip(ColliderDesc& c, const std::string& clip, double t, double fade
         throw Error("collider '" + c.name + "': switch_clip at speed 0 plays the clip's first pose, not " +
                     std::to_string(clip_time_now) + " s into it");
     if (c.skin != nullptr && !clip.empty()) (void)c.skin->clip(clip);  // names the clips there are
+    // Interrupting a fade: what shows at t is a blend of two clips, which neither clip alone carries
+    // on from (the rigged runner's legs jumped 0.27 m when it stopped during the fade from its jump
+    // into the run). The new fade starts from that blend, held still.
+    if (c.skin != nullptr && c.clip_fade > 0.0 && t < c.fade_start + c.clip_fade)
+        c.fade_from_pose = collider_poses(c, t);
+    else
+        c.fade_from_pose.clear();
     c.fade_from_clip = c.clip;
     c.fade_from_speed = c.clip_speed;
     c.fade_from_loop = c.clip_loop;

@@ -91,6 +91,9 @@ std::size_t World::add_collider(const ColliderDesc& collider) {
             throw Error(where + ": clip_fade " + std::to_string(c.clip_fade) + ", fade_from_speed " +
                         std::to_string(c.fade_from_speed) + " (expected a finite fade >= 0 s, speed >= 0 and finite times)");
         if (!c.fade_from_clip.empty()) (void)c.skin->clip(c.fade_from_clip);
+        if (!c.fade_from_pose.empty() && c.fade_from_pose.size() != c.skin->joints.size())
+            throw Error(where + ": fade_from_pose has " + std::to_string(c.fade_from_pose.size()) + " joint poses for a skin of " +
+                        std::to_string(c.skin->joints.size()) + " joints");
     }
     model_->colliders.push_back(std::move(c));
     ++model_->topology_version;

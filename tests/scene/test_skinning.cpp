@@ -204,6 +204,35 @@ TEST(Skinning, ASwitchCrossFadesFromTheOldPoseAndASpeedChangeKeepsTheClipTime) {
     EXPECT_NO_THROW((void)world.add_collider(bad));
 }
 
+// A switch while a fade is still running (the rigged runner stopping in the middle of the fade
+// from its jump into the run): what shows is a blend of two poses, and the new fade must start
+// from it. Fading from the newer clip alone jumped the runner's legs 0.27 m in one step.
+TEST(Skinning, ASwitchDuringAFadeStartsFromTheBlendShown) {
+    ColliderDesc c = waving_bar();
+    switch_clip(c, "", 0.5, 0.4);                 // the wave fading into the bind pose until 0.9 s
+    const Vec3d blended = hand_at(c, 0.7);        // halfway: the blend of the two
+    switch_clip(c, "wave", 0.7, 0.2, false, 1.0, 0.7);  // back to the wave where it would be, mid-fade
+    expect_near(hand_at(c, 0.7), blended, "the new fade starts where the old one was");
+    ASSERT_EQ(c.fade_from_pose.size(), c.skin->joints.size());
+    double largest = 0.0;
+    for (double t = 0.6; t < 1.0; t += 1e-3) largest = std::max(largest, math::length(hand_at(c, t + 1e-3) - hand_at(c, t)));
+    EXPECT_LT(largest, 0.02) << "continuous through both switches";
+    expect_near(hand_at(c, 0.95), hand_at(waving_bar(), 0.95), "the fade done: the wave itself");
+    // Without the held blend, fading from the bind pose alone would have jumped the hand.
+    ColliderDesc from_bind = c;
+    from_bind.fade_from_pose.clear();
+    EXPECT_GT(math::length(hand_at(from_bind, 0.7) - blended), 0.3);
+    // After a fade has ended a switch fades from the clip itself again (nothing held).
+    switch_clip(c, "", 2.0, 0.2);
+    EXPECT_TRUE(c.fade_from_pose.empty());
+    // The world refuses a held pose that does not fit the skin.
+    World world;
+    ColliderDesc bad = waving_bar();
+    bad.clip_fade = 0.2;
+    bad.fade_from_pose.resize(bad.skin->joints.size() + 1);
+    EXPECT_THROW((void)world.add_collider(bad), Error);
+}
+
 #if WEFT_TEST_HAVE_ASSETS
 /// `skin`'s vertices at time `t` of clip `clip` (played once), in its own frame.
 void skin_at(const SkinnedMesh& skin, const std::string& clip, double t, std::vector<Vec3d>& out) {

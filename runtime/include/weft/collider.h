@@ -55,16 +55,21 @@ struct ColliderDesc {
     double fade_from_speed = 1.0;
     bool fade_from_loop = true;
     double fade_from_start = 0.0;
+    /// When not empty (one local pose a joint of the skin), the fade starts from this pose, held
+    /// still, instead of `fade_from_clip`: switch_clip sets it when it interrupts a fade, since
+    /// what showed then was a blend of two clips, and fading from either alone would jump the body.
+    std::vector<JointPose> fade_from_pose;
     [[nodiscard]] bool is_analytic() const { return shape != ColliderShape::Mesh; }
+    /// Whether the collider fades out of something other than the bind pose.
+    [[nodiscard]] bool fades_from_motion() const { return clip_fade > 0.0 && (!fade_from_clip.empty() || !fade_from_pose.empty()); }
     /// Whether the collider can move: its motion is not static, or its skin plays a clip.
-    [[nodiscard]] bool moves() const {
-        return !motion.is_static() || (skin != nullptr && (!clip.empty() || (clip_fade > 0.0 && !fade_from_clip.empty())));
-    }
+    [[nodiscard]] bool moves() const { return !motion.is_static() || (skin != nullptr && (!clip.empty() || fades_from_motion())); }
 };
 
 /// Switches `collider`'s clip at simulated time `t` (s) to `clip` (empty: the bind pose), whose
 /// time at t is `clip_time_now` (s; 0 plays it from its start), cross-fading from what played until
-/// now over `fade` seconds (0: a cut). What played before keeps playing under the fade. Throws
+/// now over `fade` seconds (0: a cut). What played before keeps playing under the fade; a switch
+/// during a fade fades from the blend shown at t, held still (`fade_from_pose`). Throws
 /// weft::Error for an unknown clip, a negative fade or speed, or a time into the clip at speed 0.
 void switch_clip(ColliderDesc& collider, const std::string& clip, double t, double fade, bool loop = true,
                  double speed = 1.0, double clip_time_now = 0.0);
@@ -81,7 +86,7 @@ void collider_mesh_positions(const ColliderDesc& collider, double t, std::span<V
 /// Whether a mesh collider is bent by a clip (it has a skin and plays a clip, or fades out of one);
 /// otherwise its mesh moves rigidly with its motion.
 [[nodiscard]] inline bool plays_clip(const ColliderDesc& c) {
-    return c.skin != nullptr && (!c.clip.empty() || (c.clip_fade > 0.0 && !c.fade_from_clip.empty()));
+    return c.skin != nullptr && (!c.clip.empty() || c.fades_from_motion());
 }
 
 /// The clip time of `collider` at simulated time `t` (s): clip_speed·max(0, t − clip_start).
