@@ -379,7 +379,7 @@ int play(const Options& options) {
     // Hitches: the slowest cloth step, and the collision work that makes one.
     double slowest_ms = 0.0;
     int slowest_frame = 0, most_zone_rounds = 0, hitches = 0;
-    long long frozen_vertices = 0, unresolved = 0, moved_out = 0;
+    long long frozen_vertices = 0, unresolved = 0, moved_out = 0, body_jumps = 0;
     Clock::time_point last = Clock::now();
     weft::render::RenderFrame previous;
     weft::render::Image last_picture;  // --offscreen: the frame just drawn
@@ -444,6 +444,7 @@ int play(const Options& options) {
         frozen_vertices += stats.collision.frozen_vertices;
         unresolved += stats.collision.unresolved_substeps;
         moved_out += stats.collision.ejected_vertices;
+        body_jumps += stats.collision.collider_jumps;
         if (stats.step_ms > 4.0 * dt * 1000.0 && ++hitches <= 5)  // a cloth step of four frames' time
             std::printf("cape_runner: frame %d: cloth step %.0f ms (impact zones %.0f, CCD %.0f, broad phase %.0f ms; %d zone "
                         "rounds, %d vertices frozen)\n",
@@ -473,8 +474,8 @@ int play(const Options& options) {
     std::printf("; CG %.0f iterations a frame, %lld solves capped\n", frame > 0 ? static_cast<double>(cg_iterations) / frame : 0.0,
                 capped_solves);
     std::printf("cape_runner: slowest cloth step %.1f ms (frame %d); collisions: at most %d impact-zone rounds in a substep, "
-                "%lld vertices frozen, %lld substeps unresolved, %lld vertices moved out of the body\n",
-                slowest_ms, slowest_frame, most_zone_rounds, frozen_vertices, unresolved, moved_out);
+                "%lld vertices frozen, %lld substeps unresolved, %lld vertices moved out of the body, %lld jumps of a body\n",
+                slowest_ms, slowest_frame, most_zone_rounds, frozen_vertices, unresolved, moved_out, body_jumps);
     std::printf("cape_runner: cape away from the shoulders in %d frames%s, intersections after %d, failed steps %d, "
                 "torn frames %lld, validation messages %d\n",
                 cape_lost, options.check ? "" : " (not checked; --check does)", intersections, failed_steps, static_cast<long long>(feed.torn_frames()), renderer.validation_messages());

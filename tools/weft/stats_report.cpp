@@ -86,6 +86,8 @@ RunSummary summarize(std::span<const StepStats> frames) {
         sc.impact_work_spent += c.impact_work_spent;
         sc.unresolved_substeps += c.unresolved_substeps;
         sc.ejected_vertices += c.ejected_vertices;
+        sc.collider_jumps += c.collider_jumps;
+        sc.collider_jump_max = std::max(sc.collider_jump_max, c.collider_jump_max);
         sc.truncated_vertices += c.truncated_vertices;
         sc.redetections += c.redetections;
         sc.bound_fallbacks += c.bound_fallbacks;
@@ -203,6 +205,12 @@ std::vector<std::string> run_warnings(const RunContext& context, const RunSummar
                                  " frames, at most " + std::to_string(c.collider_intersections_max) + " pairs)"
                            : ""));
     }
+    if (c.collider_jumps > 0) {
+        out.push_back("a mesh collider started " + std::to_string(c.collider_jumps) +
+                      " substeps away from where the last one ended it (at most " + format_fixed(1000.0 * c.collider_jump_max, 1) +
+                      " mm): it moved with no motion for the collisions to sweep (a pose or motion rewritten for times "
+                      "already stepped, or a clip switched with a jump)");
+    }
     if (c.ejected_vertices > 0) {
         out.push_back(std::to_string(c.ejected_vertices) +
                       " cloth vertices were found inside a closed mesh collider and moved out (they got in past the "
@@ -296,6 +304,7 @@ void write_summary_fields(JsonWriter& json, const RunContext& c, const RunSummar
     json.field("impact_work_spent", col.impact_work_spent);
     json.field("unresolved_substeps", col.unresolved_substeps);
     json.field("ejected_vertices", col.ejected_vertices);
+    json.field("collider_jumps", col.collider_jumps).field("collider_jump_max", col.collider_jump_max);
     json.field("truncated_vertices", col.truncated_vertices).field("redetections", col.redetections);
     json.field("bound_fallbacks", col.bound_fallbacks).field("query_radius_max", col.query_radius_max);
     json.field("uncullings", col.uncullings).field("buffer_growths", col.buffer_growths);

@@ -83,6 +83,8 @@ struct RunSummary {
         long long impact_work_spent = 0;  ///< substeps whose projections spent collision.max_impact_work
         long long unresolved_substeps = 0;
         long long ejected_vertices = 0;  ///< cloth vertices moved out of a closed mesh collider (cpu backend)
+        long long collider_jumps = 0;    ///< substeps a mesh collider started away from where it ended (cpu)
+        double collider_jump_max = 0.0;  ///< the largest such jump, m
         /// Offset mode (CollisionStats): truncated vertex moves, detection reruns, CCD fallbacks and
         /// the largest query radius (m).
         long long truncated_vertices = 0, redetections = 0, bound_fallbacks = 0, uncullings = 0;

@@ -60,6 +60,12 @@ struct CollisionStats {
     /// just outside its nearest face (cpu backend; summed over the substeps). Should stay 0: a vertex
     /// inside got there past the contacts and the CCD, and counting it says so.
     int ejected_vertices = 0;
+    /// Substeps at whose start a mesh collider was not where the last substep ended it (by more than
+    /// a tenth of the collision gap), and the largest such jump, m (cpu backend). Should stay 0: the
+    /// collider moved with no motion for the CCD to sweep (a game rewriting a pose or motion for
+    /// times already stepped, a clip switched with a jump), and cloth can end up through it.
+    int collider_jumps = 0;
+    double collider_jump_max = 0.0;
     /// Offset mode (CollisionSettings::mode): free cloth vertices whose move the bounds shortened,
     /// summed over the updates of the step; detection reruns; substeps sent to the CCD and impact-zone
     /// fallback because a prescribed move (pin, mesh collider, fast collider) broke a bound; and the

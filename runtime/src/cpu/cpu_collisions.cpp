@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <atomic>
 #include <chrono>
+#include <cmath>
 
 #include "collision/buffer_trim.h"
 #include "weft/backend/timing.h"
@@ -76,6 +77,19 @@ std::size_t CpuCollisions<T>::begin_substep(const Model& model, double t, double
     const std::span<Vec3d> kinematic_x1 = std::span<Vec3d>(x1_).subspan(n);
     g.place_kinematic(model, t, kinematic_x0);
     g.place_kinematic(model, t + h, kinematic_x1);
+    // A mesh collider that does not start this substep where it ended the last one was moved by
+    // something no substep's motion covers (a game editing its motion or pose for the past, a clip
+    // switched with a jump in its pose): the cloth can end up through it unseen. Counted, not fixed.
+    if (last_kinematic_end_.size() == kinematic_x0.size() && std::abs(last_end_time_ - t) <= 1e-9 * std::max(1.0, std::abs(t))) {
+        double jump = 0.0;
+        for (std::size_t j = 0; j < kinematic_x0.size(); ++j) jump = std::max(jump, math::length(kinematic_x0[j] - last_kinematic_end_[j]));
+        if (jump > 0.1 * g.gap(settings)) {
+            ++stats.collision.collider_jumps;
+            stats.collision.collider_jump_max = std::max(stats.collision.collider_jump_max, jump);
+        }
+    }
+    last_kinematic_end_.assign(kinematic_x1.begin(), kinematic_x1.end());
+    last_end_time_ = t + h;
     for (std::size_t j = 0; j < g.kinematic_vertices(); ++j) {
         kinematic_x1_t_[j] = kinematic_x1[j].template cast<T>();
         kinematic_v_t_[j] = ((kinematic_x1[j] - kinematic_x0[j]) / h).template cast<T>();

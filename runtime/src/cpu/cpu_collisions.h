@@ -86,6 +86,10 @@ private:
     // Per substep.
     std::vector<Vec3d> x0_, x1_;  // collision vertices (kinematic ones at the tail) at t and t + h
     std::vector<V3> kinematic_x1_t_, kinematic_v_t_;
+    // The mesh colliders' vertices where the last substep ended them, and when: the next substep
+    // must start them there, or they moved with no motion for the CCD to sweep (collider_jumps).
+    std::vector<Vec3d> last_kinematic_end_;
+    double last_end_time_ = -1.0;
     collision::BroadPhase broad_;
     collision::BroadPhaseResult pairs_;
     std::vector<collision::ProximityContact> contacts_;
