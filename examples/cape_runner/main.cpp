@@ -491,6 +491,8 @@ int play(const Options& options) {
 }  // namespace
 
 int main(int argc, char** argv) {
+    // Line by line even into a file or pipe: a run killed by a time limit still shows how far it got.
+    std::setvbuf(stdout, nullptr, _IOLBF, 0);
     try {
         return play(parse(argc, argv));
     } catch (const std::exception& e) {  // weft::Error and the example's own
