@@ -172,8 +172,8 @@ std::vector<Ejection> find_ejections(const CollisionGeometry& g, std::span<const
         return false;
     };
     const std::size_t n = g.cloth_vertices;
-    std::vector<std::uint8_t> found(n, 0);
-    std::vector<Ejection> out_of(n);
+    // Each chunk's finds in vertex order, then the chunks in order: only the few inside are stored.
+    std::vector<std::vector<Ejection>> found((n + kParallelChunk - 1) / kParallelChunk);
     parallel_chunks(n, [&](std::size_t lo, std::size_t hi) {
         std::vector<std::size_t> holding;
         for (std::size_t i = lo; i < hi; ++i) {
@@ -218,19 +218,18 @@ std::vector<Ejection> find_ejections(const CollisionGeometry& g, std::span<const
                 e.surface_velocity = w0 * velocity(tri.v[0]) + c.q.u * velocity(tri.v[1]) + c.q.v * velocity(tri.v[2]);
                 return e;
             };
-            out_of[i] = ejection_at(candidates.front());
+            Ejection chosen = ejection_at(candidates.front());
             for (const Candidate& c : candidates) {
                 const Ejection e = ejection_at(c);
                 if (inside_any(e.position)) continue;
-                out_of[i] = e;
+                chosen = e;
                 break;
             }
-            found[i] = 1;
+            found[lo / kParallelChunk].push_back(chosen);
         }
     });
     std::vector<Ejection> ejections;
-    for (std::size_t i = 0; i < n; ++i)
-        if (found[i] != 0) ejections.push_back(out_of[i]);
+    for (const std::vector<Ejection>& chunk : found) ejections.insert(ejections.end(), chunk.begin(), chunk.end());
     return ejections;
 }
 

@@ -99,9 +99,9 @@ std::size_t CpuCollisions<T>::begin_substep(const Model& model, double t, double
     std::size_t ejected = 0;
     if (!closed_.empty()) {
         for (std::size_t i = 0; i < n; ++i) x0_[i] = x0[i].template cast<double>();
-        std::vector<Vec3d> kinematic_velocity(g.kinematic_vertices());
-        for (std::size_t j = 0; j < kinematic_velocity.size(); ++j) kinematic_velocity[j] = (kinematic_x1[j] - kinematic_x0[j]) / h;
-        for (const collision::Ejection& e : collision::find_ejections(g, closed_, x0_, kinematic_velocity, g.gap(settings))) {
+        kinematic_velocity_.resize(g.kinematic_vertices());
+        for (std::size_t j = 0; j < kinematic_velocity_.size(); ++j) kinematic_velocity_[j] = (kinematic_x1[j] - kinematic_x0[j]) / h;
+        for (const collision::Ejection& e : collision::find_ejections(g, closed_, x0_, kinematic_velocity_, g.gap(settings))) {
             Vec3d relative = v0[e.vertex].template cast<double>() - e.surface_velocity;
             const double into = math::dot(relative, e.normal);
             if (into < 0.0) relative -= into * e.normal;

@@ -83,6 +83,7 @@ private:
     bool active_ = false;
     collision::CollisionGeometry geometry_;
     std::vector<collision::ClosedPiece> closed_;  // the mesh colliders' closed pieces (an inside to eject from)
+    std::vector<Vec3d> kinematic_velocity_;       // their velocities over the substep, for the ejections (reused)
     // Per substep.
     std::vector<Vec3d> x0_, x1_;  // collision vertices (kinematic ones at the tail) at t and t + h
     std::vector<V3> kinematic_x1_t_, kinematic_v_t_;
