@@ -40,9 +40,15 @@ static_assert(static_cast<int>(weft::collision::VertexOutcome::Untouched) == 1);
 }  // namespace
 
 // WEFT_CUDA_ZONES_TRACE=1: one line per substep in which the impact zones ran (diagnostics).
+// WEFT_CUDA_ZONE_PROJECTION=colored: every zone that fits projected by colours (projected
+// Gauss–Seidel) instead of the projected gradient; WEFT_CUDA_ZONE_COLORED_ABOVE=N: by colours only
+// zones of more than N constraints. For measuring one against the other (docs/collisions.md).
 DeviceCollisions::DeviceCollisions() {
     const char* trace = std::getenv("WEFT_CUDA_ZONES_TRACE");
     trace_zones_ = trace != nullptr && std::string(trace) == "1";
+    const char* projection = std::getenv("WEFT_CUDA_ZONE_PROJECTION");
+    colored_zones_ = projection != nullptr && std::string(projection) == "colored";
+    if (const char* above = std::getenv("WEFT_CUDA_ZONE_COLORED_ABOVE")) colored_above_ = std::strtoul(above, nullptr, 10);
 }
 DeviceCollisions::~DeviceCollisions() = default;
 
@@ -414,6 +420,8 @@ bool DeviceCollisions::resolve(const Model& model, double h, float* x, float* v,
     in.refresh_broad_phase = [&](int, collision::GpuBroadPhaseInput& bp) { cull(model, bp, stream); };
     if (settings.impact_tolerance > 0.0) in.tolerance_ratio = settings.impact_tolerance;
     if (settings.max_impact_sweeps > 0) in.max_sweeps = settings.max_impact_sweeps;
+    if (colored_zones_ || colored_above_ >= 0) in.colored_zone_vertices = collision::kColoredZoneVertices;
+    if (colored_above_ >= 0) in.colored_zone_constraints = static_cast<std::uint32_t>(colored_above_);
     const weft::collision::ImpactZoneReport report = zones_.resolve(in, stream);
     weft::collision::add_to_stats(report, stats);
     count_buffer_growths(stats);

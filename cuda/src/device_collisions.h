@@ -171,6 +171,8 @@ private:
     std::uint32_t vertices_ = 0;        // n + kinematic: the component stride of the position arrays
     std::uint32_t triangle_count_ = 0, edge_count_ = 0;
     bool trace_zones_ = false;
+    bool colored_zones_ = false;        // WEFT_CUDA_ZONE_PROJECTION=colored
+    long colored_above_ = -1;           // WEFT_CUDA_ZONE_COLORED_ABOVE (-1: the default)
     std::uint32_t share_index_ = 0, share_count_ = 1;  // set_share
 
     MemoryLedger ledger_;

@@ -327,7 +327,8 @@ template <unsigned Threads>
 __global__ void __launch_bounds__(Threads)
     project_kernel(ZoneLists z, Constraints c, const float* x_hat, const float* inverse_mass, float* x1,
                    std::uint32_t n, double delta, double tol, int max_sweeps, std::uint32_t giant,
-                   std::uint8_t* action, std::uint8_t* outcome, GpuImpactZones::Counters* counters) {
+                   std::uint32_t colored_vertices, std::uint32_t colored_constraints, std::uint8_t* action,
+                   std::uint8_t* outcome, GpuImpactZones::Counters* counters) {
     using Reduce = cub::BlockReduce<MaxSum, Threads>;
     __shared__ typename Reduce::TempStorage storage;
     __shared__ MaxSum total;
@@ -335,6 +336,9 @@ __global__ void __launch_bounds__(Threads)
     const std::uint32_t root = z.zone_label[zone];
     if (action[root] != kProject) return;
     const std::uint32_t cb = z.coffset[zone], ce = z.coffset[zone + 1];
+    // Zones of at most `colored_vertices` vertices and more than `colored_constraints` constraints
+    // are the coloured Gauss–Seidel's.
+    if (z.voffset[zone + 1] - z.voffset[zone] <= colored_vertices && ce - cb > colored_constraints) return;
     // Each zone is projected by the kernel of its size class (see kLargeZoneConstraints); zones of
     // more than `giant` constraints by the grid-wide kernels instead (project_giant_zone).
     if (ce - cb > giant) return;
@@ -722,6 +726,9 @@ std::size_t GpuImpactZones::memory_bytes() const {
          zone_ccount_.bytes() + zone_coffset_.bytes() + zone_label2_.bytes() + zone_vcount_.bytes() +
          zone_voffset_.bytes() + hit_free_.bytes() + carry_.bytes() + temp_.bytes() + counters_.bytes() +
          giant_scratch_.bytes();
+    b += zone_slot_.bytes() + color_claim_.bytes() + color_.bytes() + color_order_.bytes() + color_start_.bytes() +
+         packed_slot_.bytes() + packed_weight_.bytes() + packed_move_.bytes() + packed_normal_.bytes() +
+         packed_offset_.bytes() + packed_inverse_diagonal_.bytes() + packed_lambda_.bytes();
     return b;
 }
 
@@ -729,7 +736,8 @@ void GpuImpactZones::reserve_vertices(std::uint32_t count) {
     if (vertices_ >= count && x_hat_.size() > 0) return;
     vertices_ = std::max<std::uint32_t>(count, 1);
     grow(x_hat_, 3 * static_cast<std::size_t>(vertices_));
-    for (DeviceArray<std::uint32_t>* a : {&parent_, &label_, &incidence_count_, &flags_, &rigid_size_, &claim_})
+    for (DeviceArray<std::uint32_t>* a :
+         {&parent_, &label_, &incidence_count_, &flags_, &rigid_size_, &claim_, &zone_slot_, &color_claim_})
         grow(*a, vertices_);
     for (DeviceArray<std::uint8_t>* a : {&member_, &outcome_, &action_}) grow(*a, vertices_);
     grow(counters_, 1);
@@ -746,6 +754,12 @@ void GpuImpactZones::reserve_constraints(std::size_t count, cudaStream_t stream)
     grow_keeping(momentum_, cap, keep, stream);
     grow(previous_, cap);
     grow(c_scale_, cap);
+    grow(color_, cap);
+    grow(color_order_, cap);
+    grow(color_start_, 2 * cap + 1);  // a zone's colours are at most its constraints, plus one end each
+    grow(packed_slot_, cap);
+    for (DeviceArray<float4>* a : {&packed_weight_, &packed_move_, &packed_normal_}) grow(*a, cap);
+    for (DeviceArray<double>* a : {&packed_offset_, &packed_inverse_diagonal_, &packed_lambda_}) grow(*a, cap);
     for (int i = 0; i < 2; ++i) {
         grow(slot_key_[i], 4 * cap);
         grow(slot_value_[i], 4 * cap);
@@ -902,6 +916,44 @@ ZoneLists zone_lists(const DeviceArray<std::uint32_t>& zone_label, const DeviceA
 
 }  // namespace
 
+ColoredZoneProjection GpuImpactZones::colored_projection(const GpuImpactZoneInput& in) {
+    ColoredZoneProjection p;
+    p.zone_label = zone_label_.get();
+    p.coffset = zone_coffset_.get();
+    p.cvalue = cvalue_sorted_;
+    p.voffset = zone_voffset_.get();
+    p.vvalue = vvalue_sorted_;
+    p.unique_vertex = unique_vertex_.get();
+    p.vertex = c_vertex_.get();
+    p.weight = c_weight_.get();
+    p.normal = c_normal_.get();
+    p.lambda = lambda_.get();
+    p.x_hat = x_hat_.get();
+    p.inverse_mass = in.inverse_mass;
+    p.x1 = in.x1;
+    p.n = in.vertex_count;
+    p.action = action_.get();
+    p.outcome = outcome_.get();
+    p.project_code = kProject;
+    p.done_code = kNone;
+    p.projected_code = kProjected;
+    p.sweeps = &counters_.get()->sweeps;
+    p.unconverged = &counters_.get()->unconverged;
+    p.zone_slot = zone_slot_.get();
+    p.claim = color_claim_.get();
+    p.color = color_.get();
+    p.color_order = color_order_.get();
+    p.color_start = color_start_.get();
+    p.packed_slot = packed_slot_.get();
+    p.packed_weight = packed_weight_.get();
+    p.packed_move = packed_move_.get();
+    p.packed_normal = packed_normal_.get();
+    p.packed_offset = packed_offset_.get();
+    p.packed_inverse_diagonal = packed_inverse_diagonal_.get();
+    p.packed_lambda = packed_lambda_.get();
+    return p;
+}
+
 void GpuImpactZones::project_giant_zones(const GpuImpactZoneInput& in, double tol, cudaStream_t stream) {
     // No zone can be giant while all the constraints together are not: no read-back in that case.
     if (constraints_ <= in.giant_zone_constraints) return;
@@ -910,14 +962,18 @@ void GpuImpactZones::project_giant_zones(const GpuImpactZoneInput& in, double to
     WEFT_CUDA_CHECK(cudaMemcpyAsync(host_coffset_.data(), zone_coffset_.get(), (zones_ + 1) * sizeof(std::uint32_t),
                                     cudaMemcpyDeviceToHost, stream));
     WEFT_CUDA_CHECK(cudaStreamSynchronize(stream));
-    std::vector<std::uint32_t> giant;
-    for (std::uint32_t z = 0; z < zones_; ++z)
-        if (host_coffset_[z + 1] - host_coffset_[z] > in.giant_zone_constraints) giant.push_back(z);
-    if (giant.empty()) return;
     host_voffset_.resize(zones_ + 1);
-    host_label_.resize(zones_);
     WEFT_CUDA_CHECK(cudaMemcpyAsync(host_voffset_.data(), zone_voffset_.get(), (zones_ + 1) * sizeof(std::uint32_t),
                                     cudaMemcpyDeviceToHost, stream));
+    WEFT_CUDA_CHECK(cudaStreamSynchronize(stream));
+    std::vector<std::uint32_t> giant;
+    for (std::uint32_t z = 0; z < zones_; ++z)
+        if (host_coffset_[z + 1] - host_coffset_[z] > in.giant_zone_constraints &&
+            (host_voffset_[z + 1] - host_voffset_[z] > in.colored_zone_vertices ||
+             host_coffset_[z + 1] - host_coffset_[z] <= in.colored_zone_constraints))  // not the coloured projection's
+            giant.push_back(z);
+    if (giant.empty()) return;
+    host_label_.resize(zones_);
     WEFT_CUDA_CHECK(cudaMemcpyAsync(host_label_.data(), zone_label_.get(), zones_ * sizeof(std::uint32_t),
                                     cudaMemcpyDeviceToHost, stream));
     std::vector<std::uint8_t> dirty(giant.size());
@@ -1099,6 +1155,9 @@ weft::collision::ImpactZoneReport GpuImpactZones::resolve(const GpuImpactZoneInp
                     "giant_zone_constraints ≥ 1");
     if (!std::isfinite(in.tolerance_ratio) || !(in.tolerance_ratio > 0.0))
         throw Error("GPU impact zones: tolerance_ratio must be finite and > 0");
+    if (in.colored_zone_vertices > kColoredZoneVertices)
+        throw Error("GPU impact zones: colored_zone_vertices must be at most " + std::to_string(kColoredZoneVertices) +
+                    " (got " + std::to_string(in.colored_zone_vertices) + ")");
     if (in.vertex_count >= kInvalid) throw Error("GPU impact zones: more than 2^32 − 2 vertices");
 
     weft::collision::ImpactZoneReport report;
@@ -1130,13 +1189,16 @@ weft::collision::ImpactZoneReport GpuImpactZones::resolve(const GpuImpactZoneInp
         WEFT_CUDA_CHECK_LAUNCH("impact zones: mark");
         const Constraints c{c_vertex_.get(), c_weight_.get(), c_normal_.get(), c_scale_.get(),
                             lambda_.get(),   momentum_.get(), previous_.get()};
-        const std::uint32_t giant = in.giant_zone_constraints;
+        const std::uint32_t giant = in.giant_zone_constraints, colored = in.colored_zone_vertices;
+        launch_colored_zone_projection(colored_projection(in), zones_, colored, in.colored_zone_constraints, in.thickness,
+                                       tol, in.max_sweeps, stream);
         project_kernel<kLargeZoneThreads><<<zones_, kLargeZoneThreads, 0, stream>>>(
-            z, c, x_hat_.get(), in.inverse_mass, in.x1, n, in.thickness, tol, in.max_sweeps, giant, action_.get(),
-            outcome_.get(), counters_.get());
+            z, c, x_hat_.get(), in.inverse_mass, in.x1, n, in.thickness, tol, in.max_sweeps, giant, colored,
+            in.colored_zone_constraints, action_.get(), outcome_.get(), counters_.get());
         WEFT_CUDA_CHECK_LAUNCH("impact zones: project (large zones)");
         project_kernel<kZoneThreads><<<zones_, kZoneThreads, 0, stream>>>(z, c, x_hat_.get(), in.inverse_mass, in.x1,
                                                                           n, in.thickness, tol, in.max_sweeps, giant,
+                                                                          colored, in.colored_zone_constraints,
                                                                           action_.get(), outcome_.get(), counters_.get());
         WEFT_CUDA_CHECK_LAUNCH("impact zones: project");
         project_giant_zones(in, tol, stream);

@@ -43,6 +43,7 @@
 
 #include "collision/broad_phase_gpu.h"
 #include "collision/ccd_gpu.h"
+#include "collision/colored_zone_projection.h"
 #include "weft/backend/impact_zone_report.h"
 #include "device_array.h"
 
@@ -84,6 +85,16 @@ struct GpuImpactZoneInput {
     /// each iteration, ~4 launches) instead of one thread block each, ≥ 1. One 1024-thread block
     /// takes ~70 µs an iteration on 16K constraints (H200), the grid path a few launch latencies.
     std::uint32_t giant_zone_constraints = 4096;
+    /// Zones of at most colored_zone_vertices vertices (≤ kColoredZoneVertices) and more than
+    /// colored_zone_constraints constraints are projected by projected Gauss–Seidel over colours of
+    /// their constraints (collision/colored_zone_projection.h), the CPU's method, one block a zone;
+    /// the others by the projected gradient above. Not the default: Gauss–Seidel needs far fewer
+    /// rounds on stacked contact (the game prototype's skirt with its rigged runner: 3.7 rounds a
+    /// substep against 12.9), but a sweep is a barrier a colour, and on the zones the gradient
+    /// solves it is 15–25× slower (docs/results.md, measured on an H200). 0 vertices (the default):
+    /// the projected gradient for every zone.
+    std::uint32_t colored_zone_vertices = 0;
+    std::uint32_t colored_zone_constraints = 0;
     /// Optional: called before each detection with its index and the broad-phase input about to be
     /// used, to attach filters that depend on the motion (normal-cone patch ids over x0 → x1).
     std::function<void(int detection, GpuBroadPhaseInput& input)> refresh_broad_phase;
@@ -139,7 +150,10 @@ private:
     const Counters& read_counters(cudaStream_t stream);
     void fallbacks(const GpuImpactZoneInput& in, std::uint32_t hits, weft::collision::ImpactZoneReport& report,
                    cudaStream_t stream);
-    /// Projects the zones of more than in.giant_zone_constraints constraints that this round marked.
+    /// The coloured projection's view of this call's zones, constraints and scratch.
+    ColoredZoneProjection colored_projection(const GpuImpactZoneInput& in);
+    /// Projects the zones of more than in.giant_zone_constraints constraints (and more vertices than
+    /// the coloured projection takes) that this round marked.
     void project_giant_zones(const GpuImpactZoneInput& in, double tol, cudaStream_t stream);
 
     GpuBroadPhase broad_;
@@ -172,6 +186,12 @@ private:
     DeviceArray<std::uint32_t> vertex_group_;  // fallbacks' whole-cloth freeze: each vertex's group
     DeviceArray<std::uint8_t> hit_group_;      // and the groups the round's hits touch
     DeviceArray<float> carry_;            // fallbacks, per hit: the displacement it carries frozen cloth by
+    // The coloured projection's scratch (collision/colored_zone_projection.h).
+    DeviceArray<std::uint32_t> zone_slot_, color_claim_;                // per vertex
+    DeviceArray<std::uint32_t> color_, color_order_, color_start_;      // per constraint (+ zones + 1)
+    DeviceArray<uint4> packed_slot_;                                    // per constraint, colour order
+    DeviceArray<float4> packed_weight_, packed_move_, packed_normal_;
+    DeviceArray<double> packed_offset_, packed_inverse_diagonal_, packed_lambda_;
     // Scratch.
     DeviceArray<unsigned char> temp_;
     DeviceArray<double> giant_scratch_;  // the giant-zone iteration's state and per-block partials
