@@ -260,7 +260,9 @@ int run_editor(const SceneDesc& scene, std::unique_ptr<World> world, EditorOptio
         });
         if (shown > 0) session->history().frame_ms.push(1000.0 * seconds(now - last));
         last = now;
-        // The View panel's lines and marks, from the state this frame draws; then the ImGui frame ends.
+        // The View panel: the wireframe and normals drawn by the renderer from the cloth buffer, the
+        // marks from the state this frame draws; then the ImGui frame ends.
+        frame.lines = overlay_lines(session->world(), session->display());
         draw_viewport_overlay(
             build_viewport_overlay(session->world(), window.camera(), window.width(), window.height(), session->display()));
         imgui.end_frame();

@@ -444,8 +444,8 @@ void display_rows(Session& session) {
     if (ImGui::IsItemHovered()) ImGui::SetTooltip("vertices within their contact thickness of an analytic collider");
     ImGui::SameLine();
     ImGui::Checkbox("pins", &d.pins);
-    if (d.wireframe || d.normals || d.contacts)
-        ImGui::TextDisabled("drawn from a copy of the state: zero-copy still draws the cloth");
+    if (d.contacts || d.pins)
+        ImGui::TextDisabled("contacts and pins from a copy of the state: zero-copy still draws the cloth");
 }
 
 // The scene browser: the shipped scenes by name, and any scene file by path. Opening replaces the

@@ -17,39 +17,9 @@
 namespace weft::editor {
 namespace {
 
-constexpr std::uint32_t kWire = overlay_colour(20, 20, 24, 150);
-constexpr std::uint32_t kNormal = overlay_colour(40, 110, 255, 220);
 constexpr std::uint32_t kContact = overlay_colour(255, 140, 0);
 constexpr std::uint32_t kPin = overlay_colour(30, 60, 230);
 constexpr std::uint32_t kGrab = overlay_colour(255, 220, 40);
-
-// Each edge of the triangles once (a shared edge belongs to two triangles), as (low, high) pairs.
-std::vector<std::pair<std::uint32_t, std::uint32_t>> unique_edges(const Fabric& fabric) {
-    std::vector<std::pair<std::uint32_t, std::uint32_t>> edges;
-    edges.reserve(3 * fabric.triangles().size());
-    for (const Triangle& t : fabric.triangles())
-        for (int k = 0; k < 3; ++k) {
-            const std::uint32_t a = t.v[k], b = t.v[(k + 1) % 3];
-            edges.emplace_back(std::min(a, b), std::max(a, b));
-        }
-    std::sort(edges.begin(), edges.end());
-    edges.erase(std::unique(edges.begin(), edges.end()), edges.end());
-    return edges;
-}
-
-// Area-weighted vertex normals (the sum of the incident triangles' cross products), unit length.
-std::vector<Vec3d> vertex_normals(const Fabric& fabric, const std::vector<Vec3d>& x) {
-    std::vector<Vec3d> n(x.size(), Vec3d{});
-    for (const Triangle& t : fabric.triangles()) {
-        const Vec3d c = physics::cross(x[t.v[1]] - x[t.v[0]], x[t.v[2]] - x[t.v[0]]);
-        for (const std::uint32_t v : t.v) n[v] = n[v] + c;
-    }
-    for (Vec3d& v : n) {
-        const double l = physics::length(v);
-        v = l > 0.0 ? (1.0 / l) * v : Vec3d{};
-    }
-    return n;
-}
 
 // The mean rest edge length, m: the scale of a normal's line.
 double rest_spacing(const Fabric& fabric) {
@@ -65,6 +35,20 @@ double rest_spacing(const Fabric& fabric) {
 }
 
 }  // namespace
+
+render::OverlayLines overlay_lines(const World& world, const DisplayOptions& options) {
+    render::OverlayLines lines;
+    lines.wireframe = options.wireframe;
+    if (options.normals) {
+        double spacing = 0.0;
+        for (const ClothDesc& cloth : world.model().cloths) {
+            const double s = rest_spacing(*cloth.fabric);
+            spacing = spacing == 0.0 ? s : std::min(spacing, s);
+        }
+        lines.normal_length = static_cast<float>(1.5 * (spacing > 0.0 ? spacing : 0.01));
+    }
+    return lines;
+}
 
 ViewportOverlay build_viewport_overlay(World& world, const render::Camera& camera, int width, int height,
                                        const DisplayOptions& options) {
@@ -94,17 +78,8 @@ ViewportOverlay build_viewport_overlay(World& world, const render::Camera& camer
         const ClothDesc& cloth = model.cloths[c];
         const bool grabbed = model.grab && model.grab->cloth == c;
         const bool pins = options.pins && !cloth.pins.empty();
-        if (!options.wireframe && !options.normals && !options.contacts && !pins && !grabbed) continue;
-        const Fabric& fabric = *cloth.fabric;
+        if (!options.contacts && !pins && !grabbed) continue;
         const std::vector<Vec3d> x = world.positions(c);
-        if (options.wireframe)
-            for (const auto& [a, b] : unique_edges(fabric)) out.edges += segment(x[a], x[b], kWire) ? 1 : 0;
-        if (options.normals) {
-            const std::vector<Vec3d> n = vertex_normals(fabric, x);
-            const double length = 1.5 * rest_spacing(fabric);
-            for (std::size_t v = 0; v < x.size(); ++v)
-                out.normals += segment(x[v], x[v] + length * n[v], kNormal) ? 1 : 0;
-        }
         if (options.contacts && !shapes.empty()) {
             // "Touching": within the cloth's contact thickness (the distance the solver keeps), with
             // a 10 % margin for the penalty's give.

@@ -5,9 +5,11 @@
 #ifdef VULKAN
 #define WEFT_BLOCK(b) layout(set = 0, binding = b, std140)
 #define WEFT_SAMPLER(b) layout(set = 0, binding = b)
+#define WEFT_VERTEX_INDEX gl_VertexIndex
 #else
 #define WEFT_BLOCK(b) layout(binding = b, std140)
 #define WEFT_SAMPLER(b) layout(binding = b)
+#define WEFT_VERTEX_INDEX gl_VertexID
 #endif
 
 // Per frame (render/src/frame_uniforms.h, FrameUniforms).
@@ -26,5 +28,6 @@ WEFT_BLOCK(1) uniform Draw {
     mat4 model;          // local → world
     vec4 front_colour;   // rgb, linear; the side the triangle's normal points to
     vec4 back_colour;    // rgb, linear
-    vec4 material;       // x: grid spacing (m) for the ground, 0 otherwise; y: roughness; z: 1 for cloth
+    vec4 material;       // x: grid spacing (m) for the ground, 0 otherwise; y: roughness; z: 1 for cloth;
+                         // w: overlay normals' length (m), line.vert
 } draw;

@@ -62,4 +62,13 @@ std::vector<DrawUniforms> draw_uniforms(const RenderScene& scene, const RenderFr
     return out;
 }
 
+std::array<DrawUniforms, 2> overlay_uniforms(const OverlayLines& lines) {
+    std::array<DrawUniforms, 2> out{};
+    for (DrawUniforms& u : out) u.model = glm::mat4(1.0F);
+    out[0].front_colour = glm::vec4(lines.wireframe_colour, 1.0F);
+    out[1].front_colour = glm::vec4(lines.normal_colour, 1.0F);
+    out[1].material.w = lines.normal_length;
+    return out;
+}
+
 }  // namespace weft::render::detail

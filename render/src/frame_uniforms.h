@@ -1,6 +1,8 @@
 #pragma once
 // The uniform blocks of render/shaders/common.glsl, laid out std140, and how a scene and a frame
 // fill them. Shared by the Vulkan and the EGL renderer: same numbers in, same picture out.
+#include <array>
+
 #include <glm/glm.hpp>
 
 #include "weft/render/render_scene.h"
@@ -24,7 +26,7 @@ struct DrawUniforms {
     glm::mat4 model;
     glm::vec4 front_colour;
     glm::vec4 back_colour;
-    glm::vec4 material;  ///< x: grid spacing (m), y: roughness, z: 1 for cloth
+    glm::vec4 material;  ///< x: grid spacing (m), y: roughness, z: 1 for cloth; w: overlay normal length (m)
 };
 static_assert(sizeof(DrawUniforms) == 112, "std140 layout of Draw");
 
@@ -36,5 +38,9 @@ static_assert(sizeof(DrawUniforms) == 112, "std140 layout of Draw");
 /// The uniforms of each draw, in draw order: every cloth, then every collider (model matrices from
 /// `frame`; identity where it has fewer entries).
 [[nodiscard]] std::vector<DrawUniforms> draw_uniforms(const RenderScene& scene, const RenderFrame& frame);
+
+/// The two overlay draws that follow draw_uniforms' (line.vert, line.frag): the wireframe (colour,
+/// no offset), then the normals (colour, material.w the normals' length).
+[[nodiscard]] std::array<DrawUniforms, 2> overlay_uniforms(const OverlayLines& lines);
 
 }  // namespace weft::render::detail

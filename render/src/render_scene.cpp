@@ -6,6 +6,7 @@
 #include <array>
 #include <cmath>
 #include <numbers>
+#include <string>
 
 #include "weft/error.h"
 #include "weft/physics/vec.h"
@@ -158,6 +159,7 @@ RenderScene make_render_scene(const World& world, const CameraDesc& camera) {
         scene.cloths.push_back(std::move(draw));
     }
     scene.cloth_vertices = first;
+    scene.cloth_edges = edge_indices(scene.cloth_indices);
 
     bool has_ground = false;
     for (std::size_t k = 0; k < model.colliders.size(); ++k) {
@@ -274,6 +276,32 @@ void cloth_vertices(const World& world, const RenderScene& scene, std::vector<Re
             out[draw.first_vertex + i] = vertex(to_glm(x[i]), len > 0.0F ? normals[i] / len : glm::vec3(0.0F, 1.0F, 0.0F));
         }
     }
+}
+
+std::vector<std::uint32_t> edge_indices(std::span<const std::uint32_t> triangles) {
+    if (triangles.size() % 3 != 0)
+        throw Error("edge_indices: " + std::to_string(triangles.size()) + " indices are not whole triangles");
+    std::vector<std::uint64_t> seen;  // (smaller << 32 | larger), sorted below to find repeats
+    seen.reserve(triangles.size());
+    for (std::size_t k = 0; k < triangles.size(); k += 3)
+        for (int e = 0; e < 3; ++e) {
+            const std::uint32_t a = triangles[k + e], b = triangles[k + (e + 1) % 3];
+            seen.push_back(std::uint64_t{std::min(a, b)} << 32 | std::max(a, b));
+        }
+    // Keep each edge at its first appearance: sort a copy, then walk the original order.
+    std::vector<std::uint64_t> sorted = seen;
+    std::sort(sorted.begin(), sorted.end());
+    std::vector<bool> taken(sorted.size(), false);
+    std::vector<std::uint32_t> out;
+    out.reserve(seen.size());
+    for (const std::uint64_t key : seen) {
+        const auto at = static_cast<std::size_t>(std::lower_bound(sorted.begin(), sorted.end(), key) - sorted.begin());
+        if (taken[at]) continue;
+        taken[at] = true;
+        out.push_back(static_cast<std::uint32_t>(key >> 32));
+        out.push_back(static_cast<std::uint32_t>(key & 0xFFFFFFFFU));
+    }
+    return out;
 }
 
 }  // namespace weft::render

@@ -16,6 +16,18 @@ const std::uint32_t kShadowVertSpirv[] =
 const std::uint32_t kShadowFragSpirv[] =
 #include "shadow.frag.spv.inc"
     ;
+const std::uint32_t kLineVertSpirv[] =
+#include "line.vert.spv.inc"
+    ;
+const std::uint32_t kLineFragSpirv[] =
+#include "line.frag.spv.inc"
+    ;
+const char* const kLineVertGlsl =
+#include "line.vert.glsl.inc"
+    ;
+const char* const kLineFragGlsl =
+#include "line.frag.glsl.inc"
+    ;
 const char* const kSurfaceVertGlsl =
 #include "surface.vert.glsl.inc"
     ;
@@ -35,5 +47,7 @@ ShaderCode surface_vertex_shader() { return {kSurfaceVertSpirv, kSurfaceVertGlsl
 ShaderCode surface_fragment_shader() { return {kSurfaceFragSpirv, kSurfaceFragGlsl}; }
 ShaderCode shadow_vertex_shader() { return {kShadowVertSpirv, kShadowVertGlsl}; }
 ShaderCode shadow_fragment_shader() { return {kShadowFragSpirv, kShadowFragGlsl}; }
+ShaderCode line_vertex_shader() { return {kLineVertSpirv, kLineVertGlsl}; }
+ShaderCode line_fragment_shader() { return {kLineFragSpirv, kLineFragGlsl}; }
 
 }  // namespace weft::render::detail

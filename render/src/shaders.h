@@ -15,5 +15,7 @@ struct ShaderCode {
 [[nodiscard]] ShaderCode surface_fragment_shader();
 [[nodiscard]] ShaderCode shadow_vertex_shader();
 [[nodiscard]] ShaderCode shadow_fragment_shader();
+[[nodiscard]] ShaderCode line_vertex_shader();    ///< the overlay lines (OverlayLines)
+[[nodiscard]] ShaderCode line_fragment_shader();
 
 }  // namespace weft::render::detail

@@ -462,4 +462,90 @@ inline void expect_redraws_the_same_frame_bit_for_bit(Renderer& r) {
     EXPECT_EQ(r.validation_messages(), 0);
 }
 
+/// The overlay lines (RenderFrame::lines): the wireframe and the normals are drawn from the cloth
+/// buffer, over the cloth where nothing is in front of it and hidden where something is. The sheet
+/// over the ball with a box between the camera and the sheet's left half: lines change many pixels
+/// of the sheet, none inside the box's outline on screen, none outside the cloth's (and its
+/// normals') projected bounds; the normals add pixels the wireframe does not; lines off draws the
+/// same picture as before.
+inline void expect_overlay_lines_over_the_cloth_only_where_seen(Renderer& r) {
+    TestScene t = sheet_over_ball();
+    ColliderDesc box{.name = "screen", .shape = ColliderShape::Box};
+    box.half_extents = {0.12, 0.12, 0.04};
+    box.motion.origin = {-0.2, 1.14, 0.9};  // on the line from the camera to the sheet's point (−0.3, 0.9, 0)
+    t.world->add_collider(box);
+    CameraDesc camera;
+    camera.position = {0.0, 1.6, 2.6};
+    camera.target = {0.0, 0.5, 0.0};
+    camera.fov_degrees = 45.0;
+    t.scene = make_render_scene(*t.world, camera);
+    cloth_vertices(*t.world, t.scene, t.vertices);
+    t.frame.cloth = t.vertices;
+    t.frame.collider_models = collider_models(t.scene, t.world->model(), 0.0);
+    ASSERT_EQ(t.scene.cloth_edges.size(), 2U * (16U * 17U * 2U + 16U * 16U));  // grid edges and one diagonal a cell
+    r.load(t.scene);
+    const Image plain = r.draw(t.frame);
+    RenderFrame wire_frame = t.frame;
+    wire_frame.lines.wireframe = true;
+    const Image wire = r.draw(wire_frame);
+    RenderFrame normal_frame = t.frame;
+    normal_frame.lines.normal_length = 0.08F;
+    const Image normals = r.draw(normal_frame);
+    save(r.name(), "overlay_plain", plain);
+    save(r.name(), "overlay_wireframe", wire);
+    save(r.name(), "overlay_normals", normals);
+
+    const glm::mat4 vp = view_projection(t.scene, plain.width, plain.height);
+    // The box's outline on screen, shrunk by two pixels (edges are antialiased).
+    glm::vec2 box_lo(1e9F), box_hi(-1e9F);
+    for (int k = 0; k < 8; ++k) {
+        const glm::vec3 corner(-0.2F + ((k & 1) ? 0.12F : -0.12F), 1.14F + ((k & 2) ? 0.12F : -0.12F),
+                               0.9F + ((k & 4) ? 0.04F : -0.04F));
+        const glm::vec2 q = project(vp, corner, plain.width, plain.height);
+        box_lo = glm::min(box_lo, q);
+        box_hi = glm::max(box_hi, q);
+    }
+    // The cloth's bounds on screen, grown by the normals' length and two pixels.
+    glm::vec2 cloth_lo(1e9F), cloth_hi(-1e9F);
+    for (const RenderVertex& v : t.vertices)
+        for (const float along : {0.0F, 0.08F}) {
+            const glm::vec3 p = glm::vec3(v.position[0], v.position[1], v.position[2]) +
+                                along * glm::vec3(v.normal[0], v.normal[1], v.normal[2]);
+            const glm::vec2 q = project(vp, p, plain.width, plain.height);
+            cloth_lo = glm::min(cloth_lo, q);
+            cloth_hi = glm::max(cloth_hi, q);
+        }
+    const auto differs = [](const Image& a, const Image& b, int x, int y) {
+        for (int c = 0; c < 3; ++c)
+            if (std::abs(int{a.pixel(x, y)[c]} - int{b.pixel(x, y)[c]}) > 24) return true;
+        return false;
+    };
+    int wire_pixels = 0, in_box = 0, outside_cloth = 0, normal_only = 0;
+    for (int y = 0; y < plain.height; ++y)
+        for (int x = 0; x < plain.width; ++x) {
+            const auto fx = static_cast<float>(x), fy = static_cast<float>(y);
+            const bool boxed = fx > box_lo.x + 2.0F && fx < box_hi.x - 2.0F && fy > box_lo.y + 2.0F && fy < box_hi.y - 2.0F;
+            const bool near_cloth = fx >= cloth_lo.x - 2.0F && fx <= cloth_hi.x + 2.0F && fy >= cloth_lo.y - 2.0F &&
+                                    fy <= cloth_hi.y + 2.0F;
+            for (const Image* lines : {&wire, &normals}) {
+                if (!differs(plain, *lines, x, y)) continue;
+                if (boxed) ++in_box;
+                if (!near_cloth) ++outside_cloth;
+            }
+            if (differs(plain, wire, x, y)) ++wire_pixels;
+            if (differs(plain, normals, x, y) && !differs(plain, wire, x, y)) ++normal_only;
+        }
+    std::printf("%s overlay: wireframe %d pixels, normals alone %d, inside the box %d, outside the cloth %d "
+                "(box %.0f..%.0f x %.0f..%.0f)\n",
+                std::string(r.name()).c_str(), wire_pixels, normal_only, in_box, outside_cloth, double{box_lo.x},
+                double{box_hi.x}, double{box_lo.y}, double{box_hi.y});
+    ASSERT_GT(box_hi.x - box_lo.x, 8.0F) << "the box is too small on screen to test hiding";
+    EXPECT_GT(wire_pixels, 1000) << "the wireframe was not drawn";
+    EXPECT_GT(normal_only, 200) << "the normals were not drawn";
+    EXPECT_EQ(in_box, 0) << "lines drawn through the box in front of the sheet (no depth test)";
+    EXPECT_EQ(outside_cloth, 0) << "lines away from the cloth buffer's vertices";
+    EXPECT_EQ(r.draw(t.frame).rgba, plain.rgba) << "lines off must draw the picture without them";
+    EXPECT_EQ(r.validation_messages(), 0);
+}
+
 }  // namespace weft::render::test

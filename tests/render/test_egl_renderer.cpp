@@ -174,5 +174,12 @@ TEST(EglRenderer, SubmitQueuesAndCollectReturnsThePictureOnce) {
     EXPECT_THROW((void)r.collect(), Error);
 }
 
+TEST(EglRenderer, DrawsOverlayLinesFromTheClothBufferHiddenBehindWhatIsInFront) {
+    const test::Created c = create(test::small_options(4, /*validation=*/true));
+    if (!c.renderer) GTEST_SKIP() << c.skip;
+    test::expect_overlay_lines_over_the_cloth_only_where_seen(*c.renderer);
+}
+
 }  // namespace
+
 }  // namespace weft::render

@@ -132,6 +132,14 @@ TEST(RenderScene, ClothsShareOneBufferAndCollidersBecomeMeshes) {
     EXPECT_FLOAT_EQ(t.frame.collider_models[0][3][0], 0.3F);  // the ball's translation
 }
 
+TEST(RenderScene, EdgeIndicesListEachEdgeOnceWhereItFirstAppears) {
+    // Two triangles sharing the edge 1–2: five edges, smaller index first, in order of appearance.
+    const std::vector<std::uint32_t> triangles{0, 1, 2, 2, 1, 3};
+    EXPECT_EQ(edge_indices(triangles), (std::vector<std::uint32_t>{0, 1, 1, 2, 0, 2, 1, 3, 2, 3}));
+    EXPECT_TRUE(edge_indices({}).empty());
+    EXPECT_THROW((void)edge_indices(std::vector<std::uint32_t>{0, 1, 2, 3}), Error);
+}
+
 TEST(RenderScene, WorldWithoutAPlaneGetsAGroundGrid) {
     World world;
     world.add_cloth(ClothDesc{.name = "a", .fabric = Fabric::cook(make_grid(1.0, 1.0, 4, 4), {})});

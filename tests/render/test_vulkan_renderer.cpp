@@ -208,5 +208,12 @@ TEST(VulkanRenderer, ReportsDrawTime) {
     }
 }
 
+TEST(VulkanRenderer, DrawsOverlayLinesFromTheClothBufferHiddenBehindWhatIsInFront) {
+    const test::Created c = create(test::small_options(4, /*validation=*/true));
+    if (!c.renderer) GTEST_SKIP() << c.skip;
+    test::expect_overlay_lines_over_the_cloth_only_where_seen(*c.renderer);
+}
+
 }  // namespace
+
 }  // namespace weft::render

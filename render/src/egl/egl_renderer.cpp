@@ -83,14 +83,16 @@ void check_framebuffer(GLuint framebuffer, const char* what) {
 }
 
 /// Index checks before upload: an index past its vertex buffer reads outside it on the device.
-void check_indices(std::span<const std::uint32_t> indices, std::size_t vertices, const std::string& what) {
+/// `per_primitive`: 3 for triangles, 2 for lines.
+void check_indices(std::span<const std::uint32_t> indices, std::size_t vertices, const std::string& what,
+                   std::size_t per_primitive = 3) {
     for (const std::uint32_t i : indices)
         if (i >= vertices)
             throw Error("egl renderer: " + what + " has vertex index " + std::to_string(i) + " but " +
                         std::to_string(vertices) + " vertices");
-    if (indices.size() % 3 != 0)
-        throw Error("egl renderer: " + what + " has " + std::to_string(indices.size()) +
-                    " indices, not a multiple of 3");
+    if (indices.size() % per_primitive != 0)
+        throw Error("egl renderer: " + what + " has " + std::to_string(indices.size()) + " indices, not a multiple of " +
+                    std::to_string(per_primitive));
 }
 
 /// A vertex buffer (RenderVertex layout), its uint32 index buffer and the vertex array that binds
@@ -164,6 +166,10 @@ struct SceneObjects {
     /// The exported cloth slots (export_cloth): vertices, then kSlotStampBytes of frame stamps.
     std::vector<gl::Buffer> slots;
     std::vector<Mesh> colliders;  ///< one per RenderScene::colliders entry
+    /// The overlay lines (OverlayLines) over the cloth buffer: the wireframe's edges (RenderScene::
+    /// cloth_edges as an element buffer), and the normals' array (one vertex an instance).
+    gl::Buffer edges;
+    gl::VertexArray wireframe, normals;
     gl::Buffer draw_uniforms;     ///< one DrawUniforms per draw, `draw_stride` apart
     GLsizeiptr draw_stride = 0;
     std::vector<std::byte> draw_staging;  ///< the next frame's DrawUniforms before upload
@@ -196,6 +202,9 @@ private:
     /// Draws every cloth and collider with the bound program; `shadow_pass` leaves out the draws
     /// that only receive shadows (the ground: material.x > 0).
     void draw_meshes(const std::vector<DrawUniforms>& draws, bool shadow_pass) const;
+    /// The frame's overlay lines from `cloth_buffer`, after the scene's `scene_draws` draws (their
+    /// uniforms follow), tested against the scene's depth and not writing it.
+    void draw_lines(const OverlayLines& lines, GLuint cloth_buffer, std::size_t scene_draws) const;
 
     RendererOptions options_;
     DebugLog debug_log_;
@@ -205,6 +214,7 @@ private:
 
     gl::Program surface_program_;
     gl::Program shadow_program_;
+    gl::Program line_program_;
     gl::Buffer frame_uniforms_;
     gl::Texture shadow_map_;
     gl::Framebuffer shadow_target_;
@@ -257,6 +267,7 @@ EglRenderer::EglRenderer(const RendererOptions& options) : options_(options), co
 
     surface_program_ =
         gl::link_program("surface", surface_vertex_shader().glsl, surface_fragment_shader().glsl);
+    line_program_ = gl::link_program("line", line_vertex_shader().glsl, line_fragment_shader().glsl);
     shadow_program_ = gl::link_program("shadow", shadow_vertex_shader().glsl, shadow_fragment_shader().glsl);
 
     frame_uniforms_ = gl::create_buffer();
@@ -356,6 +367,24 @@ void EglRenderer::load(const RenderScene& scene) {
     // Zeros until the first frame (or the device) fills it: drawing an unfilled buffer is defined.
     const std::vector<RenderVertex> zeros(scene.cloth_vertices, RenderVertex{});
     o.cloth = make_mesh(zeros, scene.cloth_indices, GL_DYNAMIC_STORAGE_BIT);
+    if (!scene.cloth_edges.empty() && scene.cloth_vertices > 0) {
+        check_indices(scene.cloth_edges, scene.cloth_vertices, "the cloth edge list", 2);
+        o.edges = gl::create_buffer();
+        glNamedBufferStorage(o.edges.get(), static_cast<GLsizeiptr>(scene.cloth_edges.size() * sizeof(std::uint32_t)),
+                             scene.cloth_edges.data(), 0);
+    }
+    for (gl::VertexArray* array : {&o.wireframe, &o.normals}) {
+        *array = gl::create_vertex_array();
+        const GLuint a = array->get();
+        glEnableVertexArrayAttrib(a, 0);
+        glVertexArrayAttribFormat(a, 0, 3, GL_FLOAT, GL_FALSE, offsetof(RenderVertex, position));
+        glVertexArrayAttribBinding(a, 0, 0);
+        glEnableVertexArrayAttrib(a, 1);
+        glVertexArrayAttribFormat(a, 1, 3, GL_FLOAT, GL_FALSE, offsetof(RenderVertex, normal));
+        glVertexArrayAttribBinding(a, 1, 0);
+    }
+    if (o.edges.get() != 0) glVertexArrayElementBuffer(o.wireframe.get(), o.edges.get());
+    glVertexArrayBindingDivisor(o.normals.get(), 0, 1);  // one cloth vertex an instance
     o.colliders.reserve(scene.colliders.size());
     for (const ColliderDraw& c : scene.colliders)  // a deforming collider's vertices are rewritten each frame
         o.colliders.push_back(make_mesh(c.mesh.vertices, c.mesh.indices, c.deforms ? GL_DYNAMIC_STORAGE_BIT : 0));
@@ -364,7 +393,7 @@ void EglRenderer::load(const RenderScene& scene) {
     // device's offset alignment.
     const GLsizeiptr alignment = std::max(get_integer(GL_UNIFORM_BUFFER_OFFSET_ALIGNMENT), 1);
     o.draw_stride = (static_cast<GLsizeiptr>(sizeof(DrawUniforms)) + alignment - 1) / alignment * alignment;
-    const std::size_t draws = std::max<std::size_t>(scene.cloths.size() + scene.colliders.size(), 1);
+    const std::size_t draws = scene.cloths.size() + scene.colliders.size() + 2;  // + the overlay lines
     o.draw_staging.assign(draws * static_cast<std::size_t>(o.draw_stride), std::byte{0});
     o.draw_uniforms = gl::create_buffer();
     glNamedBufferStorage(o.draw_uniforms.get(), static_cast<GLsizeiptr>(o.draw_staging.size()), nullptr,
@@ -405,6 +434,35 @@ void EglRenderer::draw_meshes(const std::vector<DrawUniforms>& draws, bool shado
         ++k;
     }
     glBindVertexArray(0);
+}
+
+void EglRenderer::draw_lines(const OverlayLines& lines, GLuint cloth_buffer, std::size_t scene_draws) const {
+    const SceneObjects& o = *loaded_;
+    const bool wireframe = lines.wireframe && o.edges.get() != 0;
+    const bool normals = lines.normal_length > 0.0F && o.scene.cloth_vertices > 0;
+    if (!wireframe && !normals) return;
+    glUseProgram(line_program_.get());
+    glDepthMask(GL_FALSE);  // lines do not hide lines
+    glDepthFunc(GL_LEQUAL);
+    const auto bind_draw = [&](std::size_t k) {
+        glBindBufferRange(GL_UNIFORM_BUFFER, kDrawBinding, o.draw_uniforms.get(),
+                          static_cast<GLintptr>(k) * o.draw_stride, sizeof(DrawUniforms));
+    };
+    if (wireframe) {
+        bind_draw(scene_draws);
+        glVertexArrayVertexBuffer(o.wireframe.get(), 0, cloth_buffer, 0, sizeof(RenderVertex));
+        glBindVertexArray(o.wireframe.get());
+        glDrawElements(GL_LINES, static_cast<GLsizei>(o.scene.cloth_edges.size()), GL_UNSIGNED_INT, nullptr);
+    }
+    if (normals) {
+        bind_draw(scene_draws + 1);
+        glVertexArrayVertexBuffer(o.normals.get(), 0, cloth_buffer, 0, sizeof(RenderVertex));
+        glBindVertexArray(o.normals.get());
+        glDrawArraysInstanced(GL_LINES, 0, 2, static_cast<GLsizei>(o.scene.cloth_vertices));
+    }
+    glBindVertexArray(0);
+    glDepthFunc(GL_LESS);
+    glDepthMask(GL_TRUE);
 }
 
 std::optional<ClothInterop> EglRenderer::export_cloth(std::string& why) {
@@ -528,6 +586,10 @@ void EglRenderer::submit(const RenderFrame& frame) {
     const std::vector<DrawUniforms> draws = draw_uniforms(o.scene, frame);
     for (std::size_t k = 0; k < draws.size(); ++k)
         std::memcpy(o.draw_staging.data() + k * static_cast<std::size_t>(o.draw_stride), &draws[k], sizeof(DrawUniforms));
+    const std::array<DrawUniforms, 2> lines = overlay_uniforms(frame.lines);
+    for (std::size_t k = 0; k < lines.size(); ++k)
+        std::memcpy(o.draw_staging.data() + (draws.size() + k) * static_cast<std::size_t>(o.draw_stride), &lines[k],
+                    sizeof(DrawUniforms));
     glNamedBufferSubData(o.draw_uniforms.get(), 0, static_cast<GLsizeiptr>(o.draw_staging.size()), o.draw_staging.data());
     glBindBufferBase(GL_UNIFORM_BUFFER, kFrameBinding, frame_uniforms_.get());
 
@@ -552,6 +614,7 @@ void EglRenderer::submit(const RenderFrame& frame) {
     glBindTextureUnit(kShadowMapUnit, shadow_map_.get());
     glUseProgram(surface_program_.get());
     draw_meshes(draws, false);
+    draw_lines(frame.lines, cloth_buffer, draws.size());
 
     // Resolve, and read into the pixel buffer: queued, collect() waits for it.
     const GLint w = options_.width;

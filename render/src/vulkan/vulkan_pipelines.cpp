@@ -210,7 +210,8 @@ VkPipeline create_pipeline(VkDevice device, const PipelineDesc& desc) {
         }
 
         // One binding for every draw: the cloth buffer and the colliders' buffer share the layout.
-        const VkVertexInputBindingDescription binding{0, sizeof(RenderVertex), VK_VERTEX_INPUT_RATE_VERTEX};
+        const VkVertexInputBindingDescription binding{
+            0, sizeof(RenderVertex), desc.per_instance ? VK_VERTEX_INPUT_RATE_INSTANCE : VK_VERTEX_INPUT_RATE_VERTEX};
         const std::array<VkVertexInputAttributeDescription, 2> attributes{{
             {0, 0, VK_FORMAT_R32G32B32_SFLOAT, offsetof(RenderVertex, position)},
             {1, 0, VK_FORMAT_R32G32B32_SFLOAT, offsetof(RenderVertex, normal)},
@@ -224,7 +225,7 @@ VkPipeline create_pipeline(VkDevice device, const PipelineDesc& desc) {
 
         VkPipelineInputAssemblyStateCreateInfo assembly{};
         assembly.sType = VK_STRUCTURE_TYPE_PIPELINE_INPUT_ASSEMBLY_STATE_CREATE_INFO;
-        assembly.topology = VK_PRIMITIVE_TOPOLOGY_TRIANGLE_LIST;
+        assembly.topology = desc.topology;
 
         const auto w = static_cast<float>(desc.extent.width), h = static_cast<float>(desc.extent.height);
         const VkViewport viewport =
@@ -256,7 +257,7 @@ VkPipeline create_pipeline(VkDevice device, const PipelineDesc& desc) {
         VkPipelineDepthStencilStateCreateInfo depth{};
         depth.sType = VK_STRUCTURE_TYPE_PIPELINE_DEPTH_STENCIL_STATE_CREATE_INFO;
         depth.depthTestEnable = VK_TRUE;
-        depth.depthWriteEnable = VK_TRUE;
+        depth.depthWriteEnable = desc.depth_write ? VK_TRUE : VK_FALSE;
         depth.depthCompareOp = desc.depth_compare;
 
         VkPipelineColorBlendAttachmentState blend_attachment{};

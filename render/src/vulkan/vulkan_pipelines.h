@@ -35,9 +35,14 @@ struct PipelineDesc {
     VkSampleCountFlagBits samples = VK_SAMPLE_COUNT_1_BIT;
     VkCompareOp depth_compare = VK_COMPARE_OP_LESS;
     bool colour = true;  ///< writes a colour attachment (the shadow pass has none)
+    VkPrimitiveTopology topology = VK_PRIMITIVE_TOPOLOGY_TRIANGLE_LIST;
+    /// The vertex buffer advances once an instance, not once a vertex (the overlay's normals).
+    bool per_instance = false;
+    bool depth_write = true;
 };
 
-/// A triangle-list pipeline over RenderVertex (stride 24), no culling, depth test and write on.
+/// A pipeline over RenderVertex (stride 24; triangles unless `topology` says otherwise), no culling,
+/// depth test on (and write unless `depth_write` is off).
 [[nodiscard]] VkPipeline create_pipeline(VkDevice device, const PipelineDesc& desc);
 
 }  // namespace weft::render::detail

@@ -181,7 +181,9 @@ void VulkanRenderer::create_size_targets() {
 
 void VulkanRenderer::destroy_size_targets() noexcept {
     const VkDevice device = context_.device();
-    if (surface_pipeline_ != VK_NULL_HANDLE) vkDestroyPipeline(device, surface_pipeline_, nullptr);
+    for (VkPipeline p : {surface_pipeline_, wireframe_pipeline_, normals_pipeline_})
+        if (p != VK_NULL_HANDLE) vkDestroyPipeline(device, p, nullptr);
+    wireframe_pipeline_ = normals_pipeline_ = VK_NULL_HANDLE;
     if (surface_framebuffer_ != VK_NULL_HANDLE) vkDestroyFramebuffer(device, surface_framebuffer_, nullptr);
     if (overlay_framebuffer_ != VK_NULL_HANDLE) vkDestroyFramebuffer(device, overlay_framebuffer_, nullptr);
     surface_pipeline_ = VK_NULL_HANDLE;
@@ -281,6 +283,16 @@ void VulkanRenderer::create_surface_pipeline() {
     surface.samples = samples_;
     surface.depth_compare = VK_COMPARE_OP_LESS;
     surface_pipeline_ = create_pipeline(context_.device(), surface);
+    // The overlay lines: tested against the surface's depth, not written (lines do not hide lines).
+    PipelineDesc lines = surface;
+    lines.vertex = line_vertex_shader();
+    lines.fragment = line_fragment_shader();
+    lines.topology = VK_PRIMITIVE_TOPOLOGY_LINE_LIST;
+    lines.depth_compare = VK_COMPARE_OP_LESS_OR_EQUAL;
+    lines.depth_write = false;
+    wireframe_pipeline_ = create_pipeline(context_.device(), lines);
+    lines.per_instance = true;
+    normals_pipeline_ = create_pipeline(context_.device(), lines);
 }
 
 void VulkanRenderer::create_descriptors() {
@@ -334,6 +346,8 @@ void VulkanRenderer::load(const RenderScene& scene) {
         if (!c.deforms) vertices.insert(vertices.end(), c.mesh.vertices.begin(), c.mesh.vertices.end());
         indices.insert(indices.end(), c.mesh.indices.begin(), c.mesh.indices.end());
     }
+    edges_first_index_ = static_cast<std::uint32_t>(indices.size());
+    indices.insert(indices.end(), scene_.cloth_edges.begin(), scene_.cloth_edges.end());
     if (scene_.deforming_vertices > 0) {
         deforming_ = create_buffer(context_, VkDeviceSize{scene_.deforming_vertices} * sizeof(RenderVertex),
                                    VK_BUFFER_USAGE_VERTEX_BUFFER_BIT, MemoryUse::upload);
@@ -398,7 +412,7 @@ void VulkanRenderer::load(const RenderScene& scene) {
     // Uniforms: offsets of dynamic uniform buffers must be multiples of the device's alignment.
     const VkDeviceSize alignment =
         std::max<VkDeviceSize>(context_.properties().limits.minUniformBufferOffsetAlignment, 16);
-    const std::size_t draw_count = scene_.cloths.size() + scene_.colliders.size();
+    const std::size_t draw_count = scene_.cloths.size() + scene_.colliders.size() + 2;  // + the overlay lines
     draw_base_ = align_up(sizeof(FrameUniforms), alignment);
     draw_stride_ = align_up(sizeof(DrawUniforms), alignment);
     uniforms_ = create_buffer(context_, draw_base_ + std::max<std::size_t>(draw_count, 1) * draw_stride_,
@@ -458,6 +472,10 @@ bool VulkanRenderer::record_frame(const RenderFrame& frame, bool& external,
     std::memcpy(uniform_bytes, &frame_u, sizeof frame_u);
     for (std::size_t i = 0; i < draws.size(); ++i)
         std::memcpy(uniform_bytes + draw_base_ + i * draw_stride_, &draws[i], sizeof(DrawUniforms));
+    const std::array<DrawUniforms, 2> lines = overlay_uniforms(frame.lines);
+    for (std::size_t i = 0; i < lines.size(); ++i)
+        std::memcpy(uniform_bytes + draw_base_ + (draws.size() + i) * draw_stride_, &lines[i], sizeof(DrawUniforms));
+    frame_lines_ = frame.lines;
 
     WEFT_VK_CHECK(vkResetCommandBuffer(commands_, 0));
     VkCommandBufferBeginInfo begin{};
@@ -571,6 +589,7 @@ void VulkanRenderer::record(VkCommandBuffer commands, const std::vector<DrawUnif
     vkCmdBeginRenderPass(commands, &pass, VK_SUBPASS_CONTENTS_INLINE);
     vkCmdBindPipeline(commands, VK_PIPELINE_BIND_POINT_GRAPHICS, surface_pipeline_);
     draw_all(commands, draws, false);
+    draw_lines(commands, draws.size());
     vkCmdEndRenderPass(commands);
 
 }
@@ -615,6 +634,28 @@ void VulkanRenderer::draw_all(VkCommandBuffer commands, const std::vector<DrawUn
         else
             vkCmdDrawIndexed(commands, count, 1, collider_first_index_[i - cloths], collider_first_vertex_[i - cloths],
                              0);
+    }
+}
+
+void VulkanRenderer::draw_lines(VkCommandBuffer commands, std::size_t scene_draws) const {
+    if (slots_.empty()) return;  // no cloth
+    const VkBuffer cloth = slots_[static_cast<std::size_t>(frame_slot_)].buffer.buffer;
+    const VkDeviceSize zero = 0;
+    const auto bind = [&](VkPipeline pipeline, std::size_t draw) {
+        vkCmdBindPipeline(commands, VK_PIPELINE_BIND_POINT_GRAPHICS, pipeline);
+        vkCmdBindVertexBuffers(commands, 0, 1, &cloth, &zero);
+        const auto offset = static_cast<std::uint32_t>(draw * draw_stride_);
+        vkCmdBindDescriptorSets(commands, VK_PIPELINE_BIND_POINT_GRAPHICS, pipeline_layout_, 0, 1, &descriptor_set_, 1,
+                                &offset);
+    };
+    if (frame_lines_.wireframe && !scene_.cloth_edges.empty()) {
+        bind(wireframe_pipeline_, scene_draws);
+        vkCmdBindIndexBuffer(commands, static_geometry_.buffer, index_offset_, VK_INDEX_TYPE_UINT32);
+        vkCmdDrawIndexed(commands, static_cast<std::uint32_t>(scene_.cloth_edges.size()), 1, edges_first_index_, 0, 0);
+    }
+    if (frame_lines_.normal_length > 0.0F && scene_.cloth_vertices > 0) {
+        bind(normals_pipeline_, scene_draws + 1);
+        vkCmdDraw(commands, 2, scene_.cloth_vertices, 0, 0);  // two ends an instance, one instance a vertex
     }
 }
 

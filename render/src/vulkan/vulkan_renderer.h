@@ -99,6 +99,9 @@ private:
     /// writer (CUDA) before the frame reads it, released back after.
     void external_barrier(VkCommandBuffer commands, int slot, bool acquire) const;
     void draw_all(VkCommandBuffer commands, const std::vector<DrawUniforms>& draws, bool casters_only) const;
+    /// The frame's overlay lines (frame_lines_) from the cloth slot, in the surface pass after the
+    /// scene's `scene_draws` draws (their uniforms follow).
+    void draw_lines(VkCommandBuffer commands, std::size_t scene_draws) const;
     void destroy_scene() noexcept;
     void destroy() noexcept;
 
@@ -127,6 +130,8 @@ private:
     VkDescriptorSetLayout set_layout_ = VK_NULL_HANDLE;
     VkPipelineLayout pipeline_layout_ = VK_NULL_HANDLE;
     VkPipeline shadow_pipeline_ = VK_NULL_HANDLE, surface_pipeline_ = VK_NULL_HANDLE;
+    /// The overlay lines (OverlayLines): the wireframe's indexed line list, the normals' instanced one.
+    VkPipeline wireframe_pipeline_ = VK_NULL_HANDLE, normals_pipeline_ = VK_NULL_HANDLE;
     VkDescriptorPool descriptor_pool_ = VK_NULL_HANDLE;
     VkDescriptorSet descriptor_set_ = VK_NULL_HANDLE;
     VkCommandBuffer commands_ = VK_NULL_HANDLE;
@@ -143,6 +148,8 @@ private:
     VkDeviceSize index_offset_ = 0;  ///< of the first index in static_geometry_
     std::vector<std::uint32_t> collider_first_index_;  ///< into the index range, per collider
     std::vector<std::int32_t> collider_first_vertex_;  ///< into the colliders' vertices (static or deforming), per collider
+    std::uint32_t edges_first_index_ = 0;  ///< RenderScene::cloth_edges in the index range, after the colliders'
+    OverlayLines frame_lines_;             ///< the lines of the frame being recorded
     DeviceBuffer deforming_;  ///< the deforming colliders' vertices, host-visible: rewritten by a frame that brings them
     /// A cloth vertex buffer: RenderScene::cloth_vertices vertices, then kSlotStampBytes of stamps.
     /// One until export_cloth(); then kSharedSlots, exported, each with a timeline that orders the
@@ -160,7 +167,7 @@ private:
     bool exported_ = false;
     int frame_slot_ = 0;               ///< the slot the frame being recorded or in flight draws from
     bool frame_reads_stamps_ = false;  ///< it copies the slot's stamps to stamp_readback_
-    DeviceBuffer uniforms_;  ///< Frame at 0, Draw i at draw_base_ + i·draw_stride_
+    DeviceBuffer uniforms_;  ///< Frame at 0, Draw i at draw_base_ + i·draw_stride_ (the scene's, then the two overlay draws)
     VkDeviceSize draw_base_ = 0, draw_stride_ = 0;
     TransferStats transfer_{"host upload", 0};
 };

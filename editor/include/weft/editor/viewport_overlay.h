@@ -1,10 +1,11 @@
 #pragma once
 /// @file
-/// What the View panel draws over the shaded picture (docs/editor.md, "Display"): the cloth's
-/// wireframe, vertex normals, the vertices touching a collider, pins and the grab's spring. Built
-/// as picture-space lines and marks from a host copy of the state (World::positions), then drawn by
-/// ImGui in the window's overlay pass; the cloth itself is still drawn from the solver's buffers.
-/// Lines are not depth-tested: the wireframe of the cloth's far side shows through it.
+/// What the View panel draws over the shaded picture (docs/editor.md, "Display"). The cloth's
+/// wireframe and vertex normals are lines the renderer draws from the cloth buffer the solver wrote,
+/// depth-tested (`overlay_lines`, RenderFrame::lines): no copy of the state through the host. The
+/// vertices touching a collider, the pins and the grab's spring are picture-space marks built from a
+/// host copy of the state (World::positions) and drawn by ImGui in the window's overlay pass, not
+/// depth-tested.
 #include <cstddef>
 #include <cstdint>
 #include <vector>
@@ -36,16 +37,18 @@ struct OverlayMark {
 struct ViewportOverlay {
     std::vector<OverlaySegment> segments;
     std::vector<OverlayMark> marks;
-    std::size_t edges = 0;     ///< wireframe edges drawn (each shared edge once)
-    std::size_t normals = 0;   ///< normal lines drawn
     std::size_t contacts = 0;  ///< vertices within their contact thickness of an analytic collider
     std::size_t pins = 0;      ///< pin marks drawn
     bool grab = false;         ///< the grab's spring is drawn
 };
 
-/// The overlay of `world` as drawn with `camera` on a `width`×`height` picture, for the toggles in
-/// `options`; the grab's spring whenever a vertex is grabbed. Points behind the camera are left
-/// out. Reads the positions of a cloth only when something is drawn for it.
+/// The lines the renderer draws for the toggles in `options`: the wireframe, and normals 1.5 mean
+/// rest edges long (of the cloth with the shortest edges).
+[[nodiscard]] render::OverlayLines overlay_lines(const World& world, const DisplayOptions& options);
+
+/// The marks of `world` as drawn with `camera` on a `width`×`height` picture, for the contact and
+/// pin toggles in `options`; the grab's spring whenever a vertex is grabbed. Points behind the
+/// camera are left out. Reads the positions of a cloth only when something is drawn for it.
 [[nodiscard]] ViewportOverlay build_viewport_overlay(World& world, const render::Camera& camera, int width, int height,
                                                      const DisplayOptions& options);
 

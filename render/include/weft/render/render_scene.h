@@ -82,6 +82,7 @@ struct Light {
 struct RenderScene {
     std::vector<ClothDraw> cloths;
     std::vector<std::uint32_t> cloth_indices;  ///< all cloths' triangles, indices into the cloth buffer
+    std::vector<std::uint32_t> cloth_edges;    ///< edge_indices(cloth_indices): the overlay's wireframe
     std::uint32_t cloth_vertices = 0;          ///< size of the shared cloth vertex buffer
     std::vector<ColliderDraw> colliders;       ///< the model's drawable colliders, then the ground
     std::uint32_t deforming_vertices = 0;      ///< the deforming colliders' vertices, all together
@@ -90,6 +91,16 @@ struct RenderScene {
     glm::vec3 background{0.62F, 0.68F, 0.76F};  ///< linear RGB
     /// Box the shadow map covers, m: the cloth at rest and the bounded colliders, grown by half.
     glm::vec3 bounds_min{-1.0F}, bounds_max{1.0F};
+};
+
+/// Lines a frame draws over the cloth from the cloth buffer itself (what the solver wrote: no copy
+/// through the host), depth-tested against the picture so that the far side stays hidden: the
+/// editor's wireframe and normals.
+struct OverlayLines {
+    bool wireframe = false;       ///< every cloth edge once (RenderScene::cloth_edges)
+    float normal_length = 0.0F;   ///< m; > 0 draws each cloth vertex's normal this long
+    glm::vec3 wireframe_colour{0.05F, 0.05F, 0.08F};  ///< linear RGB
+    glm::vec3 normal_colour{0.1F, 0.45F, 1.0F};       ///< linear RGB
 };
 
 /// The state drawn in one frame.
@@ -111,7 +122,13 @@ struct RenderFrame {
     /// written into the slot's tail with an upload, expected there from the writer otherwise.
     int cloth_slot = 0;
     std::uint64_t stamp = 0;
+    /// Overlay lines drawn after the scene (none by default).
+    OverlayLines lines;
 };
+
+/// Every edge of `triangles` (three indices each) once, as pairs of indices, in a fixed order (each
+/// edge where it first appears, its smaller index first).
+[[nodiscard]] std::vector<std::uint32_t> edge_indices(std::span<const std::uint32_t> triangles);
 
 /// The scene of `world` seen from `camera`: one draw per cloth (colours from a fixed palette, by
 /// cloth index), one per analytic or mesh collider (a plane becomes the ground grid), and a ground
