@@ -56,6 +56,9 @@ void require_device_support(const SolverSettings& settings) {
     if (settings.bending == BendingModel::Shell)
         throw Error("cuda backend: solver.bending = \"shell\" (the bending model per triangle) runs on the cpu backend only "
                     "so far; use solver.bending = \"hinge\" or --backend cpu");
+    if (settings.face_contacts)
+        throw Error("cuda backend: solver.face_contacts = true (collider contacts at triangle centroids) runs on the cpu "
+                    "backend only so far; set it false or use --backend cpu");
 }
 
 void DeviceSolver::choose_pcg_loop() {

@@ -145,6 +145,35 @@ EnergyAudit host_energy_audit(const Model& model, std::span<const std::vector<Ve
         });
         for (const Parts& part : parts) add(a, pin_power, part);
 
+        if (w.solver.face_contacts && !colliders.empty()) {
+            // The triangles' centroid contacts (implicit_terms.h: face_collider_terms), as the
+            // vertices' above: the penalty energy and a moving collider's power bound.
+            parts.assign(chunk_count(f.triangle_count()), Parts{});
+            parallel_chunks(f.triangle_count(), [&](std::size_t lo, std::size_t hi) {
+                Parts& out = parts[lo / kParallelChunk];
+                for (std::size_t tri = lo; tri < hi; ++tri) {
+                    const auto& idx = f.triangles()[tri].v;
+                    const Vec3d xm = (xc[idx[0]] + xc[idx[1]] + xc[idx[2]]) / 3.0;
+                    const Vec3d vm = (vc[idx[0]] + vc[idx[1]] + vc[idx[2]]) / 3.0;
+                    const double m = (f.masses()[idx[0]] + f.masses()[idx[1]] + f.masses()[idx[2]]) / 3.0;
+                    const double k = physics::collider_penalty_stiffness(w.solver.contact_stiffness, m, h * h);
+                    for (const ColliderNow& c : colliders) {
+                        const double mu = c.friction >= 0.0 ? c.friction : p.friction;
+                        const physics::ContactResult<double> r = physics::collider_contact(
+                            c.shape, physics::ContactParams<double>{k, p.thickness, mu, 1e-3}, xm, vm,
+                            physics::HessianKind::None);
+                        if (!r.active) continue;
+                        out.contact += r.energy;
+                        if (c.moving) {
+                            const double u = physics::length(physics::shape_point_velocity(c.shape, xm));
+                            out.power += physics::length(r.force) * u + 2.0 * m * u * (u + physics::length(vm)) / h;
+                        }
+                    }
+                }
+            });
+            for (const Parts& part : parts) add(a, pin_power, part);
+        }
+
         if (p.bending > 0.0 && w.solver.bending == BendingModel::Shell) {
             // The model per triangle (shell_bending_energy.h).
             parts.assign(chunk_count(f.triangle_count()), Parts{});

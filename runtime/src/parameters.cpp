@@ -218,6 +218,11 @@ constexpr Parameter kTable[] = {
     {.section = "solver", .name = "contact_stiffness", .type = T::Real, .unit = "N/m", .range = R{0.0, 1e12},
      .doc = "per-vertex collider contact stiffness; 0 picks one from the mass and `dt`", .label = "collider stiffness",
      .panel = "solver", .log_scale = true, .access = field<&WorldDesc::solver, &SolverSettings::contact_stiffness>()},
+    {.section = "solver", .name = "face_contacts", .type = T::Boolean,
+     .doc = "analytic colliders also push each cloth triangle's centroid, not only its vertices: a coarse cloth over a "
+            "curved collider does not let it show through its triangles (a collider test per triangle; cpu backend "
+            "only so far)",
+     .label = "face contacts", .panel = "solver", .access = field<&WorldDesc::solver, &SolverSettings::face_contacts>()},
     {.section = "solver", .name = "threads", .type = T::Integer, .range = R{0, 1024},
      .doc = "CPU worker threads, 0 = all cores (results do not depend on it); `--threads` and "
             "`BackendOptions::threads` take precedence when non-zero",

@@ -114,6 +114,11 @@ struct SolverSettings {
     /// from diverging on stiff, light cloth over long steps. The energy guard's redo turns it on.
     bool line_search = false;
     double contact_stiffness = 0.0;  ///< N/m per vertex against colliders; 0 picks a stiffness from mass and dt
+    /// The analytic colliders also push each cloth triangle's centroid, not only its vertices: a
+    /// coarse cloth over a curved collider no longer lets it show through the middle of its
+    /// triangles (weft/physics/implicit_terms.h, face_collider_terms). Costs a collider test per
+    /// triangle. cpu backend only so far.
+    bool face_contacts = false;
     int threads = 0;               ///< CPU worker threads; 0 = all cores. Results do not depend on it.
     /// GPUs one world is split across on the cuda backend (docs/multi-gpu.md); `--gpus` and
     /// BackendOptions::gpus take precedence when non-zero. The CPU backend ignores it.

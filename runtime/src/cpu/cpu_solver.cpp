@@ -95,6 +95,7 @@ void CpuSolver<T>::prepare_parameters(const Model& model, double t, double h) {
     const WorldDesc& w = model.settings;
     hessian_ = w.solver.hessian == HessianMode::Projected ? physics::HessianKind::Projected : physics::HessianKind::Fast;
     bending_ = w.solver.bending;
+    face_contacts_ = w.solver.face_contacts;
     gravity_ = to<T>(w.gravity);
     wind_.active = w.wind.active();
     wind_.velocity = to<T>(w.wind.velocity);
@@ -148,9 +149,14 @@ void CpuSolver<T>::evaluate_elements(const Model& model, double /*t*/, T h) {
     const std::size_t nt = f.triangle_count();
     const physics::ImplicitStep<T> step{h, h * h};
     const physics::HessianKind kind = hessian_;
+    const physics::ColliderSet<T> colliders{shapes_.data(), shape_friction_.data(), static_cast<int>(shapes_.size()),
+                                            contact_stiffness_};
+    const bool faces = face_contacts_ && !shapes_.empty();
+    std::atomic<int> face_contacts{0};  // an integer count: the same on any number of threads
     // Each element's terms (weft/physics/implicit_terms.h) are written straight into its own slots
     // of the element buffers; assemble() gathers them per row in a fixed order.
     parallel_chunks(nt, [&](std::size_t lo, std::size_t hi) {
+        int active = 0;
         for (std::size_t t = lo; t < hi; ++t) {
             const auto& tri = f.triangles[t].v;
             V3 x[3], vk[3], d[3];
@@ -161,9 +167,16 @@ void CpuSolver<T>::evaluate_elements(const Model& model, double /*t*/, T h) {
             }
             const TriangleRestT& r = triangle_rest_[t];
             physics::ElementTermsView<T, 3> out{&element_rhs_[3 * t], &element_blocks_[9 * t]};
-            physics::triangle_terms(step, r.dm_inv, r.area, cloth_params_[f.triangle_cloth[t]], wind_, x, vk, d, kind, out);
+            const physics::MaterialCoefficients<T>& p = cloth_params_[f.triangle_cloth[t]];
+            physics::triangle_terms(step, r.dm_inv, r.area, p, wind_, x, vk, d, kind, out);
+            if (faces) {
+                const T mass = (mass_[tri[0]] + mass_[tri[1]] + mass_[tri[2]]) / T(3);
+                active += physics::face_collider_terms(step, colliders, p, mass, x, vk, d, kind, out);
+            }
         }
+        face_contacts += active;
     });
+    face_contacts_active_ = face_contacts.load();
     const std::size_t nh = f.hinge_count();
     if (bending_ == BendingModel::Shell) {
         evaluate_shell_bending(h);
@@ -325,7 +338,7 @@ void CpuSolver<T>::substep(const Model& model, double t, double h_double, StepSt
     for (int newton = 0; newton < newton_iterations; ++newton) {
         clock = Clock::now();
         evaluate_elements(model, t, h);
-        stats.collider_contacts = evaluate_vertices(model, h);
+        stats.collider_contacts = evaluate_vertices(model, h) + face_contacts_active_;
         if (contacts != nullptr) contacts->evaluate(h, x0_, wk_, vk_, kinematic_x1, kinematic_v);
         stats.ms(Stage::Forces) += ms_since(clock);
 

@@ -102,6 +102,8 @@ private:
     // its rest data, each hinge's (up to) two triangles, pass 1's output per triangle, and the
     // linearisation point and v_k − w_k per vertex that pass 1 reads.
     BendingModel bending_ = BendingModel::Hinge;
+    bool face_contacts_ = false;   // SolverSettings::face_contacts
+    int face_contacts_active_ = 0;  // of the last evaluate_elements
     std::vector<physics::ShellBendingRest<T>> shell_rest_;
     std::vector<std::array<std::int32_t, 2>> hinge_faces_;
     std::vector<ShellFaceTerms<T>> shell_faces_;
