@@ -222,7 +222,8 @@ constexpr Parameter kTable[] = {
      .doc = "analytic colliders also push each cloth triangle's centroid, not only its vertices: a coarse cloth over a "
             "curved collider does not let it show through its triangles (a collider test per triangle; cpu backend "
             "only so far)",
-     .label = "face contacts", .panel = "solver", .access = field<&WorldDesc::solver, &SolverSettings::face_contacts>()},
+     .label = "face contacts", .panel = "solver", .effect = E::Rebuild,  // the cuda backend refuses it when built
+     .access = field<&WorldDesc::solver, &SolverSettings::face_contacts>()},
     {.section = "solver", .name = "threads", .type = T::Integer, .range = R{0, 1024},
      .doc = "CPU worker threads, 0 = all cores (results do not depend on it); `--threads` and "
             "`BackendOptions::threads` take precedence when non-zero",
