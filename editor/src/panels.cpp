@@ -441,7 +441,9 @@ void display_rows(Session& session) {
     ImGui::SameLine();
     ImGui::Checkbox("normals", &d.normals);
     ImGui::Checkbox("contacts", &d.contacts);
-    if (ImGui::IsItemHovered()) ImGui::SetTooltip("vertices within their contact thickness of an analytic collider");
+    if (ImGui::IsItemHovered())
+        ImGui::SetTooltip("orange: vertices within their contact thickness of an analytic collider; magenta: vertices in a "
+                          "contact with cloth or a mesh collider (reported by the cpu backend; not yet by cuda)");
     ImGui::SameLine();
     ImGui::Checkbox("pins", &d.pins);
     if (d.contacts || d.pins)

@@ -18,6 +18,7 @@ namespace weft::editor {
 namespace {
 
 constexpr std::uint32_t kContact = overlay_colour(255, 140, 0);
+constexpr std::uint32_t kClothContact = overlay_colour(230, 40, 200);
 constexpr std::uint32_t kPin = overlay_colour(30, 60, 230);
 constexpr std::uint32_t kGrab = overlay_colour(255, 220, 40);
 
@@ -91,6 +92,15 @@ ViewportOverlay build_viewport_overlay(World& world, const render::Camera& camer
                     touching = touching || physics::shape_distance(s, p, normal, static_cast<Mat3d*>(nullptr)) < reach;
                 }
                 if (touching && mark(p, OverlayMark::Shape::dot, 2.5F, kContact)) ++out.contacts;
+            }
+        }
+        if (options.contacts) {
+            // Cloth against cloth (or a mesh collider): the backend's own proximity pairs.
+            if (const std::optional<std::vector<std::uint32_t>> touching = world.contact_vertices(c)) {
+                for (const std::uint32_t v : *touching)
+                    if (mark(x[v], OverlayMark::Shape::dot, 2.5F, kClothContact)) ++out.cloth_contacts;
+            } else {
+                out.cloth_contacts_reported = false;
             }
         }
         if (pins)

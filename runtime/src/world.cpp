@@ -370,6 +370,14 @@ std::vector<Vec3d> World::positions(std::size_t cloth) const {
     return x;
 }
 
+std::optional<std::vector<std::uint32_t>> World::contact_vertices(std::size_t cloth) const {
+    (void)model_->cloths.at(cloth);  // a cloth that does not exist is an error, not an empty list
+    ensure_built();
+    std::vector<std::uint32_t> out;
+    if (!backend_->contact_vertices(cloth, out)) return std::nullopt;
+    return out;
+}
+
 std::vector<Vec3d> World::velocities(std::size_t cloth) const {
     const auto n = model_->cloths.at(cloth).fabric->vertex_count();
     std::vector<Vec3d> x(n), v(n);

@@ -244,8 +244,41 @@ TEST(Session, ResetKeepsPinsCollidersAndMotions) {
     EXPECT_EQ(session->world().model().cloths[0].pins.size(), 7U) << "the left edge of 10x6 cells";
 }
 
-// The View panel's lines and marks, for a sheet facing the camera.
-TEST(ViewportOverlay, DrawsEachEdgeOnceAndMarksContactsAndPins) {
+// Cloth against cloth: the backend's proximity pairs (World::contact_vertices) become magenta
+// marks; a sheet alone has none; a cloth index that does not exist is an error.
+TEST(ViewportOverlay, MarksTheVerticesInClothContacts) {
+    WorldDesc desc;
+    desc.collision.self_collision = true;
+    World world(desc, "cpu");
+    // Two 4×4-cell sheets in XY planes 2 mm apart (inside the contact thickness), facing the camera.
+    world.add_cloth({.name = "back", .fabric = Fabric::cook(make_grid(0.4, 0.4, 4, 4))});
+    ClothDesc front{.name = "front", .fabric = Fabric::cook(make_grid(0.4, 0.4, 4, 4))};
+    front.transform.translation = {0.0, 0.0, 0.002};
+    world.add_cloth(front);
+    ASSERT_TRUE(world.contact_vertices(0).has_value()) << "the cpu backend reports its contacts";
+    EXPECT_TRUE(world.contact_vertices(0)->empty()) << "nothing stepped yet";
+    (void)world.step();
+    const std::optional<std::vector<std::uint32_t>> back = world.contact_vertices(0), ahead = world.contact_vertices(1);
+    ASSERT_TRUE(back && ahead);
+    EXPECT_GT(back->size(), 10U) << "most of the back sheet touches the front one";
+    EXPECT_GT(ahead->size(), 10U);
+    EXPECT_TRUE(std::is_sorted(back->begin(), back->end()));
+    for (const std::uint32_t v : *back) EXPECT_LT(v, 25U) << "cloth-local ids";
+    EXPECT_THROW((void)world.contact_vertices(2), std::exception);
+
+    render::Camera camera;
+    camera.position = {0.0F, 0.0F, 2.0F};
+    camera.target = {0.0F, 0.0F, 0.0F};
+    DisplayOptions contacts{.contacts = true};
+    const ViewportOverlay o = build_viewport_overlay(world, camera, 640, 480, contacts);
+    EXPECT_TRUE(o.cloth_contacts_reported);
+    EXPECT_EQ(o.cloth_contacts, back->size() + ahead->size());
+    EXPECT_EQ(o.contacts, 0U) << "no analytic collider";
+    EXPECT_EQ(build_viewport_overlay(world, camera, 640, 480, DisplayOptions{}).cloth_contacts, 0U) << "toggle off";
+}
+
+// The View panel: marks for a sheet facing the camera, and the lines the renderer draws.
+TEST(ViewportOverlay, MarksContactsAndPinsAndGivesTheRendererItsLines) {
     World world(WorldDesc{}, "cpu");
     // 2×2 cells in the XY plane, 1 m, at z = 0; pinned at vertex 0.
     world.add_cloth({.name = "sheet", .fabric = Fabric::cook(make_grid(1.0, 1.0, 2, 2)), .pins = {{0, -1}}});

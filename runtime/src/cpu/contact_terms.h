@@ -65,6 +65,19 @@ public:
 
     [[nodiscard]] std::size_t size() const { return ids_.size(); }
 
+    /// The cloth vertices (ids below the cloth vertex count) of every pair still in the solve, each
+    /// once, ascending, into `out` (Backend::contact_vertices).
+    void contact_vertices(std::vector<std::uint32_t>& out) const {
+        out.clear();
+        for (std::size_t p = 0; p < ids_.size(); ++p) {
+            if (active_[p] == 0) continue;
+            for (int i = 0; i < 4; ++i)
+                if (ids_[p][i] < n_) out.push_back(static_cast<std::uint32_t>(ids_[p][i]));
+        }
+        std::sort(out.begin(), out.end());
+        out.erase(std::unique(out.begin(), out.end()), out.end());
+    }
+
     /// Evaluates every spring at the Newton linearisation point: cloth vertex i at x0 + h·w_k
     /// moving with v_k (d = v_k − w_k is how far the iterate is from the linearisation), kinematic
     /// vertex j at its pose at t + h moving with its velocity. Fills the per-pair right-hand side

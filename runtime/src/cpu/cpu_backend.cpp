@@ -45,6 +45,16 @@ public:
         std::visit([&](const auto& s) { s.read_state(first, count, x.data(), v.data()); }, solver_);
     }
 
+    bool contact_vertices(std::size_t cloth, std::vector<std::uint32_t>& out) const override {
+        std::vector<std::uint32_t> all;
+        std::visit([&](const auto& s) { s.contact_vertices(all); }, solver_);
+        const std::uint32_t first = flat_.cloth_vertex_offset.at(cloth), end = flat_.cloth_vertex_offset.at(cloth + 1);
+        out.clear();
+        for (const std::uint32_t v : all)
+            if (v >= first && v < end) out.push_back(v - first);
+        return true;
+    }
+
     std::vector<std::uint8_t> solver_state() const override {
         return std::visit([](const auto& s) { return s.solver_state(); }, solver_);
     }

@@ -45,6 +45,8 @@ public:
     [[nodiscard]] std::size_t memory_bytes() const;
     /// The share of `memory_bytes` held by the collision pipeline.
     [[nodiscard]] std::size_t collision_memory_bytes() const { return collisions_.memory_bytes(); }
+    /// The flat model's cloth vertices in a proximity contact in the last substep (ContactTerms).
+    void contact_vertices(std::vector<std::uint32_t>& out) const { collisions_.terms().contact_vertices(out); }
     /// Offset mode: the penalty energy of the current substep's offset contacts at the current state,
     /// J (0 in the other mode, or before a substep).
     [[nodiscard]] double offset_contact_energy() const;

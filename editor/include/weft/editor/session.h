@@ -75,7 +75,7 @@ struct PlayRequests {
 struct DisplayOptions {
     bool wireframe = false;  ///< the cloth's triangle edges
     bool normals = false;    ///< each vertex's normal, as a short line
-    bool contacts = false;   ///< vertices within their contact distance of an analytic collider
+    bool contacts = false;   ///< vertices within their contact distance of an analytic collider, and in a cloth contact
     bool pins = false;       ///< pinned vertices (the grab's spring is drawn whenever a vertex is grabbed)
 };
 

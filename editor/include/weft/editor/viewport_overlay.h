@@ -38,6 +38,8 @@ struct ViewportOverlay {
     std::vector<OverlaySegment> segments;
     std::vector<OverlayMark> marks;
     std::size_t contacts = 0;  ///< vertices within their contact thickness of an analytic collider
+    std::size_t cloth_contacts = 0;       ///< vertices in a proximity contact (cloth or a mesh collider)
+    bool cloth_contacts_reported = true;  ///< false: the backend does not report its proximity contacts
     std::size_t pins = 0;      ///< pin marks drawn
     bool grab = false;         ///< the grab's spring is drawn
 };
@@ -47,7 +49,8 @@ struct ViewportOverlay {
 [[nodiscard]] render::OverlayLines overlay_lines(const World& world, const DisplayOptions& options);
 
 /// The marks of `world` as drawn with `camera` on a `width`×`height` picture, for the contact and
-/// pin toggles in `options`; the grab's spring whenever a vertex is grabbed. Points behind the
+/// pin toggles in `options` (contacts: orange against analytic colliders, magenta in the backend's
+/// proximity pairs with cloth or a mesh collider); the grab's spring whenever a vertex is grabbed. Points behind the
 /// camera are left out. Reads the positions of a cloth only when something is drawn for it.
 [[nodiscard]] ViewportOverlay build_viewport_overlay(World& world, const render::Camera& camera, int width, int height,
                                                      const DisplayOptions& options);

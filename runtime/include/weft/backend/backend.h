@@ -58,6 +58,15 @@ public:
     /// with `read_state` and sums on the host; a backend that keeps its state on a device may sum there
     /// and return the result.
     [[nodiscard]] virtual EnergyAudit energy_audit(const Model& model, double t, double h, bool with_wind) const;
+    /// The vertices of cloth `cloth` (its own numbering) in a proximity contact with cloth or with a
+    /// mesh collider in the last substep (offset pairs beyond their radius left out), each once,
+    /// ascending, into `out`. False, with `out` empty, where the backend does not report them (what
+    /// the editor's contact marks then say). Reads back and allocates: for tools, not every frame of a game.
+    [[nodiscard]] virtual bool contact_vertices(std::size_t cloth, std::vector<std::uint32_t>& out) const {
+        (void)cloth;
+        out.clear();
+        return false;
+    }
     /// Bytes of simulation state held (host or device).
     [[nodiscard]] virtual std::size_t memory_bytes() const = 0;
     /// `memory_bytes` split by purpose (bytes each, summing to it), for stats and benchmarks. The
