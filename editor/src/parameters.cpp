@@ -189,7 +189,7 @@ ParameterTable::ParameterTable(const World& world, std::span<const std::string> 
         const auto alias = [&](const std::string& key) { aliases_.emplace(key, P.size() - 1); };
         for (const weft::Parameter& row : parameter_table()) {
             if (!shown(row) || !holds<ColliderDesc>(row) || !row.applies_to(c.shape)) continue;
-            if (row.name == "position" && follows) continue;  // the motion's frame
+            if ((row.name == "position" || row.name == "rotation") && follows) continue;  // the motion's frame
             add_rows<ColliderDesc>(P, row, name, std::to_string(k), group,
                                    [k](World& w) -> ColliderDesc& { return w.collider(k); }, alias);
         }

@@ -75,6 +75,20 @@ constexpr ParameterAccess field() {
     return a;
 }
 
+/// A collider's rotation as the scene writes it, Euler angles in degrees (weft/motion.h), over the
+/// rotation matrix its motion keeps: read back from the matrix, and written as one.
+constexpr ParameterAccess collider_rotation() {
+    ParameterAccess a;
+    a.owner = owner_of<ColliderDesc>;
+    a.vector = [](const void* o) -> Vec3d {
+        return euler_degrees_from_rotation(static_cast<const ColliderDesc*>(o)->motion.initial_rotation);
+    };
+    a.set_vector = [](void* o, const Vec3d& v) {
+        static_cast<ColliderDesc*>(o)->motion.initial_rotation = rotation_from_euler_degrees(v);
+    };
+    return a;
+}
+
 // An enumeration field whose names are listed in the order of `Values` (the row's `choices`).
 template <auto Values, auto First, auto... Rest>
 constexpr ParameterAccess choice_field() {
@@ -523,8 +537,9 @@ constexpr Parameter kTable[] = {
     {.section = "collider", .name = "position", .type = T::Vector, .unit = "m", .range = R{-kWorldExtent, kWorldExtent},
      .doc = "centre (sphere, capsule, box), a point on the plane, the mesh's origin", .label = "position",
      .panel = "colliders", .vector_bound = VectorBound::Components, .slider = R{-1e4, 1e4}, .access = field<&ColliderDesc::motion, &Motion::origin>()},
-    {.section = "collider", .name = "rotation", .type = T::Vector, .unit = "degrees",
-     .doc = "orientation of the local frame (see *Rotations*)", .effect = E::Rebuild, .default_text = "[0, 0, 0]"},
+    {.section = "collider", .name = "rotation", .type = T::Vector, .unit = "degrees", .range = R{-360.0, 360.0},
+     .doc = "orientation of the local frame (see *Rotations*)", .label = "rotation", .panel = "colliders",
+     .vector_bound = VectorBound::Components, .default_text = "[0, 0, 0]", .access = collider_rotation()},
     {.section = "collider", .name = "motion", .type = T::String,
      .doc = "follow this motion instead of `position` and `rotation`", .effect = E::Rebuild,
      .constraint = "a `[[motion]]` name", .default_text = "none"},

@@ -24,20 +24,6 @@ namespace {
 
 using scene_toml::Table;
 
-// Rotation from Euler angles in degrees [x, y, z]: about the world X axis first, then Y, then Z
-// (R = Rz·Ry·Rx). Degrees because people type them; the angular *velocity* of a motion stays in rad/s.
-Mat3d rotation_from_euler_degrees(Vec3d degrees) {
-    const double k = std::numbers::pi / 180.0;
-    const double cx = std::cos(degrees.x * k), sx = std::sin(degrees.x * k);
-    const double cy = std::cos(degrees.y * k), sy = std::sin(degrees.y * k);
-    const double cz = std::cos(degrees.z * k), sz = std::sin(degrees.z * k);
-    Mat3d rx = Mat3d::identity(), ry = Mat3d::identity(), rz = Mat3d::identity();
-    rx.m[1][1] = cx; rx.m[1][2] = -sx; rx.m[2][1] = sx; rx.m[2][2] = cx;
-    ry.m[0][0] = cy; ry.m[0][2] = sy; ry.m[2][0] = -sy; ry.m[2][2] = cy;
-    rz.m[0][0] = cz; rz.m[0][1] = -sz; rz.m[1][0] = sz; rz.m[1][1] = cz;
-    return rz * (ry * rx);
-}
-
 // Reads parameter `p` from `t` into `owner` when the key is present, checking its type and range.
 template <class Owner>
 void read_value(Table& t, const Parameter& p, Owner& owner) {

@@ -4,6 +4,7 @@
 // back to the same double (std::to_chars), so load → save → load is exact.
 #include <algorithm>
 #include <charconv>
+#include <cmath>
 #include <fstream>
 #include <sstream>
 #include <tuple>
@@ -177,7 +178,7 @@ void write_collider(std::ostream& out, const SceneDesc& scene, std::size_t k, co
         << "\nshape = " << toml_string(shape.choices[static_cast<std::size_t>(c.shape)]) << "\n";
     // The keys of its shape in the table's order; where it is, below, depends on whether it follows a motion.
     for (const Parameter& p : parameter_table()) {
-        if (p.section != "collider" || !p.applies_to(c.shape) || p.name == "position") continue;
+        if (p.section != "collider" || !p.applies_to(c.shape) || p.name == "position" || p.name == "rotation") continue;
         if (p.name == "file") {
             out << "file = " << toml_string(mesh_path(mesh.file, directory)) << "\n";
         } else if (p.name == "clip") {
@@ -257,9 +258,19 @@ void update_scene_from_world(SceneDesc& scene, const World& world) {
         const bool follows = k < scene.collider_motions.size() && !scene.collider_motions[k].empty();
         for (const Parameter& p : parameter_table()) {
             if (!holds<ColliderDesc>(p) || p.effect != ParameterEffect::Live) continue;
-            if (p.name == "position" && follows) continue;  // the motion's frame, copied above
+            if ((p.name == "position" || p.name == "rotation") && follows) continue;  // the motion's frame, copied above
             if (p.access.number != nullptr) set_parameter_number(p, saved, parameter_number(p, live));
             if (p.access.vector != nullptr) set_parameter_vector(p, saved, parameter_vector(p, live));
+        }
+        // The file's Euler angles, unless the rotation is still theirs (no round trip through the
+        // matrix, which would rewrite 30 as 30.000000000000004).
+        if (!follows && k < scene.collider_rotation_degrees.size()) {
+            Vec3d& degrees = scene.collider_rotation_degrees[k];
+            const Mat3d file = rotation_from_euler_degrees(degrees);
+            double change = 0.0;
+            for (int i = 0; i < 3; ++i)
+                for (int j = 0; j < 3; ++j) change = std::max(change, std::abs(file.m[i][j] - live.motion.initial_rotation.m[i][j]));
+            if (change > 1e-12) degrees = euler_degrees_from_rotation(live.motion.initial_rotation);
         }
     }
 

@@ -15,6 +15,7 @@
 
 #include "weft/backend/model.h"
 #include "weft/error.h"
+#include "weft/parameters.h"
 #include "weft/scene.h"
 
 namespace weft {
@@ -275,6 +276,28 @@ TEST(SceneWriter, TunedCollidersAreSaved) {
     EXPECT_EQ(saved.colliders[0].friction, 0.9);
     EXPECT_TRUE(same(saved.colliders[0].motion.origin, Vec3d{-0.05, 1.4, 0.1}));
     EXPECT_EQ(saved.colliders[1].motion.origin.y, -0.25);
+    EXPECT_TRUE(same(saved.collider_rotation_degrees[0], scene.collider_rotation_degrees[0]))
+        << "an untouched rotation keeps the file's angles";
+
+    // The rotation is live too (the editor's row): set through the parameter, it turns the capsule
+    // at the next step and is saved as Euler angles.
+    const Parameter& rotation = parameter("collider", "rotation");
+    ASSERT_EQ(rotation.effect, ParameterEffect::Live);
+    set_parameter_vector(rotation, world->collider(0), Vec3d{0.0, 0.0, 90.0});
+    const Vec3d axis = world->collider(0).motion.at(0.0).rotation * Vec3d{0.0, 1.0, 0.0};
+    EXPECT_NEAR(axis.x, -1.0, 1e-12) << "the capsule's axis (local y) turned 90° about z";
+    EXPECT_NEAR(parameter_vector(rotation, world->collider(0)).z, 90.0, 1e-9);
+    update_scene_from_world(scene, *world);
+    const SceneDesc turned = save_and_load(scene, "turned_collider");
+    EXPECT_NEAR(turned.collider_rotation_degrees[0].z, 90.0, 1e-9);
+    EXPECT_NEAR(turned.colliders[0].motion.initial_rotation.m[0][1], -1.0, 1e-12);
+    // Euler angles back from a matrix, away from and at the gimbal lock.
+    for (const Vec3d d : {Vec3d{30.0, -20.0, 110.0}, Vec3d{-170.0, 45.0, 5.0}, Vec3d{0.0, 90.0, 40.0}}) {
+        const Vec3d back = euler_degrees_from_rotation(rotation_from_euler_degrees(d));
+        const Mat3d a = rotation_from_euler_degrees(d), b = rotation_from_euler_degrees(back);
+        for (int i = 0; i < 3; ++i)
+            for (int j = 0; j < 3; ++j) EXPECT_NEAR(a.m[i][j], b.m[i][j], 1e-12) << d.x << " " << d.y << " " << d.z;
+    }
 
     SceneDesc spinning = load_scene(kScenes / "sphere.toml");
     auto spin_world = build_world(spinning);

@@ -38,4 +38,11 @@ struct Motion {
 /// Rotation matrix of the rotation vector w (axis × angle, rad): Rodrigues' formula.
 [[nodiscard]] Mat3d rotation_from_vector(Vec3d w);
 
+/// Rotation from the scene format's Euler angles in degrees [x, y, z]: about the world X axis
+/// first, then Y, then Z (R = Rz·Ry·Rx).
+[[nodiscard]] Mat3d rotation_from_euler_degrees(Vec3d degrees);
+/// The Euler angles (degrees, the convention above) of rotation `r`: y in [−90, 90], x and z in
+/// (−180, 180]; at y = ±90 (gimbal lock) x is 0 and z carries the rest.
+[[nodiscard]] Vec3d euler_degrees_from_rotation(const Mat3d& r);
+
 }  // namespace weft
