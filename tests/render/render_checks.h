@@ -474,14 +474,7 @@ inline void expect_overlay_lines_over_the_cloth_only_where_seen(Renderer& r) {
     box.half_extents = {0.12, 0.12, 0.04};
     box.motion.origin = {-0.2, 1.14, 0.9};  // on the line from the camera to the sheet's point (−0.3, 0.9, 0)
     t.world->add_collider(box);
-    CameraDesc camera;
-    camera.position = {0.0, 1.6, 2.6};
-    camera.target = {0.0, 0.5, 0.0};
-    camera.fov_degrees = 45.0;
-    t.scene = make_render_scene(*t.world, camera);
-    cloth_vertices(*t.world, t.scene, t.vertices);
-    t.frame.cloth = t.vertices;
-    t.frame.collider_models = collider_models(t.scene, t.world->model(), 0.0);
+    make_sheet_over_ball_view(t);
     ASSERT_EQ(t.scene.cloth_edges.size(), 2U * (16U * 17U * 2U + 16U * 16U));  // grid edges and one diagonal a cell
     r.load(t.scene);
     const Image plain = r.draw(t.frame);

@@ -20,6 +20,19 @@ struct TestScene {
     RenderFrame frame;
 };
 
+/// The scene, vertices and frame of `t`'s world seen as sheet_over_ball sees it (from the front and
+/// above): again after a test adds to the world.
+inline void make_sheet_over_ball_view(TestScene& t) {
+    CameraDesc camera;
+    camera.position = {0.0, 1.6, 2.6};
+    camera.target = {0.0, 0.5, 0.0};
+    camera.fov_degrees = 45.0;
+    t.scene = make_render_scene(*t.world, camera);
+    cloth_vertices(*t.world, t.scene, t.vertices);
+    t.frame.cloth = t.vertices;
+    t.frame.collider_models = collider_models(t.scene, t.world->model(), 0.0);
+}
+
 /// A 1 m square sheet tilted 30° about X above a ball resting on the ground plane, seen from the
 /// front and above: the image shows the sheet's front (upper) side, the ball, the ball's and the
 /// sheet's shadows on the ground grid, and the sky colour above the horizon.
@@ -38,14 +51,7 @@ inline TestScene sheet_over_ball(bool show_back = false) {
     ball.motion.origin = {0.3, 0.3, 0.2};
     t.world->add_collider(ball);
     t.world->add_collider(ColliderDesc{.name = "floor", .shape = ColliderShape::Plane});
-    CameraDesc camera;
-    camera.position = {0.0, 1.6, 2.6};
-    camera.target = {0.0, 0.5, 0.0};
-    camera.fov_degrees = 45.0;
-    t.scene = make_render_scene(*t.world, camera);
-    cloth_vertices(*t.world, t.scene, t.vertices);
-    t.frame.cloth = t.vertices;
-    t.frame.collider_models = collider_models(t.scene, t.world->model(), 0.0);
+    make_sheet_over_ball_view(t);
     return t;
 }
 

@@ -134,6 +134,19 @@ private:
     GLsync sync_ = nullptr;
 };
 
+/// A vertex array reading RenderVertex from binding 0: location 0 the position, 1 the normal.
+gl::VertexArray render_vertex_array() {
+    gl::VertexArray array = gl::create_vertex_array();
+    const GLuint a = array.get();
+    glEnableVertexArrayAttrib(a, 0);
+    glVertexArrayAttribFormat(a, 0, 3, GL_FLOAT, GL_FALSE, offsetof(RenderVertex, position));
+    glVertexArrayAttribBinding(a, 0, 0);
+    glEnableVertexArrayAttrib(a, 1);
+    glVertexArrayAttribFormat(a, 1, 3, GL_FLOAT, GL_FALSE, offsetof(RenderVertex, normal));
+    glVertexArrayAttribBinding(a, 1, 0);
+    return array;
+}
+
 /// `vertex_flags`: GL_DYNAMIC_STORAGE_BIT for the cloth buffer rewritten every frame, 0 for the
 /// static colliders.
 Mesh make_mesh(std::span<const RenderVertex> vertices, std::span<const std::uint32_t> indices, GLbitfield vertex_flags) {
@@ -146,16 +159,9 @@ Mesh make_mesh(std::span<const RenderVertex> vertices, std::span<const std::uint
     glNamedBufferStorage(mesh.indices.get(), static_cast<GLsizeiptr>(indices.size_bytes()), indices.data(), 0);
     mesh.index_count = static_cast<GLsizei>(indices.size());
 
-    mesh.array = gl::create_vertex_array();
-    const GLuint a = mesh.array.get();
-    glVertexArrayVertexBuffer(a, 0, mesh.vertices.get(), 0, sizeof(RenderVertex));
-    glVertexArrayElementBuffer(a, mesh.indices.get());
-    glEnableVertexArrayAttrib(a, 0);
-    glVertexArrayAttribFormat(a, 0, 3, GL_FLOAT, GL_FALSE, offsetof(RenderVertex, position));
-    glVertexArrayAttribBinding(a, 0, 0);
-    glEnableVertexArrayAttrib(a, 1);
-    glVertexArrayAttribFormat(a, 1, 3, GL_FLOAT, GL_FALSE, offsetof(RenderVertex, normal));
-    glVertexArrayAttribBinding(a, 1, 0);
+    mesh.array = render_vertex_array();
+    glVertexArrayVertexBuffer(mesh.array.get(), 0, mesh.vertices.get(), 0, sizeof(RenderVertex));
+    glVertexArrayElementBuffer(mesh.array.get(), mesh.indices.get());
     return mesh;
 }
 
@@ -373,16 +379,8 @@ void EglRenderer::load(const RenderScene& scene) {
         glNamedBufferStorage(o.edges.get(), static_cast<GLsizeiptr>(scene.cloth_edges.size() * sizeof(std::uint32_t)),
                              scene.cloth_edges.data(), 0);
     }
-    for (gl::VertexArray* array : {&o.wireframe, &o.normals}) {
-        *array = gl::create_vertex_array();
-        const GLuint a = array->get();
-        glEnableVertexArrayAttrib(a, 0);
-        glVertexArrayAttribFormat(a, 0, 3, GL_FLOAT, GL_FALSE, offsetof(RenderVertex, position));
-        glVertexArrayAttribBinding(a, 0, 0);
-        glEnableVertexArrayAttrib(a, 1);
-        glVertexArrayAttribFormat(a, 1, 3, GL_FLOAT, GL_FALSE, offsetof(RenderVertex, normal));
-        glVertexArrayAttribBinding(a, 1, 0);
-    }
+    o.wireframe = render_vertex_array();
+    o.normals = render_vertex_array();
     if (o.edges.get() != 0) glVertexArrayElementBuffer(o.wireframe.get(), o.edges.get());
     glVertexArrayBindingDivisor(o.normals.get(), 0, 1);  // one cloth vertex an instance
     o.colliders.reserve(scene.colliders.size());
