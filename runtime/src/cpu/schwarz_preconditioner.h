@@ -75,7 +75,7 @@ public:
         parallel_chunks(fine.size(), [&](std::size_t lo, std::size_t hi) {
             for (std::size_t s = lo; s < hi; ++s) {
                 const std::uint32_t i = slot_row_[s], j = column[s];
-                fine[s] = fixed[i] || fixed[j] ? M3{} : (i == j ? A.blocks[s] + extra_diagonal(i) : A.blocks[s]);
+                fine[s] = fixed[i] || fixed[j] ? M3{} : (i == j ? A.block(s) + extra_diagonal(i) : A.block(s));
             }
         });
         // Coarser levels: each coupling block sums its listed blocks of the level below, in order.
