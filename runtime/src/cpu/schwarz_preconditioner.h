@@ -3,9 +3,9 @@
 // §2b; the levels are weft/backend/schwarz_hierarchy.h): M⁻¹ = Σ_l R_lᵀ D_l⁻¹ R_l. Every substep
 // it aggregates the assembled 3×3 blocks level by level into coupling blocks (the hierarchy's fixed
 // sums), writes each level's domain matrices (dense, 48×48 for domains of 16 nodes), factors them
-// (Gauss–Jordan, to the explicit inverse, as on the GPU), and applies all levels to a residual. Work is split by
-// domain, each domain written by one task in a fixed order: the result does not depend on the
-// thread count.
+// (Gauss–Jordan, to the explicit inverse, as on the GPU; cpu/dense_inverse.h), and applies all
+// levels to a residual. Work is split by domain, each domain written by one task in a fixed order:
+// the result does not depend on the thread count.
 //
 // Filtered (pinned) vertices: the solve acts on the free vertices only (S·A·S), so their blocks are
 // left out of every level and a vertex or node with nothing left gets the identity (it is decoupled,
@@ -13,12 +13,12 @@
 // their vertex's node, on every level; their couplings between vertices are not aggregated yet.
 
 #include <algorithm>
-#include <cmath>
 #include <cstdint>
 #include <vector>
 
 #include "cpu/bsr_matrix.h"
 #include "cpu/dense_columns.h"
+#include "cpu/dense_inverse.h"
 #include "deterministic_parallel.h"
 #include "weft/backend/schwarz_hierarchy.h"
 #include "weft/physics/vec.h"
@@ -108,8 +108,7 @@ public:
                     // Nodes with nothing (all pinned, or past the end of the last domain) are decoupled.
                     for (std::uint32_t k = 0; k < kDim; ++k)
                         if (D[k * kDim + k] == T(0)) D[k * kDim + k] = T(1);
-                    failed[d] = invert(D) ? 1 : 0;
-                    transpose(D);  // column-major for solve_domain
+                    failed[d] = dense_invert_to_columns(D) ? 1 : 0;  // column-major for solve_domain
                 }
             });
             for (const std::uint8_t f : failed) failures += f;
@@ -177,43 +176,6 @@ private:
         T* D = dense + domain * kDim * kDim;
         for (int r = 0; r < 3; ++r)
             for (int c = 0; c < 3; ++c) D[(3 * a + r) * kDim + 3 * b + c] = m.m[r][c];
-    }
-
-    /// In-place inverse of the SPD domain matrix by Gauss–Jordan elimination without pivoting (the
-    /// same algorithm as the GPU's, schwarz_kernels.cu): every step is a rank-one update of whole rows,
-    /// which the compiler vectorises. Returns true if a pivot was not positive (the matrix is not SPD
-    /// in this precision); it is then replaced by the magnitude of the original diagonal entry, so
-    /// the result stays usable.
-    static bool invert(T* D) {
-        bool failed = false;
-        T magnitude[kDim], column[kDim];
-        for (std::uint32_t k = 0; k < kDim; ++k) magnitude[k] = std::max(std::abs(D[k * kDim + k]), T(1e-12));
-        for (std::uint32_t k = 0; k < kDim; ++k) {
-            for (std::uint32_t i = 0; i < kDim; ++i) column[i] = D[i * kDim + k];
-            T pivot = column[k];
-            if (!(pivot > T(0))) {
-                failed = true;
-                pivot = magnitude[k];
-            }
-            const T inverse = T(1) / pivot;
-            T* row_k = D + k * kDim;
-            for (std::uint32_t j = 0; j < kDim; ++j) row_k[j] *= inverse;
-            row_k[k] = inverse;
-            for (std::uint32_t i = 0; i < kDim; ++i) {
-                if (i == k) continue;
-                T* row = D + i * kDim;
-                const T f = column[i];
-                row[k] = T(0);
-                for (std::uint32_t j = 0; j < kDim; ++j) row[j] -= f * row_k[j];
-            }
-        }
-        return failed;
-    }
-
-    /// In-place transpose of a domain's inverse, so that solve_domain reads it by columns.
-    static void transpose(T* D) {
-        for (std::uint32_t i = 0; i < kDim; ++i)
-            for (std::uint32_t j = i + 1; j < kDim; ++j) std::swap(D[i * kDim + j], D[j * kDim + i]);
     }
 
     /// y = D⁻¹ v for one domain (kNodes vectors of 3), D⁻¹ column-major (transposed after the

@@ -1,0 +1,65 @@
+// See dense_inverse.h.
+#include "cpu/dense_inverse.h"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdint>
+#include <utility>
+
+#include "cpu/vector_clones.h"
+
+namespace weft::cpu {
+namespace {
+
+constexpr std::uint32_t kDim = SchwarzHierarchy::kDomainDim;
+
+/// Every step is a rank-one update of whole rows, which the compiler vectorises. Always inlined:
+/// a call out of the AVX2 clone would run the baseline build of the loops.
+template <typename T>
+[[gnu::always_inline]] inline bool invert(T* D) {
+    bool failed = false;
+    T magnitude[kDim], column[kDim];
+    for (std::uint32_t k = 0; k < kDim; ++k) magnitude[k] = std::max(std::abs(D[k * kDim + k]), T(1e-12));
+    for (std::uint32_t k = 0; k < kDim; ++k) {
+        for (std::uint32_t i = 0; i < kDim; ++i) column[i] = D[i * kDim + k];
+        T pivot = column[k];
+        if (!(pivot > T(0))) {
+            failed = true;
+            pivot = magnitude[k];
+        }
+        const T inverse = T(1) / pivot;
+        T* row_k = D + k * kDim;
+        for (std::uint32_t j = 0; j < kDim; ++j) row_k[j] *= inverse;
+        row_k[k] = inverse;
+        for (std::uint32_t i = 0; i < kDim; ++i) {
+            if (i == k) continue;
+            T* row = D + i * kDim;
+            const T f = column[i];
+            row[k] = T(0);
+            for (std::uint32_t j = 0; j < kDim; ++j) row[j] -= f * row_k[j];
+        }
+    }
+    return failed;
+}
+
+template <typename T>
+[[gnu::always_inline]] inline void transpose(T* D) {
+    for (std::uint32_t i = 0; i < kDim; ++i)
+        for (std::uint32_t j = i + 1; j < kDim; ++j) std::swap(D[i * kDim + j], D[j * kDim + i]);
+}
+
+}  // namespace
+
+WEFT_VECTOR_CLONES bool dense_invert_to_columns(double* D) {
+    const bool failed = invert(D);
+    transpose(D);
+    return failed;
+}
+
+WEFT_VECTOR_CLONES bool dense_invert_to_columns(float* D) {
+    const bool failed = invert(D);
+    transpose(D);
+    return failed;
+}
+
+}  // namespace weft::cpu
