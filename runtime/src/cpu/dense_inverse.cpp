@@ -15,6 +15,14 @@ constexpr std::uint32_t kDim = SchwarzHierarchy::kDomainDim;
 
 /// Every step is a rank-one update of whole rows, which the compiler vectorises. Always inlined:
 /// a call out of the AVX2 clone would run the baseline build of the loops.
+///
+/// Rows whose entry in the pivot's column is zero are skipped: a domain couples each node to its
+/// few mesh neighbours, so at a step most rows have nothing to eliminate (the factorisation of the
+/// demo flag's domains costs 30% less). Skipping gives the same bits as updating, for a matrix with
+/// finite entries: row[j] − (±0·row_k[j]) equals row[j] except when row[j] = −0, and no entry is
+/// ever −0 here. The domain matrices are sums that start from +0 (an exact cancellation rounds to
+/// +0), the pivot row is scaled by a positive 1/pivot, and a difference x − y is −0 only for
+/// x = −0; so by induction none appears during the elimination either.
 template <typename T>
 [[gnu::always_inline]] inline bool invert(T* D) {
     bool failed = false;
@@ -36,6 +44,7 @@ template <typename T>
             T* row = D + i * kDim;
             const T f = column[i];
             row[k] = T(0);
+            if (f == T(0)) continue;  // the update would leave the row as it is (see above)
             for (std::uint32_t j = 0; j < kDim; ++j) row[j] -= f * row_k[j];
         }
     }
