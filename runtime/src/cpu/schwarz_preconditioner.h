@@ -162,11 +162,25 @@ public:
 private:
     /// Each coarse node of domain d's pieces gets the sum of its members' values `v` (the domain's
     /// kNodes), in node order; the domain's pieces are its own, so domains write disjoint nodes.
+    /// The sum of the node being summed is kept in registers while its members come in a run (a
+    /// domain is mostly one piece): the same additions in the same order as adding into `coarse`
+    /// member by member, without a store and a reload between two of them.
     static void restrict_domain(const SchwarzLevel& level, std::size_t d, const V3* v, std::vector<V3>& coarse) {
         const std::uint32_t first = level.parent_start[d], last = level.parent_start[d + 1];
         for (std::uint32_t c = first; c < last; ++c) coarse[c] = V3{};
-        const std::size_t end = std::min<std::size_t>(level.nodes, (d + 1) * kNodes);
-        for (std::size_t k = d * kNodes; k < end; ++k) coarse[level.parent[k]] += v[k - d * kNodes];
+        const std::size_t begin = d * kNodes, end = std::min<std::size_t>(level.nodes, (d + 1) * kNodes);
+        if (begin >= end) return;
+        std::uint32_t node = level.parent[begin];
+        V3 sum{};
+        for (std::size_t k = begin; k < end; ++k) {
+            if (level.parent[k] != node) {
+                coarse[node] = sum;
+                node = level.parent[k];
+                sum = coarse[node];
+            }
+            sum += v[k - begin];
+        }
+        coarse[node] = sum;
     }
 
     /// Writes `m` as block `block` = (domain·kNodes + a)·kNodes + b of the dense matrices.
