@@ -16,6 +16,7 @@
 #include <cstdint>
 #include <vector>
 
+#include "cpu/aligned_allocator.h"
 #include "cpu/bsr_matrix.h"
 #include "cpu/dense_columns.h"
 #include "cpu/dense_inverse.h"
@@ -95,7 +96,7 @@ public:
         for (int l = 0; l < h.levels(); ++l) {
             const SchwarzLevel& level = h.level[static_cast<std::size_t>(l)];
             const std::vector<M3>& blocks = couplings_[static_cast<std::size_t>(l)];
-            std::vector<T>& dense = dense_[static_cast<std::size_t>(l)];
+            auto& dense = dense_[static_cast<std::size_t>(l)];
             std::fill(dense.begin(), dense.end(), T(0));
             // Each dense block comes from one coupling: the writes never collide.
             parallel_chunks(level.dense_entry.size(), [&](std::size_t lo, std::size_t hi) {
@@ -126,7 +127,7 @@ public:
         for (int l = 0; l < levels; ++l) {
             const SchwarzLevel& level = h.level[static_cast<std::size_t>(l)];
             std::vector<V3>& v = values_[static_cast<std::size_t>(l)];
-            const std::vector<T>& dense = dense_[static_cast<std::size_t>(l)];
+            const auto& dense = dense_[static_cast<std::size_t>(l)];
             std::vector<V3>& y = solved_[static_cast<std::size_t>(l)];
             parallel_grains(level.domains(), kDomainGrain, [&](std::size_t lo, std::size_t hi) {
                 for (std::size_t d = lo; d < hi; ++d) {
@@ -208,7 +209,9 @@ private:
     std::vector<std::uint32_t> slot_row_;        // pattern slot → its row
     std::vector<std::vector<M3>> couplings_;      // per level: the coupling blocks (level 0: per slot)
     std::vector<std::vector<std::uint8_t>> failed_;  // per level and domain: a pivot was replaced
-    std::vector<std::vector<T>> dense_;   // per level: domains × kDim², row-major: the matrix, then its inverse transposed
+    // Per level: domains × kDim², row-major: the matrix, then its inverse transposed. On cache lines:
+    // a domain (kDim² scalars) is a whole number of them, so every row's 32-byte accesses stay in one.
+    std::vector<std::vector<T, AlignedAllocator<T>>> dense_;
     std::vector<std::vector<V3>> values_;  // per level: the restricted residual per node
     std::vector<std::vector<V3>> solved_;  // per level: the domain solutions per node
     int pivot_failures_ = 0;
