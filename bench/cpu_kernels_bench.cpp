@@ -24,14 +24,14 @@ void spmv(benchmark::State& state) {
     auto fabric = flag_fabric(state.range(0));
     cpu::BsrMatrix<T> A;
     A.resize(fabric->pattern());
-    for (auto& b : A.blocks) b = physics::Mat3<T>::diagonal(T(1));
+    for (std::size_t s = 0; s < fabric->pattern().block_count(); ++s) A.set_block(s, physics::Mat3<T>::diagonal(T(1)));
     std::vector<physics::Vec3<T>> x(fabric->vertex_count(), physics::Vec3<T>{T(1), T(2), T(3)}), y(x.size());
     for (auto _ : state) {
         A.multiply(x, y);
         benchmark::DoNotOptimize(y.data());
     }
     // Bytes: every block (9 T) and its column index, x gathered once per block, y and row_start once per row.
-    const double blocks = double(A.blocks.size()), rows = double(x.size());
+    const double blocks = double(fabric->pattern().block_count()), rows = double(x.size());
     const double bytes = blocks * (9.0 * sizeof(T) + 4.0 + 3.0 * sizeof(T)) + rows * (3.0 * sizeof(T) + 4.0);
     state.SetBytesProcessed(std::int64_t(bytes) * state.iterations());
     state.counters["triangles"] = double(fabric->triangle_count());
@@ -46,7 +46,7 @@ void pcg_iteration(benchmark::State& state) {
     // A diagonally dominant SPD matrix, so every solve runs exactly the iteration cap.
     for (std::size_t i = 0; i < fabric->vertex_count(); ++i)
         for (std::uint32_t s = fabric->pattern().row_start[i]; s < fabric->pattern().row_start[i + 1]; ++s)
-            A.blocks[s] = s == fabric->pattern().diagonal[i] ? physics::Mat3<T>::diagonal(T(20)) : physics::Mat3<T>::diagonal(T(-1));
+            A.set_block(s, s == fabric->pattern().diagonal[i] ? physics::Mat3<T>::diagonal(T(20)) : physics::Mat3<T>::diagonal(T(-1)));
     const std::size_t n = fabric->vertex_count();
     std::vector<physics::Vec3<T>> b(n, physics::Vec3<T>{T(1), T(0), T(-1)}), x(n);
     std::vector<std::uint8_t> fixed(n, 0);

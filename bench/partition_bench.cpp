@@ -82,10 +82,10 @@ weft::cpu::BsrMatrix<double> stiff_laplacian(const weft::BlockPattern& pattern, 
         double degree = 0.0;
         for (std::uint32_t s = pattern.row_start[i]; s < pattern.row_start[i + 1]; ++s)
             if (pattern.column[s] != i) {
-                A.blocks[s] = M3::diagonal(-k);
+                A.set_block(s, M3::diagonal(-k));
                 degree += 1.0;
             }
-        A.blocks[pattern.diagonal[i]] = M3::diagonal(mass + k * degree);
+        A.set_block(pattern.diagonal[i], M3::diagonal(mass + k * degree));
     }
     return A;
 }

@@ -19,7 +19,7 @@ cpu::BsrMatrix<double> random_spd(const Fabric& fabric, std::mt19937& rng, doubl
     cpu::BsrMatrix<double> A;
     A.resize(fabric.pattern());
     std::normal_distribution<double> g(0.0, 1.0);
-    for (std::size_t i = 0; i < fabric.vertex_count(); ++i) A.blocks[fabric.pattern().diagonal[i]] = M3::diagonal(mass);
+    for (std::size_t i = 0; i < fabric.vertex_count(); ++i) A.set_block(fabric.pattern().diagonal[i], M3::diagonal(mass));
     for (std::size_t t = 0; t < fabric.triangle_count(); ++t) {
         double B[9][9], K[9][9] = {};
         for (auto& row : B)
@@ -29,9 +29,11 @@ cpu::BsrMatrix<double> random_spd(const Fabric& fabric, std::mt19937& rng, doubl
                 for (int k = 0; k < 9; ++k) K[r][c] += B[k][r] * B[k][c];
         for (int a = 0; a < 3; ++a)
             for (int b = 0; b < 3; ++b) {
-                M3& blk = A.blocks[fabric.pattern().triangle_slots[t * 9 + std::size_t(a * 3 + b)]];
+                const std::size_t s = fabric.pattern().triangle_slots[t * 9 + std::size_t(a * 3 + b)];
+                M3 blk = A.block(s);
                 for (int r = 0; r < 3; ++r)
                     for (int c = 0; c < 3; ++c) blk.m[r][c] += K[3 * a + r][3 * b + c];
+                A.set_block(s, blk);
             }
     }
     return A;

@@ -38,10 +38,10 @@ cpu::BsrMatrix<double> stiff_laplacian(const Fabric& fabric, double mass, double
         double degree = 0.0;
         for (std::uint32_t s = p.row_start[i]; s < p.row_start[i + 1]; ++s)
             if (p.column[s] != i) {
-                A.blocks[s] = M3::diagonal(-k);
+                A.set_block(s, M3::diagonal(-k));
                 degree += 1.0;
             }
-        A.blocks[p.diagonal[i]] = M3::diagonal(mass + k * degree);
+        A.set_block(p.diagonal[i], M3::diagonal(mass + k * degree));
     }
     return A;
 }
@@ -345,7 +345,7 @@ cpu::BsrMatrix<double> cloth_matrix(const Fabric& fabric, std::mt19937& rng) {
     std::normal_distribution<double> noise(0.0, 0.004);
     std::vector<Vec3d> x(fabric.rest_positions().begin(), fabric.rest_positions().end());
     for (Vec3d& q : x) q = 1.05 * q + Vec3d{noise(rng), noise(rng), noise(rng)};  // stretched 5 %, rumpled
-    for (std::size_t i = 0; i < fabric.vertex_count(); ++i) A.blocks[p.diagonal[i]] = M3::diagonal(fabric.masses()[i]);
+    for (std::size_t i = 0; i < fabric.vertex_count(); ++i) A.set_block(p.diagonal[i], M3::diagonal(fabric.masses()[i]));
     const auto material = physics::membrane_material(2.0e4, 0.3);
     for (std::size_t t = 0; t < fabric.triangle_count(); ++t) {
         const auto& v = fabric.triangles()[t].v;
@@ -354,7 +354,10 @@ cpu::BsrMatrix<double> cloth_matrix(const Fabric& fabric, std::mt19937& rng) {
         M3 H[3][3];
         (void)physics::membrane_evaluate<double>(r.dm_inv, r.area, material, xs, nullptr, H, physics::HessianKind::Fast);
         for (int a = 0; a < 3; ++a)
-            for (int b = 0; b < 3; ++b) A.blocks[p.triangle_slots[9 * t + 3 * a + b]] += (h * h) * H[a][b];
+            for (int b = 0; b < 3; ++b) {
+                const std::size_t s = p.triangle_slots[9 * t + 3 * a + b];
+                A.set_block(s, A.block(s) + (h * h) * H[a][b]);
+            }
     }
     return A;
 }
@@ -425,10 +428,10 @@ TEST(SchwarzPreconditioner, OnA3dLaplacian) {
         double degree = 0.0;
         for (std::uint32_t s = p.row_start[r]; s < p.row_start[r + 1]; ++s)
             if (p.column[s] != r) {
-                A.blocks[s] = M3::diagonal(-10.0);
+                A.set_block(s, M3::diagonal(-10.0));
                 degree += 1.0;
             }
-        A.blocks[p.diagonal[r]] = M3::diagonal(1e-3 + 10.0 * degree);
+        A.set_block(p.diagonal[r], M3::diagonal(1e-3 + 10.0 * degree));
     }
     const SchwarzHierarchy h = build_schwarz_hierarchy(x, p);
     EXPECT_GE(h.levels(), 3);

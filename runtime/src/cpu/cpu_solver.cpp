@@ -278,7 +278,7 @@ void CpuSolver<T>::assemble() {
                 M3 block = s == diag[i] ? vertex_blocks_[i] : M3{};
                 for (std::uint32_t e = f.slot_block_start[s]; e < f.slot_block_start[s + 1]; ++e)
                     block += element_blocks_[f.slot_block_index[e]];
-                A_.blocks[s] = block;
+                A_.set_block(s, block);
             }
         }
     });
@@ -566,7 +566,7 @@ std::size_t CpuSolver<T>::memory_bytes() const {
     const std::size_t vec3 = x_.capacity() + v_.capacity() + x0_.capacity() + v0_.capacity() + vk_.capacity() +
                              wk_.capacity() + dv_previous_.capacity() + element_rhs_.capacity() + vertex_rhs_.capacity() + b_.capacity() +
                              dv_.capacity() + pin_velocity_.capacity();
-    return vec3 * sizeof(V3) + (element_blocks_.capacity() + vertex_blocks_.capacity() + A_.blocks.capacity()) * sizeof(M3) +
+    return vec3 * sizeof(V3) + (element_blocks_.capacity() + vertex_blocks_.capacity() + A_.columns.capacity()) * sizeof(M3) +
            mass_.capacity() * sizeof(T) + triangle_rest_.capacity() * sizeof(TriangleRestT) +
            hinge_rest_.capacity() * sizeof(HingeRestT) + shell_rest_.capacity() * sizeof(physics::ShellBendingRest<T>) +
            hinge_faces_.capacity() * sizeof(hinge_faces_[0]) + shell_faces_.capacity() * sizeof(ShellFaceTerms<T>) +

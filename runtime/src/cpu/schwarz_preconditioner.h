@@ -3,9 +3,9 @@
 // §2b; the levels are weft/backend/schwarz_hierarchy.h): M⁻¹ = Σ_l R_lᵀ D_l⁻¹ R_l. Every substep
 // it aggregates the assembled 3×3 blocks level by level into coupling blocks (the hierarchy's fixed
 // sums), writes each level's domain matrices (dense, 48×48 for domains of 16 nodes), factors them
-// (Gauss–Jordan, to the explicit inverse, as on the GPU), and applies all levels to a residual. Work is split by
-// domain, each domain written by one task in a fixed order: the result does not depend on the
-// thread count.
+// (Gauss–Jordan, to the explicit inverse, as on the GPU; cpu/dense_inverse.h), and applies all
+// levels to a residual. Work is split by domain, each domain written by one task in a fixed order:
+// the result does not depend on the thread count.
 //
 // Filtered (pinned) vertices: the solve acts on the free vertices only (S·A·S), so their blocks are
 // left out of every level and a vertex or node with nothing left gets the identity (it is decoupled,
@@ -13,12 +13,13 @@
 // their vertex's node, on every level; their couplings between vertices are not aggregated yet.
 
 #include <algorithm>
-#include <cmath>
 #include <cstdint>
 #include <vector>
 
+#include "cpu/aligned_allocator.h"
 #include "cpu/bsr_matrix.h"
 #include "cpu/dense_columns.h"
+#include "cpu/dense_inverse.h"
 #include "deterministic_parallel.h"
 #include "weft/backend/schwarz_hierarchy.h"
 #include "weft/physics/vec.h"
@@ -75,7 +76,7 @@ public:
         parallel_chunks(fine.size(), [&](std::size_t lo, std::size_t hi) {
             for (std::size_t s = lo; s < hi; ++s) {
                 const std::uint32_t i = slot_row_[s], j = column[s];
-                fine[s] = fixed[i] || fixed[j] ? M3{} : (i == j ? A.blocks[s] + extra_diagonal(i) : A.blocks[s]);
+                fine[s] = fixed[i] || fixed[j] ? M3{} : (i == j ? A.block(s) + extra_diagonal(i) : A.block(s));
             }
         });
         // Coarser levels: each coupling block sums its listed blocks of the level below, in order.
@@ -95,7 +96,7 @@ public:
         for (int l = 0; l < h.levels(); ++l) {
             const SchwarzLevel& level = h.level[static_cast<std::size_t>(l)];
             const std::vector<M3>& blocks = couplings_[static_cast<std::size_t>(l)];
-            std::vector<T>& dense = dense_[static_cast<std::size_t>(l)];
+            auto& dense = dense_[static_cast<std::size_t>(l)];
             std::fill(dense.begin(), dense.end(), T(0));
             // Each dense block comes from one coupling: the writes never collide.
             parallel_chunks(level.dense_entry.size(), [&](std::size_t lo, std::size_t hi) {
@@ -108,8 +109,7 @@ public:
                     // Nodes with nothing (all pinned, or past the end of the last domain) are decoupled.
                     for (std::uint32_t k = 0; k < kDim; ++k)
                         if (D[k * kDim + k] == T(0)) D[k * kDim + k] = T(1);
-                    failed[d] = invert(D) ? 1 : 0;
-                    transpose(D);  // column-major for solve_domain
+                    failed[d] = dense_invert_to_columns(D) ? 1 : 0;  // column-major for solve_domain
                 }
             });
             for (const std::uint8_t f : failed) failures += f;
@@ -127,7 +127,7 @@ public:
         for (int l = 0; l < levels; ++l) {
             const SchwarzLevel& level = h.level[static_cast<std::size_t>(l)];
             std::vector<V3>& v = values_[static_cast<std::size_t>(l)];
-            const std::vector<T>& dense = dense_[static_cast<std::size_t>(l)];
+            const auto& dense = dense_[static_cast<std::size_t>(l)];
             std::vector<V3>& y = solved_[static_cast<std::size_t>(l)];
             parallel_grains(level.domains(), kDomainGrain, [&](std::size_t lo, std::size_t hi) {
                 for (std::size_t d = lo; d < hi; ++d) {
@@ -163,11 +163,25 @@ public:
 private:
     /// Each coarse node of domain d's pieces gets the sum of its members' values `v` (the domain's
     /// kNodes), in node order; the domain's pieces are its own, so domains write disjoint nodes.
+    /// The sum of the node being summed is kept in registers while its members come in a run (a
+    /// domain is mostly one piece): the same additions in the same order as adding into `coarse`
+    /// member by member, without a store and a reload between two of them.
     static void restrict_domain(const SchwarzLevel& level, std::size_t d, const V3* v, std::vector<V3>& coarse) {
         const std::uint32_t first = level.parent_start[d], last = level.parent_start[d + 1];
         for (std::uint32_t c = first; c < last; ++c) coarse[c] = V3{};
-        const std::size_t end = std::min<std::size_t>(level.nodes, (d + 1) * kNodes);
-        for (std::size_t k = d * kNodes; k < end; ++k) coarse[level.parent[k]] += v[k - d * kNodes];
+        const std::size_t begin = d * kNodes, end = std::min<std::size_t>(level.nodes, (d + 1) * kNodes);
+        if (begin >= end) return;
+        std::uint32_t node = level.parent[begin];
+        V3 sum{};
+        for (std::size_t k = begin; k < end; ++k) {
+            if (level.parent[k] != node) {
+                coarse[node] = sum;
+                node = level.parent[k];
+                sum = coarse[node];
+            }
+            sum += v[k - begin];
+        }
+        coarse[node] = sum;
     }
 
     /// Writes `m` as block `block` = (domain·kNodes + a)·kNodes + b of the dense matrices.
@@ -177,43 +191,6 @@ private:
         T* D = dense + domain * kDim * kDim;
         for (int r = 0; r < 3; ++r)
             for (int c = 0; c < 3; ++c) D[(3 * a + r) * kDim + 3 * b + c] = m.m[r][c];
-    }
-
-    /// In-place inverse of the SPD domain matrix by Gauss–Jordan elimination without pivoting (the
-    /// same algorithm as the GPU's, schwarz_kernels.cu): every step is a rank-one update of whole rows,
-    /// which the compiler vectorises. Returns true if a pivot was not positive (the matrix is not SPD
-    /// in this precision); it is then replaced by the magnitude of the original diagonal entry, so
-    /// the result stays usable.
-    static bool invert(T* D) {
-        bool failed = false;
-        T magnitude[kDim], column[kDim];
-        for (std::uint32_t k = 0; k < kDim; ++k) magnitude[k] = std::max(std::abs(D[k * kDim + k]), T(1e-12));
-        for (std::uint32_t k = 0; k < kDim; ++k) {
-            for (std::uint32_t i = 0; i < kDim; ++i) column[i] = D[i * kDim + k];
-            T pivot = column[k];
-            if (!(pivot > T(0))) {
-                failed = true;
-                pivot = magnitude[k];
-            }
-            const T inverse = T(1) / pivot;
-            T* row_k = D + k * kDim;
-            for (std::uint32_t j = 0; j < kDim; ++j) row_k[j] *= inverse;
-            row_k[k] = inverse;
-            for (std::uint32_t i = 0; i < kDim; ++i) {
-                if (i == k) continue;
-                T* row = D + i * kDim;
-                const T f = column[i];
-                row[k] = T(0);
-                for (std::uint32_t j = 0; j < kDim; ++j) row[j] -= f * row_k[j];
-            }
-        }
-        return failed;
-    }
-
-    /// In-place transpose of a domain's inverse, so that solve_domain reads it by columns.
-    static void transpose(T* D) {
-        for (std::uint32_t i = 0; i < kDim; ++i)
-            for (std::uint32_t j = i + 1; j < kDim; ++j) std::swap(D[i * kDim + j], D[j * kDim + i]);
     }
 
     /// y = D⁻¹ v for one domain (kNodes vectors of 3), D⁻¹ column-major (transposed after the
@@ -232,7 +209,9 @@ private:
     std::vector<std::uint32_t> slot_row_;        // pattern slot → its row
     std::vector<std::vector<M3>> couplings_;      // per level: the coupling blocks (level 0: per slot)
     std::vector<std::vector<std::uint8_t>> failed_;  // per level and domain: a pivot was replaced
-    std::vector<std::vector<T>> dense_;   // per level: domains × kDim², row-major: the matrix, then its inverse transposed
+    // Per level: domains × kDim², row-major: the matrix, then its inverse transposed. On cache lines:
+    // a domain (kDim² scalars) is a whole number of them, so every row's 32-byte accesses stay in one.
+    std::vector<std::vector<T, AlignedAllocator<T>>> dense_;
     std::vector<std::vector<V3>> values_;  // per level: the restricted residual per node
     std::vector<std::vector<V3>> solved_;  // per level: the domain solutions per node
     int pivot_failures_ = 0;

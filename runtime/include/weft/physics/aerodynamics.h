@@ -115,12 +115,20 @@ WEFT_HD constexpr T lattice_value(int i, int j, int k, int l, unsigned channel) 
     // Top 24 bits: exact in float and double, so host and device agree bit for bit.
     return static_cast<T>(h >> 8) * T(1.0 / 8388608.0) - T(1);
 }
-/// 4D value noise with quintic fade (C² in every coordinate) and its gradient in the first three
-/// coordinates. Quintic fade 6f⁵ − 15f⁴ + 10f³ (Perlin 2002) has zero first and second derivatives
-/// at the lattice, so the gradient is C¹ and the curl below is C¹.
+/// The gradients in the first three coordinates of three channels of 4D value noise at p:
+/// grad[c][k] = ∂noise_c/∂p_k for channels c = 0, 1, 2. Quintic fade 6f⁵ − 15f⁴ + 10f³ (Perlin
+/// 2002) has zero first and second derivatives at the lattice, so each noise is C² in every
+/// coordinate, its gradient C¹ and the curl below C¹.
+///
+/// The channels share their lattice cell, fade weights and the corners' weight products (formed
+/// once for the three: they are the same numbers); each channel's corner values come from its own
+/// hash chain, shared down the 16 corners' tree (l, then k, j, i): 30 mixes a channel instead of
+/// 64. Every channel gets the bits of the corner-by-corner definition, lattice_value in order i
+/// fastest, l slowest (WindGust.TheSharedHashTreeGivesTheBitsOfTheDefinition).
 template <typename T>
-WEFT_HD inline T value_noise4(const T p[4], unsigned channel, T grad[3]) {
+WEFT_HD inline void value_noise4_gradients(const T p[4], T grad[3][3]) {
     using std::floor;
+    constexpr int kChannels = 3;
     int cell[4];
     T s[4], ds[4];
     for (int k = 0; k < 4; ++k) {
@@ -130,33 +138,32 @@ WEFT_HD inline T value_noise4(const T p[4], unsigned channel, T grad[3]) {
         s[k] = f * f * f * (f * (f * T(6) - T(15)) + T(10));
         ds[k] = T(30) * f * f * (f - T(1)) * (f - T(1));
     }
-    T value = T(0);
-    grad[0] = grad[1] = grad[2] = T(0);
-    // The 16 corners in lattice_value's order (i fastest, l slowest), its hash chain shared down the
-    // tree (l, then k, j, i): 30 mixes instead of 64, the same values.
-    const unsigned seed = 0x9e3779b9U * (channel + 1U);
+    for (int c = 0; c < kChannels; ++c) grad[c][0] = grad[c][1] = grad[c][2] = T(0);
     for (int bl = 0; bl < 2; ++bl) {
-        const unsigned hl = mix_u32(static_cast<unsigned>(cell[3] + bl) + seed);
+        unsigned hl[kChannels];
+        for (int c = 0; c < kChannels; ++c)
+            hl[c] = mix_u32(static_cast<unsigned>(cell[3] + bl) + 0x9e3779b9U * (static_cast<unsigned>(c) + 1U));
         const T wl = bl != 0 ? s[3] : T(1) - s[3];
         for (int bk = 0; bk < 2; ++bk) {
-            const unsigned hk = mix_u32(hl ^ static_cast<unsigned>(cell[2] + bk));
+            unsigned hk[kChannels];
+            for (int c = 0; c < kChannels; ++c) hk[c] = mix_u32(hl[c] ^ static_cast<unsigned>(cell[2] + bk));
             const T wk = bk != 0 ? s[2] : T(1) - s[2], dwk = bk != 0 ? ds[2] : -ds[2];
             for (int bj = 0; bj < 2; ++bj) {
-                const unsigned hj = mix_u32(hk ^ static_cast<unsigned>(cell[1] + bj));
+                unsigned hj[kChannels];
+                for (int c = 0; c < kChannels; ++c) hj[c] = mix_u32(hk[c] ^ static_cast<unsigned>(cell[1] + bj));
                 const T wj = bj != 0 ? s[1] : T(1) - s[1], dwj = bj != 0 ? ds[1] : -ds[1];
                 for (int bi = 0; bi < 2; ++bi) {
-                    const unsigned h = mix_u32(hj ^ static_cast<unsigned>(cell[0] + bi));
                     const T wi = bi != 0 ? s[0] : T(1) - s[0], dwi = bi != 0 ? ds[0] : -ds[0];
-                    const T val = static_cast<T>(h >> 8) * T(1.0 / 8388608.0) - T(1);  // as lattice_value
-                    value += val * (wi * wj * wk * wl);
-                    grad[0] += val * (dwi * wj * wk * wl);
-                    grad[1] += val * (wi * dwj * wk * wl);
-                    grad[2] += val * (wi * wj * dwk * wl);
+                    const T weight[3] = {dwi * wj * wk * wl, wi * dwj * wk * wl, wi * wj * dwk * wl};
+                    for (int c = 0; c < kChannels; ++c) {
+                        const unsigned h = mix_u32(hj[c] ^ static_cast<unsigned>(cell[0] + bi));
+                        const T val = static_cast<T>(h >> 8) * T(1.0 / 8388608.0) - T(1);  // as lattice_value
+                        for (int k = 0; k < 3; ++k) grad[c][k] += val * weight[k];
+                    }
                 }
             }
         }
     }
-    return value;
 }
 }  // namespace detail
 
@@ -171,13 +178,11 @@ template <typename T>
 WEFT_HD inline Vec3<T> wind_gust(Vec3<T> p, T t, T amplitude, T frequency, T scale) {
     if (!(scale > T(0))) return Vec3<T>{};  // no eddy size: no turbulence (and no division by zero)
     const T q[4] = {p.x / scale, p.y / scale, p.z / scale, t * frequency};
-    T d0[3], d1[3], d2[3];
-    detail::value_noise4(q, 0U, d0);
-    detail::value_noise4(q, 1U, d1);
-    detail::value_noise4(q, 2U, d2);
+    T d[3][3];
+    detail::value_noise4_gradients(q, d);
     // curl ψ in noise coordinates. Its RMS over space–time is 1.66 (10⁵ random samples; peaks
     // reach ≈ 5.4), so 0.6 makes the RMS gust speed ≈ amplitude (checked in aerodynamics_test.cpp).
-    const Vec3<T> curl{d2[1] - d1[2], d0[2] - d2[0], d1[0] - d0[1]};
+    const Vec3<T> curl{d[2][1] - d[1][2], d[0][2] - d[2][0], d[1][0] - d[0][1]};
     return (amplitude * T(0.6)) * curl;
 }
 
