@@ -25,7 +25,9 @@ struct AlignedAllocator {
     [[nodiscard]] T* allocate(std::size_t n) {
         return static_cast<T*>(::operator new(n * sizeof(T), std::align_val_t(Alignment)));
     }
-    void deallocate(T* p, std::size_t n) noexcept { ::operator delete(p, n * sizeof(T), std::align_val_t(Alignment)); }
+    // The unsized form: the sized aligned delete is not declared where sized deallocation is off
+    // (clang without -fsized-deallocation, the fuzz preset).
+    void deallocate(T* p, std::size_t /*n*/) noexcept { ::operator delete(p, std::align_val_t(Alignment)); }
 
     template <typename U>
     bool operator==(const AlignedAllocator<U, Alignment>&) const noexcept {
