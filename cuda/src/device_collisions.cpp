@@ -420,6 +420,7 @@ bool DeviceCollisions::resolve(const Model& model, double h, float* x, float* v,
     in.refresh_broad_phase = [&](int, collision::GpuBroadPhaseInput& bp) { cull(model, bp, stream); };
     if (settings.impact_tolerance > 0.0) in.tolerance_ratio = settings.impact_tolerance;
     if (settings.max_impact_sweeps > 0) in.max_sweeps = settings.max_impact_sweeps;
+    if (settings.max_impact_work >= 1.0) in.max_work = static_cast<std::int64_t>(settings.max_impact_work);
     if (colored_zones_ || colored_above_ >= 0) in.colored_zone_vertices = collision::kColoredZoneVertices;
     if (colored_above_ >= 0) in.colored_zone_constraints = static_cast<std::uint32_t>(colored_above_);
     const weft::collision::ImpactZoneReport report = zones_.resolve(in, stream);

@@ -362,7 +362,8 @@ constexpr Parameter kTable[] = {
      .range = R{0.0, 1e12},
      .doc = "cap on the zone projections' work in one substep (constraint updates over all zones and rounds); "
             "once spent, the hits left go to the rigid and freezing fallbacks, so a pinch no projection can "
-            "solve costs a bounded time; 0: the default, 2e7 (cpu backend only)",
+            "solve costs a bounded time; 0: the default, 2e7 (on the cuda backend an iteration of a zone "
+            "counts as a sweep)",
      .label = "impact work cap", .panel = "collision", .log_scale = true,
      .access = field<&WorldDesc::collision, &CollisionSettings::max_impact_work>()},
     {.section = "collision", .name = "check", .type = T::Boolean,

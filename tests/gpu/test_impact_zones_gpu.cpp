@@ -48,7 +48,8 @@ Scene rounded(Scene s) {
 
 Resolved resolve_gpu(const Scene& s, int max_iterations, GpuImpactZones& zones,
                      std::uint32_t giant = GpuImpactZoneInput{}.giant_zone_constraints,
-                     std::uint32_t colored = GpuImpactZoneInput{}.colored_zone_vertices) {
+                     std::uint32_t colored = GpuImpactZoneInput{}.colored_zone_vertices,
+                     std::int64_t max_work = GpuImpactZoneInput{}.max_work) {
     const std::size_t n = s.x0.size();
     const std::vector<float> x0 = weft::test::soa_floats(s.x0);
     std::vector<float> x1 = weft::test::soa_floats(s.x1), im(n);
@@ -82,6 +83,7 @@ Resolved resolve_gpu(const Scene& s, int max_iterations, GpuImpactZones& zones,
     in.giant_zone_constraints = giant;
     in.colored_zone_vertices = colored;
     in.colored_zone_constraints = 0;  // with `colored` > 0: every zone small enough by colours
+    in.max_work = max_work;
     Resolved r;
     r.report = zones.resolve(in, nullptr);
     WEFT_CUDA_CHECK(cudaMemcpy(x1.data(), d1.get(), x1.size() * sizeof(float), cudaMemcpyDeviceToHost));
@@ -235,6 +237,39 @@ TEST(GpuImpactZones, ColouredGaussSeidelAndProjectedGradientLandOnTheSameMinimis
         for (std::size_t v = 0; v < s.x0.size(); ++v) differ += same_bits(coloured.x1[v], again.x1[v]) ? 0 : 1;
         EXPECT_EQ(differ, 0U);
         EXPECT_EQ(again.report.qp_sweeps, coloured.report.qp_sweeps);
+    }
+}
+
+TEST(GpuImpactZones, AWorkCapSpentHandsTheHitsToTheFallbacksAndEndsClean) {
+    WEFT_REQUIRE_GPU();
+    // The CPU test's promise on the device (max_work, the CPU's qp_max_work): with a tenth of the
+    // projections' work, and with a cap of 1 (no projection at all), the substep still ends clean
+    // through the fallbacks, within the cap, the same bits on every run; by both projections.
+    const Scene s = rounded(test::crumpled_sheet(16, 11));
+    const std::uint32_t giant = GpuImpactZoneInput{}.giant_zone_constraints;
+    for (const std::uint32_t colored : {0U, cuda::collision::kColoredZoneVertices}) {
+        GpuImpactZones zones;
+        const Resolved full = resolve_gpu(s, 32, zones, giant, colored);
+        expect_clean(s, full);
+        EXPECT_FALSE(full.report.qp_work_spent);
+        ASSERT_GT(full.report.qp_work, 1000);
+        for (const std::int64_t cap : {full.report.qp_work / 10, std::int64_t{1}}) {
+            SCOPED_TRACE("cap " + std::to_string(cap) + (colored > 0 ? ", colours" : ", gradient"));
+            const Resolved capped = resolve_gpu(s, 32, zones, giant, colored, cap);
+            print("crumpled sheet, work capped (GPU)", capped);
+            expect_clean(s, capped);
+            EXPECT_TRUE(capped.report.qp_work_spent);
+            EXPECT_LE(capped.report.qp_work, cap);
+            EXPECT_LT(capped.report.iterations, full.report.iterations);
+            EXPECT_GT(capped.report.rigid_rounds + capped.report.frozen_vertices, 0) << "the fallbacks took the hits";
+            if (cap == 1) {
+                EXPECT_EQ(capped.report.iterations, 0);
+            }
+            const Resolved again = resolve_gpu(s, 32, zones, giant, colored, cap);
+            std::size_t differ = 0;
+            for (std::size_t v = 0; v < s.x0.size(); ++v) differ += same_bits(capped.x1[v], again.x1[v]) ? 0 : 1;
+            EXPECT_EQ(differ, 0U);
+        }
     }
 }
 

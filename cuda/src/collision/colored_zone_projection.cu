@@ -192,7 +192,9 @@ __global__ void __launch_bounds__(kThreads)
     }
     if (tid == 0) {
         p.action[root] = p.done_code;
-        atomicAdd(p.sweeps, static_cast<std::uint32_t>(converged ? sweep : max_sweeps));
+        const int used = converged ? sweep : max_sweeps;
+        atomicAdd(p.sweeps, static_cast<std::uint32_t>(used));
+        atomicAdd(p.work, static_cast<unsigned long long>(used) * (ce - cb));
         if (!converged) atomicAdd(p.unconverged, 1U);
     }
 }

@@ -55,6 +55,7 @@ struct ColoredZoneProjection {
     std::uint8_t project_code = 0, done_code = 0, projected_code = 0;
     std::uint32_t* sweeps = nullptr;       ///< += sweeps used, summed over zones
     std::uint32_t* unconverged = nullptr;  ///< += zones that reached the sweep cap
+    unsigned long long* work = nullptr;    ///< += sweeps × constraints, summed over zones
     // Scratch (sizes: vertices n; constraints C; zones Z).
     std::uint32_t* zone_slot = nullptr;    ///< n: a vertex's index among its zone's vertices
     std::uint32_t* claim = nullptr;        ///< n: the colouring's claims

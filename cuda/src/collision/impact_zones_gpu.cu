@@ -377,7 +377,9 @@ __global__ void __launch_bounds__(Threads)
     for (std::uint32_t i = vb + threadIdx.x; i < ve; i += blockDim.x) outcome[z.unique_vertex[z.vvalue[i]]] = kProjected;
     if (threadIdx.x == 0) {
         action[root] = kNone;
-        atomicAdd(&counters->sweeps, static_cast<std::uint32_t>(converged ? sweep : max_sweeps));
+        const int used = converged ? sweep : max_sweeps;
+        atomicAdd(&counters->sweeps, static_cast<std::uint32_t>(used));
+        atomicAdd(&counters->work, static_cast<unsigned long long>(used) * (ce - cb));
         if (!converged) atomicAdd(&counters->unconverged, 1U);
     }
 }
@@ -466,6 +468,7 @@ __global__ void giant_end_kernel(ZoneLists z, std::uint32_t zone, std::uint8_t* 
     if (blockIdx.x == 0 && threadIdx.x == 0) {
         action[z.zone_label[zone]] = kNone;
         atomicAdd(&counters->sweeps, state->sweeps);
+        atomicAdd(&counters->work, static_cast<unsigned long long>(state->sweeps) * (z.coffset[zone + 1] - z.coffset[zone]));
         if (state->converged == 0) atomicAdd(&counters->unconverged, 1U);
     }
 }
@@ -939,6 +942,7 @@ ColoredZoneProjection GpuImpactZones::colored_projection(const GpuImpactZoneInpu
     p.projected_code = kProjected;
     p.sweeps = &counters_.get()->sweeps;
     p.unconverged = &counters_.get()->unconverged;
+    p.work = &counters_.get()->work;
     p.zone_slot = zone_slot_.get();
     p.claim = color_claim_.get();
     p.color = color_.get();
@@ -954,7 +958,7 @@ ColoredZoneProjection GpuImpactZones::colored_projection(const GpuImpactZoneInpu
     return p;
 }
 
-void GpuImpactZones::project_giant_zones(const GpuImpactZoneInput& in, double tol, cudaStream_t stream) {
+void GpuImpactZones::project_giant_zones(const GpuImpactZoneInput& in, double tol, int max_sweeps, cudaStream_t stream) {
     // No zone can be giant while all the constraints together are not: no read-back in that case.
     if (constraints_ <= in.giant_zone_constraints) return;
     // The zones' sizes and roots on the host (one copy each; zones are few next to vertices).
@@ -1009,8 +1013,8 @@ void GpuImpactZones::project_giant_zones(const GpuImpactZoneInput& in, double to
         giant_gather_kernel<<<vblocks, kGridThreads, 0, stream>>>(zl, c, vb, ve, x_hat_.get(), in.inverse_mass, in.x1,
                                                                   n, nullptr);
         WEFT_CUDA_CHECK_LAUNCH("impact zones: giant zone set-up");
-        for (int done = 0; done < in.max_sweeps;) {
-            const int batch = std::min(kBatch, in.max_sweeps - done);
+        for (int done = 0; done < max_sweeps;) {
+            const int batch = std::min(kBatch, max_sweeps - done);
             for (int b = 0; b < batch; ++b) {
                 giant_step_kernel<<<cblocks, kGridThreads, 0, stream>>>(c, cvalue_sorted_, cb, ce, in.x1, n,
                                                                         in.thickness, state, partial);
@@ -1150,8 +1154,9 @@ weft::collision::ImpactZoneReport GpuImpactZones::resolve(const GpuImpactZoneInp
     if (!(in.separation_ratio > 0.0 && in.separation_ratio < 1.0))
         throw Error("GPU impact zones: separation_ratio must be in (0, 1) (got " + std::to_string(in.separation_ratio) +
                     ")");
-    if (in.max_iterations < 0 || in.max_rigid_rounds < 0 || in.max_sweeps < 1 || in.giant_zone_constraints < 1)
-        throw Error("GPU impact zones: max_iterations and max_rigid_rounds must be ≥ 0, max_sweeps and "
+    if (in.max_iterations < 0 || in.max_rigid_rounds < 0 || in.max_sweeps < 1 || in.giant_zone_constraints < 1 ||
+        in.max_work < 1)
+        throw Error("GPU impact zones: max_iterations and max_rigid_rounds must be ≥ 0, max_sweeps, max_work and "
                     "giant_zone_constraints ≥ 1");
     if (!std::isfinite(in.tolerance_ratio) || !(in.tolerance_ratio > 0.0))
         throw Error("GPU impact zones: tolerance_ratio must be finite and > 0");
@@ -1177,6 +1182,17 @@ weft::collision::ImpactZoneReport GpuImpactZones::resolve(const GpuImpactZoneInp
     remaining_ = hits;
     const double tol = in.tolerance_ratio * in.thickness;
     while (hits > 0 && report.iterations < in.max_iterations) {
+        // Not one iteration of every constraint the round could project fits what is left of the
+        // work budget (max_work): the fallbacks take the hits (the CPU's rule).
+        const std::int64_t left = in.max_work - report.qp_work;
+        if (left < static_cast<std::int64_t>(constraints_) + hits) {
+            report.qp_work_spent = true;
+            break;
+        }
+        // The round's iteration cap: what is left over every constraint there will be (an upper
+        // bound of those the round projects; at least one, by the check above).
+        const int round_sweeps = static_cast<int>(
+            std::min<std::int64_t>(in.max_sweeps, std::max<std::int64_t>(left / (std::int64_t{constraints_} + hits), 1)));
         ++report.iterations;
         const auto clock = Clock::now();
         const std::uint32_t first_new = constraints_;
@@ -1191,22 +1207,23 @@ weft::collision::ImpactZoneReport GpuImpactZones::resolve(const GpuImpactZoneInp
                             lambda_.get(),   momentum_.get(), previous_.get()};
         const std::uint32_t giant = in.giant_zone_constraints, colored = in.colored_zone_vertices;
         launch_colored_zone_projection(colored_projection(in), zones_, colored, in.colored_zone_constraints, in.thickness,
-                                       tol, in.max_sweeps, stream);
+                                       tol, round_sweeps, stream);
         project_kernel<kLargeZoneThreads><<<zones_, kLargeZoneThreads, 0, stream>>>(
-            z, c, x_hat_.get(), in.inverse_mass, in.x1, n, in.thickness, tol, in.max_sweeps, giant, colored,
+            z, c, x_hat_.get(), in.inverse_mass, in.x1, n, in.thickness, tol, round_sweeps, giant, colored,
             in.colored_zone_constraints, action_.get(), outcome_.get(), counters_.get());
         WEFT_CUDA_CHECK_LAUNCH("impact zones: project (large zones)");
         project_kernel<kZoneThreads><<<zones_, kZoneThreads, 0, stream>>>(z, c, x_hat_.get(), in.inverse_mass, in.x1,
-                                                                          n, in.thickness, tol, in.max_sweeps, giant,
+                                                                          n, in.thickness, tol, round_sweeps, giant,
                                                                           colored, in.colored_zone_constraints,
                                                                           action_.get(), outcome_.get(), counters_.get());
         WEFT_CUDA_CHECK_LAUNCH("impact zones: project");
-        project_giant_zones(in, tol, stream);
+        project_giant_zones(in, tol, round_sweeps, stream);
         const Counters& counters = read_counters(stream);
         if (counters.zone_vertex_runs != zones_)
             throw Error("GPU impact zones: internal error, " + std::to_string(zones_) + " zones by constraints but " +
                         std::to_string(counters.zone_vertex_runs) + " by vertices");
         report.qp_sweeps += counters.sweeps;
+        report.qp_work += static_cast<std::int64_t>(counters.work);
         report.qp_unconverged += static_cast<int>(counters.unconverged);
         report.zones_ms += ms_since(clock);
         hits = detect(in, report, stream);

@@ -77,6 +77,13 @@ struct GpuImpactZoneInput {
     /// are the cheapest measured on the 200K twist's heaviest frames (docs/results.md) with the same
     /// outcome (intersection-free, about as many rigid zones) as the CPU's 1000 and 1 %.
     int max_sweeps = 200;
+    /// Cap on the projections' work in one `resolve`, in constraint updates (a zone's iteration
+    /// updates each of its constraints once), summed over zones and rounds, ≥ 1: the CPU's
+    /// `qp_max_work` (collision.max_impact_work). A round's zones get an iteration cap that fits what
+    /// is left (the same for every zone of the round); when not one iteration of every constraint
+    /// fits, the rounds stop and the hits left go to the fallbacks. Why: the game prototype's skirt,
+    /// pressed between the legs, spent up to 3.2 s of one substep's rounds on the GPU (docs/results.md).
+    std::int64_t max_work = 20'000'000;
     /// Convergence tolerance of a zone's projection as a fraction of the thickness (the CPU's rule:
     /// every constraint satisfied to it, every active one tight to it). 10 % keeps every corrected
     /// gap ≥ 0.9·δ, 9× the CCD separation.
@@ -138,6 +145,7 @@ public:
         std::uint32_t rigid_zones = 0;
         std::uint32_t frozen = 0;
         std::uint32_t carried = 0;
+        unsigned long long work = 0;  ///< constraint updates of this round's projections (sweeps × constraints)
     };
 
 private:
@@ -154,7 +162,7 @@ private:
     ColoredZoneProjection colored_projection(const GpuImpactZoneInput& in);
     /// Projects the zones of more than in.giant_zone_constraints constraints (and more vertices than
     /// the coloured projection takes) that this round marked.
-    void project_giant_zones(const GpuImpactZoneInput& in, double tol, cudaStream_t stream);
+    void project_giant_zones(const GpuImpactZoneInput& in, double tol, int max_sweeps, cudaStream_t stream);
 
     GpuBroadPhase broad_;
     GpuCcd ccd_;

@@ -204,8 +204,8 @@ struct CollisionSettings {
     /// end: a pinch no projection can solve (cloth pressed between two colliders, or into a
     /// collider's own overlapping parts) costs a bounded time instead of seconds. Smaller bounds the
     /// worst substep tighter and falls back sooner. 0: the default, 2·10⁷ (about 0.2 s on one core
-    /// of the development machine). cpu backend only (the cuda backend's projection is bounded by
-    /// its rounds and sweeps).
+    /// of the development machine). Both backends (on cuda an iteration of a zone's projection
+    /// counts as a sweep).
     double max_impact_work = 0.0;
     /// Contact pipeline: CCD with impact zones, or offset contact with displacement bounds.
     CollisionMode mode = CollisionMode::CcdZones;
