@@ -184,11 +184,21 @@ __device__ inline void evaluate_offset_pair(const DeviceView& d, std::uint32_t p
 
 __global__ void contact_evaluate_kernel(DeviceView d) {
     const std::uint32_t m = contact_count(d.contacts);
-    for (std::uint32_t p = first_thread(); p < m; p += thread_stride()) {
-        if ((d.contacts.list[p].pair & kOffsetContactBit) != 0)
-            evaluate_offset_pair(d, p);
-        else
-            evaluate_pair(d, p);
+    const std::uint32_t lane = threadIdx.x % 32;
+    // A warp takes 32 consecutive pairs at a time (the block size is a multiple of 32), every lane
+    // the same number of times, so that it can write their word of the active mask with one ballot.
+    for (std::uint32_t base = first_thread() - lane; base < m; base += thread_stride()) {
+        const std::uint32_t p = base + lane;
+        bool active = false;
+        if (p < m) {
+            if ((d.contacts.list[p].pair & kOffsetContactBit) != 0)
+                evaluate_offset_pair(d, p);
+            else
+                evaluate_pair(d, p);
+            active = (d.contacts.list[p].pair & kInactiveContactBit) == 0;
+        }
+        const unsigned bits = __ballot_sync(0xffffffffu, active);
+        if (lane == 0) d.contacts.active_mask[base / 32] = bits;
     }
 }
 

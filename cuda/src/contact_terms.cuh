@@ -29,10 +29,15 @@ __device__ inline V3 load_pair_vector(const float4* v, std::uint32_t p) {
 }
 __device__ inline void store_pair_vector(float4* v, std::uint32_t p, V3 value) { v[p] = float4{value.x, value.y, value.z, 0.0f}; }
 
+/// Pair p is in the solve this Newton iteration (ContactView::active_mask, one word for 32 pairs).
+__device__ inline bool contact_active(const ContactView& c, std::uint32_t p) {
+    return ((c.active_mask[p / 32] >> (p % 32)) & 1U) != 0;
+}
+
 /// First pass of A_contact·x for pair p: s_p = C_p·Σ_j w_j x_j over its cloth corners (kinematic
 /// vertices are not unknowns of the solve: they add nothing).
 __device__ inline void contact_pair_product(const ContactView& c, std::uint32_t p, const float* x, std::uint32_t n) {
-    if ((c.list[p].pair & kInactiveContactBit) != 0) return;  // not in the incidence: its product is never read
+    if (!contact_active(c, p)) return;  // not in the incidence: its product is never read
     const uint4 ids = reinterpret_cast<const uint4*>(c.list)[4 * p];
     const float4 w = reinterpret_cast<const float4*>(c.list)[4 * p + 1];
     V3 s{};

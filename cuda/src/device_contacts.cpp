@@ -48,6 +48,7 @@ bool DeviceContacts::reserve(std::size_t pairs, std::size_t kinematic, std::uint
     entries_.allocate(4 * capacity, ledger_, "proximity contacts");
     per_pair_.allocate(16 * capacity, ledger_, "proximity contacts");
     entry_weight_.allocate(4 * capacity, ledger_, "proximity contacts");
+    active_mask_.allocate((capacity + 31) / 32 + 1, ledger_, "proximity contacts");
     const auto corner_slots = static_cast<std::uint32_t>(4 * capacity);
     const int key_bits = std::max(1, static_cast<int>(std::bit_width(n)));  // n itself keys the unused slots
     sort_keys_.allocate(2 * std::size_t{corner_slots}, ledger_, "proximity contacts: incidence sort");
@@ -74,6 +75,7 @@ bool DeviceContacts::reserve(std::size_t pairs, std::size_t kinematic, std::uint
     v.rhs = v.block + 9 * capacity;
     v.product = reinterpret_cast<float4*>(v.rhs + 3 * capacity);  // 12·capacity floats in: 16-byte aligned
     v.entry_weight = entry_weight_.get();
+    v.active_mask = active_mask_.get();
     return true;
 }
 
@@ -131,6 +133,7 @@ void DeviceContacts::release() {
     sort_ids_ = {};
     per_pair_ = {};
     entry_weight_ = {};
+    active_mask_ = {};
     sort_storage_ = {};
     sort_scratch_ = {};
     ledger_.clear();

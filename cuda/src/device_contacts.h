@@ -96,6 +96,10 @@ struct ContactView {
     /// Per pair, the product C·Σ_j w_j x_j of the current SpMV, one float4 (x, y, z, 0) a pair: the
     /// rows' gathers read it at random, one sector an entry (3 with SoA).
     float4* product = nullptr;
+    /// One bit a pair (word p/32, bit p%32), written by each evaluation: the pair is in the solve
+    /// (not kInactiveContactBit). The pair pass reads it instead of the pair's 64-byte record, whose
+    /// second sector held the flag: a quarter of the pass's traffic (docs/multi-gpu.md).
+    std::uint32_t* active_mask = nullptr;
     /// Per row, written at each SpMV after the pair pass (contact_row_sums): the row's sum of
     /// w_i·product over its incidence, SoA with component stride `vertices` (the solver's n).
     float* row_sum = nullptr;
@@ -171,6 +175,7 @@ private:
     DeviceArray<std::uint32_t> sort_keys_, sort_ids_;  // 2 and 1 × 4·capacity
     DeviceArray<float> per_pair_;                      // block, rhs (SoA), product (float4): 16 floats a pair
     DeviceArray<float> entry_weight_;                  // ContactView::entry_weight
+    DeviceArray<std::uint32_t> active_mask_;           // ContactView::active_mask
     DeviceArray<unsigned char> sort_storage_;
     ContactSortScratch sort_scratch_{};
 };

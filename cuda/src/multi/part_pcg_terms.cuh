@@ -137,7 +137,7 @@ __device__ inline V3 part_product_row(const PartSystem& a, std::uint32_t i, cons
 /// reads, in the same order: contact_pair_product's sum.
 __device__ inline void part_pair_product(const ContactView& c, std::uint32_t p, const float* x, std::uint32_t local,
                                          const float* copy) {
-    if ((c.list[p].pair & kInactiveContactBit) != 0) return;  // not in the incidence
+    if (!contact_active(c, p)) return;  // not in the incidence
     const std::uint32_t whole = c.cloth_vertices;
     const uint4 from = c.corner_source[p];
     const float4 w = reinterpret_cast<const float4*>(c.list)[4 * p + 1];
