@@ -51,6 +51,18 @@ __global__ void __launch_bounds__(kThreads) ccd_kernel(GpuCcdInput in, std::uint
                 rejected = lo[0] > __fadd_ru(hi[1], in.eta) || lo[1] > __fadd_ru(hi[0], in.eta);
             }
             if (!rejected) {
+                // The search in the pair's own frame: its rounding bound δ grows with the largest
+                // coordinate (ccd.h), and in world coordinates 15 m from the origin float's δ alone
+                // left no room to exclude t ≈ 0 for pairs that start under a millimetre apart, which
+                // every round then found again at toi 0 (the character's script ran every substep to
+                // the round cap; the CPU's double search never reports them). The differences are
+                // exact where the coordinates are within a factor 2 (Sterbenz) and otherwise off by
+                // half an ulp of the small result.
+                const V3f origin = a0[0];
+                for (int k = 0; k < 4; ++k) {
+                    a0[k] = a0[k] - origin;
+                    a1[k] = a1[k] - origin;
+                }
                 float eta = in.eta;
                 if (in.clamp_to_start_distance) {
                     float w[4];
