@@ -284,11 +284,14 @@ int play(const Options& options) {
         unresolved += stats.collision.unresolved_substeps;
         moved_out += stats.collision.ejected_vertices;
         body_jumps += stats.collision.collider_jumps;
-        if (stats.step_ms > 4.0 * dt * 1000.0 && ++hitches <= 5)  // a cloth step of four frames' time
+        // A cloth step of four frames' time: the first five, and every one over a second.
+        if (stats.step_ms > 4.0 * dt * 1000.0 && (++hitches <= 5 || stats.step_ms > 1000.0))
             std::printf("cape_runner: frame %d: cloth step %.0f ms (impact zones %.0f, CCD %.0f, broad phase %.0f ms; %d zone "
-                        "rounds, %d vertices frozen)\n",
+                        "rounds, %d vertices frozen; %lld candidate pairs, %lld CCD tests, %lld hits)\n",
                         frame, stats.step_ms, stats.ms(weft::Stage::ImpactZones), stats.ms(weft::Stage::Ccd),
-                        stats.ms(weft::Stage::BroadPhase), stats.collision.impact_iterations, stats.collision.frozen_vertices);
+                        stats.ms(weft::Stage::BroadPhase), stats.collision.impact_iterations, stats.collision.frozen_vertices,
+                        static_cast<long long>(stats.collision.candidate_pairs), static_cast<long long>(stats.collision.ccd_tests),
+                        static_cast<long long>(stats.collision.ccd_hits));
         for (std::size_t k = 0; k < stage_ms_sum.size(); ++k) stage_ms_sum[k] += stats.stage_ms[k];
         cg_iterations += stats.cg_iterations;
         capped_solves += stats.cg_not_converged;
