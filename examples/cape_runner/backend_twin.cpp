@@ -188,7 +188,7 @@ int twin(const Options& o) {
 
     constexpr double dt = 1.0 / 60.0;
     Totals gpu_totals, cpu_totals;
-    int frame = 0, reported = 0, differing = 0, gpu_only_through = 0, failed = 0;
+    int frame = 0, reported = 0, differing = 0, gpu_only_through = 0, gpu_failed = 0, cpu_failed = 0;
     double widest_gap = 0.0;
     while (true) {
         if (o.frames > 0 && frame >= o.frames) break;
@@ -202,7 +202,8 @@ int twin(const Options& o) {
         const FrameFacts g = facts(gpu.step()), k = facts(cpu.step());
         if ((g.cloth_through_cloth + g.cloth_through_body) > 0 && (k.cloth_through_cloth + k.cloth_through_body) == 0)
             ++gpu_only_through;
-        if (g.stats.non_finite || k.stats.non_finite) ++failed;
+        if (g.stats.non_finite || g.stats.runaway_solves > 0) ++gpu_failed;  // a NaN rolled back, or a solve dropped
+        if (k.stats.non_finite || k.stats.runaway_solves > 0) ++cpu_failed;
         gpu_totals.add(g);
         cpu_totals.add(k);
         const double gap = largest_gap(gpu, cpu);
@@ -228,8 +229,10 @@ int twin(const Options& o) {
                 frame, differing, std::min(differing, o.report), widest_gap);
     gpu_totals.print("GPU", frame);
     cpu_totals.print("CPU", frame);
-    std::printf("cape_runner_twin: cloth through something on the GPU only after %d frames, failed steps %d\n", gpu_only_through, failed);
-    return o.strict && (gpu_only_through > 0 || failed > 0) ? 1 : 0;
+    std::printf("cape_runner_twin: cloth through something on the GPU only after %d frames; failed steps (a NaN rolled back or a solve dropped): GPU %d, "
+                "CPU %d\n",
+                gpu_only_through, gpu_failed, cpu_failed);
+    return o.strict && (gpu_only_through > 0 || gpu_failed > 0) ? 1 : 0;
 }
 
 }  // namespace

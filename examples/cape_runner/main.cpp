@@ -214,7 +214,7 @@ int play(const Options& options) {
     long long most_cloth_pairs = 0, most_body_pairs = 0;
     double cloth_ms_sum = 0.0, frame_ms_sum = 0.0;
     std::array<double, weft::kStageNames.size()> stage_ms_sum{};  // where the cloth's time goes
-    long long cg_iterations = 0, capped_solves = 0;
+    long long cg_iterations = 0, capped_solves = 0, runaway_solves = 0;
     // Hitches: the slowest cloth step, and the collision work that makes one.
     double slowest_ms = 0.0;
     int slowest_frame = 0, most_zone_rounds = 0, hitches = 0;
@@ -272,7 +272,7 @@ int play(const Options& options) {
             most_cloth_pairs = std::max(most_cloth_pairs, stats.collision.remaining_intersections - body);
             most_body_pairs = std::max(most_body_pairs, body);
         }
-        if (stats.non_finite) ++failed_steps;
+        if (stats.non_finite || stats.runaway_solves > 0) ++failed_steps;  // a NaN rolled back, or a solve dropped
 
         const Clock::time_point now = Clock::now();
         const double frame_ms = std::chrono::duration<double, std::milli>(now - last).count();
@@ -295,6 +295,7 @@ int play(const Options& options) {
         for (std::size_t k = 0; k < stage_ms_sum.size(); ++k) stage_ms_sum[k] += stats.stage_ms[k];
         cg_iterations += stats.cg_iterations;
         capped_solves += stats.cg_not_converged;
+        runaway_solves += stats.cg_preconditioner_fallbacks;
         frame_ms_sum += frame_ms;
         ++frame;
         if (frame % 15 == 0) {
@@ -313,8 +314,8 @@ int play(const Options& options) {
     std::printf("cape_runner: mean ms per frame by stage:");
     for (std::size_t k = 0; k < stage_ms_sum.size(); ++k)
         if (frame > 0 && stage_ms_sum[k] > 0.0) std::printf(" %s %.2f", std::string(weft::kStageNames[k]).c_str(), stage_ms_sum[k] / frame);
-    std::printf("; CG %.0f iterations a frame, %lld solves capped\n", frame > 0 ? static_cast<double>(cg_iterations) / frame : 0.0,
-                capped_solves);
+    std::printf("; CG %.0f iterations a frame, %lld solves capped, %lld redone with block-Jacobi\n",
+                frame > 0 ? static_cast<double>(cg_iterations) / frame : 0.0, capped_solves, runaway_solves);
     std::printf("cape_runner: slowest cloth step %.1f ms (frame %d); collisions: at most %d impact-zone rounds in a substep, "
                 "%lld vertices frozen, %lld substeps unresolved, %lld vertices moved out of the body, %lld jumps of a body\n",
                 slowest_ms, slowest_frame, most_zone_rounds, frozen_vertices, unresolved, moved_out, body_jumps);

@@ -114,6 +114,29 @@ TEST(StatsReport, EnergyGainedIsAWarningLikeACappedSolve) {
         EXPECT_NE(json.str().find(key), std::string::npos) << key << "\n" << json.str();
 }
 
+// A dropped runaway solve and a Schwarz solve redone with block-Jacobi are counted, warned about
+// and written to the JSON; the runaway makes the run not ok (the redone solve converged: it does not).
+TEST(StatsReport, RunawaySolvesAndPreconditionerFallbacksAreReported) {
+    std::vector<StepStats> frames{frame(10.0, 20, 12), frame(12.0, 22, 12), frame(12.0, 22, 12)};
+    frames[1].runaway_solves = 2;
+    frames[2].cg_preconditioner_fallbacks = 1;
+    const RunSummary s = summarize(frames);
+    EXPECT_EQ(s.runaway_solves, 2);
+    EXPECT_EQ(s.cg_preconditioner_fallbacks, 1);
+    EXPECT_FALSE(s.ok());
+    const auto warnings = run_warnings(context(), s);
+    ASSERT_EQ(warnings.size(), 2u);
+    EXPECT_NE(warnings[0].find("1 of 6 linear solves found the multilevel Schwarz preconditioner not SPD"), std::string::npos)
+        << warnings[0];
+    EXPECT_NE(warnings[1].find("2 substeps dropped their solve"), std::string::npos) << warnings[1];
+    std::ostringstream json;
+    write_run_json(json, context(), s, frames, 1.0);
+    for (const char* key : {"\"runaway_solves\": 2", "\"cg_preconditioner_fallbacks\": 1"})
+        EXPECT_NE(json.str().find(key), std::string::npos) << key << "\n" << json.str();
+    StepStats one = frames[1];
+    EXPECT_FALSE(one.ok());
+}
+
 TEST(StatsReport, CleanRunHasNoWarnings) {
     const std::vector<StepStats> frames{frame(10.0, 20, 12), frame(12.0, 22, 12)};
     const RunSummary s = summarize(frames);

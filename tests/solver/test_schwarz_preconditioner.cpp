@@ -454,5 +454,38 @@ TEST(SchwarzPreconditioner, OnA3dLaplacian) {
     EXPECT_LT(rs.iterations, rj.iterations);
 }
 
+// A preconditioner that is not SPD (factored from an indefinite matrix: the Laplacian shifted down
+// by its stiffness, or by three times it) makes rᵀM⁻¹r useless as the stopping norm: the solve must
+// say so (PcgResult::preconditioner_failed) instead of reporting convergence, so that the solver
+// can solve again with block-Jacobi. One factored from the system itself is not flagged.
+TEST(SchwarzPreconditioner, APreconditionerThatIsNotSpdIsReportedNotTakenForConvergence) {
+    const auto fabric = Fabric::cook(make_grid(1.0, 1.0, 39, 39));
+    const auto A = stiff_laplacian(*fabric, 1e-3, 10.0);
+    const std::size_t n = fabric->vertex_count();
+    std::mt19937 rng(5);
+    const auto b = random_vectors(n, rng);
+    const std::vector<std::uint8_t> fixed(n, 0);
+    const SchwarzHierarchy h = build_schwarz_hierarchy(rest_positions(*fabric), fabric->pattern());
+    cpu::Pcg<double> pcg;
+    pcg.resize(n);
+    for (const double shift : {0.0, 1.0, 3.0}) {
+        SCOPED_TRACE("shift " + std::to_string(shift));
+        const auto factored_from = shift == 0.0 ? A : stiff_laplacian(*fabric, -shift * 10.0, 10.0);
+        cpu::SchwarzPreconditioner<double> M;
+        M.build(h, fabric->pattern());
+        M.factor(factored_from, fixed, [](std::size_t) { return M3{}; });
+        std::vector<V3> x(n);
+        const cpu::PcgResult r = pcg.solve(A, b, fixed, x, 1e-4, 500, &M);
+        if (shift == 0.0) {
+            EXPECT_TRUE(r.converged);
+            EXPECT_FALSE(r.preconditioner_failed);
+        } else {
+            EXPECT_GT(M.pivot_failures(), 0);
+            EXPECT_TRUE(r.preconditioner_failed);
+            EXPECT_FALSE(r.converged);
+        }
+    }
+}
+
 }  // namespace
 }  // namespace weft

@@ -154,5 +154,38 @@ TEST(StabilityMatrix, TheSoftHeavyCornersAtALongStepStayOutOfTheBall) {
     EXPECT_EQ(cases, 4) << "the soft heavy corners at 1/24 s were not found in the matrix";
 }
 
+// A solve that gives cloth a speed no cloth reaches (cpu::kRunawaySpeed, 10 km/s: what a system
+// singular in float does, |Δv| ~10¹⁵ m/s) is dropped and reported, never committed: the cloth
+// drifts on at its start velocity through the substep. Driven here by the state itself: a sheet thrown down at just under the limit, under the
+// strongest gravity the parameters allow and the longest step, passes it within one substep.
+TEST(RunawayGuard, ASolveFasterThanAnyClothIsDroppedAndReported) {
+    for (const double thrown : {9'000.0, 9'990.0}) {
+        SCOPED_TRACE("thrown at " + std::to_string(thrown) + " m/s");
+        WorldDesc desc;
+        desc.solver.dt = 0.1;
+        desc.gravity = {0.0, -1000.0, 0.0};
+        World world(desc, "cpu");
+        world.add_cloth({.name = "sheet", .fabric = Fabric::cook(make_grid(1.0, 1.0, 4, 4))});
+        const std::vector<Vec3d> x = world.positions(0);
+        world.set_state(0, x, std::vector<Vec3d>(x.size(), Vec3d{0.0, -thrown, 0.0}));
+        const StepStats s = world.step();
+        double fastest = 0.0;
+        for (const Vec3d& v : world.velocities(0)) fastest = std::max(fastest, math::length(v));
+        if (thrown < 9'500.0) {  // 9,000 + 100 m/s: under the limit, an ordinary step
+            EXPECT_EQ(s.runaway_solves, 0);
+            EXPECT_GT(fastest, thrown);
+            EXPECT_TRUE(s.ok());
+        } else {  // 9,990 + 100 m/s: over it
+            EXPECT_GT(s.runaway_solves, 0);
+            EXPECT_FALSE(s.ok());
+            EXPECT_FALSE(s.non_finite);  // a runaway, not a NaN
+            EXPECT_LE(fastest, thrown * (1.0 + 1e-6));  // the solve's speed never committed
+            const std::vector<Vec3d> after = world.positions(0);
+            for (std::size_t i = 0; i < x.size(); ++i)  // drifted 0.1 s at the start velocity
+                EXPECT_NEAR(after[i].y, x[i].y - thrown * desc.solver.dt, 1e-6 * thrown) << "vertex " << i;
+        }
+    }
+}
+
 }  // namespace
 }  // namespace weft

@@ -53,6 +53,8 @@ RunSummary summarize(std::span<const StepStats> frames) {
         s.solves += st.newton_iterations;
         s.cg_not_converged += st.cg_not_converged;
         if (st.cg_not_converged > 0) ++s.frames_not_converged;
+        s.cg_preconditioner_fallbacks += st.cg_preconditioner_fallbacks;
+        s.runaway_solves += st.runaway_solves;
         // fmax ignores a NaN residual; a NaN there comes with non_finite, which is counted below.
         s.cg_residual_max = std::fmax(s.cg_residual_max, st.cg_residual);
         if (st.non_finite) {
@@ -170,6 +172,16 @@ std::vector<std::string> run_warnings(const RunContext& context, const RunSummar
                       json_number(summary.cg_residual_max) + " against tolerance " + json_number(context.cg_tolerance) +
                       " (raise the CG iteration cap or the substeps)");
     }
+    if (summary.cg_preconditioner_fallbacks > 0) {
+        out.push_back(std::to_string(summary.cg_preconditioner_fallbacks) + " of " + std::to_string(summary.solves) +
+                      " linear solves found the multilevel Schwarz preconditioner not SPD in this precision "
+                      "and were solved again with block-Jacobi");
+    }
+    if (summary.runaway_solves > 0) {
+        out.push_back(std::to_string(summary.runaway_solves) +
+                      " substeps dropped their solve, which gave cloth a speed over 10 km/s (a system singular in this "
+                      "precision); the cloth kept its velocity through those substeps");
+    }
     if (summary.non_finite_frames > 0) {
         out.push_back("non-finite values (NaN/Inf) in " + std::to_string(summary.non_finite_frames) + " of " +
                       std::to_string(summary.frames) + " frames, first at frame " +
@@ -268,8 +280,10 @@ void write_summary_fields(JsonWriter& json, const RunContext& c, const RunSummar
     json.end_object();
     json.field("cg_not_converged", s.cg_not_converged);
     json.field("cg_not_converged_frames", s.frames_not_converged);
+    json.field("cg_preconditioner_fallbacks", s.cg_preconditioner_fallbacks);
     json.field("cg_residual_max", s.cg_residual_max);
     json.field("non_finite_frames", s.non_finite_frames);
+    json.field("runaway_solves", s.runaway_solves);
     json.key("energy_guard").begin_object();
     json.field("mode", c.energy_guard);
     json.field("gained_substeps", s.energy_gained);
@@ -399,7 +413,9 @@ void print_run_summary(std::ostream& out, const RunContext& c, const RunSummary&
 
     out << "\n  CG iterations  per frame: mean " << format_fixed(s.cg_iterations.mean, 1) << ", max "
         << format_fixed(s.cg_iterations.max, 0) << "; largest solve " << s.cg_iterations_max_solve << "; "
-        << s.cg_not_converged << " of " << s.solves << " solves not converged\n";
+        << s.cg_not_converged << " of " << s.solves << " solves not converged";
+    if (s.cg_preconditioner_fallbacks > 0) out << ", " << s.cg_preconditioner_fallbacks << " redone with block-Jacobi (the Schwarz preconditioner not SPD)";
+    out << "\n";
     if (s.kernels.max > 0.0)
         out << "  GPU kernels    per frame: median " << format_fixed(s.kernels.median, 0) << ", max "
             << format_fixed(s.kernels.max, 0) << " (a CUDA graph's nodes counted at each launch)\n";

@@ -49,9 +49,11 @@ struct RunSummary {
     int cg_iterations_max_solve = 0;  ///< largest single solve
     long long solves = 0;             ///< linear solves (Newton iterations) in all frames
     long long cg_not_converged = 0;   ///< solves that hit the iteration cap
+    long long cg_preconditioner_fallbacks = 0;  ///< solves whose Schwarz preconditioner was not SPD, redone with block-Jacobi
     std::size_t frames_not_converged = 0;
     double cg_residual_max = 0.0;  ///< largest final relative residual of any solve
     std::size_t non_finite_frames = 0;
+    long long runaway_solves = 0;  ///< substeps whose solve ran away and was dropped (StepStats::runaway_solves)
     long long first_non_finite_frame = -1;  ///< 1-based frame number, -1 if none
     Distribution contacts;                  ///< collider contacts per frame
     /// Analytic colliders after the solve (swept_collider.h), over all frames: vertices a fast one
@@ -103,7 +105,7 @@ struct RunSummary {
     double simulation_seconds = 0.0;        ///< sum of step times, s
     double fps = 0.0;                       ///< frames per second of simulation time (I/O excluded)
     [[nodiscard]] bool ok() const {
-        return cg_not_converged == 0 && non_finite_frames == 0 && energy_gained == 0 &&
+        return cg_not_converged == 0 && non_finite_frames == 0 && runaway_solves == 0 && energy_gained == 0 &&
                collisions.unresolved_substeps == 0 &&
                collisions.frames_with_intersections == 0;
     }

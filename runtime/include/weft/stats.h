@@ -97,9 +97,17 @@ struct StepStats {
     /// MAS domain factorisations that met a non-positive pivot (a domain matrix not SPD in the
     /// backend's precision; the pivot is replaced and the solve goes on, usually with more iterations)
     int preconditioner_pivot_failures = 0;
+    /// Solves whose multilevel Schwarz preconditioner turned out not SPD in the backend's precision
+    /// (rᵀM⁻¹r negative, so its stopping norm means nothing) and were solved again with block-Jacobi
+    /// (cpu backend). The first try's iterations are in cg_iterations too.
+    int cg_preconditioner_fallbacks = 0;
     int collider_contacts = 0;     ///< vertex–collider contacts active in the last substep
     CollisionStats collision{};
     bool non_finite = false;       ///< a NaN or Inf appeared; the state was restored to the last good one
+    /// Substeps whose solve gave a free vertex a speed no cloth reaches (over 10 km/s: a system
+    /// singular in the backend's precision); the solve is dropped and the free vertices keep their
+    /// start velocity through the substep, collisions included (cpu backend).
+    int runaway_solves = 0;
     /// Energy guard (SolverSettings::energy_guard; docs/methods.md §1b): substeps whose kinetic +
     /// potential + elastic energy grew beyond the external work, as kept in the state (in retry
     /// mode, those whose redo still gained), and the sum of their gains beyond it, J.
@@ -124,7 +132,7 @@ struct StepStats {
     /// No NaN, every solve converged, no energy gained, no collision left unresolved and no
     /// intersection found.
     [[nodiscard]] bool ok() const {
-        return !non_finite && cg_not_converged == 0 && energy_gained == 0 && collision.unresolved_substeps == 0 &&
+        return !non_finite && runaway_solves == 0 && cg_not_converged == 0 && energy_gained == 0 && collision.unresolved_substeps == 0 &&
                collision.remaining_intersections <= 0;
     }
     [[nodiscard]] double& ms(Stage s) { return stage_ms[static_cast<int>(s)]; }

@@ -376,8 +376,18 @@ void CpuSolver<T>::substep(const Model& model, double t, double h_double, StepSt
             stats.ms(Stage::Precondition) += ms_since(clock);
             clock = Clock::now();
         }
-        const PcgResult r = pcg_.solve(SystemOperator<T>{A_, contacts}, b_, fixed_, dv_, solver.cg_tolerance,
-                                       solver.cg_max_iterations, schwarz);
+        if (schwarz != nullptr) dv_start_ = dv_;
+        PcgResult r = pcg_.solve(SystemOperator<T>{A_, contacts}, b_, fixed_, dv_, solver.cg_tolerance,
+                                 solver.cg_max_iterations, schwarz);
+        if (r.preconditioner_failed) {
+            // The Schwarz preconditioner lost definiteness in this precision (rᵀM⁻¹r came out negative):
+            // solved again from the same start with block-Jacobi, whose 3×3 diagonal blocks are SPD
+            // wherever A is. Counted (StepStats::cg_preconditioner_fallbacks).
+            ++stats.cg_preconditioner_fallbacks;
+            stats.cg_iterations += r.iterations;
+            dv_ = dv_start_;
+            r = pcg_.solve(SystemOperator<T>{A_, contacts}, b_, fixed_, dv_, solver.cg_tolerance, solver.cg_max_iterations);
+        }
         stats.cg_iterations += r.iterations;
         stats.cg_iterations_max = std::max(stats.cg_iterations_max, r.iterations);
         stats.cg_residual = std::max(stats.cg_residual, r.relative_residual);
@@ -403,6 +413,11 @@ void CpuSolver<T>::substep(const Model& model, double t, double h_double, StepSt
 
     clock = Clock::now();
     // Commit x = x0 + h·v and check every value: a NaN or Inf rolls the substep back and is reported.
+    // A free vertex faster than kRunawaySpeed (a runaway solve) is reported too, and the substep
+    // goes on without the solve: every vertex keeps its start velocity (pins their prescribed one),
+    // and the collision stages below still sweep that motion against the colliders, which moved on.
+    const double runaway2 = kRunawaySpeed * kRunawaySpeed;
+    std::atomic<bool> runaway{false};
     const double bad = deterministic_sum(n_, partials_, [&](std::size_t lo, std::size_t hi) {
         double count = 0.0;
         for (std::size_t i = lo; i < hi; ++i) {
@@ -410,6 +425,8 @@ void CpuSolver<T>::substep(const Model& model, double t, double h_double, StepSt
             x_[i] = x0_[i] + h * vk_[i];
             dv_previous_[i] = vk_[i] - v0_[i];
             if (!physics::is_finite(x_[i]) || !physics::is_finite(v_[i])) count += 1.0;
+            else if (!fixed_[i] && static_cast<double>(physics::length_squared(v_[i])) > runaway2)
+                runaway.store(true, std::memory_order_relaxed);
         }
         return count;
     });
@@ -418,6 +435,15 @@ void CpuSolver<T>::substep(const Model& model, double t, double h_double, StepSt
         v_ = v0_;
         std::fill(dv_previous_.begin(), dv_previous_.end(), V3{});
         stats.non_finite = true;
+    } else if (runaway.load()) {
+        ++stats.runaway_solves;
+        parallel_chunks(n_, [&](std::size_t lo, std::size_t hi) {
+            for (std::size_t i = lo; i < hi; ++i) {
+                if (!fixed_[i]) v_[i] = v0_[i];
+                x_[i] = x0_[i] + h * v_[i];
+                dv_previous_[i] = V3{};
+            }
+        });
     }
     int swept = 0;
     if (bad == 0.0 && !shapes_.empty()) {

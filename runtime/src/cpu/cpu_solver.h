@@ -24,6 +24,13 @@
 
 namespace weft::cpu {
 
+/// A free vertex faster than this after a solve (m/s) means the solve ran away: the substep goes on
+/// without it, every free vertex at its start velocity (StepStats::runaway_solves). Ten kilometres a second: above the speed of
+/// sound in steel, so no cloth a game or a tool moves, struck or not, comes near it, and a solve of
+/// a system singular in the backend's precision (a very light vertex under stiff springs in float:
+/// |Δv| 1.3·10¹⁵ m/s in the cape_runner's frame 390, docs/results.md) lands far above it.
+inline constexpr double kRunawaySpeed = 1e4;
+
 /// Implicit Euler with Newton iterations on the velocity (Baraff & Witkin 1998), in scalar T.
 template <typename T>
 class CpuSolver {
@@ -118,6 +125,7 @@ private:
     std::vector<V3> b_, dv_, pin_velocity_;
     std::vector<Vec3d> pin_targets_;  // this substep's, from pin_targets (weft/backend/flat_model.h)
     std::vector<V3> dv_previous_;  // v − v0 of the last substep: the warm start of the next first solve
+    std::vector<V3> dv_start_;     // a Schwarz solve's start, for the block-Jacobi solve after a divergence
     std::vector<std::uint8_t> fixed_;
     std::vector<int> contacts_;
     std::vector<double> partials_;

@@ -22,6 +22,11 @@ struct PcgResult {
     int iterations = 0;
     double relative_residual = 0.0;  ///< sqrt(δ_new / δ₀) at exit
     bool converged = false;
+    /// Schwarz only: rᵀM⁻¹r came out negative (or NaN) for a nonzero r, so the preconditioner is not
+    /// SPD in this precision (a domain matrix factored past a non-positive pivot) and the norm the
+    /// loop stops on means nothing: the solve stops, not converged, and says so (the CPU solver then
+    /// solves again with block-Jacobi). Before, such a solve stopped at once and reported convergence.
+    bool preconditioner_failed = false;
 };
 
 template <typename T>
@@ -124,7 +129,10 @@ public:
         PcgResult result;
         const double eps2 = tolerance * tolerance;
         if (!(delta0 > 0.0)) {
-            result.converged = delta0 == 0.0;
+            // rᵀM⁻¹r ≤ 0 (or NaN) with r ≠ 0: M is not SPD.
+            result.preconditioner_failed =
+                sum(n, [&](std::size_t i) { return static_cast<double>(physics::dot(r_[i], r_[i])); }) > 0.0;
+            result.converged = delta0 == 0.0 && !result.preconditioner_failed;
             return result;
         }
         while (delta > eps2 * delta0 && result.iterations < max_iterations) {
@@ -139,6 +147,11 @@ public:
             });
             precondition(r_, s_);
             const double delta_new = sum(n, [&](std::size_t i) { return static_cast<double>(physics::dot(r_[i], s_[i])); });
+            if (delta_new < 0.0) {  // rᵀM⁻¹r < 0: M is not SPD
+                result.preconditioner_failed = true;
+                ++result.iterations;
+                break;
+            }
             const T beta = static_cast<T>(delta_new / delta);
             delta = delta_new;
             next_direction(beta, fixed);
@@ -146,6 +159,7 @@ public:
         }
         result.relative_residual = std::sqrt(std::max(delta, 0.0) / delta0);
         result.converged = delta <= eps2 * delta0;
+        if (result.preconditioner_failed) result.converged = false;
         return result;
     }
 
