@@ -84,6 +84,7 @@ struct DeviceStats {
     int swept_hits;      ///< vertices the swept collider test carried along (one per vertex and collider)
     int overshoot_hits;  ///< slow vertices it put back onto a collider's surface (read with swept_hits)
     int pivot_failures;  ///< Schwarz domain factorisations that met a non-positive pivot
+    int runaway;         ///< free vertices the commit found faster than kRunawaySpeed (weft/backend/runaway.h)
 };
 
 }  // namespace weft::cuda

@@ -244,6 +244,7 @@ void DeviceSolver::run_substep(const Model& model, double t, double h, StepStats
     // With the collision stages on, `detect` reported the list's size, as the CPU does.
     if (view_.contacts.capacity > 0 && !collisions_.active()) stats.collision.contacts = ds.proximity_contacts;
     if (ds.non_finite > 0) stats.non_finite = true;
+    else if (ds.runaway > 0) ++stats.runaway_solves;  // dropped by drop_runaway_kernel
 
     auto elapsed = [&](std::size_t a, std::size_t b) {
         float ms = 0.0f;

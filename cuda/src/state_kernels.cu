@@ -3,6 +3,7 @@
 // of positions and normals.
 #include "cuda_check.h"
 #include "device_math.cuh"
+#include "weft/backend/runaway.h"
 #include "weft/physics/swept_collider.h"
 
 namespace weft::cuda {
@@ -11,6 +12,9 @@ namespace {
 struct FloatMax {
     __device__ float operator()(float a, float b) const { return a < b ? b : a; }
 };
+
+/// kRunawaySpeed² in float (m²/s²).
+constexpr float kRunawaySpeedSquared = static_cast<float>(kRunawaySpeed * kRunawaySpeed);
 
 __global__ void begin_substep_kernel(DeviceView d) {
     const std::uint32_t i = blockIdx.x * blockDim.x + threadIdx.x;
@@ -75,6 +79,7 @@ __global__ void commit_kernel(DeviceView d) {
         store3(d.x, i, d.n, x);
         store3(d.dv_previous, i, d.n, v - load3(d.v0, i, d.n));
         if (!physics::is_finite(x) || !physics::is_finite(v)) atomicAdd(&d.stats->non_finite, 1);
+        else if (!d.fixed[i] && physics::length_squared(v) > kRunawaySpeedSquared) atomicAdd(&d.stats->runaway, 1);
         // The vertex's own share of the relative motion the swept test measures (swept_collider.h);
         // pinned vertices are never swept, as on the CPU.
         if (sp.bounded_shape_count > 0 && !d.fixed[i]) {
@@ -109,6 +114,18 @@ __global__ void rollback_kernel(DeviceView d, int always) {
     d.x[i] = d.x0[i];
     d.v[i] = d.v0[i];
     d.dv_previous[i] = 0.0f;
+}
+
+// A runaway solve (a free vertex over kRunawaySpeed, no NaN) is dropped, as on the CPU: the free
+// vertices keep their start velocity through the substep; the collision stages still sweep it.
+__global__ void drop_runaway_kernel(DeviceView d) {
+    const std::uint32_t i = blockIdx.x * blockDim.x + threadIdx.x;
+    if (i >= d.n || d.stats->runaway == 0 || d.stats->non_finite != 0) return;
+    const V3 x0 = load3(d.x0, i, d.n);
+    const V3 v = d.fixed[i] ? load3(d.v, i, d.n) : load3(d.v0, i, d.n);
+    store3(d.v, i, d.n, v);
+    store3(d.x, i, d.n, x0 + step_params(d).h * v);
+    store3(d.dv_previous, i, d.n, V3{});
 }
 
 // The per-vertex loop of CpuSolver::sweep_fast_colliders, in float: every collider in the CPU's
@@ -205,6 +222,8 @@ void launch_commit(const DeviceView& d, cudaStream_t stream) {
     WEFT_CUDA_CHECK_LAUNCH("commit_kernel");
     rollback_kernel<<<grid_for(3 * d.n), kBlockSize, 0, stream>>>(d, 0);
     WEFT_CUDA_CHECK_LAUNCH("rollback_kernel");
+    drop_runaway_kernel<<<grid_for(d.n), kBlockSize, 0, stream>>>(d);
+    WEFT_CUDA_CHECK_LAUNCH("drop_runaway_kernel");
 }
 
 void launch_rollback(const DeviceView& d, cudaStream_t stream) {

@@ -401,6 +401,38 @@ TEST(CudaBackend, WrittenStateReadsBackRoundedToFloat) {
     EXPECT_THROW(world->set_state(0, std::vector<Vec3d>(3), std::vector<Vec3d>(3)), Error);
 }
 
+// The CPU's runaway guard on the device (RunawayGuard in tests/solver/test_stability.cpp): a sheet
+// thrown down just under kRunawaySpeed passes it within one substep at the strongest gravity and the
+// longest step; the solve is dropped and counted, and the sheet drifts at its start velocity.
+TEST(CudaBackend, ASolveFasterThanAnyClothIsDroppedAndReportedLikeOnTheCpu) {
+    WEFT_REQUIRE_GPU();
+    for (const double thrown : {9'000.0, 9'990.0}) {
+        SCOPED_TRACE("thrown at " + std::to_string(thrown) + " m/s");
+        WorldDesc desc;
+        desc.solver.dt = 0.1;
+        desc.gravity = {0.0, -1000.0, 0.0};
+        World world(desc, "cuda");
+        world.add_cloth({.name = "sheet", .fabric = Fabric::cook(make_grid(1.0, 1.0, 4, 4))});
+        const std::vector<Vec3d> x = world.positions(0);
+        world.set_state(0, x, std::vector<Vec3d>(x.size(), Vec3d{0.0, -thrown, 0.0}));
+        const StepStats s = world.step();
+        double fastest = 0.0;
+        for (const Vec3d& v : world.velocities(0)) fastest = std::max(fastest, math::length(v));
+        if (thrown < 9'500.0) {
+            EXPECT_EQ(s.runaway_solves, 0);
+            EXPECT_GT(fastest, thrown);
+        } else {
+            EXPECT_GT(s.runaway_solves, 0);
+            EXPECT_FALSE(s.ok());
+            EXPECT_FALSE(s.non_finite);
+            EXPECT_LE(fastest, thrown * (1.0 + 1e-6));
+            const std::vector<Vec3d> after = world.positions(0);
+            for (std::size_t i = 0; i < x.size(); ++i)
+                EXPECT_NEAR(after[i].y, x[i].y - thrown * desc.solver.dt, 1e-5 * thrown) << "vertex " << i;
+        }
+    }
+}
+
 TEST(CudaBackend, SetStateContinuesLikeTheWorldItCameFrom) {
     WEFT_REQUIRE_GPU();
     // The drape in free fall (frames 0–10; it reaches the ball at frame 13): moving fast, so a state that

@@ -537,12 +537,16 @@ void MultiSolver::substep(const Model& model, double t, double h, StepStats& sta
 
     // Every part checks its own vertices (ghosts included) for NaN and Inf; one finding rolls every
     // part back, as one GPU would.
-    int non_finite = 0, contacts = 0;
+    // A part whose vertex ran away dropped its own solve (drop_runaway_kernel); the others kept theirs:
+    // counted once for the substep (multi-GPU does not yet drop every part's solve together).
+    int non_finite = 0, contacts = 0, runaway = 0;
     for (auto& s : solvers_) {
         const DeviceStats& ds = s->part_stats();
         non_finite += ds.non_finite;
         contacts += ds.contacts;
+        runaway += ds.runaway;
     }
+    if (non_finite == 0 && runaway > 0) ++stats.runaway_solves;
     stats.collider_contacts = contacts;
     // Events: start, after the start of the substep, per Newton iteration (assembly, solve, update), end.
     stats.ms(Stage::Kinematics) += host_ms + std::max(0.0, elapsed_ms(0, 1) - detection);

@@ -106,7 +106,7 @@ struct StepStats {
     bool non_finite = false;       ///< a NaN or Inf appeared; the state was restored to the last good one
     /// Substeps whose solve gave a free vertex a speed no cloth reaches (over 10 km/s: a system
     /// singular in the backend's precision); the solve is dropped and the free vertices keep their
-    /// start velocity through the substep, collisions included (cpu backend).
+    /// start velocity through the substep, collisions included (cpu backend and one GPU).
     int runaway_solves = 0;
     /// Energy guard (SolverSettings::energy_guard; docs/methods.md §1b): substeps whose kinetic +
     /// potential + elastic energy grew beyond the external work, as kept in the state (in retry

@@ -16,6 +16,7 @@
 #include "weft/backend/flat_model.h"
 #include "weft/backend/material_terms.h"
 #include "weft/backend/model.h"
+#include "weft/backend/runaway.h"
 #include "weft/physics/bending.h"
 #include "weft/physics/collider_contact.h"
 #include "weft/physics/implicit_terms.h"
@@ -23,13 +24,6 @@
 #include "weft/stats.h"
 
 namespace weft::cpu {
-
-/// A free vertex faster than this after a solve (m/s) means the solve ran away: the substep goes on
-/// without it, every free vertex at its start velocity (StepStats::runaway_solves). Ten kilometres a second: above the speed of
-/// sound in steel, so no cloth a game or a tool moves, struck or not, comes near it, and a solve of
-/// a system singular in the backend's precision (a very light vertex under stiff springs in float:
-/// |Δv| 1.3·10¹⁵ m/s in the cape_runner's frame 390, docs/results.md) lands far above it.
-inline constexpr double kRunawaySpeed = 1e4;
 
 /// Implicit Euler with Newton iterations on the velocity (Baraff & Witkin 1998), in scalar T.
 template <typename T>
