@@ -21,6 +21,7 @@
 #include "weft/scene.h"
 
 #include "gpu_test_util.h"
+#include "thrown_sheet.h"
 
 namespace weft {
 namespace {
@@ -408,27 +409,17 @@ TEST(CudaBackend, ASolveFasterThanAnyClothIsDroppedAndReportedLikeOnTheCpu) {
     WEFT_REQUIRE_GPU();
     for (const double thrown : {9'000.0, 9'990.0}) {
         SCOPED_TRACE("thrown at " + std::to_string(thrown) + " m/s");
-        WorldDesc desc;
-        desc.solver.dt = 0.1;
-        desc.gravity = {0.0, -1000.0, 0.0};
-        World world(desc, "cuda");
-        world.add_cloth({.name = "sheet", .fabric = Fabric::cook(make_grid(1.0, 1.0, 4, 4))});
-        const std::vector<Vec3d> x = world.positions(0);
-        world.set_state(0, x, std::vector<Vec3d>(x.size(), Vec3d{0.0, -thrown, 0.0}));
-        const StepStats s = world.step();
-        double fastest = 0.0;
-        for (const Vec3d& v : world.velocities(0)) fastest = std::max(fastest, math::length(v));
+        const test::ThrownSheetStep r = test::step_thrown_sheet("cuda", thrown);
         if (thrown < 9'500.0) {
-            EXPECT_EQ(s.runaway_solves, 0);
-            EXPECT_GT(fastest, thrown);
+            EXPECT_EQ(r.stats.runaway_solves, 0);
+            EXPECT_GT(r.fastest, thrown);
         } else {
-            EXPECT_GT(s.runaway_solves, 0);
-            EXPECT_FALSE(s.ok());
-            EXPECT_FALSE(s.non_finite);
-            EXPECT_LE(fastest, thrown * (1.0 + 1e-6));
-            const std::vector<Vec3d> after = world.positions(0);
-            for (std::size_t i = 0; i < x.size(); ++i)
-                EXPECT_NEAR(after[i].y, x[i].y - thrown * desc.solver.dt, 1e-5 * thrown) << "vertex " << i;
+            EXPECT_GT(r.stats.runaway_solves, 0);
+            EXPECT_FALSE(r.stats.ok());
+            EXPECT_FALSE(r.stats.non_finite);
+            EXPECT_LE(r.fastest, thrown * (1.0 + 1e-6));
+            for (std::size_t i = 0; i < r.before.size(); ++i)
+                EXPECT_NEAR(r.after[i].y, r.before[i].y - thrown * r.dt, 1e-5 * thrown) << "vertex " << i;
         }
     }
 }

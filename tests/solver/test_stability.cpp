@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "stability_matrix.h"
+#include "thrown_sheet.h"
 #include "weft/mesh.h"
 #include "weft/world.h"
 
@@ -161,28 +162,18 @@ TEST(StabilityMatrix, TheSoftHeavyCornersAtALongStepStayOutOfTheBall) {
 TEST(RunawayGuard, ASolveFasterThanAnyClothIsDroppedAndReported) {
     for (const double thrown : {9'000.0, 9'990.0}) {
         SCOPED_TRACE("thrown at " + std::to_string(thrown) + " m/s");
-        WorldDesc desc;
-        desc.solver.dt = 0.1;
-        desc.gravity = {0.0, -1000.0, 0.0};
-        World world(desc, "cpu");
-        world.add_cloth({.name = "sheet", .fabric = Fabric::cook(make_grid(1.0, 1.0, 4, 4))});
-        const std::vector<Vec3d> x = world.positions(0);
-        world.set_state(0, x, std::vector<Vec3d>(x.size(), Vec3d{0.0, -thrown, 0.0}));
-        const StepStats s = world.step();
-        double fastest = 0.0;
-        for (const Vec3d& v : world.velocities(0)) fastest = std::max(fastest, math::length(v));
+        const test::ThrownSheetStep r = test::step_thrown_sheet("cpu", thrown);
         if (thrown < 9'500.0) {  // 9,000 + 100 m/s: under the limit, an ordinary step
-            EXPECT_EQ(s.runaway_solves, 0);
-            EXPECT_GT(fastest, thrown);
-            EXPECT_TRUE(s.ok());
+            EXPECT_EQ(r.stats.runaway_solves, 0);
+            EXPECT_GT(r.fastest, thrown);
+            EXPECT_TRUE(r.stats.ok());
         } else {  // 9,990 + 100 m/s: over it
-            EXPECT_GT(s.runaway_solves, 0);
-            EXPECT_FALSE(s.ok());
-            EXPECT_FALSE(s.non_finite);  // a runaway, not a NaN
-            EXPECT_LE(fastest, thrown * (1.0 + 1e-6));  // the solve's speed never committed
-            const std::vector<Vec3d> after = world.positions(0);
-            for (std::size_t i = 0; i < x.size(); ++i)  // drifted 0.1 s at the start velocity
-                EXPECT_NEAR(after[i].y, x[i].y - thrown * desc.solver.dt, 1e-6 * thrown) << "vertex " << i;
+            EXPECT_GT(r.stats.runaway_solves, 0);
+            EXPECT_FALSE(r.stats.ok());
+            EXPECT_FALSE(r.stats.non_finite);  // a runaway, not a NaN
+            EXPECT_LE(r.fastest, thrown * (1.0 + 1e-6));  // the solve's speed never committed
+            for (std::size_t i = 0; i < r.before.size(); ++i)  // drifted one step at the start velocity
+                EXPECT_NEAR(r.after[i].y, r.before[i].y - thrown * r.dt, 1e-6 * thrown) << "vertex " << i;
         }
     }
 }
