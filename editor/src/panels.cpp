@@ -288,7 +288,8 @@ void warning_banner(Session& session, const PanelLayout& layout) {
     const bool not_converged = h.last.cg_not_converged > 0;
     const bool non_finite = h.last.non_finite;
     const bool energy = h.last.energy_gained > 0;
-    if (!not_converged && !non_finite && !energy) return;
+    const bool runaway = h.last.runaway_solves > 0;
+    if (!not_converged && !non_finite && !energy && !runaway) return;
     const float width = std::max(200.0F, layout.width - 2.0F * column_width(layout.width) - 20.0F);
     ImGui::SetNextWindowPos(ImVec2((layout.width - width) * 0.5F, 8.0F), ImGuiCond_Always);
     ImGui::SetNextWindowSize(ImVec2(width, 0.0F), ImGuiCond_Always);
@@ -299,6 +300,10 @@ void warning_banner(Session& session, const PanelLayout& layout) {
     if (non_finite)
         ImGui::TextWrapped("NaN or Inf in the last step: the state was restored (%d of %d steps)", h.non_finite_steps,
                            h.steps);
+    if (runaway)
+        ImGui::TextWrapped("A solve ran away in %d substeps of the last step (cloth over 10 km/s) and was dropped: the "
+                           "cloth kept its velocity (%d of %d steps)",
+                           h.last.runaway_solves, h.runaway_steps, h.steps);
     if (not_converged)
         ImGui::TextWrapped("CG did not converge in %d solves of the last step (%d of %d steps): raise the cap, "
                            "the substeps, or loosen the tolerance",

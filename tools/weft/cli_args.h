@@ -21,7 +21,7 @@ namespace weft::cli {
 inline constexpr int kExitOk = 0;
 inline constexpr int kExitError = 1;          ///< bad scene, unreadable mesh, unwritable output
 inline constexpr int kExitUsage = 2;          ///< wrong flags or values
-inline constexpr int kExitNonFinite = 3;      ///< the simulation produced NaN or Inf at least once
+inline constexpr int kExitNonFinite = 3;      ///< the simulation produced NaN or Inf, or a solve ran away, at least once
 inline constexpr int kExitCollision = 4;      ///< a collision stayed unresolved, or --check found intersections
 inline constexpr int kExitStepFailed = 5;     ///< a step failed (a device fault, out of device memory): the frames before it are written
 inline constexpr int kExitInterrupted = 130;  ///< Ctrl-C or SIGTERM (128 + SIGINT, as shells report Ctrl-C); stats still written

@@ -86,6 +86,8 @@ void print_bench_table(std::ostream& out, const std::vector<BenchResult>& result
         if (s.cg_not_converged > 0) flags += std::to_string(s.cg_not_converged) + " not converged";
         if (s.non_finite_frames > 0)
             flags += (flags.empty() ? "" : ", ") + std::to_string(s.non_finite_frames) + " NaN";
+        if (s.runaway_solves > 0)
+            flags += (flags.empty() ? "" : ", ") + std::to_string(s.runaway_solves) + " runaway";
         if (s.energy_gained > 0)
             flags += (flags.empty() ? "" : ", ") + std::to_string(s.energy_gained) + " energy gained";
         row.push_back(flags.empty() ? "-" : flags);
@@ -119,7 +121,7 @@ int bench_command(const BenchOptions& options, std::ostream& out, std::ostream& 
         for (const std::string& w : run_warnings(r.context, r.summary)) {
             err << "weft: WARNING: " << r.context.scene << ": " << w << '\n';
         }
-        non_finite = non_finite || r.summary.non_finite_frames > 0;
+        non_finite = non_finite || r.summary.non_finite_frames > 0 || r.summary.runaway_solves > 0;
     }
     return non_finite ? kExitNonFinite : kExitOk;
 }

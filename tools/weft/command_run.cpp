@@ -178,6 +178,11 @@ int run_command(const RunOptions& options, std::ostream& out, std::ostream& err)
             << " frames; exit code " << kExitNonFinite << std::endl;
         return kExitNonFinite;
     }
+    if (summary.runaway_solves > 0) {
+        err << "weft: " << summary.runaway_solves << " solves ran away (cloth over 10 km/s) and were dropped; exit code "
+            << kExitNonFinite << std::endl;
+        return kExitNonFinite;
+    }
     const auto& col = summary.collisions;
     if (col.unresolved_substeps > 0 || col.frames_with_intersections > 0) {
         err << "weft: collisions: " << col.unresolved_substeps << " unresolved substeps, intersections after "

@@ -45,6 +45,7 @@ struct StatsHistory {
     int not_converged_steps = 0;          ///< of those, steps with a CG solve that hit its cap
     int energy_gained_steps = 0;          ///< of those, steps with a substep that gained energy (energy guard)
     int non_finite_steps = 0;             ///< of those, steps where NaN or Inf appeared
+    int runaway_steps = 0;                ///< of those, steps with a solve that ran away (StepStats::runaway_solves)
     StepStats last{};
 
     void record(const StepStats& s);
