@@ -283,6 +283,18 @@ inline Resolved resolve_cpu(const Scene& s, int max_iterations = 32, ImpactZoneS
 
 inline bool same_bits(const Vec3d& a, const Vec3d& b) { return std::memcmp(&a, &b, sizeof(Vec3d)) == 0; }
 
+/// What a resolve whose work cap `cap` was spent shows against the same scene uncapped (`full`):
+/// the cap kept, fewer rounds, the fallbacks took the hits, and a cap of 1 allows no round at all.
+inline void expect_work_capped(const ImpactZoneReport& capped, const ImpactZoneReport& full, std::int64_t cap) {
+    EXPECT_TRUE(capped.qp_work_spent);
+    EXPECT_LE(capped.qp_work, cap);
+    EXPECT_LT(capped.iterations, full.iterations);
+    EXPECT_GT(capped.rigid_rounds + capped.frozen_vertices, 0) << "the fallbacks took the hits";
+    if (cap == 1) {
+        EXPECT_EQ(capped.iterations, 0);
+    }
+}
+
 /// Everything `resolve` promises about its output.
 inline void expect_clean(const Scene& s, const Resolved& r) {
     const ImpactZoneReport& rep = r.report;

@@ -348,8 +348,11 @@ void CpuSolver<T>::substep(const Model& model, double t, double h_double, StepSt
         // Filtered vertices get their prescribed change z = v_target − v_k. The rest start at 0, or in
         // the first Newton iteration from the last substep's velocity change (warm start).
         const bool warm = solver.cg_warm_start && newton == 0;
-        for (std::size_t i = 0; i < n_; ++i)
-            dv_[i] = fixed_[i] ? pin_velocity_[i] - vk_[i] : (warm ? dv_previous_[i] : V3{});
+        const auto start_solve = [&] {
+            for (std::size_t i = 0; i < n_; ++i)
+                dv_[i] = fixed_[i] ? pin_velocity_[i] - vk_[i] : (warm ? dv_previous_[i] : V3{});
+        };
+        start_solve();
         stats.ms(Stage::Assembly) += ms_since(clock);
 
         clock = Clock::now();
@@ -376,7 +379,6 @@ void CpuSolver<T>::substep(const Model& model, double t, double h_double, StepSt
             stats.ms(Stage::Precondition) += ms_since(clock);
             clock = Clock::now();
         }
-        if (schwarz != nullptr) dv_start_ = dv_;
         PcgResult r = pcg_.solve(SystemOperator<T>{A_, contacts}, b_, fixed_, dv_, solver.cg_tolerance,
                                  solver.cg_max_iterations, schwarz);
         if (r.preconditioner_failed) {
@@ -385,7 +387,7 @@ void CpuSolver<T>::substep(const Model& model, double t, double h_double, StepSt
             // wherever A is. Counted (StepStats::cg_preconditioner_fallbacks).
             ++stats.cg_preconditioner_fallbacks;
             stats.cg_iterations += r.iterations;
-            dv_ = dv_start_;
+            start_solve();
             r = pcg_.solve(SystemOperator<T>{A_, contacts}, b_, fixed_, dv_, solver.cg_tolerance, solver.cg_max_iterations);
         }
         stats.cg_iterations += r.iterations;

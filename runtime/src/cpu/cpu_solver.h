@@ -119,7 +119,6 @@ private:
     std::vector<V3> b_, dv_, pin_velocity_;
     std::vector<Vec3d> pin_targets_;  // this substep's, from pin_targets (weft/backend/flat_model.h)
     std::vector<V3> dv_previous_;  // v − v0 of the last substep: the warm start of the next first solve
-    std::vector<V3> dv_start_;     // a Schwarz solve's start, for the block-Jacobi solve after a divergence
     std::vector<std::uint8_t> fixed_;
     std::vector<int> contacts_;
     std::vector<double> partials_;
