@@ -28,14 +28,22 @@ enum LoopPhase : int {
     kLoopPhases,
 };
 
-/// Entries of a loop clock in device memory: the cycles of each phase, then the iterations timed.
-inline constexpr int kLoopClockEntries = kLoopPhases + 1;
+/// The counts a loop clock keeps after the phases' cycles.
+enum LoopCount : int {
+    kCountIterations = kLoopPhases,  ///< iterations timed
+    kCountSolves,                    ///< loops started with contacts (the counts below are their sums)
+    kCountPairs,                     ///< pairs in the (part's) contact list
+    kCountActivePairs,               ///< of which in the solve (ContactView::active_mask)
+    kCountEntries,                   ///< incidence entries of the rows the loop sums (contact_row_sums)
+    kLoopClockEntries,               ///< entries of a loop clock in device memory
+};
 
 /// True where WEFT_CUDA_PCG_CLOCK=1 asks for the loop clock.
 [[nodiscard]] bool loop_clock_requested();
 
 /// Prints `who`'s clock (kLoopClockEntries cycles in device memory on `device`) to stderr as µs per
-/// iteration at the device's clock rate, the phases it never entered left out. Returns quietly where
+/// iteration at the device's clock rate, the phases it never entered left out, and the contact work
+/// of an average solve (pairs, those in the solve, incidence entries): what the phases' times are for. Returns quietly where
 /// the device cannot be read (it is for profiling, called from destructors).
 void print_loop_clock(const std::string& who, const long long* device_cycles, int device) noexcept;
 

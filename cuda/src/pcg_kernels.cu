@@ -222,6 +222,8 @@ __global__ void pcg_persistent_kernel(DeviceView d) {
     // skipped uniformly when the substep has no pairs.
     const std::uint32_t pairs = kContacts ? contact_count(d.contacts) : 0u;
     LoopClock clock(d.loop_clock);  // profiling: block 0's first thread times the phases
+    if constexpr (kContacts)
+        if (pairs > 0) clock_contact_work(d.loop_clock, d.contacts, d.n);
     for (;;) {
         clock.iteration();
         if constexpr (kContacts) {

@@ -90,6 +90,8 @@ __global__ void __launch_bounds__(kBlockSize, 3) part_pcg_loop_kernel(const __gr
     const std::uint32_t across = kContacts ? __ldcg(&v.across[owned]) : 0u;
     unsigned meetings = 0;
     LoopClock clock(v.clock);  // profiling: block 0's first thread times the phases
+    if constexpr (kContacts)
+        if (pairs > 0) clock_contact_work(v.clock, a.contacts, owned);
     const auto mark = [&](int phase) { clock.mark(phase); };
     const auto meet = [&] {
         const bool going = meet_parts(v, ++meetings, clock);
