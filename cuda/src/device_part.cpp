@@ -194,6 +194,11 @@ void DeviceSolver::part_rollback() {
     launch_rollback(view_, active_stream());
 }
 
+void DeviceSolver::part_drop_solve() {
+    WEFT_CUDA_CHECK(cudaSetDevice(device_));
+    launch_drop_solve(view_, active_stream());
+}
+
 bool DeviceSolver::part_sweep(StepStats& stats) {
     WEFT_CUDA_CHECK(cudaSetDevice(device_));
     const int before = sweep_launches_;

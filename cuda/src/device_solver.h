@@ -151,6 +151,9 @@ public:
     const DeviceStats& part_stats();
     /// Rolls this part back to the substep's start (another part met a non-finite value).
     void part_rollback();
+    /// Drops this part's solve of the substep (another part's vertex ran away): the free vertices
+    /// keep their start velocity, as the runaway drop in part_commit.
+    void part_drop_solve();
     /// The swept test of fast analytic colliders on this part's vertices (as in substep()), after
     /// part_stats; true when it ran (it may have moved ghosts: exchange the state then).
     bool part_sweep(StepStats& stats);

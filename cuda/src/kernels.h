@@ -46,6 +46,9 @@ void launch_write_output(const DeviceView& d, void* out, std::size_t stride, cud
                          const std::uint32_t* index = nullptr);
 /// x = x0, v = v0, previous Δv = 0 whatever the stats say (part mode: another part met a non-finite value).
 void launch_rollback(const DeviceView& d, cudaStream_t stream);
+/// The substep's solve dropped whatever the stats say (part mode: another part's vertex ran away):
+/// x = x0 + h·v0 and v = v0 for the free vertices, previous Δv = 0, as launch_commit's runaway drop.
+void launch_drop_solve(const DeviceView& d, cudaStream_t stream);
 /// Stores `stamp` at `where` (8-byte aligned, device memory): the frame stamps of a shared slot.
 void launch_write_stamp(void* where, std::uint64_t stamp, cudaStream_t stream);
 

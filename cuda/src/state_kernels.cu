@@ -118,9 +118,10 @@ __global__ void rollback_kernel(DeviceView d, int always) {
 
 // A runaway solve (a free vertex over kRunawaySpeed, no NaN) is dropped, as on the CPU: the free
 // vertices keep their start velocity through the substep; the collision stages still sweep it.
-__global__ void drop_runaway_kernel(DeviceView d) {
+// `always`: whatever this device's stats say (part mode: another part's vertex ran away).
+__global__ void drop_runaway_kernel(DeviceView d, int always) {
     const std::uint32_t i = blockIdx.x * blockDim.x + threadIdx.x;
-    if (i >= d.n || d.stats->runaway == 0 || d.stats->non_finite != 0) return;
+    if (i >= d.n || (always == 0 && d.stats->runaway == 0) || d.stats->non_finite != 0) return;
     const V3 x0 = load3(d.x0, i, d.n);
     const V3 v = d.fixed[i] ? load3(d.v, i, d.n) : load3(d.v0, i, d.n);
     store3(d.v, i, d.n, v);
@@ -222,7 +223,12 @@ void launch_commit(const DeviceView& d, cudaStream_t stream) {
     WEFT_CUDA_CHECK_LAUNCH("commit_kernel");
     rollback_kernel<<<grid_for(3 * d.n), kBlockSize, 0, stream>>>(d, 0);
     WEFT_CUDA_CHECK_LAUNCH("rollback_kernel");
-    drop_runaway_kernel<<<grid_for(d.n), kBlockSize, 0, stream>>>(d);
+    drop_runaway_kernel<<<grid_for(d.n), kBlockSize, 0, stream>>>(d, 0);
+    WEFT_CUDA_CHECK_LAUNCH("drop_runaway_kernel");
+}
+
+void launch_drop_solve(const DeviceView& d, cudaStream_t stream) {
+    drop_runaway_kernel<<<grid_for(d.n), kBlockSize, 0, stream>>>(d, 1);
     WEFT_CUDA_CHECK_LAUNCH("drop_runaway_kernel");
 }
 

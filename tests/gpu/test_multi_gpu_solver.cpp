@@ -19,6 +19,9 @@
 #include "weft/backend/backend.h"
 #include "weft/backend/energy_audit.h"
 #include "weft/error.h"
+#include "weft/cloth.h"
+#include "weft/fabric.h"
+#include "weft/mesh.h"
 #include "weft/world.h"
 
 namespace weft {
@@ -609,6 +612,46 @@ TEST(MultiGpuSolver, BadRequestsAreClearErrors) {
         ADD_FAILURE() << "more GPUs than the host has were accepted";
     } catch (const Error& e) {
         EXPECT_NE(std::string(e.what()).find("this host has"), std::string::npos) << e.what();
+    }
+}
+
+// The runaway guard across parts (weft/backend/runaway.h): a small sheet thrown down at 9,990 m/s
+// beside a large one at rest, under 1000 m/s² for one 0.1 s step. The thrown sheet passes
+// kRunawaySpeed within the substep, so the solve is dropped: every free vertex moves on at its
+// start velocity (the thrown sheet 999 m down, the resting one not at all), as on one GPU. The
+// sheets share no element and the small one's nine vertices lie in one part's run of the order, so
+// the other part holds resting cloth only; if it kept its solve, its vertices would fall 10 m.
+TEST(MultiGpuSolver, ARunawayOnOnePartDropsEveryPartsSolve) {
+    WEFT_REQUIRE_GPU();
+    constexpr double kThrown = 9'990.0, kDt = 0.1;  // m/s, s
+    for (const bool one_device : {true, false}) {
+        if (!one_device && cuda::devices().size() < 2) continue;
+        SCOPED_TRACE(one_device ? "two parts on one GPU" : "two GPUs");
+        WorldDesc desc;
+        desc.solver.dt = kDt;
+        desc.gravity = {0.0, -1000.0, 0.0};
+        BackendOptions options;
+        options.gpus = 2;
+        parts_on_one_device(one_device);
+        World world(desc, "cuda", options);
+        ClothDesc thrown{.name = "thrown", .fabric = Fabric::cook(make_grid(0.2, 0.2, 2, 2))};
+        thrown.initial_velocity = {0.0, -kThrown, 0.0};
+        world.add_cloth(thrown);
+        ClothDesc resting{.name = "resting", .fabric = Fabric::cook(make_grid(1.0, 1.0, 16, 16))};
+        resting.transform.translation = {2.0, 0.0, 0.0};
+        world.add_cloth(resting);
+        const std::vector<Vec3d> thrown_before = world.positions(0), resting_before = world.positions(1);
+        const StepStats stats = world.step();
+        parts_on_one_device(false);
+        EXPECT_GT(stats.runaway_solves, 0);
+        EXPECT_FALSE(stats.non_finite);
+        const std::vector<Vec3d> thrown_after = world.positions(0), resting_after = world.positions(1);
+        for (std::size_t i = 0; i < thrown_after.size(); ++i)
+            EXPECT_NEAR(thrown_after[i].y, thrown_before[i].y - kThrown * kDt, 1e-5 * kThrown) << "thrown vertex " << i;
+        double fell = 0.0;
+        for (std::size_t i = 0; i < resting_after.size(); ++i)
+            fell = std::max(fell, std::abs(resting_after[i].y - resting_before[i].y));
+        EXPECT_LT(fell, 1e-6) << "the resting sheet moved " << fell << " m: a part kept its solve";
     }
 }
 

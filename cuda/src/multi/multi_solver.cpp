@@ -537,16 +537,23 @@ void MultiSolver::substep(const Model& model, double t, double h, StepStats& sta
 
     // Every part checks its own vertices (ghosts included) for NaN and Inf; one finding rolls every
     // part back, as one GPU would.
-    // A part whose vertex ran away dropped its own solve (drop_runaway_kernel); the others kept theirs:
-    // counted once for the substep (multi-GPU does not yet drop every part's solve together).
+    // A part whose vertex ran away (ghosts included) dropped its own solve in its commit; then every
+    // other part drops its solve too, as one GPU drops the whole system's: a part that kept its solve
+    // would move its cloth while the part next to it stands still, and tear the cloth at the cut.
     int non_finite = 0, contacts = 0, runaway = 0;
+    std::vector<char> ran_away;
     for (auto& s : solvers_) {
         const DeviceStats& ds = s->part_stats();
         non_finite += ds.non_finite;
         contacts += ds.contacts;
         runaway += ds.runaway;
+        ran_away.push_back(ds.runaway > 0 ? 1 : 0);
     }
-    if (non_finite == 0 && runaway > 0) ++stats.runaway_solves;
+    if (non_finite == 0 && runaway > 0) {
+        ++stats.runaway_solves;
+        for (std::size_t p = 0; p < solvers_.size(); ++p)
+            if (ran_away[p] == 0) solvers_[p]->part_drop_solve();
+    }
     stats.collider_contacts = contacts;
     // Events: start, after the start of the substep, per Newton iteration (assembly, solve, update), end.
     stats.ms(Stage::Kinematics) += host_ms + std::max(0.0, elapsed_ms(0, 1) - detection);
