@@ -10,8 +10,9 @@
 // --resync N copies the CPU's state into the GPU world every N frames (default 1: every frame; 0:
 // never, the two runs drift apart as the game's would). --report N prints at most N frames that
 // differ (default 40). The preset is the same on both (default "game", the CPU game's). --strict
-// exits 1 if a GPU step leaves cloth through something where the CPU's step does not, or either
-// fails (a test). Exit 77: no CUDA device here (the test is skipped).
+// exits 1 if a GPU step leaves cloth through something, or fails (a NaN rolled back or a runaway
+// solve dropped), where the CPU's step does not (a test: the CPU is the reference; a frame where
+// both fail is the CPU's trouble too, printed, not the GPU's). Exit 77: no CUDA device here (the test is skipped).
 #include <algorithm>
 #include <chrono>
 #include <cmath>
@@ -188,7 +189,7 @@ int twin(const Options& o) {
 
     constexpr double dt = 1.0 / 60.0;
     Totals gpu_totals, cpu_totals;
-    int frame = 0, reported = 0, differing = 0, gpu_only_through = 0, gpu_failed = 0, cpu_failed = 0;
+    int frame = 0, reported = 0, differing = 0, gpu_only_through = 0, gpu_failed = 0, cpu_failed = 0, gpu_only_failed = 0;
     double widest_gap = 0.0;
     while (true) {
         if (o.frames > 0 && frame >= o.frames) break;
@@ -202,8 +203,14 @@ int twin(const Options& o) {
         const FrameFacts g = facts(gpu.step()), k = facts(cpu.step());
         if ((g.cloth_through_cloth + g.cloth_through_body) > 0 && (k.cloth_through_cloth + k.cloth_through_body) == 0)
             ++gpu_only_through;
-        if (g.stats.non_finite || g.stats.runaway_solves > 0) ++gpu_failed;  // a NaN rolled back, or a solve dropped
-        if (k.stats.non_finite || k.stats.runaway_solves > 0) ++cpu_failed;
+        // A NaN rolled back, or a solve dropped.
+        const bool gpu_fails = g.stats.non_finite || g.stats.runaway_solves > 0;
+        const bool cpu_fails = k.stats.non_finite || k.stats.runaway_solves > 0;
+        gpu_failed += gpu_fails ? 1 : 0;
+        cpu_failed += cpu_fails ? 1 : 0;
+        gpu_only_failed += gpu_fails && !cpu_fails ? 1 : 0;
+        if (gpu_fails || cpu_fails)
+            std::printf("frame %4d  failed on the %s\n", frame, gpu_fails && cpu_fails ? "GPU and the CPU" : gpu_fails ? "GPU only" : "CPU only");
         gpu_totals.add(g);
         cpu_totals.add(k);
         const double gap = largest_gap(gpu, cpu);
@@ -230,9 +237,9 @@ int twin(const Options& o) {
     gpu_totals.print("GPU", frame);
     cpu_totals.print("CPU", frame);
     std::printf("cape_runner_twin: cloth through something on the GPU only after %d frames; failed steps (a NaN rolled back or a solve dropped): GPU %d, "
-                "CPU %d\n",
-                gpu_only_through, gpu_failed, cpu_failed);
-    return o.strict && (gpu_only_through > 0 || gpu_failed > 0) ? 1 : 0;
+                "CPU %d, the GPU only %d\n",
+                gpu_only_through, gpu_failed, cpu_failed, gpu_only_failed);
+    return o.strict && (gpu_only_through > 0 || gpu_only_failed > 0) ? 1 : 0;
 }
 
 }  // namespace
