@@ -362,6 +362,7 @@ EnergyAudit DeviceSolver::energy_audit(const Model& model, double t, double h, b
     a.gravity = s[kEnergyGravity];
     a.contact = s[kEnergyContact] + s[kEnergyOffsetContact];
     a.elastic = s[kEnergyMembrane] + s[kEnergyBending];
+    a.max_stretch = s[kEnergyMaxStretch];
     a.external_power =
         s[kEnergyColliderPower] + s[kEnergyGrabPower] + s[kEnergyWindPower] + std::max(0.0, s[kEnergyPinPower]);
     return a;

@@ -22,12 +22,25 @@ namespace {
 
 using Reduce = cub::BlockReduce<double, kBlockSize>;
 
+struct MaxOp {
+    __device__ double operator()(double a, double b) const { return a > b ? a : b; }
+};
+
 /// Sums `value` over the block into partials[blockIdx.x] (thread 0 writes).
 __device__ void block_partial(double value, double* partials) {
     __shared__ typename Reduce::TempStorage storage;
     const double sum = Reduce(storage).Sum(value);
     if (threadIdx.x == 0) partials[blockIdx.x] = sum;
     __syncthreads();  // storage is reused by the next value
+}
+
+/// The block's largest `value` into partials[blockIdx.x] (the sums' layout; audit_finish_kernel
+/// takes the largest over the blocks for the values that are maxima, kEnergyMaxStretch).
+__device__ void block_maximum(double value, double* partials) {
+    __shared__ typename Reduce::TempStorage storage;
+    const double largest = Reduce(storage).Reduce(value, MaxOp{});
+    if (threadIdx.x == 0) partials[blockIdx.x] = largest;
+    __syncthreads();
 }
 
 __device__ inline V3 position(const DeviceView& d, std::uint32_t i) { return load3(d.x, i, d.n); }
@@ -89,13 +102,14 @@ __device__ inline void triangle_state(const DeviceView& d, std::uint32_t t, V3 (
 __global__ void audit_triangle_kernel(DeviceView d, double* partials, std::uint32_t stride, int with_wind) {
     const StepParams& sp = step_params(d);
     const std::uint32_t t = blockIdx.x * blockDim.x + threadIdx.x;
-    double energy = 0.0, wind_power = 0.0;
+    double energy = 0.0, wind_power = 0.0, stretch = 0.0;
     // Part mode: an element is the part's to count when the part owns its first corner (exactly one
     // part does; on one GPU every row is owned).
     if (t < d.triangles && d.triangle_vertices[3 * t] < d.rows) {
         V3 x[3];
         float dm_inv[2][2], area;
         triangle_state(d, t, x, dm_inv, area);
+        stretch = physics::largest_stretch<float>(dm_inv, x);
         const ClothParams& p = staged<ClothParams>(d, sp.cloth_offset)[d.triangle_cloth[t]];
         energy = physics::membrane_evaluate<float>(dm_inv, area, p.membrane, x, nullptr, nullptr, physics::HessianKind::None);
         if (with_wind && sp.wind_active && (p.drag > 0.0f || p.lift > 0.0f)) {
@@ -114,6 +128,7 @@ __global__ void audit_triangle_kernel(DeviceView d, double* partials, std::uint3
     }
     block_partial(energy, partials);
     block_partial(wind_power, partials + stride);
+    block_maximum(stretch, partials + (kEnergyMaxStretch - kEnergyMembrane) * stride);
 }
 
 __global__ void audit_hinge_kernel(DeviceView d, double* partials) {
@@ -201,10 +216,12 @@ __global__ void audit_offset_contact_kernel(DeviceView d, double* partials, cons
 /// One block: sums[k] = the partials of value k in block order.
 __global__ void audit_finish_kernel(const double* partials, std::uint32_t stride, EnergySumCounts counts, double* sums) {
     for (int k = 0; k < kEnergySums; ++k) {
+        const bool maximum = k == kEnergyMaxStretch;  // the largest over the blocks, not the sum
         double acc = 0.0;
-        for (std::uint32_t b = threadIdx.x; b < counts.blocks[k]; b += blockDim.x) acc += partials[k * stride + b];
+        for (std::uint32_t b = threadIdx.x; b < counts.blocks[k]; b += blockDim.x)
+            acc = maximum ? fmax(acc, partials[k * stride + b]) : acc + partials[k * stride + b];
         __shared__ typename Reduce::TempStorage storage;
-        const double total = Reduce(storage).Sum(acc);
+        const double total = maximum ? Reduce(storage).Reduce(acc, MaxOp{}) : Reduce(storage).Sum(acc);
         if (threadIdx.x == 0) sums[k] = total;
         __syncthreads();
     }
@@ -226,7 +243,8 @@ void launch_energy_audit(const DeviceView& d, bool with_wind, double* partials, 
     for (int k = 0; k < 5; ++k) counts.blocks[k] = vertex_blocks;
     audit_vertex_kernel<<<vertex_blocks, kBlockSize, 0, stream>>>(d, partials, stride);
     WEFT_CUDA_CHECK_LAUNCH("audit_vertex_kernel");
-    counts.blocks[kEnergyMembrane] = counts.blocks[kEnergyWindPower] = d.triangles > 0 ? grid_for(d.triangles) : 0;
+    counts.blocks[kEnergyMembrane] = counts.blocks[kEnergyWindPower] = counts.blocks[kEnergyMaxStretch] =
+        d.triangles > 0 ? grid_for(d.triangles) : 0;
     static_assert(kEnergyWindPower == kEnergyMembrane + 1, "the triangle kernel writes both, one stride apart");
     if (d.triangles > 0) {
         audit_triangle_kernel<<<grid_for(d.triangles), kBlockSize, 0, stream>>>(d, partials + kEnergyMembrane * stride,

@@ -178,6 +178,7 @@ enum EnergySum : int {
     kEnergyKinetic, kEnergyGravity, kEnergyContact, kEnergyColliderPower, kEnergyGrabPower,
     kEnergyMembrane, kEnergyWindPower, kEnergyBending, kEnergyPinPower,
     kEnergyOffsetContact,  ///< the offset contacts' penalty energy (collision.mode = offset), J
+    kEnergyMaxStretch,     ///< the largest principal stretch of a triangle (a maximum, not a sum)
     kEnergySums
 };
 /// Blocks each sum was reduced over (the finishing kernel's argument).

@@ -235,6 +235,7 @@ const StepStats& World::step() {
     }
     ++steps_;
     if (guard != EnergyGuard::Off) {
+        stats_.max_stretch = audit.max_stretch;  // the audit of the step's end state
         carried_audit_ = std::make_unique<EnergyAudit>(audit);
         carried_h_ = h;
         carried_wind_ = wind;

@@ -137,6 +137,27 @@ TEST(StatsReport, RunawaySolvesAndPreconditionerFallbacksAreReported) {
     EXPECT_FALSE(one.ok());
 }
 
+TEST(StatsReport, OverstretchedClothIsReportedNotJudged) {
+    std::vector<StepStats> frames{frame(10.0, 20, 12), frame(12.0, 22, 12), frame(12.0, 22, 12), frame(12.0, 22, 12)};
+    frames[0].max_stretch = 1.05;
+    frames[1].max_stretch = kOverstretch + 0.5;
+    frames[2].max_stretch = 40.0;
+    frames[3].max_stretch = 2.0;
+    const RunSummary s = summarize(frames);
+    EXPECT_DOUBLE_EQ(s.max_stretch, 40.0);
+    EXPECT_EQ(s.overstretched_frames, 2u);
+    EXPECT_EQ(s.first_overstretched_frame, 2);
+    EXPECT_TRUE(s.ok());  // soft cloth may stretch so by design: a warning, not a failure
+    const auto warnings = run_warnings(context(), s);
+    ASSERT_EQ(warnings.size(), 1u);
+    EXPECT_NE(warnings[0].find("stretched to 40x its rest length"), std::string::npos) << warnings[0];
+    EXPECT_NE(warnings[0].find("in 2 of 4 frames, first at frame 2"), std::string::npos) << warnings[0];
+    std::ostringstream json;
+    write_run_json(json, context(), s, frames, 1.0);
+    for (const char* key : {"\"max_stretch\": 40", "\"overstretched_frames\": 2"})
+        EXPECT_NE(json.str().find(key), std::string::npos) << key << "\n" << json.str();
+}
+
 TEST(StatsReport, CleanRunHasNoWarnings) {
     const std::vector<StepStats> frames{frame(10.0, 20, 12), frame(12.0, 22, 12)};
     const RunSummary s = summarize(frames);

@@ -21,6 +21,7 @@
 #include "weft/scene.h"
 
 #include "gpu_test_util.h"
+#include "stretched_sheet.h"
 #include "thrown_sheet.h"
 
 namespace weft {
@@ -422,6 +423,20 @@ TEST(CudaBackend, ASolveFasterThanAnyClothIsDroppedAndReportedLikeOnTheCpu) {
                 EXPECT_NEAR(r.after[i].y, r.before[i].y - thrown * r.dt, 1e-5 * thrown) << "vertex " << i;
         }
     }
+}
+
+// The stretch report on the device (StretchReport in tests/solver/test_stability.cpp): the audit's
+// triangle kernel measures the largest principal stretch, as the host's audit does on the CPU.
+TEST(CudaBackend, AStretchedClothIsReportedLikeOnTheCpu) {
+    WEFT_REQUIRE_GPU();
+    const StepStats resting = test::step_stretched_sheet("cuda", 0.0, EnergyGuard::Report);
+    EXPECT_GT(resting.max_stretch, 0.99);
+    EXPECT_LT(resting.max_stretch, 1.05);
+    const StepStats gpu = test::step_stretched_sheet("cuda", 5.0, EnergyGuard::Report);
+    const StepStats cpu = test::step_stretched_sheet("cpu", 5.0, EnergyGuard::Report);
+    EXPECT_GE(gpu.max_stretch, kOverstretch);
+    EXPECT_NEAR(gpu.max_stretch, cpu.max_stretch, 1e-3 * cpu.max_stretch);
+    EXPECT_EQ(test::step_stretched_sheet("cuda", 5.0, EnergyGuard::Off).max_stretch, 0.0);
 }
 
 TEST(CudaBackend, SetStateContinuesLikeTheWorldItCameFrom) {

@@ -175,6 +175,31 @@ TEST(Membrane, UniaxialStressEnergyIsHalfKStrainSquared) {
     EXPECT_NEAR(e / t.area, 0.5 * kStretch * eps * eps, 1e-3 * 0.5 * kStretch * eps * eps);
 }
 
+TEST(Membrane, LargestStretchIsTheInPlaneMapsLargestSingularValue) {
+    // x = R·A·X + c in the rest plane: the principal stretches are A's singular values, whatever the
+    // rotation and the translation; 1 at rest.
+    std::mt19937 rng(16);
+    const Tri t = make_rest(rng);
+    const double I2[2][2] = {{1.0, 0.0}, {0.0, 1.0}};
+    const double A[2][2] = {{3.0, 0.5}, {0.2, 0.7}};
+    // σ_max² = the larger eigenvalue of AᵀA.
+    const double a = A[0][0] * A[0][0] + A[1][0] * A[1][0], b = A[0][0] * A[0][1] + A[1][0] * A[1][1];
+    const double c = A[0][1] * A[0][1] + A[1][1] * A[1][1];
+    const double sigma = std::sqrt(0.5 * (a + c) + std::sqrt(0.25 * (a - c) * (a - c) + b * b));
+    for (int k = 0; k < 3; ++k) {
+        const M R = random_rotation(rng);
+        const V shift = random_vec(rng, -5, 5);
+        V x[3];
+        deform(t, I2, 0.0, R, shift, x);
+        EXPECT_NEAR(largest_stretch(t.dm_inv, x), 1.0, 1e-12);
+        deform(t, A, 0.0, R, shift, x);
+        EXPECT_NEAR(largest_stretch(t.dm_inv, x), sigma, 1e-12 * sigma);
+    }
+    // A triangle squashed to a point stretches nothing.
+    const V point[3] = {V{1, 1, 1}, V{1, 1, 1}, V{1, 1, 1}};
+    EXPECT_EQ(largest_stretch(t.dm_inv, point), 0.0);
+}
+
 TEST(Membrane, DegenerateInputGivesZerosNotNaN) {
     double dm_inv[2][2] = {{7, 7}, {7, 7}};
     double area = 7;

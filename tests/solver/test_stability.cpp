@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "stability_matrix.h"
+#include "stretched_sheet.h"
 #include "thrown_sheet.h"
 #include "weft/mesh.h"
 #include "weft/world.h"
@@ -176,6 +177,19 @@ TEST(RunawayGuard, ASolveFasterThanAnyClothIsDroppedAndReported) {
                 EXPECT_NEAR(r.after[i].y, r.before[i].y - thrown * r.dt, 1e-6 * thrown) << "vertex " << i;
         }
     }
+}
+
+// A cloth torn open or dragged along by something it should slide off (the cape_runner's banner
+// held to the runner) breaks no other check: the stats report its largest principal stretch,
+// measured by the energy guard's audit at the end of the step.
+TEST(StretchReport, ADraggedCornerIsReportedAndARestingSheetIsNot) {
+    const StepStats resting = test::step_stretched_sheet("cpu", 0.0, EnergyGuard::Report);
+    EXPECT_GT(resting.max_stretch, 0.99);
+    EXPECT_LT(resting.max_stretch, 1.05);
+    const StepStats dragged = test::step_stretched_sheet("cpu", 5.0, EnergyGuard::Report);
+    EXPECT_GE(dragged.max_stretch, kOverstretch) << "a corner 5 m from a 12.5 cm cell";
+    // Without the guard nothing is audited: 0, "not measured".
+    EXPECT_EQ(test::step_stretched_sheet("cpu", 5.0, EnergyGuard::Off).max_stretch, 0.0);
 }
 
 }  // namespace

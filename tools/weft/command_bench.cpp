@@ -90,6 +90,8 @@ void print_bench_table(std::ostream& out, const std::vector<BenchResult>& result
             flags += (flags.empty() ? "" : ", ") + std::to_string(s.runaway_solves) + " runaway";
         if (s.energy_gained > 0)
             flags += (flags.empty() ? "" : ", ") + std::to_string(s.energy_gained) + " energy gained";
+        if (s.overstretched_frames > 0)
+            flags += (flags.empty() ? "" : ", ") + std::to_string(s.overstretched_frames) + " overstretched";
         row.push_back(flags.empty() ? "-" : flags);
         table.add_row(std::move(row));
     }

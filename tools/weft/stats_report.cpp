@@ -55,6 +55,11 @@ RunSummary summarize(std::span<const StepStats> frames) {
         if (st.cg_not_converged > 0) ++s.frames_not_converged;
         s.cg_preconditioner_fallbacks += st.cg_preconditioner_fallbacks;
         s.runaway_solves += st.runaway_solves;
+        s.max_stretch = std::fmax(s.max_stretch, st.max_stretch);
+        if (st.max_stretch >= kOverstretch) {
+            if (s.overstretched_frames == 0) s.first_overstretched_frame = static_cast<long long>(f) + 1;
+            ++s.overstretched_frames;
+        }
         // fmax ignores a NaN residual; a NaN there comes with non_finite, which is counted below.
         s.cg_residual_max = std::fmax(s.cg_residual_max, st.cg_residual);
         if (st.non_finite) {
@@ -182,6 +187,12 @@ std::vector<std::string> run_warnings(const RunContext& context, const RunSummar
                       " substeps dropped their solve, which gave cloth a speed over 10 km/s (a system singular in this "
                       "precision); the cloth kept its velocity through those substeps");
     }
+    if (summary.overstretched_frames > 0) {
+        out.push_back("cloth stretched to " + json_number(summary.max_stretch) + "x its rest length (a triangle's largest principal stretch) in " +
+                      std::to_string(summary.overstretched_frames) + " of " + std::to_string(summary.frames) +
+                      " frames, first at frame " + std::to_string(summary.first_overstretched_frame) +
+                      ": torn, or dragged by something it should slide off (look at the colliders and pins there)");
+    }
     if (summary.non_finite_frames > 0) {
         out.push_back("non-finite values (NaN/Inf) in " + std::to_string(summary.non_finite_frames) + " of " +
                       std::to_string(summary.frames) + " frames, first at frame " +
@@ -284,6 +295,8 @@ void write_summary_fields(JsonWriter& json, const RunContext& c, const RunSummar
     json.field("cg_residual_max", s.cg_residual_max);
     json.field("non_finite_frames", s.non_finite_frames);
     json.field("runaway_solves", s.runaway_solves);
+    json.field("max_stretch", s.max_stretch);
+    json.field("overstretched_frames", s.overstretched_frames);
     json.key("energy_guard").begin_object();
     json.field("mode", c.energy_guard);
     json.field("gained_substeps", s.energy_gained);

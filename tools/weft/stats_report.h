@@ -54,6 +54,11 @@ struct RunSummary {
     double cg_residual_max = 0.0;  ///< largest final relative residual of any solve
     std::size_t non_finite_frames = 0;
     long long runaway_solves = 0;  ///< substeps whose solve ran away and was dropped (StepStats::runaway_solves)
+    /// The largest principal stretch of any triangle at the end of any frame (StepStats::max_stretch;
+    /// 0 when the energy guard is off), the frames at or over kOverstretch and the first (1-based, −1).
+    double max_stretch = 0.0;
+    std::size_t overstretched_frames = 0;
+    long long first_overstretched_frame = -1;
     long long first_non_finite_frame = -1;  ///< 1-based frame number, -1 if none
     Distribution contacts;                  ///< collider contacts per frame
     /// Analytic colliders after the solve (swept_collider.h), over all frames: vertices a fast one

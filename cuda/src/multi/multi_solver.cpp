@@ -846,6 +846,7 @@ EnergyAudit MultiSolver::energy_audit(const Model& model, double t, double h, bo
         sum.gravity += a.gravity;
         sum.contact += a.contact;
         sum.elastic += a.elastic;
+        sum.max_stretch = std::max(sum.max_stretch, a.max_stretch);
         sum.external_power += a.external_power;
     }
     return sum;

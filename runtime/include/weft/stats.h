@@ -87,6 +87,10 @@ struct CollisionStats {
     std::int64_t remaining_collider_intersections = -1;
 };
 
+/// A principal stretch at or over which the run summaries report a cloth as overstretched (torn, or
+/// held by something that drags it: StepStats::max_stretch).
+inline constexpr double kOverstretch = 3.0;
+
 struct StepStats {
     int substeps = 0;
     int newton_iterations = 0;     ///< summed over substeps
@@ -108,6 +112,11 @@ struct StepStats {
     /// singular in the backend's precision); the solve is dropped and the free vertices keep their
     /// start velocity through the substep, collisions included (cpu backend and one GPU).
     int runaway_solves = 0;
+    /// The largest principal stretch of any cloth triangle at the end of the step (1 at rest; cloth
+    /// stretches a few percent, kOverstretch and more means a torn or dragged cloth), measured by the
+    /// energy guard's audit: 0 with solver.energy_guard = "off". Reported, not judged by ok(): very
+    /// soft cloth may stretch that far by design.
+    double max_stretch = 0.0;
     /// Energy guard (SolverSettings::energy_guard; docs/methods.md §1b): substeps whose kinetic +
     /// potential + elastic energy grew beyond the external work, as kept in the state (in retry
     /// mode, those whose redo still gained), and the sum of their gains beyond it, J.

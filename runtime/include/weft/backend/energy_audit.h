@@ -32,6 +32,9 @@ struct EnergyAudit {
     /// False when the world holds a source of work the audit cannot bound (a mesh collider that
     /// moves); the guard then skips the substep and counts it in `StepStats::energy_unchecked`.
     bool bounded = true;
+    /// The largest principal stretch of any triangle (physics::largest_stretch; 1 at rest): not an
+    /// energy, but measured in the same pass over the triangles (StepStats::max_stretch).
+    double max_stretch = 0.0;
     /// Kinetic + gravitational + elastic + contact energy, J.
     [[nodiscard]] double total() const { return kinetic + gravity + elastic + contact; }
 };
