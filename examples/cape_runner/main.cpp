@@ -214,7 +214,10 @@ int play(const Options& options) {
     long long most_cloth_pairs = 0, most_body_pairs = 0;
     double cloth_ms_sum = 0.0, frame_ms_sum = 0.0;
     std::array<double, weft::kStageNames.size()> stage_ms_sum{};  // where the cloth's time goes
-    long long cg_iterations = 0, capped_solves = 0, runaway_solves = 0;
+    long long cg_iterations = 0, capped_solves = 0, fallback_solves = 0;
+    // The most any cloth triangle stretched, and the frames where cloth tore or was dragged along.
+    double most_stretch = 0.0;
+    int overstretched = 0, first_overstretched = -1;
     // Hitches: the slowest cloth step, and the collision work that makes one.
     double slowest_ms = 0.0;
     int slowest_frame = 0, most_zone_rounds = 0, hitches = 0;
@@ -273,6 +276,8 @@ int play(const Options& options) {
             most_body_pairs = std::max(most_body_pairs, body);
         }
         if (stats.non_finite || stats.runaway_solves > 0) ++failed_steps;  // a NaN rolled back, or a solve dropped
+        most_stretch = std::max(most_stretch, stats.max_stretch);
+        if (stats.max_stretch >= weft::kOverstretch && overstretched++ == 0) first_overstretched = frame;
 
         const Clock::time_point now = Clock::now();
         const double frame_ms = std::chrono::duration<double, std::milli>(now - last).count();
@@ -295,7 +300,7 @@ int play(const Options& options) {
         for (std::size_t k = 0; k < stage_ms_sum.size(); ++k) stage_ms_sum[k] += stats.stage_ms[k];
         cg_iterations += stats.cg_iterations;
         capped_solves += stats.cg_not_converged;
-        runaway_solves += stats.cg_preconditioner_fallbacks;
+        fallback_solves += stats.cg_preconditioner_fallbacks;
         frame_ms_sum += frame_ms;
         ++frame;
         if (frame % 15 == 0) {
@@ -315,13 +320,17 @@ int play(const Options& options) {
     for (std::size_t k = 0; k < stage_ms_sum.size(); ++k)
         if (frame > 0 && stage_ms_sum[k] > 0.0) std::printf(" %s %.2f", std::string(weft::kStageNames[k]).c_str(), stage_ms_sum[k] / frame);
     std::printf("; CG %.0f iterations a frame, %lld solves capped, %lld redone with block-Jacobi\n",
-                frame > 0 ? static_cast<double>(cg_iterations) / frame : 0.0, capped_solves, runaway_solves);
+                frame > 0 ? static_cast<double>(cg_iterations) / frame : 0.0, capped_solves, fallback_solves);
     std::printf("cape_runner: slowest cloth step %.1f ms (frame %d); collisions: at most %d impact-zone rounds in a substep, "
                 "%lld vertices frozen, %lld substeps unresolved, %lld vertices moved out of the body, %lld jumps of a body\n",
                 slowest_ms, slowest_frame, most_zone_rounds, frozen_vertices, unresolved, moved_out, body_jumps);
     std::printf("cape_runner: cape away from the shoulders in %d frames%s, intersections after %d, failed steps %d, "
                 "torn frames %lld, validation messages %d\n",
                 cape_lost, options.check ? "" : " (not checked; --check does)", intersections, failed_steps, static_cast<long long>(feed.torn_frames()), renderer.validation_messages());
+    std::printf("cape_runner: cloth stretched at most %.2fx its rest length; %gx or more (torn, or dragged along) in %d frames",
+                most_stretch, weft::kOverstretch, overstretched);
+    if (overstretched > 0) std::printf(", first after frame %d", first_overstretched);
+    std::printf("\n");
     if (intersections > 0)
         std::printf("cape_runner: intersections first after frame %d; cloth through cloth at most %lld pairs a frame, cloth through "
                     "the body in %d frames, at most %lld pairs a frame\n",
