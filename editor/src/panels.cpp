@@ -289,7 +289,8 @@ void warning_banner(Session& session, const PanelLayout& layout) {
     const bool non_finite = h.last.non_finite;
     const bool energy = h.last.energy_gained > 0;
     const bool runaway = h.last.runaway_solves > 0;
-    if (!not_converged && !non_finite && !energy && !runaway) return;
+    const bool overstretched = h.last.max_stretch >= kOverstretch;
+    if (!not_converged && !non_finite && !energy && !runaway && !overstretched) return;
     const float width = std::max(200.0F, layout.width - 2.0F * column_width(layout.width) - 20.0F);
     ImGui::SetNextWindowPos(ImVec2((layout.width - width) * 0.5F, 8.0F), ImGuiCond_Always);
     ImGui::SetNextWindowSize(ImVec2(width, 0.0F), ImGuiCond_Always);
@@ -304,6 +305,10 @@ void warning_banner(Session& session, const PanelLayout& layout) {
         ImGui::TextWrapped("A solve ran away in %d substeps of the last step (cloth over 10 km/s) and was dropped: the "
                            "cloth kept its velocity (%d of %d steps)",
                            h.last.runaway_solves, h.runaway_steps, h.steps);
+    if (overstretched)
+        ImGui::TextWrapped("Cloth stretched to %.1fx its rest length: torn, or dragged along by a collider or pin "
+                           "(%d of %d steps)",
+                           h.last.max_stretch, h.overstretched_steps, h.steps);
     if (not_converged)
         ImGui::TextWrapped("CG did not converge in %d solves of the last step (%d of %d steps): raise the cap, "
                            "the substeps, or loosen the tolerance",

@@ -46,6 +46,7 @@ void StatsHistory::record(const StepStats& s) {
     if (s.cg_not_converged > 0) ++not_converged_steps;
     if (s.non_finite) ++non_finite_steps;
     if (s.runaway_solves > 0) ++runaway_steps;
+    if (s.max_stretch >= kOverstretch) ++overstretched_steps;
     if (s.energy_gained > 0) ++energy_gained_steps;
     last = s;
 }
@@ -59,7 +60,7 @@ void StatsHistory::clear() {
     impact_zones.clear();
     intersections.clear();
     frame_ms.clear();
-    steps = not_converged_steps = non_finite_steps = runaway_steps = energy_gained_steps = 0;
+    steps = not_converged_steps = non_finite_steps = runaway_steps = overstretched_steps = energy_gained_steps = 0;
     last = {};
 }
 

@@ -46,6 +46,7 @@ struct StatsHistory {
     int energy_gained_steps = 0;          ///< of those, steps with a substep that gained energy (energy guard)
     int non_finite_steps = 0;             ///< of those, steps where NaN or Inf appeared
     int runaway_steps = 0;                ///< of those, steps with a solve that ran away (StepStats::runaway_solves)
+    int overstretched_steps = 0;          ///< of those, steps ending with cloth at kOverstretch or more (StepStats::max_stretch)
     StepStats last{};
 
     void record(const StepStats& s);
