@@ -36,6 +36,21 @@
 namespace weft::collision {
 namespace {
 
+/// The largest per-axis gap between the bounding box of points p[0, split) and that of p[split, 4)
+/// (a vertex against a triangle: split 1; two edges: split 2): a lower bound of the distance between
+/// the two primitives, 0 or negative where the boxes overlap.
+double start_boxes_gap(const Vec3d p[4], int split) {
+    double gap = -std::numeric_limits<double>::infinity();
+    for (int axis = 0; axis < 3; ++axis) {
+        double lo_a = p[0][axis], hi_a = p[0][axis], lo_b = p[split][axis], hi_b = p[split][axis];
+        for (int k = 1; k < split; ++k) lo_a = std::min(lo_a, p[k][axis]), hi_a = std::max(hi_a, p[k][axis]);
+        for (int k = split + 1; k < 4; ++k) lo_b = std::min(lo_b, p[k][axis]), hi_b = std::max(hi_b, p[k][axis]);
+        gap = std::max(gap, std::max(lo_b - hi_a, lo_a - hi_b));
+    }
+    return gap;
+}
+
+
 using Clock = std::chrono::steady_clock;
 
 // Candidate slot states: no movable vertex; unchanged since a miss (not tested again); tested, miss;
@@ -148,8 +163,15 @@ void ImpactZoneSolver::detect(const ImpactZoneInput& in, ImpactZoneReport& repor
             // A pair already within eta at x0 (allowed: x0 is only free of intersections) would be
             // reported at t = 0 by every detection, whatever the zones do to x1. Half its start
             // distance still separates it from any crossing, which is what must not be missed.
-            const double d0 = vf ? physics::point_triangle_proximity(a0[0], a0[1], a0[2], a0[3]).distance
-                                 : physics::edge_edge_proximity(a0[0], a0[1], a0[2], a0[3]).distance;
+            // Only a start distance under 2·eta changes eta_pair, and most candidates start farther
+            // apart than that: where the boxes of the two primitives at x0 are already 2·eta apart on
+            // some axis (a lower bound of the distance; the margin covers the rounding of both
+            // sides), eta_pair is eta and the proximity query is skipped (a sixth of the CPU's time
+            // on `layers`). The same eta_pair either way: the same bits.
+            const bool far_at_start = start_boxes_gap(a0, vf ? 1 : 2) > 2.0 * eta * (1.0 + 1e-9);
+            const double d0 = far_at_start ? 2.0 * eta
+                              : vf         ? physics::point_triangle_proximity(a0[0], a0[1], a0[2], a0[3]).distance
+                                           : physics::edge_edge_proximity(a0[0], a0[1], a0[2], a0[3]).distance;
             const double eta_pair = std::min(eta, 0.5 * d0);
             const physics::CcdResult<double> r =
                 vf ? physics::vertex_face_ccd(a0[0], a0[1], a0[2], a0[3], a1[0], a1[1], a1[2], a1[3], eta_pair)
