@@ -1,123 +1,51 @@
 #pragma once
-// The bending model per triangle (SolverSettings::bending = Shell; weft/physics/shell_bending.h) in
-// the CPU solver's element slots. A triangle couples up to six vertices (its corners and its
-// neighbours' far corners), the solver's elements four: each triangle's implicit terms are split over
-// the element slots of its hinges, so that the solver's gather sums them in a fixed order
-// (deterministic on any thread count).
-//
-//   pass 1, per triangle (shell_face_terms): the angles' gradients ∇θ_k of its hinges, the scalars
-//     g_k = h·∂E/∂θ_k + Σ_l C_kl·q_l   (q_l = Σ_b ∇_bθ_l·(h·β·v_k,b + h²·d_b), C = D·A·M)
-//   so that its right-hand side at vertex a is −Σ_k g_k·∇_aθ_k: elastic_terms' −h·∇E − H·(hβv + h²d)
-//   with the Gauss–Newton Hessian H = Σ_kl C_kl ∇θ_k ∇θ_lᵀ, exactly (the forces are the model's);
-//   pass 2, per hinge (shell_hinge_slots): the hinge's four right-hand sides, each triangle's term at
-//     a vertex going to the triangle's first hinge (in edge order) that holds it, and its sixteen
-//     blocks.
-// The matrix. H couples the far corners of a triangle's different hinges, for which the pattern has
-// no slot, and dropping those blocks leaves it indefinite (measured: the strip blows up). It is
-// replaced by H' = Σ_k (C_kk + Σ_{l≠k} |C_kl|)·∇θ_k ∇θ_kᵀ, one rank-one term per hinge, which fits
-// the hinge's slots: H' − H = Σ_{k<l} |C_kl|·(∇θ_k ∓ ∇θ_l)(∇θ_k ∓ ∇θ_l)ᵀ ⪰ 0, so the implicit step is
-// at least as stable as with H (a stiffer matrix damps more), at the price of some Newton
-// convergence: on Weft's grids H' is at most 1.7× H along a hinge. (Spreading the dropped blocks'
-// norms onto the vertices' diagonal blocks instead, also PSD, over-damped the cantilever so much that
-// 400 steps were far from rest.)
+// The bending model per triangle (SolverSettings::bending = Shell) in the CPU solver's element slots:
+// the two passes of weft/physics/shell_bending_slots.h (shared with the CUDA backend), fed from the
+// solver's arrays (the file comment there says what each pass computes and why the matrix is H').
 
-#include <cmath>
 #include <cstdint>
 
 #include "weft/fabric.h"
-#include "weft/physics/shell_bending.h"
+#include "weft/physics/shell_bending_slots.h"
 #include "weft/physics/vec.h"
 
 namespace weft::cpu {
 
-/// Pass 1's output for one triangle.
 template <typename T>
-struct ShellFaceTerms {
-    std::int32_t hinge[3]{-1, -1, -1};  ///< active hinges (−1: none, or degenerate)
-    physics::Vec3<T> dtheta[3][4]{};     ///< ∇θ_k over hinge k's vertices, in the hinge's order
-    T g[3]{};                            ///< see the file comment
-    T weight[3]{};                       ///< (h·β + h²)·(C_kk + Σ_{l≠k} |C_kl|): hinge k's rank-one block
-};
+using ShellFaceTerms = physics::ShellFaceTerms<T>;
 
 /// Pass 1 for one triangle. `x`, `vk`, `d`: the solver's arrays (linearisation point, iterate,
-/// v_k − w_k) indexed by global vertex; `hinges` the flat model's; `stiffness` D, `beta` the
-/// stiffness damping; `rest_angle` per hinge.
+/// v_k − w_k) indexed by global vertex; `hinge_at` the flat model's hinges; `stiffness` D, `beta` the
+/// stiffness damping; `rest_angle_at` per hinge.
 template <typename T, typename HingeAt, typename RestAngleAt>
 ShellFaceTerms<T> shell_face_terms(T h, T stiffness, T beta, const physics::ShellBendingRest<T>& rest, const TriangleHinges& th,
                                    HingeAt&& hinge_at, RestAngleAt&& rest_angle_at, const physics::Vec3<T>* x,
                                    const physics::Vec3<T>* vk, const physics::Vec3<T>* d) {
-    ShellFaceTerms<T> out;
-    bool present[3];
-    physics::Vec3<T> p[3][4];
+    physics::Vec3<T> p[3][4], v[3][4], dv[3][4];
     T rest_angle[3];
     for (int k = 0; k < 3; ++k) {
-        present[k] = th.edge[k] >= 0;
-        rest_angle[k] = present[k] ? rest_angle_at(th.edge[k]) : T(0);
-        for (int a = 0; a < 4; ++a) p[k][a] = present[k] ? x[hinge_at(th.edge[k]).v[a]] : physics::Vec3<T>{};
-    }
-    const physics::ShellBendingTerms<T> t = physics::shell_bending_evaluate(stiffness, rest, present, p, rest_angle);
-    T q[3]{};
-    for (int k = 0; k < 3; ++k) {
-        if (!t.active[k]) continue;
-        out.hinge[k] = th.edge[k];
-        const Hinge& hk = hinge_at(th.edge[k]);
+        const bool present = th.edge[k] >= 0;
+        rest_angle[k] = present ? rest_angle_at(th.edge[k]) : T(0);
         for (int a = 0; a < 4; ++a) {
-            out.dtheta[k][a] = t.dtheta[k][a];
-            q[k] += physics::dot(t.dtheta[k][a], (h * beta) * vk[hk.v[a]] + (h * h) * d[hk.v[a]]);
+            const std::uint32_t vertex = present ? hinge_at(th.edge[k]).v[a] : 0;
+            p[k][a] = present ? x[vertex] : physics::Vec3<T>{};
+            v[k][a] = present ? vk[vertex] : physics::Vec3<T>{};
+            dv[k][a] = present ? d[vertex] : physics::Vec3<T>{};
         }
     }
-    const T coef = h * beta + h * h;
-    for (int k = 0; k < 3; ++k) {
-        if (!t.active[k]) continue;
-        T sum = h * t.force_angle[k], weight = T(0);
-        for (int l = 0; l < 3; ++l)
-            if (t.active[l]) {
-                const T c = physics::shell_bending_coupling(stiffness, rest, k, l);
-                sum += c * q[l];
-                weight += l == k ? c : (c < T(0) ? -c : c);
-            }
-        out.g[k] = sum;
-        out.weight[k] = coef * weight;
-    }
-    return out;
+    return physics::shell_face_terms(h, stiffness, beta, rest, th.edge, p, v, dv, rest_angle);
 }
-
-namespace detail {
-/// Where vertex `u` sits in hinge `hv` (0–3), or −1.
-inline int place(const Hinge& hv, std::uint32_t u) {
-    for (int a = 0; a < 4; ++a)
-        if (hv.v[a] == u) return a;
-    return -1;
-}
-}  // namespace detail
 
 /// Pass 2 for hinge `self`: adds into rhs[4] and block[16] (row-major, the hinge's vertex order)
 /// the terms of triangle `face` (pass 1's output) that fall to it.
 template <typename T, typename HingeAt>
 void shell_hinge_slots(std::int32_t self, const ShellFaceTerms<T>& face, HingeAt&& hinge_at, physics::Vec3<T> rhs[4],
                        physics::Mat3<T> block[16]) {
-    int self_k = -1;
+    std::uint32_t face_vertices[3][4]{};
     for (int k = 0; k < 3; ++k)
-        if (face.hinge[k] == self) self_k = k;
-    if (self_k < 0) return;  // not an active hinge of this triangle
-    const Hinge& mine = hinge_at(self);
-    for (int a = 0; a < 4; ++a) {
-        // Vertex a's places in the triangle's hinges; its right-hand side falls to the first.
-        int where[3];
-        int first = -1;
-        for (int k = 0; k < 3; ++k) {
-            where[k] = face.hinge[k] >= 0 ? detail::place(hinge_at(face.hinge[k]), mine.v[a]) : -1;
-            if (first < 0 && where[k] >= 0) first = k;
-        }
-        if (first == self_k) {
-            physics::Vec3<T> f{};
-            for (int k = 0; k < 3; ++k)
-                if (where[k] >= 0) f -= face.g[k] * face.dtheta[k][where[k]];
-            rhs[a] += f;
-        }
-        for (int b = 0; b < 4; ++b)
-            block[4 * a + b] += face.weight[self_k] * physics::Mat3<T>::outer(face.dtheta[self_k][a], face.dtheta[self_k][b]);
-    }
+        if (face.hinge[k] >= 0)
+            for (int a = 0; a < 4; ++a) face_vertices[k][a] = hinge_at(face.hinge[k]).v[a];
+    physics::shell_hinge_slots(self, hinge_at(self).v, face, face_vertices, rhs, block);
 }
 
 }  // namespace weft::cpu
