@@ -100,6 +100,7 @@ void DeviceSolver::record(cudaStream_t stream, bool capturing) {
     mark();
     for (int it = 0; it < newton; ++it) {
         launch_begin_newton(view_, stream);
+        launch_shell_faces(view_, stream);  // the bending model per triangle's pass 1 (nothing with hinges)
         if (row_gather_)
             launch_assemble_rows(view_, stream);
         else
@@ -137,6 +138,7 @@ void DeviceSolver::record_extra_newton(cudaStream_t stream) {
     // One Newton iteration over the contacts of the rerun detection, as in record() (offset mode only:
     // the evaluation builds their incidence).
     launch_begin_newton(view_, stream);
+    launch_shell_faces(view_, stream);
     if (row_gather_)
         launch_assemble_rows(view_, stream);
     else

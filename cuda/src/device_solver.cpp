@@ -53,12 +53,50 @@ std::vector<std::pair<std::string, std::size_t>> DeviceSolver::memory_breakdown(
 }
 
 void require_device_support(const SolverSettings& settings) {
-    if (settings.bending == BendingModel::Shell)
-        throw Error("cuda backend: solver.bending = \"shell\" (the bending model per triangle) runs on the cpu backend only "
-                    "so far; use solver.bending = \"hinge\" or --backend cpu");
     if (settings.face_contacts)
         throw Error("cuda backend: solver.face_contacts = true (collider contacts at triangle centroids) runs on the cpu "
                     "backend only so far; set it false or use --backend cpu");
+}
+
+void DeviceSolver::choose_bending(BendingModel bending) {
+    const bool shell = bending == BendingModel::Shell;
+    if (shell == (view_.shell_faces != nullptr)) return;
+    if (shell && shell_faces_.size() == 0) upload_shell_bending();
+    destroy_graph();  // recorded with the other view
+    view_.triangle_hinges = shell ? triangle_hinges_.get() : nullptr;
+    view_.hinge_faces = shell ? hinge_faces_.get() : nullptr;
+    view_.shell_rest = shell ? shell_rest_.get() : nullptr;
+    view_.shell_faces = shell ? shell_faces_.get() : nullptr;
+}
+
+void DeviceSolver::upload_shell_bending() {
+    // The flat model's triangles, hinges and rest data in the device's colour order; each hinge's
+    // faces in ascending flat order, the order in which the CPU adds them.
+    const FlatModel& flat = *flat_;
+    const std::size_t nt = flat.triangle_count(), nh = flat.hinge_count();
+    std::vector<std::int32_t> device_triangle(nt), device_hinge(nh);
+    for (std::size_t j = 0; j < nt; ++j) device_triangle[layout_.triangle_colors.order[j]] = static_cast<std::int32_t>(j);
+    for (std::size_t j = 0; j < nh; ++j) device_hinge[layout_.hinge_colors.order[j]] = static_cast<std::int32_t>(j);
+    std::vector<std::int32_t> hinges(3 * nt, -1), faces(2 * nh, -1);
+    std::vector<float> rest(10 * nt, 0.0f);
+    for (std::size_t t = 0; t < nt; ++t) {
+        const auto j = static_cast<std::size_t>(device_triangle[t]);
+        for (int k = 0; k < 3; ++k) {
+            const std::int32_t e = flat.triangle_hinges[t].edge[k];
+            if (e < 0) continue;
+            const auto dh = static_cast<std::size_t>(device_hinge[static_cast<std::size_t>(e)]);
+            hinges[3 * j + static_cast<std::size_t>(k)] = static_cast<std::int32_t>(dh);
+            (faces[2 * dh] < 0 ? faces[2 * dh] : faces[2 * dh + 1]) = static_cast<std::int32_t>(j);
+        }
+        const physics::ShellBendingRest<double>& r = flat.shell_rest[t];
+        rest[10 * j] = static_cast<float>(r.area);
+        for (int e = 0; e < 9; ++e) rest[10 * j + 1 + static_cast<std::size_t>(e)] = static_cast<float>(r.m[e / 3][e % 3]);
+    }
+    WEFT_CUDA_CHECK(cudaSetDevice(device_));
+    triangle_hinges_.upload(hinges, ledger_, "shell bending");
+    hinge_faces_.upload(faces, ledger_, "shell bending");
+    shell_rest_.upload(rest, ledger_, "shell bending");
+    shell_faces_.allocate(std::max<std::size_t>(nt, 1), ledger_, "shell bending");
 }
 
 void DeviceSolver::choose_pcg_loop() {
@@ -195,6 +233,8 @@ void DeviceSolver::run_substep(const Model& model, double t, double h, StepStats
     if (collisions_.stale(model)) build_collisions(model);  // self-collision toggled live
     stage_ = "the preconditioner's build";
     choose_preconditioner(model.settings.solver.preconditioner);  // may change live
+    stage_ = "the bending model's upload";
+    choose_bending(model.settings.solver.bending);  // may change live
     stage_ = "collision detection";
     if (collisions_.active()) {
         const std::size_t found = collisions_.detect(model, t, h, view_.x, view_.v, view_.dv_previous, stream, stats);

@@ -28,8 +28,8 @@
 
 namespace weft::cuda {
 
-/// Throws weft::Error when `settings` asks for what the CUDA backend does not do yet: the bending
-/// model per triangle (SolverSettings::bending = Shell, CPU backend only so far).
+/// Throws weft::Error when `settings` asks for what the CUDA backend does not do yet: collider
+/// contacts at triangle centroids (SolverSettings::face_contacts, CPU backend only so far).
 void require_device_support(const SolverSettings& settings);
 
 class DeviceSolver {
@@ -228,6 +228,10 @@ private:
     /// Switches the preconditioner to `preconditioner` (builds the Schwarz levels the first time;
     /// the graph is re-captured with the other kernels).
     void choose_preconditioner(Preconditioner preconditioner);
+    /// Points the view at the bending model per triangle's arrays while solver.bending = "shell"
+    /// (uploaded on the first substep that asks for it, kept until the next build), or at none.
+    void choose_bending(BendingModel bending);
+    void upload_shell_bending();
     void capture_graph();
     void choose_assembly();
     void choose_pcg_loop();
@@ -281,6 +285,10 @@ private:
     DeviceArray<std::uint32_t> triangle_vertices_, triangle_cloth_, triangle_positions_;
     DeviceArray<float> triangle_rest_;
     DeviceArray<std::uint32_t> hinge_vertices_, hinge_cloth_, hinge_positions_;
+    // The bending model per triangle (DeviceView::triangle_hinges …; empty until a substep asks).
+    DeviceArray<std::int32_t> triangle_hinges_, hinge_faces_;
+    DeviceArray<float> shell_rest_;
+    DeviceArray<physics::ShellFaceTerms<float>> shell_faces_;
     DeviceArray<float> hinge_rest_;
     DeviceArray<std::uint32_t> vertex_triangle_start_, vertex_triangle_, vertex_hinge_start_, vertex_hinge_;
     DeviceArray<std::uint32_t> pin_vertex_;

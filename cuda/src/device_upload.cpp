@@ -36,6 +36,10 @@ void DeviceSolver::build(const FlatModel& flat, const Model& model) {
     contacts_.release();  // vertex ids of the old model mean nothing in the new one
     collisions_.release();
     schwarz_.release();  // its levels follow the topology: rebuilt when first used
+    triangle_hinges_ = {};  // the bending model per triangle's arrays too (choose_bending)
+    hinge_faces_ = {};
+    shell_rest_ = {};
+    shell_faces_ = {};
     schwarz_on_ = false;
     schwarz_factored_ = false;
     substep_count_ = 0;

@@ -8,6 +8,7 @@
 #include "device_contacts.h"
 #include "device_params.h"
 #include "device_schwarz.h"
+#include "weft/physics/shell_bending_slots.h"
 
 namespace weft::cuda {
 
@@ -39,6 +40,15 @@ struct DeviceView {
     const float* hinge_rest = nullptr;                 ///< weight and rest angle, 2 per hinge
     const std::uint32_t* hinge_cloth = nullptr;
     const std::uint32_t* hinge_positions = nullptr;    ///< 16 ELL positions per hinge
+    /// The bending model per triangle (solver.bending = "shell"; null with hinges, the default): per
+    /// triangle its hinges (3, −1 where none) and rest data (area and the 3×3 coupling M: 10 floats),
+    /// per hinge its faces (2, −1 where none; ascending in the flat model's order, as the CPU sums
+    /// them), and the per-triangle terms of the Newton iteration (pass 1, shell_faces_kernel), all in
+    /// the device's colour order.
+    const std::int32_t* triangle_hinges = nullptr;
+    const std::int32_t* hinge_faces = nullptr;
+    const float* shell_rest = nullptr;
+    physics::ShellFaceTerms<float>* shell_faces = nullptr;
     // Vertex → incident (element, corner) pairs, entries 4·element + corner (device_layout.h).
     const std::uint32_t* vertex_triangle_start = nullptr;
     const std::uint32_t* vertex_triangle = nullptr;

@@ -49,9 +49,35 @@ __device__ inline void triangle_terms(const DeviceView& d, const StepParams& sp,
 /// Hinge k: bending (with stiffness damping). `false` when the cloth has no bending stiffness.
 using HingeTerms = physics::ElementTerms<float, 4>;
 
+/// Hinge k's slots under the bending model per triangle (d.shell_faces set): the terms of its faces
+/// that fall to it (weft/physics/shell_bending_slots.h, pass 2), from the faces' pass-1 terms of this
+/// Newton iteration (shell_faces_kernel), in the CPU's face order.
+__device__ inline void shell_hinge_terms(const DeviceView& d, std::uint32_t k, HingeTerms& out) {
+    for (int a = 0; a < 4; ++a) {
+        out.rhs[a] = V3{};
+        for (int b = 0; b < 4; ++b) out.block[a][b] = M3{};
+    }
+    const std::uint32_t mine[4] = {d.hinge_vertices[4 * k], d.hinge_vertices[4 * k + 1], d.hinge_vertices[4 * k + 2],
+                                   d.hinge_vertices[4 * k + 3]};
+    for (int side = 0; side < 2; ++side) {
+        const std::int32_t f = d.hinge_faces[2 * k + side];
+        if (f < 0) continue;
+        const physics::ShellFaceTerms<float>& face = d.shell_faces[f];
+        std::uint32_t face_vertices[3][4]{};
+        for (int e = 0; e < 3; ++e)
+            if (face.hinge[e] >= 0)
+                for (int a = 0; a < 4; ++a) face_vertices[e][a] = d.hinge_vertices[4 * face.hinge[e] + a];
+        physics::shell_hinge_slots<float>(static_cast<std::int32_t>(k), mine, face, face_vertices, out.rhs, &out.block[0][0]);
+    }
+}
+
 __device__ inline bool hinge_terms(const DeviceView& d, const StepParams& sp, std::uint32_t k, HingeTerms& out) {
     const ClothParams& p = staged<ClothParams>(d, sp.cloth_offset)[d.hinge_cloth[k]];
     if (p.bending <= 0.0f) return false;  // before any load: most scenes' hinges are all live or all idle
+    if (d.shell_faces != nullptr) {
+        shell_hinge_terms(d, k, out);
+        return true;
+    }
     const float h = sp.h;
     V3 x[4], vk[4], dvw[4];
     for (int a = 0; a < 4; ++a) {

@@ -8,6 +8,7 @@
 #include <cuda_runtime.h>
 
 #include "contact_terms.cuh"
+#include "shell_bending_state.cuh"
 #include "cuda_check.h"
 #include "weft/physics/offset_contact.h"
 #include "weft/physics/proximity.h"
@@ -147,6 +148,41 @@ __global__ void audit_hinge_kernel(DeviceView d, double* partials) {
     block_partial(energy, partials);
 }
 
+/// Per triangle, with the bending model per triangle (d.shell_faces set): its bending energy (as
+/// host_energy_audit's shell_bending_triangle). Counted on the part that owns its first corner.
+__global__ void audit_shell_kernel(DeviceView d, double* partials) {
+    const StepParams& sp = step_params(d);
+    const std::uint32_t t = blockIdx.x * blockDim.x + threadIdx.x;
+    double energy = 0.0;
+    if (t < d.triangles && d.triangle_vertices[3 * t] < d.rows) {
+        const ClothParams& p = staged<ClothParams>(d, sp.cloth_offset)[d.triangle_cloth[t]];
+        if (p.bending > 0.0f) {
+            ShellFaceInput in;
+            energy = shell_face_at(d, t, p.bending, d.x, in).energy;
+        }
+    }
+    block_partial(energy, partials);
+}
+
+/// ∂E_bend/∂x_i under the bending model per triangle: each hinge e at vertex i (corner `corner`)
+/// takes, from each face f of e, f's ∂E/∂θ_e·∇_iθ_e. Every (face, hinge of the face holding i) pair is
+/// met exactly once this way, which is the sum host_energy_audit's gradient callback forms.
+__device__ inline V3 shell_bending_gradient(const DeviceView& d, const StepParams& sp, std::uint32_t e, std::uint32_t corner) {
+    V3 gradient{};
+    for (int side = 0; side < 2; ++side) {
+        const std::int32_t f = d.hinge_faces[2 * e + side];
+        if (f < 0) continue;
+        const ClothParams& p = staged<ClothParams>(d, sp.cloth_offset)[d.triangle_cloth[f]];
+        if (!(p.bending > 0.0f)) continue;
+        ShellFaceInput in;
+        const physics::ShellBendingTerms<float> terms = shell_face_at(d, static_cast<std::uint32_t>(f), p.bending, d.x, in);
+        for (int k = 0; k < 3; ++k)
+            if (in.hinge[k] == static_cast<std::int32_t>(e) && terms.active[k])
+                gradient += terms.force_angle[k] * terms.dtheta[k][corner];
+    }
+    return gradient;
+}
+
 /// Per pinned vertex: ∇U·v, the power the pin puts in by holding the vertex against the elastic
 /// force (a static pin has v = 0 and adds nothing; host_energy_audit counts moving pins only).
 __global__ void audit_pin_kernel(DeviceView d, double* partials) {
@@ -167,6 +203,10 @@ __global__ void audit_pin_kernel(DeviceView d, double* partials) {
         }
         for (std::uint32_t e = d.vertex_hinge_start[i]; e < d.vertex_hinge_start[i + 1]; ++e) {
             const std::uint32_t h = d.vertex_hinge[e] >> 2, corner = d.vertex_hinge[e] & 3u;
+            if (d.shell_faces != nullptr) {
+                gradient += shell_bending_gradient(d, sp, h, corner);
+                continue;
+            }
             const ClothParams& p = staged<ClothParams>(d, sp.cloth_offset)[d.hinge_cloth[h]];
             if (!(p.bending > 0.0f)) continue;
             V3 x[4], grad[4];
@@ -251,10 +291,18 @@ void launch_energy_audit(const DeviceView& d, bool with_wind, double* partials, 
                                                                                  stride, with_wind ? 1 : 0);
         WEFT_CUDA_CHECK_LAUNCH("audit_triangle_kernel");
     }
-    counts.blocks[kEnergyBending] = d.hinges > 0 ? grid_for(d.hinges) : 0;
-    if (d.hinges > 0) {
-        audit_hinge_kernel<<<grid_for(d.hinges), kBlockSize, 0, stream>>>(d, partials + kEnergyBending * stride);
-        WEFT_CUDA_CHECK_LAUNCH("audit_hinge_kernel");
+    if (d.shell_faces != nullptr) {  // the bending model per triangle
+        counts.blocks[kEnergyBending] = d.triangles > 0 ? grid_for(d.triangles) : 0;
+        if (d.triangles > 0) {
+            audit_shell_kernel<<<grid_for(d.triangles), kBlockSize, 0, stream>>>(d, partials + kEnergyBending * stride);
+            WEFT_CUDA_CHECK_LAUNCH("audit_shell_kernel");
+        }
+    } else {
+        counts.blocks[kEnergyBending] = d.hinges > 0 ? grid_for(d.hinges) : 0;
+        if (d.hinges > 0) {
+            audit_hinge_kernel<<<grid_for(d.hinges), kBlockSize, 0, stream>>>(d, partials + kEnergyBending * stride);
+            WEFT_CUDA_CHECK_LAUNCH("audit_hinge_kernel");
+        }
     }
     counts.blocks[kEnergyPinPower] = d.pins > 0 ? grid_for(d.pins) : 0;
     if (d.pins > 0) {

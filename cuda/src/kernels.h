@@ -53,6 +53,10 @@ void launch_drop_solve(const DeviceView& d, cudaStream_t stream);
 void launch_write_stamp(void* where, std::uint64_t stamp, cudaStream_t stream);
 
 // ---- forces and assembly (force_kernels.cu) -------------------------------------------------------
+/// The bending model per triangle's pass 1 (solver.bending = "shell"; shell_bending_kernels.cu): every
+/// triangle's terms at the Newton iteration's linearisation point into d.shell_faces, which the
+/// assembly then reads through each hinge. Nothing without d.shell_faces.
+void launch_shell_faces(const DeviceView& d, cudaStream_t stream);
 /// The whole system A·Δv = b (assembly_kernels.cu): inertia, gravity, mass damping and collider
 /// contacts of each vertex, membrane, damping and wind of each triangle, bending of each hinge.
 /// Row gather: one launch, one warp per row (device_layout.h says when each strategy wins).

@@ -20,6 +20,16 @@
 namespace weft::cuda::multi {
 namespace {
 
+/// What one GPU runs and several do not yet: the bending model per triangle (its per-triangle pass
+/// and hinge faces are not split over the parts).
+void require_multi_gpu_support(const SolverSettings& settings) {
+    require_device_support(settings);
+    if (settings.bending == BendingModel::Shell)
+        throw Error("cuda backend on several GPUs: solver.bending = \"shell\" (the bending model per triangle) runs on one "
+                    "GPU or the cpu backend so far; use --gpus 1, solver.bending = \"hinge\" or --backend cpu");
+}
+
+
 class MultiGpuBackend final : public Backend, public CudaBackendApi {
 public:
     MultiGpuBackend(std::vector<int> devices, DeviceInfo display, std::string description, std::size_t memory_limit)
@@ -39,14 +49,14 @@ public:
     }
 
     void build(const Model& model) override {
-        require_device_support(model.settings.solver);
+        require_multi_gpu_support(model.settings.solver);
         const BudgetScope scope(&budget_);
         flat_ = flatten(model);
         solver_.build(flat_, model);
     }
 
     void substep(const Model& model, double t, double h, StepStats& stats) override {
-        require_device_support(model.settings.solver);
+        require_multi_gpu_support(model.settings.solver);
         const BudgetScope scope(&budget_);
         const long long launches_before = thread_kernel_launches;  // the shares' threads add theirs
         solver_.substep(model, t, h, stats);
