@@ -110,7 +110,8 @@ struct StepStats {
     bool non_finite = false;       ///< a NaN or Inf appeared; the state was restored to the last good one
     /// Substeps whose solve gave a free vertex a speed no cloth reaches (over 10 km/s: a system
     /// singular in the backend's precision); the solve is dropped and the free vertices keep their
-    /// start velocity through the substep, collisions included (cpu backend and one GPU).
+    /// start velocity through the substep, collisions included (cpu and cuda backends; across GPUs
+    /// every part drops its solve when any part's vertex ran away).
     int runaway_solves = 0;
     /// The largest principal stretch of any cloth triangle at the end of the step (1 at rest; cloth
     /// stretches a few percent, kOverstretch and more means a torn or dragged cloth), measured by the
