@@ -22,7 +22,7 @@ namespace {
 /// One chunk's share of the audit's sums.
 struct Parts {
     double kinetic = 0.0, gravity = 0.0, contact = 0.0, power = 0.0, elastic = 0.0, pin_power = 0.0;
-    double max_stretch = 0.0;
+    double max_stretch_squared = 0.0;  // the square root is taken once, of the largest
 };
 
 std::size_t chunk_count(std::size_t n) { return (n + kParallelChunk - 1) / kParallelChunk; }
@@ -33,7 +33,7 @@ void add(EnergyAudit& a, double& pin_power, const Parts& p) {
     a.contact += p.contact;
     a.external_power += p.power;
     a.elastic += p.elastic;
-    a.max_stretch = std::max(a.max_stretch, p.max_stretch);
+    a.max_stretch = std::max(a.max_stretch, std::sqrt(p.max_stretch_squared));
     pin_power += p.pin_power;
 }
 
@@ -127,7 +127,7 @@ EnergyAudit host_energy_audit(const Model& model, std::span<const std::vector<Ve
                 Vec3d grad[3];
                 out.elastic += physics::membrane_evaluate<double>(r.dm_inv, r.area, p.membrane, xs, pin ? grad : nullptr,
                                                                   nullptr, physics::HessianKind::None);
-                out.max_stretch = std::max(out.max_stretch, physics::largest_stretch<double>(r.dm_inv, xs));
+                out.max_stretch_squared = std::max(out.max_stretch_squared, physics::largest_stretch_squared<double>(r.dm_inv, xs));
                 if (pin)
                     for (int k = 0; k < 3; ++k)
                         if (moving_pin[idx[k]]) out.pin_power += physics::dot(grad[k], vc[idx[k]]);

@@ -198,8 +198,10 @@ WEFT_HD inline T membrane_evaluate(const T dm_inv[2][2], T area, MembraneMateria
 /// membrane_evaluate): the square root of the larger eigenvalue of FᵀF, F = [x1 − x0, x2 − x0]·Dm⁻¹
 /// (1 at rest, 1.1 for 10% stretch along some direction). What the stats report as a torn cloth
 /// when it reaches tens (StepStats::max_stretch).
+/// Its square, the larger eigenvalue of FᵀF (≥ 0): what a maximum over many triangles compares, the
+/// square root taken once for the largest (√ is monotone and correctly rounded: the same result).
 template <typename T>
-WEFT_HD inline T largest_stretch(const T dm_inv[2][2], const Vec3<T> x[3]) {
+WEFT_HD inline T largest_stretch_squared(const T dm_inv[2][2], const Vec3<T> x[3]) {
     const Vec3<T> d1 = x[1] - x[0], d2 = x[2] - x[0];
     const Vec3<T> f0 = dm_inv[0][0] * d1 + dm_inv[1][0] * d2;
     const Vec3<T> f1 = dm_inv[0][1] * d1 + dm_inv[1][1] * d2;
@@ -207,7 +209,13 @@ WEFT_HD inline T largest_stretch(const T dm_inv[2][2], const Vec3<T> x[3]) {
     const T half_trace = T(0.5) * (a + c), half_difference = T(0.5) * (a - c);
     using std::sqrt;
     const T largest = half_trace + sqrt(half_difference * half_difference + b * b);
-    return sqrt(largest > T(0) ? largest : T(0));
+    return largest > T(0) ? largest : T(0);
+}
+
+template <typename T>
+WEFT_HD inline T largest_stretch(const T dm_inv[2][2], const Vec3<T> x[3]) {
+    using std::sqrt;
+    return sqrt(largest_stretch_squared(dm_inv, x));
 }
 
 }  // namespace weft::physics
