@@ -32,12 +32,13 @@ __device__ inline void add_contacts(const DeviceView& d, int active) {
 __global__ void assemble_rows_kernel(DeviceView d) {
     const std::uint32_t lane = threadIdx.x % 32;
     const std::uint32_t i = (blockIdx.x * blockDim.x + threadIdx.x) / 32;
-    int active = 0;
+    int active = 0;         // this lane's centroid contacts
+    int vertex_active = 0;  // the row's vertex contacts (every lane holds them)
     if (i < d.rows) {  // uniform over the warp
         const StepParams& sp = step_params(d);
         V3 vertex_rhs;
         M3 vertex_block;
-        active = vertex_terms(d, sp, i, vertex_rhs, vertex_block);  // every lane: broadcast loads
+        vertex_active = vertex_terms(d, sp, i, vertex_rhs, vertex_block);  // every lane: broadcast loads
         const std::uint32_t slice = i / kSliceRowsDevice, row_lane = i % kSliceRowsDevice;
         const std::uint32_t first = d.slice_start[slice], width = (d.slice_start[slice + 1] - first) / kSliceRowsDevice;
         const std::uint32_t diag_slot = (d.diagonal[i] - first - row_lane) / kSliceRowsDevice;
@@ -56,7 +57,8 @@ __global__ void assemble_rows_kernel(DeviceView d) {
                     const std::uint32_t entry = d.vertex_triangle[tri_first + e];
                     const std::uint32_t t = entry >> 2, a = entry & 3u;
                     TriangleTerms terms;
-                    triangle_terms(d, sp, t, terms);
+                    const int faces = triangle_terms(d, sp, t, terms);
+                    if (chunk == 0 && a == 0) active += faces;  // a centroid contact counted at its first corner's row
                     if (chunk == 0) rhs += terms.rhs[a];
                     for (int b = 0; b < 3; ++b) {
                         block[b] = terms.block[a][b];
@@ -89,7 +91,7 @@ __global__ void assemble_rows_kernel(DeviceView d) {
         rhs = V3{warp_sum(rhs.x), warp_sum(rhs.y), warp_sum(rhs.z)};
         if (lane == 0) store3(d.b, i, d.n, vertex_rhs + rhs);
     }
-    add_contacts(d, lane == 0 ? active : 0);
+    add_contacts(d, active + (lane == 0 ? vertex_active : 0));
 }
 
 // ---- colour passes -----------------------------------------------------------------------------------
@@ -117,14 +119,18 @@ __global__ void vertex_rows_kernel(DeviceView d) {
 
 __global__ void triangle_pass_kernel(DeviceView d, std::uint32_t first, std::uint32_t last) {
     const std::uint32_t t = first + blockIdx.x * blockDim.x + threadIdx.x;
-    if (t >= last) return;
-    TriangleTerms terms;
-    triangle_terms(d, step_params(d), t, terms);
-    for (int a = 0; a < 3; ++a) {
-        const std::uint32_t v = d.triangle_vertices[3 * t + a];
-        for (int c = 0; c < 3; ++c) d.b[c * d.n + v] += terms.rhs[a][c];
-        for (int b = 0; b < 3; ++b) add_block(d.blocks, d.triangle_positions[9 * t + 3 * a + b], terms.block[a][b]);
+    int active = 0;
+    if (t < last) {
+        TriangleTerms terms;
+        active = triangle_terms(d, step_params(d), t, terms);
+        if (d.triangle_vertices[3 * t] >= d.rows) active = 0;  // a part counts what its first corner's owner counts
+        for (int a = 0; a < 3; ++a) {
+            const std::uint32_t v = d.triangle_vertices[3 * t + a];
+            for (int c = 0; c < 3; ++c) d.b[c * d.n + v] += terms.rhs[a][c];
+            for (int b = 0; b < 3; ++b) add_block(d.blocks, d.triangle_positions[9 * t + 3 * a + b], terms.block[a][b]);
+        }
     }
+    add_contacts(d, active);
 }
 
 __global__ void hinge_pass_kernel(DeviceView d, std::uint32_t first, std::uint32_t last) {

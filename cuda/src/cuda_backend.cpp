@@ -85,7 +85,6 @@ public:
     // (device_collisions.h; impact zones on the host for now); self-collision switched on or off live
     // rebuilds them at the next substep.
     void build(const Model& model) override {
-        require_device_support(model.settings.solver);
         const BudgetScope scope(&budget_);
         flat_ = flatten(model);
         solver_->build(flat_, model);
@@ -93,7 +92,6 @@ public:
 
     // Fast analytic colliders are swept per vertex after the solve, in the device solver as on the CPU.
     void substep(const Model& model, double t, double h, StepStats& stats) override {
-        require_device_support(model.settings.solver);
         const BudgetScope scope(&budget_);
         const long long launches_before = thread_kernel_launches;
         solver_->substep(model, t, h, stats);

@@ -39,6 +39,9 @@ struct StepParams {
     /// surface (swept_collider.h). 0 under offset contact, whose moves must stay within their
     /// displacement bounds: the next substep's penalty pushes it out (CpuSolver::sweep_fast_colliders).
     int correct_overshoots = 1;
+    /// 1: the analytic colliders also push each triangle's centroid (SolverSettings::face_contacts,
+    /// weft/physics/implicit_terms.h: face_collider_terms); 0 without it or without analytic colliders.
+    int face_contacts = 0;
     int pin_count = 0;
     int cg_max_iterations = 0;
     int cg_warm_start = 0;

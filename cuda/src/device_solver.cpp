@@ -52,10 +52,9 @@ std::vector<std::pair<std::string, std::size_t>> DeviceSolver::memory_breakdown(
     return parts;
 }
 
-void require_device_support(const SolverSettings& settings) {
-    if (settings.face_contacts)
-        throw Error("cuda backend: solver.face_contacts = true (collider contacts at triangle centroids) runs on the cpu "
-                    "backend only so far; set it false or use --backend cpu");
+bool face_contacts(const Model& model) {
+    return model.settings.solver.face_contacts &&
+           std::any_of(model.colliders.begin(), model.colliders.end(), [](const ColliderDesc& c) { return c.is_analytic(); });
 }
 
 void DeviceSolver::choose_bending(BendingModel bending) {
@@ -397,14 +396,14 @@ EnergyAudit DeviceSolver::energy_audit(const Model& model, double t, double h, b
                                     cudaMemcpyHostToDevice, stream));
     DeviceView view = view_;
     view.staging = audit_staging_.get();
-    const double* s = audit_sums(view, with_wind, whole_x, stream);
+    const double* s = audit_sums(view, with_wind, face_contacts(model), whole_x, stream);
     a.kinetic = s[kEnergyKinetic];
     a.gravity = s[kEnergyGravity];
-    a.contact = s[kEnergyContact] + s[kEnergyOffsetContact];
+    a.contact = s[kEnergyContact] + s[kEnergyOffsetContact] + s[kEnergyFaceContact];
     a.elastic = s[kEnergyMembrane] + s[kEnergyBending];
     a.max_stretch = s[kEnergyMaxStretch];
-    a.external_power =
-        s[kEnergyColliderPower] + s[kEnergyGrabPower] + s[kEnergyWindPower] + std::max(0.0, s[kEnergyPinPower]);
+    a.external_power = s[kEnergyColliderPower] + s[kEnergyFaceColliderPower] + s[kEnergyGrabPower] + s[kEnergyWindPower] +
+                       std::max(0.0, s[kEnergyPinPower]);
     return a;
 }
 
@@ -419,9 +418,10 @@ void DeviceSolver::ensure_audit_buffers(cudaStream_t stream) {
     audit_sums_.allocate(kEnergySums);
 }
 
-const double* DeviceSolver::audit_sums(const DeviceView& view, bool with_wind, const float* whole_x, cudaStream_t stream) {
+const double* DeviceSolver::audit_sums(const DeviceView& view, bool with_wind, bool with_faces, const float* whole_x,
+                                       cudaStream_t stream) {
     double* sums = audit_partials_.get() + static_cast<std::size_t>(kEnergySums) * energy_partial_stride(view_);
-    launch_energy_audit(view, with_wind, audit_partials_.get(), sums, stream, whole_x,
+    launch_energy_audit(view, with_wind, with_faces, audit_partials_.get(), sums, stream, whole_x,
                         whole_ != nullptr ? static_cast<std::uint32_t>(whole_->vertex_count) : 0);
     WEFT_CUDA_CHECK(cudaMemcpyAsync(audit_sums_.get(), sums, kEnergySums * sizeof(double), cudaMemcpyDeviceToHost, stream));
     WEFT_CUDA_CHECK(cudaStreamSynchronize(stream));
@@ -450,9 +450,9 @@ int DeviceSolver::line_search(cudaStream_t stream) {
     trial.v = trial_dv_.get();
     const auto objective = [&](float alpha) {
         launch_line_search_trial(view_, alpha, trial_x_.get(), trial_dv_.get(), stream);
-        const double* s = audit_sums(trial, false, nullptr, stream);
+        const double* s = audit_sums(trial, false, face_contacts(*line_search_model_), nullptr, stream);
         return s[kEnergyKinetic] + s[kEnergyGravity] + s[kEnergyContact] + s[kEnergyMembrane] + s[kEnergyBending] +
-               s[kEnergyOffsetContact];
+               s[kEnergyOffsetContact] + s[kEnergyFaceContact];
     };
     const double start = objective(0.0f);
     float alpha = 1.0f;

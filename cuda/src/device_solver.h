@@ -28,9 +28,9 @@
 
 namespace weft::cuda {
 
-/// Throws weft::Error when `settings` asks for what the CUDA backend does not do yet: collider
-/// contacts at triangle centroids (SolverSettings::face_contacts, CPU backend only so far).
-void require_device_support(const SolverSettings& settings);
+/// Whether `model` asks for collider contacts at the triangles' centroids and has an analytic
+/// collider for them (SolverSettings::face_contacts).
+[[nodiscard]] bool face_contacts(const Model& model);
 
 class DeviceSolver {
 public:
@@ -209,7 +209,7 @@ private:
     /// The audit's parameter block and sums (allocated on first use).
     void ensure_audit_buffers(cudaStream_t stream);
     /// The audit's sums over `view` (its staging the audit's), read back (synchronises `stream`).
-    const double* audit_sums(const DeviceView& view, bool with_wind, const float* whole_x, cudaStream_t stream);
+    const double* audit_sums(const DeviceView& view, bool with_wind, bool with_faces, const float* whole_x, cudaStream_t stream);
     /// The contacts' evaluation at the Newton iterate, and in offset mode the incidence of the pairs in
     /// contact.
     void record_contact_evaluation(cudaStream_t stream);

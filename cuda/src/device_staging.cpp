@@ -63,6 +63,7 @@ void DeviceSolver::fill_staging(const Model& model, double t, double h, unsigned
         return c.is_analytic() && c.shape != ColliderShape::Plane;
     }));
     p.correct_overshoots = moves_bounded_ ? 0 : 1;
+    p.face_contacts = w.solver.face_contacts && p.shape_count > 0 ? 1 : 0;
     p.pin_count = static_cast<int>(flat_->pin_vertex.size());
     p.cg_max_iterations = w.solver.cg_max_iterations;
     p.cg_warm_start = w.solver.cg_warm_start ? 1 : 0;

@@ -25,10 +25,11 @@ __device__ inline int vertex_terms(const DeviceView& d, const StepParams& sp, st
                                  static_cast<physics::HessianKind>(sp.hessian), rhs, block);
 }
 
-/// Triangle t: membrane, Rayleigh stiffness damping and wind.
+/// Triangle t: membrane, Rayleigh stiffness damping, wind and, with sp.face_contacts, the analytic
+/// colliders at its centroid (after the membrane, as on the CPU). Returns the active centroid contacts.
 using TriangleTerms = physics::ElementTerms<float, 3>;
 
-__device__ inline void triangle_terms(const DeviceView& d, const StepParams& sp, std::uint32_t t, TriangleTerms& out) {
+__device__ inline int triangle_terms(const DeviceView& d, const StepParams& sp, std::uint32_t t, TriangleTerms& out) {
     const float h = sp.h;
     V3 x[3], vk[3], dvw[3];
     for (int a = 0; a < 3; ++a) {
@@ -42,8 +43,17 @@ __device__ inline void triangle_terms(const DeviceView& d, const StepParams& sp,
     const float dm_inv[2][2] = {{rest[0], rest[1]}, {rest[2], rest[3]}};
     const physics::WindField<float> wind{sp.wind_active != 0, sp.wind,       sp.air_density, sp.turbulence,
                                          sp.turbulence_frequency, sp.turbulence_scale, sp.time};
-    physics::triangle_terms(implicit_step(sp), dm_inv, rest[4], staged<ClothParams>(d, sp.cloth_offset)[d.triangle_cloth[t]],
-                            wind, x, vk, dvw, static_cast<physics::HessianKind>(sp.hessian), out);
+    const ClothParams& p = staged<ClothParams>(d, sp.cloth_offset)[d.triangle_cloth[t]];
+    const auto kind = static_cast<physics::HessianKind>(sp.hessian);
+    physics::triangle_terms(implicit_step(sp), dm_inv, rest[4], p, wind, x, vk, dvw, kind, out);
+    if (sp.face_contacts == 0) return 0;
+    const float mass = (d.mass[d.triangle_vertices[3 * t]] + d.mass[d.triangle_vertices[3 * t + 1]] +
+                        d.mass[d.triangle_vertices[3 * t + 2]]) /
+                       3.0f;
+    const physics::ColliderSet<float> colliders{staged<physics::Shape<float>>(d, sp.shape_offset),
+                                                staged<float>(d, sp.friction_offset), sp.shape_count,
+                                                sp.contact_stiffness};
+    return physics::face_collider_terms(implicit_step(sp), colliders, p, mass, x, vk, dvw, kind, out);
 }
 
 /// Hinge k: bending (with stiffness damping). `false` when the cloth has no bending stiffness.

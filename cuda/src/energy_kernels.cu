@@ -132,6 +132,42 @@ __global__ void audit_triangle_kernel(DeviceView d, double* partials, std::uint3
     block_maximum(stretch, partials + (kEnergyMaxStretch - kEnergyMembrane) * stride);
 }
 
+/// Per triangle, with face contacts: its centroid's penalty energy against the analytic colliders and
+/// their power bound, as the vertices' in audit_vertex_kernel (host_energy_audit's face contacts).
+__global__ void audit_face_contact_kernel(DeviceView d, double* partials, std::uint32_t stride) {
+    const StepParams& sp = step_params(d);
+    const std::uint32_t t = blockIdx.x * blockDim.x + threadIdx.x;
+    double contact = 0.0, collider_power = 0.0;
+    if (t < d.triangles && d.triangle_vertices[3 * t] < d.rows) {
+        V3 x{}, v{};
+        float m = 0.0f;
+        for (int a = 0; a < 3; ++a) {
+            const std::uint32_t i = d.triangle_vertices[3 * t + a];
+            x += position(d, i);
+            v += velocity(d, i);
+            m += d.mass[i];
+        }
+        x = x / 3.0f;
+        v = v / 3.0f;
+        m /= 3.0f;
+        const ClothParams& p = staged<ClothParams>(d, sp.cloth_offset)[d.triangle_cloth[t]];
+        const float k = physics::collider_penalty_stiffness(sp.contact_stiffness, m, sp.h2);
+        const auto* shapes = staged<physics::Shape<float>>(d, sp.shape_start_offset);  // the pose at t
+        const float* friction = staged<float>(d, sp.friction_offset);
+        for (int c = 0; c < sp.shape_count; ++c) {
+            const float mu = friction[c] >= 0.0f ? friction[c] : p.friction;
+            const physics::ContactResult<float> r = physics::collider_contact(
+                shapes[c], physics::ContactParams<float>{k, p.thickness, mu, 1e-3f}, x, v, physics::HessianKind::None);
+            if (!r.active) continue;
+            contact += r.energy;
+            const double u = physics::length(physics::shape_point_velocity(shapes[c], x));
+            collider_power += physics::length(r.force) * u + 2.0 * m * u * (u + physics::length(v)) / sp.h;
+        }
+    }
+    block_partial(contact, partials);
+    block_partial(collider_power, partials + stride);
+}
+
 __global__ void audit_hinge_kernel(DeviceView d, double* partials) {
     const StepParams& sp = step_params(d);
     const std::uint32_t k = blockIdx.x * blockDim.x + threadIdx.x;
@@ -275,7 +311,7 @@ std::uint32_t energy_partial_stride(const DeviceView& d) {
     return blocks;
 }
 
-void launch_energy_audit(const DeviceView& d, bool with_wind, double* partials, double* sums, cudaStream_t stream,
+void launch_energy_audit(const DeviceView& d, bool with_wind, bool with_faces, double* partials, double* sums, cudaStream_t stream,
                          const float* whole_x, std::uint32_t whole_n) {
     const std::uint32_t stride = energy_partial_stride(d);
     EnergySumCounts counts{};
@@ -290,6 +326,13 @@ void launch_energy_audit(const DeviceView& d, bool with_wind, double* partials, 
         audit_triangle_kernel<<<grid_for(d.triangles), kBlockSize, 0, stream>>>(d, partials + kEnergyMembrane * stride,
                                                                                  stride, with_wind ? 1 : 0);
         WEFT_CUDA_CHECK_LAUNCH("audit_triangle_kernel");
+    }
+    if (with_faces && d.triangles > 0) {  // the centroid contacts (StepParams::face_contacts)
+        static_assert(kEnergyFaceColliderPower == kEnergyFaceContact + 1, "the face kernel writes both, one stride apart");
+        counts.blocks[kEnergyFaceContact] = counts.blocks[kEnergyFaceColliderPower] = grid_for(d.triangles);
+        audit_face_contact_kernel<<<grid_for(d.triangles), kBlockSize, 0, stream>>>(d, partials + kEnergyFaceContact * stride,
+                                                                                     stride);
+        WEFT_CUDA_CHECK_LAUNCH("audit_face_contact_kernel");
     }
     if (d.shell_faces != nullptr) {  // the bending model per triangle
         counts.blocks[kEnergyBending] = d.triangles > 0 ? grid_for(d.triangles) : 0;

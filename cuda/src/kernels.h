@@ -183,6 +183,8 @@ enum EnergySum : int {
     kEnergyMembrane, kEnergyWindPower, kEnergyBending, kEnergyPinPower,
     kEnergyOffsetContact,  ///< the offset contacts' penalty energy (collision.mode = offset), J
     kEnergyMaxStretch,     ///< the largest principal stretch of a triangle (a maximum, not a sum)
+    kEnergyFaceContact,    ///< the triangles' centroid contacts' penalty energy (StepParams::face_contacts), J
+    kEnergyFaceColliderPower,  ///< and their moving colliders' power bound, W
     kEnergySums
 };
 /// Blocks each sum was reduced over (the finishing kernel's argument).
@@ -197,9 +199,10 @@ struct EnergySumCounts {
 /// In part mode (d.contacts.row_of set) the offset contacts name whole-model vertices: they read
 /// `whole_x` (the whole model's positions on this GPU, stride `whole_n`), and each counts on the part
 /// that owns its first cloth corner, so that the parts' sums add up to one GPU's; without `whole_x`
-/// a part leaves them out.
-void launch_energy_audit(const DeviceView& d, bool with_wind, double* partials, double* sums, cudaStream_t stream,
-                         const float* whole_x = nullptr, std::uint32_t whole_n = 0);
+/// a part leaves them out. `with_faces`: the triangles' centroid contacts too (StepParams::
+/// face_contacts; else their sums are 0).
+void launch_energy_audit(const DeviceView& d, bool with_wind, bool with_faces, double* partials, double* sums,
+                         cudaStream_t stream, const float* whole_x = nullptr, std::uint32_t whole_n = 0);
 
 /// y = A·x over the fabric matrix (benchmarks; the solver's SpMV is fused with its dot product and
 /// adds the contacts).

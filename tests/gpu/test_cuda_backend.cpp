@@ -21,6 +21,7 @@
 #include "weft/scene.h"
 
 #include "gpu_test_util.h"
+#include "face_contacts_drape.h"
 #include "stretched_sheet.h"
 #include "thrown_sheet.h"
 
@@ -444,6 +445,29 @@ TEST(CudaBackend, AStretchedClothIsReportedLikeOnTheCpu) {
     EXPECT_GE(gpu.max_stretch, kOverstretch);
     EXPECT_NEAR(gpu.max_stretch, cpu.max_stretch, 1e-3 * cpu.max_stretch);
     EXPECT_EQ(test::step_stretched_sheet("cuda", 5.0, EnergyGuard::Off).max_stretch, 0.0);
+}
+
+// Collider contacts at the triangles' centroids on the device (FaceContacts in
+// tests/solver/test_face_contacts.cpp): the triangle terms add each centroid's contact, the audit its
+// energy. The coarse sheet over the ball shows the ball through its middle cell without them and
+// holds every centroid off the ball with them, as on the CPU.
+TEST(CudaBackend, FaceContactsHoldACoarseSheetOffTheBallLikeOnTheCpu) {
+    WEFT_REQUIRE_GPU();
+    const test::Draped vertices_only = test::drape_coarse_sheet("cuda", false);
+    const test::Draped gpu = test::drape_coarse_sheet("cuda", true);
+    const test::Draped cpu = test::drape_coarse_sheet("cpu", true);
+    std::printf("[ faces    ] cuda: centroid gap %.4f m without face contacts, %.4f m with (%d contacts, %d substeps gained); "
+                "cpu: %.4f m (%d contacts)\n",
+                vertices_only.centroid_gap, gpu.centroid_gap, gpu.collider_contacts, gpu.gained, cpu.centroid_gap,
+                cpu.collider_contacts);
+    EXPECT_LT(vertices_only.centroid_gap, -0.01) << "the control: the ball through the middle cell";
+    EXPECT_TRUE(gpu.finite);
+    EXPECT_GT(gpu.centroid_gap, -0.0005);
+    EXPECT_GT(gpu.vertex_gap, -0.0005);
+    EXPECT_LE(gpu.gained, 3);
+    EXPECT_GT(gpu.collider_contacts, vertices_only.collider_contacts) << "centroid contacts are counted";
+    EXPECT_EQ(gpu.collider_contacts, cpu.collider_contacts);
+    EXPECT_NEAR(gpu.centroid_gap, cpu.centroid_gap, 1e-3);
 }
 
 TEST(CudaBackend, SetStateContinuesLikeTheWorldItCameFrom) {
