@@ -22,9 +22,10 @@ struct Draped {
 };
 
 /// A 0.8 m sheet of 3×3 cells (0.27 m cells) dropped onto a 0.25 m ball and left to settle for 1.5 s
-/// on `backend` (FACE_DEBUG=1 prints each step).
-inline Draped drape_coarse_sheet(const std::string& backend, bool face_contacts) {
+/// on `backend` (`precision`: the CPU backend's scalar; FACE_DEBUG=1 prints each step).
+inline Draped drape_coarse_sheet(const std::string& backend, bool face_contacts, Precision precision = Precision::Double) {
     WorldDesc desc;
+    desc.solver.precision = precision;
     desc.solver.dt = 1.0 / 60.0;
     desc.solver.substeps = 2;
     desc.solver.face_contacts = face_contacts;

@@ -21,12 +21,8 @@ namespace weft::cuda::multi {
 namespace {
 
 /// What one GPU runs and several do not yet: the bending model per triangle (its per-triangle pass
-/// and hinge faces are not split over the parts) and the triangles' centroid contacts (not yet
-/// tested across parts).
+/// and hinge faces are not split over the parts).
 void require_multi_gpu_support(const SolverSettings& settings) {
-    if (settings.face_contacts)
-        throw Error("cuda backend on several GPUs: solver.face_contacts = true (collider contacts at triangle centroids) runs "
-                    "on one GPU or the cpu backend so far; use --gpus 1 or set it false");
     if (settings.bending == BendingModel::Shell)
         throw Error("cuda backend on several GPUs: solver.bending = \"shell\" (the bending model per triangle) runs on one "
                     "GPU or the cpu backend so far; use --gpus 1, solver.bending = \"hinge\" or --backend cpu");
