@@ -234,9 +234,8 @@ constexpr Parameter kTable[] = {
      .panel = "solver", .log_scale = true, .access = field<&WorldDesc::solver, &SolverSettings::contact_stiffness>()},
     {.section = "solver", .name = "face_contacts", .type = T::Boolean,
      .doc = "analytic colliders also push each cloth triangle's centroid, not only its vertices: a coarse cloth over a "
-            "curved collider does not let it show through its triangles (a collider test per triangle; the cpu backend "
-            "and one GPU; several GPUs refuse it so far)",
-     .label = "face contacts", .panel = "solver", .effect = E::Rebuild,  // several GPUs refuse it when built
+            "curved collider does not let it show through its triangles (a collider test per triangle)",
+     .label = "face contacts", .panel = "solver", .effect = E::Rebuild,  // the cpu backend reads it when built
      .access = field<&WorldDesc::solver, &SolverSettings::face_contacts>()},
     {.section = "solver", .name = "threads", .type = T::Integer, .range = R{0, 1024},
      .doc = "CPU worker threads, 0 = all cores (results do not depend on it); `--threads` and "
