@@ -3,9 +3,10 @@
 // lost or invented by a hash collision; the sort plays the part of the hash table.
 #include "collision/broad_phase.h"
 
+#include "collision/radix_sort.h"
+
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
-#include <tbb/parallel_sort.h>
 
 #include <algorithm>
 #include <bit>
@@ -100,48 +101,6 @@ std::vector<Edge> build_edges(std::span<const Triangle> triangles) {
     std::sort(edges.begin(), edges.end(), less);
     edges.erase(std::unique(edges.begin(), edges.end(), same), edges.end());
     return edges;
-}
-
-void BroadPhase::radix_sort(int bits) {
-    if (bits == 0) return;  // a single cell: nothing to sort
-    // Fewest passes of at most 11 bits (2048 buckets stay in L1 per chunk), split evenly.
-    const int passes = (bits + 10) / 11;
-    const int digit_bits = (bits + passes - 1) / passes;
-    const std::size_t buckets = std::size_t{1} << digit_bits;
-    const std::uint64_t digit_mask = buckets - 1;
-    const std::size_t n = entries_.size();
-    // Fixed chunks, so the (digit, chunk) prefix sums, hence the scatter, do not depend on threads.
-    constexpr std::size_t kSortChunk = std::size_t{1} << 16;
-    const std::size_t chunks = (n + kSortChunk - 1) / kSortChunk;
-    histogram_.resize(chunks * buckets);
-    sorted_.resize(n);
-    for (int pass = 0; pass < passes; ++pass) {
-        const int shift = pass * digit_bits;
-        const auto each_chunk = [&](auto&& body) {
-            tbb::parallel_for(tbb::blocked_range<std::size_t>(0, chunks, 1),
-                              [&](const tbb::blocked_range<std::size_t>& r) {
-                                  for (std::size_t c = r.begin(); c != r.end(); ++c)
-                                      body(c, c * kSortChunk, std::min(n, (c + 1) * kSortChunk));
-                              });
-        };
-        each_chunk([&](std::size_t c, std::size_t b, std::size_t e) {
-            std::size_t* h = histogram_.data() + c * buckets;
-            std::fill(h, h + buckets, std::size_t{0});
-            for (std::size_t i = b; i < e; ++i) ++h[(entries_[i].cell >> shift) & digit_mask];
-        });
-        std::size_t at = 0;
-        for (std::size_t d = 0; d < buckets; ++d)
-            for (std::size_t c = 0; c < chunks; ++c) {
-                const std::size_t count = histogram_[c * buckets + d];
-                histogram_[c * buckets + d] = at;
-                at += count;
-            }
-        each_chunk([&](std::size_t c, std::size_t b, std::size_t e) {
-            std::size_t* h = histogram_.data() + c * buckets;
-            for (std::size_t i = b; i < e; ++i) sorted_[h[(entries_[i].cell >> shift) & digit_mask]++] = entries_[i];
-        });
-        entries_.swap(sorted_);
-    }
 }
 
 void BroadPhase::find(const BroadPhaseInput& in, BroadPhaseResult& out) {
@@ -413,7 +372,7 @@ void BroadPhase::find(const BroadPhaseInput& in, BroadPhaseResult& out) {
     // Entries were written in primitive order, and the radix sort is stable: within a cell the
     // primitives stay in index order (vertices, then edges, then triangles), and the result is one
     // fixed sequence whatever the thread count.
-    radix_sort(packing.bits);
+    radix_sort_by_key(entries_, sorted_, histogram_, packing.bits, [](const Entry& e) { return e.cell; });
     cell_start_.clear();
     for (std::size_t i = 0; i < total; ++i)
         if (i == 0 || entries_[i].cell != entries_[i - 1].cell) cell_start_.push_back(i);
@@ -627,9 +586,14 @@ void BroadPhase::find(const BroadPhaseInput& in, BroadPhaseResult& out) {
         out.vf.insert(out.vf.end(), l.vf.begin(), l.vf.end());
         out.ee.insert(out.ee.end(), l.ee.begin(), l.ee.end());
     }
-    // Each pair was reported once, so sorting alone gives the unique, thread-count-free order.
-    tbb::parallel_sort(out.vf.begin(), out.vf.end());
-    tbb::parallel_sort(out.ee.begin(), out.ee.end());
+    // Each pair was reported once, so sorting alone gives the unique, thread-count-free order: by
+    // (first id, second id), the pairs' own order, with the two ids packed into one radix key.
+    const int vertex_bits = bits_for(n), triangle_bits = bits_for(nt), edge_bits = bits_for(ne);
+    radix_sort_by_key(out.vf, vf_scratch_, histogram_, vertex_bits + triangle_bits, [triangle_bits](const VertexFacePair& p) {
+        return (std::uint64_t{p.vertex} << triangle_bits) | p.triangle;
+    });
+    radix_sort_by_key(out.ee, ee_scratch_, histogram_, 2 * edge_bits,
+                      [edge_bits](const EdgeEdgePair& p) { return (std::uint64_t{p.a} << edge_bits) | p.b; });
     c.vf_pairs = out.vf.size();
     c.ee_pairs = out.ee.size();
     trim_pair_lists(out);
@@ -650,6 +614,8 @@ void BroadPhase::trim_pair_lists(BroadPhaseResult& out) {
     }
     (void)trim_to_peak(out.vf, out_vf_peak_);
     (void)trim_to_peak(out.ee, out_ee_peak_);
+    (void)trim_to_peak(vf_scratch_, out_vf_peak_);
+    (void)trim_to_peak(ee_scratch_, out_ee_peak_);
     out_vf_peak_ = out_ee_peak_ = 0;
     calls_since_trim_ = 0;
 }
@@ -659,6 +625,7 @@ std::size_t BroadPhase::scratch_bytes() const {
                         offset_.capacity() * sizeof(std::size_t) +
                         (oversized_.capacity() + vertex_cloth_.capacity()) * sizeof(std::uint32_t) +
                         (entries_.capacity() + sorted_.capacity()) * sizeof(Entry) +
+                        vf_scratch_.capacity() * sizeof(VertexFacePair) + ee_scratch_.capacity() * sizeof(EdgeEdgePair) +
                         (histogram_.capacity() + cell_start_.capacity()) * sizeof(std::size_t) +
                         extent_.capacity() * sizeof(double) + state_.capacity();
     for (const Local& l : local_)

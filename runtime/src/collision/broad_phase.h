@@ -119,9 +119,6 @@ public:
     static constexpr std::uint64_t kMaxCellsPerPrimitive = 512;
 
 private:
-    /// Sorts `entries_` by cell, stably, on the low `bits` bits of the key.
-    void radix_sort(int bits);
-
     struct Box {
         Vec3d lo, hi;
     };
@@ -158,6 +155,8 @@ private:
     std::vector<std::uint32_t> oversized_;
     std::vector<std::uint32_t> vertex_cloth_;
     std::vector<Entry> entries_, sorted_;  // sorted_: the radix sort's other buffer
+    std::vector<VertexFacePair> vf_scratch_;  // the pair lists' radix sort buffers
+    std::vector<EdgeEdgePair> ee_scratch_;
     std::vector<std::size_t> histogram_;   // radix sort: bucket counts, then offsets, per chunk
     std::vector<std::size_t> cell_start_;
     std::vector<double> extent_;       // edge bound extents, for the automatic cell size
