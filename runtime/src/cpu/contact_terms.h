@@ -125,8 +125,8 @@ public:
             for (std::size_t i = lo; i < hi; ++i) {
                 M3 acc{};
                 for (std::uint32_t e = start_[i]; e < start_[i + 1]; ++e) {
-                    const T w = weight_[entry_[e] / 4][entry_[e] % 4];
-                    acc += (w * w) * block_[entry_[e] / 4];
+                    const T w = entry_weight_[e];
+                    acc += (w * w) * block_[entry_[e]];
                 }
                 diagonal_[i] = acc;
             }
@@ -152,7 +152,7 @@ public:
         parallel_chunks(n_, [&](std::size_t lo, std::size_t hi) {
             for (std::size_t i = lo; i < hi; ++i)
                 for (std::uint32_t e = start_[i]; e < start_[i + 1]; ++e)
-                    b[i] += weight_[entry_[e] / 4][entry_[e] % 4] * rhs_[entry_[e] / 4];
+                    b[i] += entry_weight_[e] * rhs_[entry_[e]];
         });
     }
 
@@ -173,7 +173,7 @@ public:
         parallel_chunks(n_, [&](std::size_t lo, std::size_t hi) {
             for (std::size_t i = lo; i < hi; ++i)
                 for (std::uint32_t e = start_[i]; e < start_[i + 1]; ++e)
-                    y[i] += weight_[entry_[e] / 4][entry_[e] % 4] * scratch_[entry_[e] / 4];
+                    y[i] += entry_weight_[e] * scratch_[entry_[e]];
         });
     }
 
@@ -181,7 +181,8 @@ public:
         return ids_.capacity() * sizeof(ids_[0]) + weight_.capacity() * sizeof(weight_[0]) +
                (normal_.capacity() + rhs_.capacity() + scratch_.capacity()) * sizeof(V3) +
                params_.capacity() * sizeof(params_[0]) + (block_.capacity() + diagonal_.capacity()) * sizeof(M3) +
-               (start_.capacity() + entry_.capacity() + fill_.capacity()) * sizeof(std::uint32_t) + edge_edge_.capacity() +
+               (start_.capacity() + entry_.capacity() + fill_.capacity()) * sizeof(std::uint32_t) +
+               entry_weight_.capacity() * sizeof(T) + edge_edge_.capacity() +
                active_.capacity();
     }
 
@@ -203,6 +204,7 @@ private:
         (void)collision::trim_to_peak(rhs_, peak_pairs_);
         (void)collision::trim_to_peak(scratch_, peak_pairs_);
         (void)collision::trim_to_peak(entry_, peak_entries_);
+        (void)collision::trim_to_peak(entry_weight_, peak_entries_);
         sets_since_trim_ = peak_pairs_ = peak_entries_ = 0;
     }
 
@@ -215,11 +217,16 @@ private:
                     if (v < n_) ++start_[v + 1];
         for (std::size_t i = 0; i < n_; ++i) start_[i + 1] += start_[i];
         entry_.resize(start_[n_]);
+        entry_weight_.resize(start_[n_]);
         fill_.assign(start_.begin(), start_.end() - 1);
         for (std::size_t p = 0; p < ids_.size(); ++p)
             if (active_[p] != 0)
                 for (std::uint32_t i = 0; i < 4; ++i)
-                    if (ids_[p][i] < n_) entry_[fill_[ids_[p][i]]++] = static_cast<std::uint32_t>(4 * p + i);
+                    if (ids_[p][i] < n_) {
+                        const std::uint32_t e = fill_[ids_[p][i]]++;
+                        entry_[e] = static_cast<std::uint32_t>(p);
+                        entry_weight_[e] = weight_[p][i];
+                    }
     }
 
     /// One offset contact at the linearisation point: closest points of its two primitives there
@@ -265,7 +272,10 @@ private:
     std::vector<M3> block_;
     std::vector<V3> rhs_;
     mutable std::vector<V3> scratch_;  // per-pair C·Σ w_j x_j of the current product
+    // The incidence: row i's entries [start_[i], start_[i+1]) name a pair and carry the row's weight
+    // in it, in the order the rows read them (one random load a product term, not two).
     std::vector<std::uint32_t> start_, entry_, fill_;
+    std::vector<T> entry_weight_;
     std::vector<M3> diagonal_;
 };
 
