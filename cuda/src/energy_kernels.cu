@@ -47,6 +47,26 @@ __device__ void block_maximum(double value, double* partials) {
 __device__ inline V3 position(const DeviceView& d, std::uint32_t i) { return load3(d.x, i, d.n); }
 __device__ inline V3 velocity(const DeviceView& d, std::uint32_t i) { return load3(d.v, i, d.n); }
 
+/// A point of mass `m` (kg) at `x` moving with `v` (a vertex, or a triangle's centroid with face
+/// contacts) against the analytic colliders at their pose at t: adds its penalty energy to
+/// `contact` and the moving colliders' power bound to `power` (|f|·|u| for a steady contact,
+/// 2m|u|(|u| + |v|)/h for an impact; host_energy_audit).
+__device__ inline void add_collider_energy(const DeviceView& d, const StepParams& sp, const ClothParams& p, float m, V3 x, V3 v,
+                                           double& contact, double& power) {
+    const float k = physics::collider_penalty_stiffness(sp.contact_stiffness, m, sp.h2);
+    const auto* shapes = staged<physics::Shape<float>>(d, sp.shape_start_offset);
+    const float* friction = staged<float>(d, sp.friction_offset);
+    for (int c = 0; c < sp.shape_count; ++c) {
+        const float mu = friction[c] >= 0.0f ? friction[c] : p.friction;
+        const physics::ContactResult<float> r = physics::collider_contact(
+            shapes[c], physics::ContactParams<float>{k, p.thickness, mu, 1e-3f}, x, v, physics::HessianKind::None);
+        if (!r.active) continue;
+        contact += r.energy;
+        const double u = physics::length(physics::shape_point_velocity(shapes[c], x));
+        power += physics::length(r.force) * u + 2.0 * m * u * (u + physics::length(v)) / sp.h;
+    }
+}
+
 /// Per vertex: kinetic and gravitational energy, the analytic colliders' penalty energy and the
 /// power bound of moving colliders (as host_energy_audit), the grab spring's power.
 __global__ void audit_vertex_kernel(DeviceView d, double* partials, std::uint32_t stride) {
@@ -59,22 +79,9 @@ __global__ void audit_vertex_kernel(DeviceView d, double* partials, std::uint32_
         kinetic = 0.5 * m * static_cast<double>(physics::dot(v, v));
         gravity = -static_cast<double>(m) * static_cast<double>(physics::dot(sp.gravity, x));
         // Pinned vertices get no collider terms in the solve (implicit_terms.h: vertex_terms).
-        if (!d.fixed[i] && sp.shape_count > 0) {
-            const ClothParams& p = staged<ClothParams>(d, sp.cloth_offset)[d.vertex_cloth[i]];
-            const float k = physics::collider_penalty_stiffness(sp.contact_stiffness, m, sp.h2);
-            const auto* shapes = staged<physics::Shape<float>>(d, sp.shape_start_offset);  // the pose at t
-            const float* friction = staged<float>(d, sp.friction_offset);
-            for (int c = 0; c < sp.shape_count; ++c) {
-                const float mu = friction[c] >= 0.0f ? friction[c] : p.friction;
-                const physics::ContactResult<float> r = physics::collider_contact(
-                    shapes[c], physics::ContactParams<float>{k, p.thickness, mu, 1e-3f}, x, v, physics::HessianKind::None);
-                if (!r.active) continue;
-                contact += r.energy;
-                // |f|·|u| for a steady contact, 2m|u|(|u| + |v|)/h for an impact (host_energy_audit).
-                const double u = physics::length(physics::shape_point_velocity(shapes[c], x));
-                collider_power += physics::length(r.force) * u + 2.0 * m * u * (u + physics::length(v)) / sp.h;
-            }
-        }
+        if (!d.fixed[i] && sp.shape_count > 0)
+            add_collider_energy(d, sp, staged<ClothParams>(d, sp.cloth_offset)[d.vertex_cloth[i]], m, x, v, contact,
+                                collider_power);
         if (i == sp.grab_vertex && !d.fixed[i]) {
             const V3 force = sp.grab_stiffness * (sp.grab_target - x) - sp.grab_damping * v;
             grab_power = static_cast<double>(physics::dot(force, v));
@@ -150,19 +157,8 @@ __global__ void audit_face_contact_kernel(DeviceView d, double* partials, std::u
         x = x / 3.0f;
         v = v / 3.0f;
         m /= 3.0f;
-        const ClothParams& p = staged<ClothParams>(d, sp.cloth_offset)[d.triangle_cloth[t]];
-        const float k = physics::collider_penalty_stiffness(sp.contact_stiffness, m, sp.h2);
-        const auto* shapes = staged<physics::Shape<float>>(d, sp.shape_start_offset);  // the pose at t
-        const float* friction = staged<float>(d, sp.friction_offset);
-        for (int c = 0; c < sp.shape_count; ++c) {
-            const float mu = friction[c] >= 0.0f ? friction[c] : p.friction;
-            const physics::ContactResult<float> r = physics::collider_contact(
-                shapes[c], physics::ContactParams<float>{k, p.thickness, mu, 1e-3f}, x, v, physics::HessianKind::None);
-            if (!r.active) continue;
-            contact += r.energy;
-            const double u = physics::length(physics::shape_point_velocity(shapes[c], x));
-            collider_power += physics::length(r.force) * u + 2.0 * m * u * (u + physics::length(v)) / sp.h;
-        }
+        add_collider_energy(d, sp, staged<ClothParams>(d, sp.cloth_offset)[d.triangle_cloth[t]], m, x, v, contact,
+                            collider_power);
     }
     block_partial(contact, partials);
     block_partial(collider_power, partials + stride);
