@@ -70,10 +70,11 @@ inline constexpr double kEnergyGuardFloor = 1e-9;
 /// The energy a substep of length `h` (s) gained beyond what the outside world can have done,
 /// J, from the audits at its start and end; 0 when it gained nothing unexplained:
 ///
-///   excess = ΔE − h·max(P₀, P₁) − ε·(K₀ + K₁ + U₀ + U₁ + |ΔG|) − E_floor,
+///   excess = ΔE − 2·h·max(P₀, P₁) − ε·(K₀ + U₀ + |ΔG|) − E_floor,
 ///
 /// E = kinetic + gravity + elastic + contact (the potentials of every conservative force), P the
-/// external power bound, K the kinetic energy, U elastic + contact, G gravity, ε = kEnergyGuardSlack.
+/// external power bound (counted kEnergyGuardWorkFactor = 2 times), K the kinetic energy, U elastic +
+/// contact, both at the substep's start, G gravity, ε = kEnergyGuardSlack.
 /// Why this bound: implicit Euler solved exactly is dissipative — for a convex potential,
 /// E₁ − E₀ = h v₁·f_ext − ½|v₁ − v₀|²_M − (damping) ≤ W_ext — so a converged step gains at most the
 /// external work, and the slack covers what one linearisation, a non-convex membrane under
