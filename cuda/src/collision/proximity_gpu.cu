@@ -11,6 +11,7 @@
 #include "cuda_check.h"
 #include "device_contacts.h"
 #include "grid_size.h"
+#include "weft/backend/proximity_contact.h"
 
 namespace weft::cuda::collision {
 namespace {
@@ -45,19 +46,20 @@ __device__ __noinline__ bool make_contact(const GpuProximityInput& in, std::uint
     V3f normal;
     float gap0 = 0.0F;
     pair_closest(pv.vf, x, w, normal, gap0);
-    float inverse_effective_mass = 0.0F;
+    float inverse_effective_mass = 0.0F, movable_weight = 0.0F;
     float thickness_a = 0.0F, thickness_b = 0.0F, friction_a = 0.0F, friction_b = 0.0F;
     V3f predicted{};
     for (int i = 0; i < 4; ++i) {
         const std::uint32_t v = pv.id[i];
         inverse_effective_mass += w[i] * w[i] * in.inverse_mass[v];
+        if (in.inverse_mass[v] > 0.0F) movable_weight += w[i] < 0.0F ? -w[i] : w[i];
         predicted += w[i] * load_position(in.x1, v, stride);
         float& thickness_side = i < pv.first_side ? thickness_a : thickness_b;
         float& friction_side = i < pv.first_side ? friction_a : friction_b;
         thickness_side = physics::max_(thickness_side, in.thickness[v]);
         friction_side = physics::max_(friction_side, in.friction[v]);
     }
-    if (!(inverse_effective_mass > 0.0F)) return false;
+    if (!(inverse_effective_mass > 0.0F) || !(movable_weight >= static_cast<float>(weft::collision::kMinMovableContactWeight))) return false;
     const float thickness =
         in.thickness_override > 0.0F ? in.thickness_override : physics::max_(thickness_a, thickness_b);
     if (in.offset_bound == nullptr) {

@@ -30,19 +30,20 @@ bool rest_neighbours(const ProximityInput& in, const std::uint32_t (&ids)[4], in
 /// `first_side` vertices (1 for vertex–face, 2 for edge–edge) belong to the first primitive.
 bool make_contact(const ProximityInput& in, const std::uint32_t (&ids)[4], const double (&w)[4], int first_side,
                   Vec3d normal, double gap0, ProximityContact& c) {
-    double inverse_effective_mass = 0.0;
+    double inverse_effective_mass = 0.0, movable_weight = 0.0;
     double thickness_a = 0.0, thickness_b = 0.0, friction_a = 0.0, friction_b = 0.0;
     Vec3d predicted{};
     for (int i = 0; i < 4; ++i) {
         const std::uint32_t v = ids[i];
         inverse_effective_mass += w[i] * w[i] * in.inverse_mass[v];
+        if (in.inverse_mass[v] > 0.0) movable_weight += std::abs(w[i]);
         predicted += w[i] * in.x1[v];
         double& thickness_side = i < first_side ? thickness_a : thickness_b;
         double& friction_side = i < first_side ? friction_a : friction_b;
         thickness_side = std::max(thickness_side, in.thickness[v]);
         friction_side = std::max(friction_side, in.friction[v]);
     }
-    if (!(inverse_effective_mass > 0.0)) return false;
+    if (!(inverse_effective_mass > 0.0) || !(movable_weight >= kMinMovableContactWeight)) return false;
     const double thickness = in.thickness_override > 0.0 ? in.thickness_override : std::max(thickness_a, thickness_b);
     if (in.offset_bound.empty()) {
         const double gap1 = dot(normal, predicted);
