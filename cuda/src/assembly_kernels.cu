@@ -130,7 +130,9 @@ __global__ void triangle_pass_kernel(DeviceView d, std::uint32_t first, std::uin
             for (int b = 0; b < 3; ++b) add_block(d.blocks, d.triangle_positions[9 * t + 3 * a + b], terms.block[a][b]);
         }
     }
-    add_contacts(d, active);
+    // Without face contacts a triangle has none to count: skip the block reduction (the flag is one
+    // value for the whole launch, so every thread of the block takes the same branch).
+    if (step_params(d).face_contacts != 0) add_contacts(d, active);
 }
 
 __global__ void hinge_pass_kernel(DeviceView d, std::uint32_t first, std::uint32_t last) {
