@@ -15,7 +15,7 @@ bool loop_clock_requested() {
 
 void print_loop_clock(const std::string& who, const long long* device_cycles, int device) noexcept {
     static constexpr std::array<const char*, kLoopPhases> kNames = {
-        "update", "fine", "level 1", "coarse", "prolong", "push", "pairs", "row sums", "product", "sums", "meetings", "(waiting)"};
+        "update", "restrict", "level 1", "coarse restrict", "solves", "prolong", "push", "pairs", "row sums", "product", "sums", "meetings", "(waiting)"};
     std::array<long long, kLoopClockEntries> cycles{};
     int previous = 0, rate_khz = 0;
     if (device_cycles == nullptr || cudaGetDevice(&previous) != cudaSuccess) return;

@@ -14,9 +14,10 @@ namespace weft::cuda {
 /// The phases of one CG iteration the loop clock times, in the order of the multi-GPU loop.
 enum LoopPhase : int {
     kPhaseUpdate = 0,  ///< p, s, x, r (and u with block-Jacobi); one GPU: the direction
-    kPhaseFine,        ///< Schwarz level 0 over the (part's) domains; one GPU: with r −= αq
+    kPhaseFine,        ///< Schwarz level 0's residual restricted to level 1 (one GPU: with r −= αq)
     kPhaseLevel1,      ///< level 1's run into the other parts
-    kPhaseCoarse,      ///< the coarse levels, whole on every GPU
+    kPhaseCoarse,      ///< the restriction down the coarse levels, whole on every GPU
+    kPhaseSolves,      ///< every level's domain solves in one phase (schwarz_solve_levels)
     kPhaseProlong,     ///< u = Σ levels, rᵀu
     kPhasePush,        ///< u's ghosts and contact vertices into the other parts
     kPhasePairs,       ///< the contacts' pair pass

@@ -203,9 +203,15 @@ __device__ double persistent_sum(double value, double* partials) {
 /// The one-launch CG loop: the same phases as the per-kernel form, a grid-wide barrier after each
 /// (the contact pair pass; SpMV and cᵀq; the preconditioner with rᵀs; the direction). With block-Jacobi
 /// the preconditioner is fused into the axpy pair; with Schwarz it is the axpy pair with level 0's
-/// domains, each coarser level, then the corrections. A warp keeps the same domains in every iteration.
+/// restriction, the restriction down the coarser levels, every level's solves in one phase, then the
+/// corrections (schwarz_apply.cuh). A warp keeps the same domains in every iteration.
+/// Five blocks an SM (48 registers): the contact gathers and the domain solves are bound by the loads
+/// in flight. Left to itself the compiler took 96–114 registers for the Schwarz variant with contacts
+/// (two blocks an SM) and the 1.2M flag with self-contact ran 320.4 ms a frame; at 4, 5 and 6 blocks
+/// 290.5, 288.2 and 285.1 ms, the wound twist 30.0, 30.0 and 31.3 ms a step (32.3 unbounded; one
+/// H200, one build): 5 is the best of both.
 template <bool kContacts, bool kSchwarz>
-__global__ void pcg_persistent_kernel(DeviceView d) {
+__global__ void __launch_bounds__(kBlockSize, 5) pcg_persistent_kernel(DeviceView d) {
     namespace cg = cooperative_groups;
     __shared__ float values[kSchwarz ? kSchwarzWarpsPerBlock : 1][kSchwarzDim];
     const StepParams& sp = step_params(d);
@@ -259,17 +265,22 @@ __global__ void pcg_persistent_kernel(DeviceView d) {
         const float alpha = static_cast<float>(delta / cq);
         local = 0.0;
         if constexpr (kSchwarz) {
+            // r −= αq and Δv += αc with the restriction to level 1, the restriction down the coarse
+            // levels, then every level's solves in one phase (schwarz_apply.cuh).
             const SchwarzView& m = d.mas;
             for (std::uint32_t domain = first_warp; domain < m.level[0].domains; domain += warps)
-                schwarz_fine_domain(d, domain, lane, values[warp], SchwarzInput::Update, alpha);
-            for (int l = 1; l < m.levels; ++l) {
-                cg::this_grid().sync();
-                clock.mark(l == 1 ? kPhaseFine : kPhaseCoarse);
-                for (std::uint32_t domain = first_warp; domain < m.level[l].domains; domain += warps)
-                    schwarz_coarse_domain(d, l, domain, lane, values[warp]);
-            }
+                schwarz_restrict_only(d, 0, domain, lane, values[warp], SchwarzInput::Update, alpha);
             cg::this_grid().sync();
-            clock.mark(m.levels > 1 ? kPhaseCoarse : kPhaseFine);
+            clock.mark(kPhaseFine);
+            for (int l = 1; l + 1 < m.levels; ++l) {
+                for (std::uint32_t domain = first_warp; domain < m.level[l].domains; domain += warps)
+                    schwarz_restrict_only(d, l, domain, lane, values[warp], SchwarzInput::Residual, 0.0f);
+                cg::this_grid().sync();
+            }
+            clock.mark(kPhaseCoarse);
+            schwarz_solve_levels(d, first_warp, warps, lane, values[warp]);
+            cg::this_grid().sync();
+            clock.mark(kPhaseSolves);
             for (std::uint32_t i = blockIdx.x * blockDim.x + threadIdx.x; i < d.n; i += stride) {
                 const V3 z = schwarz_correction(d, i);
                 store3(d.s, i, d.n, z);

@@ -38,11 +38,11 @@ __device__ inline void schwarz_restrict_domain(const SchwarzLevelView& level, co
     for (int c = 0; c < 3; ++c) next.values[3 * me + c] = acc[c];
 }
 
-/// Level 0, domain `domain`, by a whole warp (`v`: 48 floats of shared memory for it): takes its 16
-/// vertices' residuals as `in` says (for Update, after r −= αq and Δv += αc, written back), solves,
-/// and restricts to level 1.
-__device__ inline void schwarz_fine_domain(const DeviceView& d, std::uint32_t domain, std::uint32_t lane, float* v,
-                                           SchwarzInput in, float alpha) {
+/// Level 0, domain `domain`: lane k < 16 puts its node's residual into v (48 floats of shared memory
+/// for the warp) as `in` says (for Update, after r −= αq and Δv += αc, written back). Ends with the
+/// warp converged and v complete.
+__device__ inline void schwarz_fine_load(const DeviceView& d, std::uint32_t domain, std::uint32_t lane, float* v,
+                                         SchwarzInput in, float alpha) {
     const SchwarzView& m = d.mas;
     const SchwarzLevelView& level = m.level[0];
     if (lane < kSchwarzNodes) {
@@ -66,24 +66,96 @@ __device__ inline void schwarz_fine_domain(const DeviceView& d, std::uint32_t do
         v[3 * lane + 2] = r.z;
     }
     __syncwarp();
-    schwarz_solve_domain(level.inverse + static_cast<std::size_t>(domain) * kSchwarzDim * kSchwarzDim, v,
-                         level.solved + domain * kSchwarzDim, lane);
-    if (m.levels > 1) schwarz_restrict_domain(level, m.level[1], domain, v, lane);
-    __syncwarp();  // v is reused by the warp's next domain
 }
 
-/// Level l ≥ 1, domain `domain`, by a whole warp: solve and restrict to level l + 1. The values were
-/// written by other warps before a kernel boundary or grid barrier: read past L1.
-__device__ inline void schwarz_coarse_domain(const DeviceView& d, int l, std::uint32_t domain, std::uint32_t lane,
-                                             float* v) {
-    const SchwarzView& m = d.mas;
-    const SchwarzLevelView& level = m.level[l];
+/// Level l ≥ 1, domain `domain`: its values into v. They were written by other warps before a kernel
+/// boundary or grid barrier: read past L1.
+__device__ inline void schwarz_coarse_load(const DeviceView& d, int l, std::uint32_t domain, std::uint32_t lane, float* v) {
+    const SchwarzLevelView& level = d.mas.level[l];
     for (std::uint32_t k = lane; k < kSchwarzDim; k += 32) v[k] = __ldcg(&level.values[domain * kSchwarzDim + k]);
     __syncwarp();
+}
+
+/// Level l's domain `domain` solved from the values in v, which are then restricted to level l + 1
+/// (when there is one); v may be reused by the warp once it returns.
+__device__ inline void schwarz_solve_and_restrict(const DeviceView& d, int l, std::uint32_t domain, std::uint32_t lane,
+                                                  const float* v) {
+    const SchwarzView& m = d.mas;
+    const SchwarzLevelView& level = m.level[l];
     schwarz_solve_domain(level.inverse + static_cast<std::size_t>(domain) * kSchwarzDim * kSchwarzDim, v,
                          level.solved + domain * kSchwarzDim, lane);
     if (l + 1 < m.levels) schwarz_restrict_domain(level, m.level[l + 1], domain, v, lane);
     __syncwarp();
+}
+
+/// Level 0, domain `domain`, by a whole warp: takes its residuals (schwarz_fine_load), solves, and
+/// restricts to level 1.
+__device__ inline void schwarz_fine_domain(const DeviceView& d, std::uint32_t domain, std::uint32_t lane, float* v,
+                                           SchwarzInput in, float alpha) {
+    schwarz_fine_load(d, domain, lane, v, in, alpha);
+    schwarz_solve_and_restrict(d, 0, domain, lane, v);
+}
+
+/// Level l ≥ 1, domain `domain`, by a whole warp: solve and restrict to level l + 1.
+__device__ inline void schwarz_coarse_domain(const DeviceView& d, int l, std::uint32_t domain, std::uint32_t lane,
+                                             float* v) {
+    schwarz_coarse_load(d, l, domain, lane, v);
+    schwarz_solve_and_restrict(d, l, domain, lane, v);
+}
+
+// ---- restriction first, then every level's solves (the one-launch loops) ---------------------------
+// The levels are additive: each level's input is the residual restricted to it, not another level's
+// solution, so the restriction chain (short: load, add, store) can run first, a grid-wide barrier a
+// level, and then every level's domain solves in one phase. There the coarse levels' few domains,
+// each a chain of dependent loads that used to be a phase of its own between barriers, run beside
+// the fine level's many and hide behind them. Every value is the one the level-by-level form
+// computes (the same sums in the same order): the same bits.
+
+/// The restriction of level l's domain `domain` to level l + 1 (l = 0 with `in` as for
+/// schwarz_fine_load, which it writes back where `in` says).
+__device__ inline void schwarz_restrict_only(const DeviceView& d, int l, std::uint32_t domain, std::uint32_t lane, float* v,
+                                             SchwarzInput in, float alpha) {
+    const SchwarzView& m = d.mas;
+    if (l == 0)
+        schwarz_fine_load(d, domain, lane, v, in, alpha);
+    else
+        schwarz_coarse_load(d, l, domain, lane, v);
+    if (l + 1 < m.levels) schwarz_restrict_domain(m.level[l], m.level[l + 1], domain, v, lane);
+    __syncwarp();
+}
+
+/// The solve of level l's domain `domain` alone, its input restricted before (level 0 reads r).
+__device__ inline void schwarz_solve_only(const DeviceView& d, int l, std::uint32_t domain, std::uint32_t lane, float* v) {
+    const SchwarzView& m = d.mas;
+    if (l == 0)
+        schwarz_fine_load(d, domain, lane, v, SchwarzInput::Residual, 0.0f);
+    else
+        schwarz_coarse_load(d, l, domain, lane, v);
+    const SchwarzLevelView& level = m.level[l];
+    schwarz_solve_domain(level.inverse + static_cast<std::size_t>(domain) * kSchwarzDim * kSchwarzDim, v,
+                         level.solved + domain * kSchwarzDim, lane);
+    __syncwarp();
+}
+
+/// Every level's solves in one pass by warp `warp` of `warps`: the coarse levels' domains first,
+/// deepest first (task 0 is the coarsest level's first domain), so that their warps start at once,
+/// then the fine level's.
+__device__ inline void schwarz_solve_levels(const DeviceView& d, std::uint32_t warp, std::uint32_t warps,
+                                            std::uint32_t lane, float* v) {
+    const SchwarzView& m = d.mas;
+    std::uint32_t coarse = 0;
+    for (int l = 1; l < m.levels; ++l) coarse += m.level[l].domains;
+    const std::uint32_t tasks = coarse + m.level[0].domains;
+    for (std::uint32_t task = warp; task < tasks; task += warps) {
+        if (task >= coarse) {
+            schwarz_solve_only(d, 0, task - coarse, lane, v);
+            continue;
+        }
+        std::uint32_t t = task;
+        int l = m.levels - 1;
+        while (t >= m.level[l].domains) t -= m.level[l--].domains;  // uniform over the warp
+        schwarz_solve_only(d, l, t, lane, v);
+    }
 }
 
 /// z_i = filter(Σ_l solved_l[node_l(i)]): vertex i's correction from every level.

@@ -71,12 +71,13 @@ __device__ bool meet_parts(const PartLoopView& v, unsigned count, LoopClock& clo
 }
 
 /// The loop of PartPcg::enqueue_iteration, phase by phase, with the batches' values (see the header).
-/// Three blocks an SM at least: left to itself the compiler gives the Schwarz variants 128 registers
-/// a thread, two blocks an SM, and the contact gathers (random loads, bound by the loads in flight)
-/// ran at about half one GPU's rate per contact. Capped at 80 registers (a few spills): the 1.2M flag
-/// with self-contact on 2 × H200 208.7 → 191.9 ms a frame; the wound twist 29.6 → 30.6 ms.
+/// Four blocks an SM: the contact gathers (random loads) are bound by the loads in flight, and left to
+/// itself the compiler gives the Schwarz variants 128 registers a thread, two blocks an SM. Measured
+/// on 2 × H200, the 1.2M flag with self-contact a frame (the wound twist a step): 3 blocks (80
+/// registers) 185.7 ms (27.6 ms), 4 (64 registers, a few spills) 180.1 (28.2), 5 (48, spilling)
+/// 190.1 (30.1); earlier, 2 against 3: 208.7 against 191.9 (29.6 against 30.6).
 template <bool kSchwarz, bool kContacts>
-__global__ void __launch_bounds__(kBlockSize, 3) part_pcg_loop_kernel(const __grid_constant__ PartLoopView v) {
+__global__ void __launch_bounds__(kBlockSize, 4) part_pcg_loop_kernel(const __grid_constant__ PartLoopView v) {
     __shared__ float values[kSchwarz ? kSchwarzWarpsPerBlock : 1][kSchwarzDim];
     __shared__ PartReduce::TempStorage storage;
     const PartSystem& a = v.a;
@@ -101,21 +102,29 @@ __global__ void __launch_bounds__(kBlockSize, 3) part_pcg_loop_kernel(const __gr
     for (int parity = 0;; parity ^= 1) {
         clock.iteration();
         const auto alpha = static_cast<float>(s.alpha), beta = static_cast<float>(s.beta);
-        // p, s, x, r (and u = M⁻¹r with block-Jacobi, its rᵀu into slot 0).
-        for (unsigned b = blockIdx.x; b < v.row_blocks; b += gridDim.x) {
-            const std::uint32_t i = b * kBlockSize + threadIdx.x;
-            double ru = 0.0;
-            if (i < owned) ru = part_update_row(a, i, v.precond, !kSchwarz, alpha, beta, v.x, v.r, v.u, v.w, v.p, v.s);
-            if constexpr (!kSchwarz) part_block_partial(ru, v.partials, b, 0, storage);
-        }
-        if constexpr (kSchwarz) {
-            // u = M⁻¹r: level 0 over this part's domains, level 1 gathered from every part, the coarse
-            // levels whole on every GPU, then the prolongation with rᵀu into slot 0.
+        if constexpr (!kSchwarz) {
+            // p, s, x, r and u = M⁻¹r (block-Jacobi), its rᵀu into slot 0.
+            for (unsigned b = blockIdx.x; b < v.row_blocks; b += gridDim.x) {
+                const std::uint32_t i = b * kBlockSize + threadIdx.x;
+                double ru = 0.0;
+                if (i < owned) ru = part_update_row(a, i, v.precond, true, alpha, beta, v.x, v.r, v.u, v.w, v.p, v.s);
+                part_block_partial(ru, v.partials, b, 0, storage);
+            }
+        } else {
+            // p, s, x and r, then u = M⁻¹r: level 0 restricted to level 1, level 1 gathered from
+            // every part, the restriction down the coarse levels (whole on every GPU), every level's
+            // solves in one phase (schwarz_apply.cuh), then the prolongation with rᵀu into slot 0.
+            // (Updating each row in the lane that restricts its node, to save the pass and its
+            // barrier, measured slower: a warp's 16 lanes chained through the order's indirection.)
             const SchwarzView& m = v.schwarz.mas;
+            for (unsigned b = blockIdx.x; b < v.row_blocks; b += gridDim.x) {
+                const std::uint32_t i = b * kBlockSize + threadIdx.x;
+                if (i < owned) part_update_directions_row(local, i, alpha, beta, v.x, v.r, v.u, v.w, v.p, v.s);
+            }
             cg::this_grid().sync();
             mark(kPhaseUpdate);
             for (std::uint32_t domain = first_warp; domain < m.level[0].domains; domain += warps)
-                schwarz_fine_domain(v.schwarz, domain, lane, values[warp], SchwarzInput::Residual, 0.0f);
+                schwarz_restrict_only(v.schwarz, 0, domain, lane, values[warp], SchwarzInput::Residual, 0.0f);
             cg::this_grid().sync();
             mark(kPhaseFine);
             if (m.levels > 1) {
@@ -127,13 +136,16 @@ __global__ void __launch_bounds__(kBlockSize, 3) part_pcg_loop_kernel(const __gr
                 }
                 mark(kPhaseLevel1);
                 if (!meet()) break;
-                for (int l = 1; l < m.levels; ++l) {
+                for (int l = 1; l + 1 < m.levels; ++l) {
                     for (std::uint32_t domain = first_warp; domain < m.level[l].domains; domain += warps)
-                        schwarz_coarse_domain(v.schwarz, l, domain, lane, values[warp]);
+                        schwarz_restrict_only(v.schwarz, l, domain, lane, values[warp], SchwarzInput::Residual, 0.0f);
                     cg::this_grid().sync();
                 }
                 mark(kPhaseCoarse);
             }
+            schwarz_solve_levels(v.schwarz, first_warp, warps, lane, values[warp]);
+            cg::this_grid().sync();
+            mark(kPhaseSolves);
             for (unsigned b = blockIdx.x; b < v.row_blocks; b += gridDim.x) {
                 const std::uint32_t i = b * kBlockSize + threadIdx.x;
                 double rz = 0.0;

@@ -100,9 +100,9 @@ __device__ inline bool part_is_fixed(const PartSystem& a, std::uint32_t i) { ret
 
 /// Owned row i of the update p ← u + βp, s ← w + βs, x ← x + αp, r ← r − αs and (`jacobi`)
 /// u ← M⁻¹r; returns rᵀu (0 without `jacobi`: the Schwarz apply computes u and the sum).
-__device__ inline double part_update_row(const PartSystem& a, std::uint32_t i, const float* precond, bool jacobi, float alpha,
-                                         float beta, float* x, float* r, float* u, const float* w, float* p, float* s) {
-    const std::uint32_t local = a.local;
+/// The first half of part_update_row: p, s, x and r of owned row i; returns the new r_i.
+__device__ inline V3 part_update_directions_row(std::uint32_t local, std::uint32_t i, float alpha, float beta, float* x,
+                                                float* r, const float* u, const float* w, float* p, float* s) {
     const V3 pi = load3(u, i, local) + beta * load3(p, i, local);
     const V3 si = load3(w, i, local) + beta * load3(s, i, local);
     store3(p, i, local, pi);
@@ -110,6 +110,13 @@ __device__ inline double part_update_row(const PartSystem& a, std::uint32_t i, c
     store3(x, i, local, load3(x, i, local) + alpha * pi);
     const V3 ri = load3(r, i, local) - alpha * si;
     store3(r, i, local, ri);
+    return ri;
+}
+
+__device__ inline double part_update_row(const PartSystem& a, std::uint32_t i, const float* precond, bool jacobi, float alpha,
+                                         float beta, float* x, float* r, float* u, const float* w, float* p, float* s) {
+    const std::uint32_t local = a.local;
+    const V3 ri = part_update_directions_row(local, i, alpha, beta, x, r, u, w, p, s);
     if (!jacobi) return 0.0;
     const V3 ui = part_load_precond(precond, i, local) * ri;
     store3(u, i, local, ui);
