@@ -365,6 +365,12 @@ constexpr Parameter kTable[] = {
             "counts as a sweep)",
      .label = "impact work cap", .panel = "collision", .log_scale = true,
      .access = field<&WorldDesc::collision, &CollisionSettings::max_impact_work>()},
+    {.section = "collision", .name = "ccd_time_tolerance", .type = T::Real, .unit = "substeps", .range = R{0.0, 1e-2},
+     .doc = "time tolerance of the impact zones' CCD as a fraction of the substep: hits are resolved to it (larger: "
+            "faster, near misses within about eta + this × the motion may count as hits); 0: the CCD's default, "
+            "1e-6; cpu backend only",
+     .label = "CCD time tolerance", .panel = "collision", .log_scale = true,
+     .access = field<&WorldDesc::collision, &CollisionSettings::ccd_time_tolerance>()},
     {.section = "collision", .name = "check", .type = T::Boolean,
      .doc = "run the exact triangle–triangle intersection check after every step and report the count in the stats "
             "(costly: for tests; also `weft run --check`)",

@@ -243,6 +243,36 @@ TEST(ClothCollisions, RestNeighboursGetNoSpringsButOtherClothsDo) {
     EXPECT_GE(two_sheets, 41 * 41) << "every vertex of each sheet is over a face of the other";
 }
 
+// A coarse CCD time tolerance (collision.ccd_time_tolerance) keeps CCD's guarantee: the stacked
+// sheets end every frame intersection-free. It reaches the CCD: the run differs from the default's.
+// Out of its range it is refused.
+TEST(ClothCollisions, ACoarseCcdTimeToleranceStaysIntersectionFree) {
+    auto run = [](double tolerance) {
+        WorldDesc desc = collision_world(true);
+        desc.collision.ccd_time_tolerance = tolerance;
+        World world(desc);
+        add_stacked_sheets_on_a_ball(world);
+        std::int64_t hits = 0;
+        for (int frame = 0; frame < 45; ++frame) {
+            const StepStats& s = world.step();
+            EXPECT_FALSE(s.non_finite) << "frame " << frame;
+            EXPECT_EQ(s.collision.remaining_intersections, 0) << "tolerance " << tolerance << ", frame " << frame;
+            EXPECT_EQ(s.collision.unresolved_substeps, 0) << "tolerance " << tolerance << ", frame " << frame;
+            hits += s.collision.ccd_hits;
+        }
+        return std::make_pair(hits, world.positions(1));
+    };
+    const auto [default_hits, default_x] = run(0.0);
+    const auto [coarse_hits, coarse_x] = run(1e-2);
+    EXPECT_GT(default_hits, 0) << "no CCD hit: the scene does not test the tolerance";
+    EXPECT_NE(coarse_x, default_x) << "the tolerance did not reach the CCD";
+    for (double bad : {-1e-3, 0.5}) {
+        WorldDesc desc;
+        desc.collision.ccd_time_tolerance = bad;
+        EXPECT_THROW(World world(desc), Error) << bad;
+    }
+}
+
 TEST(ClothCollisions, RestExclusionOutOfRangeIsRejected) {
     WorldDesc desc;
     desc.collision.rest_exclusion = -1.0;

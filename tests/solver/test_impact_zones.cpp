@@ -388,6 +388,11 @@ TEST(ImpactZones, RejectsBadInput) {
     bad = in;
     bad.qp_max_work = 0;
     EXPECT_THROW((void)solver.resolve(bad), Error);
+    for (double tolerance : {-1e-6, 1.0, std::nan("")}) {
+        bad = in;
+        bad.ccd_time_tolerance = tolerance;
+        EXPECT_THROW((void)solver.resolve(bad), Error) << tolerance;
+    }
 }
 
 // Not run by default (about 10 s on 2 cores): --gtest_also_run_disabled_tests.

@@ -124,6 +124,8 @@ void ImpactZoneSolver::detect(const ImpactZoneInput& in, ImpactZoneReport& repor
     slot_.resize(total);
     const double eta = report.eta;
     const auto im = in.inverse_mass;
+    physics::CcdOptions<double> ccd_options;
+    if (in.ccd_time_tolerance > 0.0) ccd_options.t_tolerance = in.ccd_time_tolerance;
     parallel_chunks(total, [&](std::size_t b, std::size_t e) {
         for (std::size_t i = b; i < e; ++i) {
             const bool vf = i < nvf;
@@ -174,8 +176,8 @@ void ImpactZoneSolver::detect(const ImpactZoneInput& in, ImpactZoneReport& repor
                                            : physics::edge_edge_proximity(a0[0], a0[1], a0[2], a0[3]).distance;
             const double eta_pair = std::min(eta, 0.5 * d0);
             const physics::CcdResult<double> r =
-                vf ? physics::vertex_face_ccd(a0[0], a0[1], a0[2], a0[3], a1[0], a1[1], a1[2], a1[3], eta_pair)
-                   : physics::edge_edge_ccd(a0[0], a0[1], a0[2], a0[3], a1[0], a1[1], a1[2], a1[3], eta_pair);
+                vf ? physics::vertex_face_ccd(a0[0], a0[1], a0[2], a0[3], a1[0], a1[1], a1[2], a1[3], eta_pair, ccd_options)
+                   : physics::edge_edge_ccd(a0[0], a0[1], a0[2], a0[3], a1[0], a1[1], a1[2], a1[3], eta_pair, ccd_options);
             if (!r.hit) {
                 slot_state_[i] = kMiss;
                 continue;
@@ -570,6 +572,9 @@ ImpactZoneReport ImpactZoneSolver::resolve(const ImpactZoneInput& in) {
         throw Error("impact zones: max_iterations and max_rigid_rounds must be ≥ 0, qp_max_sweeps and qp_max_work ≥ 1");
     if (!std::isfinite(in.qp_tolerance_ratio) || !(in.qp_tolerance_ratio > 0.0))
         throw Error("impact zones: qp_tolerance_ratio must be finite and > 0");
+    if (!(in.ccd_time_tolerance >= 0.0 && in.ccd_time_tolerance < 1.0))
+        throw Error("impact zones: ccd_time_tolerance must be in [0, 1) (0: the CCD's default), got " +
+                    std::to_string(in.ccd_time_tolerance));
     for (std::size_t v = 0; v < n; ++v)
         if (!std::isfinite(in.inverse_mass[v]) || in.inverse_mass[v] < 0.0)
             throw Error("impact zones: inverse mass of vertex " + std::to_string(v) + " is " +

@@ -82,6 +82,10 @@ struct ImpactZoneInput {
     /// between a collider's own overlapping parts) every round re-projected a growing zone for up to
     /// qp_max_sweeps sweeps, and a substep of a 1,500-triangle cape took minutes.
     std::int64_t qp_max_work = 20'000'000;
+    /// The CCD's time tolerance (physics::CcdOptions::t_tolerance), a fraction of the step in
+    /// (0, 1); 0: the CCD's default. Larger resolves hits faster and may take near misses within
+    /// about eta + this × the pair's motion for hits.
+    double ccd_time_tolerance = 0.0;
 
     // ---- Broad-phase extension point ----------------------------------------------------------------
     /// Template of every broad-phase call: the solver overwrites x0, x1, triangles, edges, self_pairs,

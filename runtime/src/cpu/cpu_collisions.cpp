@@ -381,6 +381,7 @@ void CpuCollisions<T>::end_substep(const Model& model, double h, const std::vect
     if (settings.impact_tolerance > 0.0) in.qp_tolerance_ratio = settings.impact_tolerance;
     if (settings.max_impact_sweeps > 0) in.qp_max_sweeps = settings.max_impact_sweeps;
     if (settings.max_impact_work >= 1.0) in.qp_max_work = static_cast<std::int64_t>(settings.max_impact_work);
+    in.ccd_time_tolerance = settings.ccd_time_tolerance;
     // The zones move x1 between detections, so the cones are refitted before each one: a cone
     // bounded over an older motion could cull a pair that now collides.
     in.refresh_broad_phase = [&](int /*detection*/, collision::BroadPhaseInput& b) { cull(model, b.x0, b.x1, b, stats); };
