@@ -3,17 +3,21 @@
 // candidate bending energies, against the exact heavy elastica. Measures the candidates before one
 // of them replaces the solver's model (issue 22):
 //
-//   hinge  the solver's model today: ½·D·Σ_e w_e·θ_e² over interior edges, w_e = |e|²/(A₀+A₁)
-//          (weft/physics/bending.h's hinge_weight);
-//   shell  (solver.bending = "shell") a shape operator per triangle from its three edges' angles,
-//          S_f = Σ_i θ_i·|e_i|/(2·A_f)·t_i t_iᵀ (t_i the unit in-plane normal of edge i at rest), and
-//          the plate energy ½·D·Σ_f A_f·|S_f|²_F (Poisson 0). A cylinder of curvature κ bent about
-//          any direction gives S_f = κ·n nᵀ on every triangle of a regular grid, so the energy is the
-//          plate's whatever the bend's direction; the cost is a stencil of six vertices (a triangle
-//          and its three neighbours' far corners) instead of the hinge's four.
+//   hinge    the solver's default: ½·D·Σ_e w_e·θ_e² over interior edges, w_e = |e|²/(A₀+A₁)
+//            (weft/physics/bending.h's hinge_weight);
+//   shell    (solver.bending = "shell") a shape operator per triangle from its three edges' angles,
+//            S_f = Σ_i θ_i·|e_i|/(2·A_f)·t_i t_iᵀ (t_i the unit in-plane normal of edge i at rest), and
+//            the plate energy ½·D·Σ_f A_f·|S_f|²_F (Poisson 0). A cylinder bent about either grid axis
+//            costs the plate energy; about the grid's diagonal 1.49× (so does the hinge model's);
+//   midedge  (solver.bending = "midedge") the shell model with each edge's normal free to turn about
+//            the edge, ψ_i = θ_i + 2·s_i·ξ_e (weft/physics/midedge_bending.h); here the turns ξ are
+//            unknowns of the Newton solve beside the positions (the solver relaxes them by a CG solve
+//            at each linearisation point instead: runtime/src/midedge_normals.h), so this is the
+//            model's exact static answer. The cylinder costs the plate energy about any direction.
 //
+// Each model runs on grids (cells of the given aspect) and on the strip meshed with its rows at 45°.
 // It also prints each energy of a cylinder bent about the grid's axes and its diagonal, over the
-// plate's ½·D·κ²·area (1 is exact).
+// plate's ½·D·κ²·area (1 is exact; a free sheet's edges make it 1 − O(1/n)).
 //
 //   weft_bending_models_bench [--cells 12,24,48] [--aspect 0.5,1,2] [--load 0.5,2,6.6] [--json FILE]
 #include <algorithm>
@@ -35,7 +39,9 @@
 #include "weft/error.h"
 #include "weft/physics/bending.h"
 #include "weft/physics/membrane.h"
+#include "weft/physics/midedge_bending.h"
 #include "weft/physics/shell_bending.h"
+#include "midedge_normals.h"
 
 namespace {
 
@@ -45,8 +51,10 @@ using M3 = weft::physics::Mat3<double>;
 
 constexpr double kLength = 0.3, kWidth = 0.04, kDensity = 0.2, kGravity = 9.81, kStretch = 1e6;
 
-enum class Model { Hinge, Shell };
-const char* name(Model m) { return m == Model::Hinge ? "hinge" : "shell"; }
+enum class Model { Hinge, Shell, MidEdge };
+const char* name(Model m) {
+    return m == Model::Hinge ? "hinge" : m == Model::Shell ? "shell" : "midedge";
+}
 
 /// A grid strip, vertex (i, j) at index i·(ny + 1) + j (numbered across first, so that the stiffness
 /// matrix is banded), cells split along alternating diagonals as weft::make_grid does. The clamp: the
@@ -183,6 +191,26 @@ struct Bending {
     Topology topo;
     std::vector<double> hinge_weight;
     std::vector<weft::physics::ShellBendingRest<double>> faces;
+    // The mid-edge model's view of the strip in the runtime's types, and its state.
+    std::vector<weft::Triangle> triangles;
+    std::vector<weft::TriangleHinges> triangle_hinges;
+    std::vector<weft::Hinge> hinges;
+    mutable weft::MidEdgeState midedge;
+
+    void prepare_midedge() {
+        for (const auto& t : strip->triangles) triangles.push_back(weft::Triangle{{t[0], t[1], t[2]}});
+        for (const auto& fh : topo.face_hinges) triangle_hinges.push_back(weft::TriangleHinges{{fh[0], fh[1], fh[2]}});
+        for (const auto& h : topo.hinges) hinges.push_back(weft::Hinge{{h[0], h[1], h[2], h[3]}, 0.0, 0.0});
+        weft::midedge_rest(faces, triangle_hinges, midedge.rest);
+        weft::midedge_hinge_faces(triangle_hinges, hinges.size(), midedge.hinge_faces);
+    }
+
+    /// The mid-edge model's triangles at positions `x` (runtime/src/midedge_normals.h, as the solver
+    /// builds them: the clamp from the pinned vertices).
+    void midedge_state(const std::vector<V3>& x, weft::MidEdgeState& st) const {
+        weft::midedge_faces(triangles, triangle_hinges, hinges, [&](std::uint32_t i) { return x[i]; },
+                            [&](std::uint32_t i) { return i < strip->pinned; }, st.angle, st.faces);
+    }
 
     double evaluate(const std::vector<V3>& x, std::vector<V3>* grad,
                     const std::function<void(std::uint32_t, std::uint32_t, const M3&)>* add) const {
@@ -201,7 +229,24 @@ struct Bending {
         // ∂E/∂θ_h, and the Gauss–Newton couplings Σ K_hk ∇θ_h ∇θ_kᵀ.
         std::vector<double> de(nh, 0.0);
         std::vector<std::pair<std::pair<int, int>, double>> couplings;
-        if (model == Model::Hinge) {
+        if (model == Model::MidEdge) {
+            // The normals relaxed at x (the solver's solve), then the triangles' energy.
+            midedge_state(x, midedge);
+            midedge.xi.assign(nh, 0.0);
+            midedge.report = weft::solve_midedge_normals(midedge.faces, midedge.rest, midedge.hinge_faces, midedge.xi, midedge.scratch);
+            for (std::size_t f = 0; f < faces.size(); ++f) {
+                bool present[3];
+                V3 p[3][4];
+                const double rest_angle[3] = {0.0, 0.0, 0.0};
+                for (int k = 0; k < 3; ++k) {
+                    present[k] = topo.face_hinges[f][k] >= 0;
+                    for (int a = 0; a < 4; ++a) p[k][a] = present[k] ? x[topo.hinges[topo.face_hinges[f][k]][a]] : V3{};
+                }
+                const auto reading = midedge.reading(f);
+                energy += weft::physics::shell_bending_evaluate(stiffness, midedge.rest[f], present, p, rest_angle, &reading).energy;
+            }
+            return energy;
+        } else if (model == Model::Hinge) {
             for (std::size_t h = 0; h < nh; ++h) {
                 const double k = stiffness * hinge_weight[h];
                 energy += 0.5 * k * theta[h] * theta[h];
@@ -325,6 +370,7 @@ Row solve(Model model, double load, int cells_along, double aspect, bool diagona
         bending.hinge_weight.push_back(weft::physics::hinge_weight(p));
     }
     bending.faces = face_rest(s);
+    if (model == Model::MidEdge) bending.prepare_midedge();
     const auto material = weft::physics::membrane_material(kStretch, 0.0);
     std::vector<std::array<std::array<double, 2>, 2>> dm(s.triangles.size());
     std::vector<double> area(s.triangles.size());
@@ -347,68 +393,190 @@ Row solve(Model model, double load, int cells_along, double aspect, bool diagona
             for (int b = 0; b < 4; ++b) span = std::max<std::size_t>(span, h[a] > h[b] ? h[a] - h[b] : h[b] - h[a]);
     // The shell model couples the far corners of a triangle's hinges, which share its corners: at
     // most two hinge spans apart.
-    if (model == Model::Shell) span = 2 * span;
+    if (model != Model::Hinge) span = 2 * span;
     Banded hess;
+    (void)span;
+    (void)dofs;
+
+    // Unknowns: three a free vertex and (the mid-edge model) one a hinge whose normal may turn (not
+    // held by a clamp), numbered along the strip (by rest x, a hinge at its edge's midpoint) so that
+    // the matrix stays banded. The mid-edge model's boundary normals are condensed out at rest.
+    const bool midedge = model == Model::MidEdge;
+    const std::size_t ne = midedge ? bending.hinges.size() : 0;
+    constexpr std::size_t kNone = static_cast<std::size_t>(-1);
+    std::vector<std::size_t> vdof(nv, kNone), edof(ne, kNone);
+    std::size_t unknowns = 0;
+    {
+        std::vector<char> turns(ne, 0);
+        if (midedge) {
+            bending.midedge_state(s.rest, bending.midedge);
+            for (const auto& f : bending.midedge.faces)
+                for (int k = 0; k < 3; ++k)
+                    if (f.side[k] != 0.0) turns[static_cast<std::size_t>(f.hinge[k])] = 1;
+        }
+        std::vector<std::pair<double, std::int64_t>> order;  // (x, vertex ≥ 0 or −1 − hinge)
+        for (std::size_t v = pinned; v < nv; ++v) order.push_back({s.rest[v].x, static_cast<std::int64_t>(v)});
+        for (std::size_t e = 0; e < ne; ++e)
+            if (turns[e] != 0) {
+                const auto& hv = bending.hinges[e].v;
+                order.push_back({0.5 * (s.rest[hv[0]].x + s.rest[hv[1]].x), -1 - static_cast<std::int64_t>(e)});
+            }
+        std::stable_sort(order.begin(), order.end(), [](const auto& l, const auto& r) { return l.first < r.first; });
+        for (const auto& [key, node] : order) {
+            if (node >= 0) {
+                vdof[static_cast<std::size_t>(node)] = unknowns;
+                unknowns += 3;
+            } else {
+                edof[static_cast<std::size_t>(-1 - node)] = unknowns++;
+            }
+        }
+    }
 
     std::vector<V3> x = s.rest;
+    std::vector<double> xi(ne, 0.0);
     double gravity = 0.0;
-    const auto total = [&](const std::vector<V3>& p, std::vector<V3>* grad, Banded* h) {
+    std::size_t band = 0;
+    bool probing = false;
+    const auto put = [&](Banded* h, std::size_t r, std::size_t c, double v) {
+        if (r == kNone || c == kNone) return;
+        if (probing) {
+            band = std::max(band, r > c ? r - c : c - r);
+            return;
+        }
+        h->add(r, c, v);
+    };
+    const auto total = [&](const std::vector<V3>& p, const std::vector<double>& q, std::vector<V3>* grad, std::vector<double>* gxi,
+                           Banded* h) {
         double e = 0.0;
         std::function<void(std::uint32_t, std::uint32_t, const M3&)> add = [&](std::uint32_t a, std::uint32_t b, const M3& m) {
-            if (a < pinned || b < pinned) return;
+            if (vdof[a] == kNone || vdof[b] == kNone) return;
             for (int r = 0; r < 3; ++r)
                 for (int c = 0; c < 3; ++c)
-                    h->add(3 * (a - pinned) + static_cast<std::size_t>(r), 3 * (b - pinned) + static_cast<std::size_t>(c), m.m[r][c]);
+                    put(h, vdof[a] + static_cast<std::size_t>(r), vdof[b] + static_cast<std::size_t>(c), m.m[r][c]);
         };
         for (std::size_t f = 0; f < s.triangles.size(); ++f) {
-            const V3 q[3] = {p[s.triangles[f][0]], p[s.triangles[f][1]], p[s.triangles[f][2]]};
+            const V3 tq[3] = {p[s.triangles[f][0]], p[s.triangles[f][1]], p[s.triangles[f][2]]};
             const double d[2][2] = {{dm[f][0][0], dm[f][0][1]}, {dm[f][1][0], dm[f][1][1]}};
             V3 g[3];
             M3 hh[3][3];
-            e += weft::physics::membrane_evaluate(d, area[f], material, q, g, h != nullptr ? hh : nullptr, HessianKind::Fast);
-            for (int a = 0; a < 3; ++a) {
-                if (grad != nullptr) (*grad)[s.triangles[f][a]] += g[a];
+            e += weft::physics::membrane_evaluate(d, area[f], material, tq, g, h != nullptr ? hh : nullptr, HessianKind::Fast);
+            for (int a2 = 0; a2 < 3; ++a2) {
+                if (grad != nullptr) (*grad)[s.triangles[f][a2]] += g[a2];
                 if (h != nullptr)
-                    for (int b = 0; b < 3; ++b) add(s.triangles[f][a], s.triangles[f][b], hh[a][b]);
+                    for (int b2 = 0; b2 < 3; ++b2) add(s.triangles[f][a2], s.triangles[f][b2], hh[a2][b2]);
             }
         }
-        e += bending.evaluate(p, grad, h != nullptr ? &add : nullptr);
+        if (midedge) {
+            // E(θ(x), ξ) with ξ unknowns, through the shared physics (weft/physics/midedge_bending.h):
+            // each triangle's reading at ξ, its energy and ∂E/∂θ, ∂E/∂ξ, and the Gauss–Newton blocks
+            // over ψ_k = a_k·θ_k + 2·s_k·ξ_k.
+            weft::MidEdgeState& st = bending.midedge;
+            bending.midedge_state(p, st);
+            for (std::size_t f = 0; f < bending.faces.size(); ++f) {
+                const auto& face = st.faces[f];
+                const auto& rest = st.rest[f];
+                double local[3]{};
+                bool present[3];
+                V3 pts[3][4];
+                const double rest_angle[3] = {0.0, 0.0, 0.0};
+                for (int k = 0; k < 3; ++k) {
+                    present[k] = face.hinge[k] >= 0;
+                    if (face.side[k] != 0.0) local[k] = q[static_cast<std::size_t>(face.hinge[k])];
+                    for (int a2 = 0; a2 < 4; ++a2)
+                        pts[k][a2] = present[k] ? p[bending.hinges[static_cast<std::size_t>(face.hinge[k])].v[a2]] : V3{};
+                }
+                const auto reading = weft::physics::midedge_reading(face, local);
+                const auto t = weft::physics::shell_bending_evaluate(bending.stiffness, rest, present, pts, rest_angle, &reading);
+                e += t.energy;
+                const double scale = bending.stiffness * rest.area;
+                for (int k = 0; k < 3; ++k) {
+                    const auto* hv = present[k] ? bending.hinges[static_cast<std::size_t>(face.hinge[k])].v : nullptr;
+                    if (grad != nullptr && t.active[k])
+                        for (int a2 = 0; a2 < 4; ++a2) (*grad)[hv[a2]] += t.force_angle[k] * t.dtheta[k][a2];
+                    if (gxi != nullptr && face.side[k] != 0.0)
+                        (*gxi)[static_cast<std::size_t>(face.hinge[k])] += scale * weft::physics::midedge_xi_gradient(face, rest, local, k, true);
+                    if (h == nullptr) continue;
+                    for (int l = 0; l < 3; ++l) {
+                        const double c = scale * rest.m[k][l];
+                        const std::size_t ek = face.side[k] != 0.0 ? edof[static_cast<std::size_t>(face.hinge[k])] : kNone;
+                        const std::size_t el = face.side[l] != 0.0 ? edof[static_cast<std::size_t>(face.hinge[l])] : kNone;
+                        put(h, ek, el, c * 4.0 * face.side[k] * face.side[l]);
+                        if (!t.active[k]) continue;
+                        for (int a2 = 0; a2 < 4; ++a2) {
+                            if (t.active[l]) {
+                                const auto* lv = bending.hinges[static_cast<std::size_t>(face.hinge[l])].v;
+                                for (int b2 = 0; b2 < 4; ++b2)
+                                    add(hv[a2], lv[b2], (c * face.scale[k] * face.scale[l]) * M3::outer(t.dtheta[k][a2], t.dtheta[l][b2]));
+                            }
+                            const std::size_t r0 = vdof[hv[a2]];
+                            if (r0 == kNone || el == kNone) continue;
+                            const double w = c * face.scale[k] * 2.0 * face.side[l];
+                            for (int r = 0; r < 3; ++r) {
+                                put(h, r0 + static_cast<std::size_t>(r), el, w * t.dtheta[k][a2][r]);
+                                put(h, el, r0 + static_cast<std::size_t>(r), w * t.dtheta[k][a2][r]);
+                            }
+                        }
+                    }
+                }
+            }
+        } else {
+            e += bending.evaluate(p, grad, h != nullptr ? &add : nullptr);
+        }
         for (std::size_t v = 0; v < nv; ++v) {
             e += mass[v] * gravity * p[v].y;
             if (grad != nullptr) (*grad)[v].y += mass[v] * gravity;
         }
         return e;
     };
+    {
+        probing = true;
+        std::vector<V3> grad(nv);
+        std::vector<double> gxi(ne);
+        (void)total(x, xi, &grad, &gxi, &hess);
+        probing = false;
+    }
     const double vertex_weight = kDensity * kGravity * kLength * kWidth / static_cast<double>(nv);
     for (int stage = 1; stage <= 5; ++stage) {
         gravity = kGravity * stage / 5.0;
         for (int it = 0; it < 200; ++it) {
             std::vector<V3> grad(nv);
-            hess.reset(dofs, 3 * span + 2);
-            const double e0 = total(x, &grad, &hess);
-            std::vector<double> g(dofs);
-            double largest = 0.0;
+            std::vector<double> gxi(ne, 0.0);
+            hess.reset(unknowns, band);
+            const double e0 = total(x, xi, &grad, &gxi, &hess);
+            std::vector<double> g(unknowns);
+            double largest = 0.0, largest_xi = 0.0;
             for (std::size_t v = pinned; v < nv; ++v)
                 for (int c = 0; c < 3; ++c) {
-                    g[3 * (v - pinned) + static_cast<std::size_t>(c)] = -grad[v][c];
+                    g[vdof[v] + static_cast<std::size_t>(c)] = -grad[v][c];
                     largest = std::max(largest, std::abs(grad[v][c]));
                 }
+            for (std::size_t e2 = 0; e2 < ne; ++e2) {
+                if (edof[e2] == kNone) continue;
+                g[edof[e2]] = -gxi[e2];
+                largest_xi = std::max(largest_xi, std::abs(gxi[e2]));
+            }
             row.residual = largest / vertex_weight;
-            if (largest < 1e-6 * vertex_weight) break;  // the tip deflection to far below 0.1%
+            // ξ's force is a moment (N·m): against the vertex weight over a cell.
+            if (largest < 1e-6 * vertex_weight && largest_xi < 1e-6 * vertex_weight * dx) break;
             double diag = 0.0;
-            for (std::size_t r = 0; r < dofs; ++r) diag = std::max(diag, hess.at(r, r));
-            for (std::size_t r = 0; r < dofs; ++r) hess.at(r, r) += 1e-14 * diag;
+            for (std::size_t r = 0; r < unknowns; ++r) diag = std::max(diag, hess.at(r, r));
+            for (std::size_t r = 0; r < unknowns; ++r) hess.at(r, r) += 1e-14 * diag;
             if (!hess.factor()) throw weft::Error(std::string(name(model)) + ": the Hessian is not positive definite");
             hess.solve(g);
             double step = 1.0;
             std::vector<V3> trial(nv);
+            std::vector<double> trial_xi(ne);
             for (int ls = 0; ls < 40; ++ls, step *= 0.5) {
                 trial = x;
+                trial_xi = xi;
                 for (std::size_t v = pinned; v < nv; ++v)
-                    for (int c = 0; c < 3; ++c) trial[v][c] += step * g[3 * (v - pinned) + static_cast<std::size_t>(c)];
-                if (total(trial, nullptr, nullptr) <= e0) break;
+                    for (int c = 0; c < 3; ++c) trial[v][c] += step * g[vdof[v] + static_cast<std::size_t>(c)];
+                for (std::size_t e2 = 0; e2 < ne; ++e2)
+                    if (edof[e2] != kNone) trial_xi[e2] += step * g[edof[e2]];
+                if (total(trial, trial_xi, nullptr, nullptr, nullptr) <= e0) break;
             }
             x = trial;
+            xi = trial_xi;
             ++row.newton;
         }
     }
@@ -428,7 +596,8 @@ Row solve(Model model, double load, int cells_along, double aspect, bool diagona
 double cylinder_ratio(Model model, double angle) {
     const int n = 40;
     const double size = 0.4, kappa = 2.0, stiffness = 1.0;
-    const Strip s = make_strip(n, n, size, size);
+    Strip s = make_strip(n, n, size, size);
+    s.pinned = 0;  // a free sheet: no clamp for the mid-edge model
     Bending bending{model, stiffness, &s, build_topology(s), {}, {}};
     for (const auto& h : bending.topo.hinges) {
         V3 p[4];
@@ -436,6 +605,7 @@ double cylinder_ratio(Model model, double angle) {
         bending.hinge_weight.push_back(weft::physics::hinge_weight(p));
     }
     bending.faces = face_rest(s);
+    if (model == Model::MidEdge) bending.prepare_midedge();
     // The cylinder's axis runs along (cos a, 0, sin a); the sheet wraps about it, away from +y.
     const V3 axis{std::cos(angle), 0.0, std::sin(angle)}, across{-std::sin(angle), 0.0, std::cos(angle)};
     std::vector<V3> x(s.rest.size());
@@ -458,7 +628,7 @@ int main(int argc, char** argv) {
         const weft::bench::StripSweep sweep = weft::bench::parse_strip_sweep(argc, argv);
         std::printf("cylinder energy over the plate's ½·D·κ²·area (40 × 40 sweep.cells), bent about the grid's x axis / z axis / "
                     "diagonal:\n");
-        for (const Model m : {Model::Hinge, Model::Shell})
+        for (const Model m : {Model::Hinge, Model::Shell, Model::MidEdge})
             std::printf("  %-5s %.3f / %.3f / %.3f\n", name(m), cylinder_ratio(m, 0.0), cylinder_ratio(m, std::numbers::pi / 2.0),
                         cylinder_ratio(m, std::numbers::pi / 4.0));
         std::printf("\n| model | load ρgL³/D | cells along × across | cell aspect | tip deflection m | heavy elastica m (L − dx) | "
@@ -476,13 +646,13 @@ int main(int argc, char** argv) {
         for (const double load : sweep.loads) {
             for (const double aspect : sweep.aspects)
                 for (const double n : sweep.cells)
-                    for (const Model m : {Model::Hinge, Model::Shell}) {
+                    for (const Model m : {Model::Hinge, Model::Shell, Model::MidEdge}) {
                         rows.push_back(solve(m, load, static_cast<int>(n), aspect));
                         print(rows.back());
                     }
             // The same strip meshed with its rows at 45° (an even number of lattice columns).
             for (const double n : sweep.cells)
-                for (const Model m : {Model::Hinge, Model::Shell}) {
+                for (const Model m : {Model::Hinge, Model::Shell, Model::MidEdge}) {
                     rows.push_back(solve(m, load, 2 * (static_cast<int>(n) / 2), 1.0, true));
                     print(rows.back());
                 }

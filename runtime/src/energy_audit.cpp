@@ -177,15 +177,26 @@ EnergyAudit host_energy_audit(const Model& model, std::span<const std::vector<Ve
             for (const Parts& part : parts) add(a, pin_power, part);
         }
 
-        if (p.bending > 0.0 && w.solver.bending == BendingModel::Shell) {
-            // The model per triangle (shell_bending_energy.h).
+        if (p.bending > 0.0 && (w.solver.bending == BendingModel::Shell || w.solver.bending == BendingModel::MidEdge)) {
+            // The models per triangle (shell_bending_energy.h); the mid-edge model's normals relaxed
+            // at these positions, so that the audit sees min over ξ, the energy the solver descends.
+            MidEdgeState midedge;
+            const bool relaxed = w.solver.bending == BendingModel::MidEdge;
+            if (relaxed) {
+                std::vector<char> pins(f.vertex_count(), 0);
+                for (const PinDesc& pin : cloth.pins) pins[pin.vertex] = 1;
+                relax_midedge_normals(f, xc, [&](std::uint32_t i) { return pins[i] != 0; }, midedge);
+            }
             parts.assign(chunk_count(f.triangle_count()), Parts{});
             parallel_chunks(f.triangle_count(), [&](std::size_t lo, std::size_t hi) {
                 Parts& out = parts[lo / kParallelChunk];
                 for (std::size_t tri = lo; tri < hi; ++tri)
-                    out.elastic += shell_bending_triangle(f, tri, p.bending, xc, [&](std::uint32_t vertex, const Vec3d& grad) {
-                        if (any_moving_pin && moving_pin[vertex]) out.pin_power += physics::dot(grad, vc[vertex]);
-                    });
+                    out.elastic += shell_bending_triangle(
+                        f, tri, p.bending, xc,
+                        [&](std::uint32_t vertex, const Vec3d& grad) {
+                            if (any_moving_pin && moving_pin[vertex]) out.pin_power += physics::dot(grad, vc[vertex]);
+                        },
+                        relaxed ? &midedge : nullptr);
             });
             for (const Parts& part : parts) add(a, pin_power, part);
         } else if (p.bending > 0.0) {

@@ -132,8 +132,8 @@ constexpr std::string_view kPrecisionNames[] = {"float", "double"};
 constexpr std::array kPrecisions{Precision::Float, Precision::Double};
 constexpr std::string_view kHessianNames[] = {"fast", "projected"};
 constexpr std::array kHessians{HessianMode::Fast, HessianMode::Projected};
-constexpr std::string_view kBendingNames[] = {"hinge", "shell"};
-constexpr std::array kBendings{BendingModel::Hinge, BendingModel::Shell};
+constexpr std::string_view kBendingNames[] = {"hinge", "shell", "midedge"};
+constexpr std::array kBendings{BendingModel::Hinge, BendingModel::Shell, BendingModel::MidEdge};
 constexpr std::string_view kPreconditionerNames[] = {"jacobi", "mas", "auto"};
 constexpr std::array kPreconditioners{Preconditioner::Jacobi, Preconditioner::Schwarz, Preconditioner::Auto};
 constexpr std::string_view kEnergyGuardNames[] = {"off", "report", "retry"};
@@ -203,7 +203,8 @@ constexpr Parameter kTable[] = {
     {.section = "solver", .name = "bending", .type = T::Choice,
      .doc = "`hinge`: one term per interior edge (every backend; too soft by an amount that depends on the cells' "
             "shape); `shell`: a shape operator per triangle, converged within 0.5% on a clamped strip at any cell "
-            "shape (cpu backend and one GPU; several GPUs refuse it)",
+            "shape (cpu backend and one GPU; several GPUs refuse it); `midedge`: the same with each edge's normal "
+            "relaxed, which also converges on meshes whose rows run diagonally (cpu backend only so far)",
      .label = "bending model", .panel = "solver", .effect = E::Rebuild, .choices = kBendingNames,
      .access = choice_field<kBendings, &WorldDesc::solver, &SolverSettings::bending>()},
     {.section = "solver", .name = "preconditioner", .type = T::Choice,

@@ -590,8 +590,28 @@ TEST(CudaBackend, MissingDeviceIsAnErrorNamingIt) {
     }
 }
 
-// The bending model per triangle is the CPU backend's only so far: the cuda backend refuses it by
-// name rather than running the hinge model in its place.
+// The mid-edge bending model is the CPU backend's only so far: the cuda backend refuses it by name,
+// at the build and when it is switched on live, rather than stepping another model in its place.
+TEST(CudaBackend, RefusesTheMidEdgeBendingModelByName) {
+    WEFT_REQUIRE_GPU();
+    const auto refused = [](World& w) {
+        try {
+            (void)w.step();
+        } catch (const Error& e) {
+            const std::string message = e.what();
+            EXPECT_NE(message.find("midedge"), std::string::npos) << message;
+            return true;
+        }
+        return false;
+    };
+    const auto built = make_world("cantilever", "cuda", {"solver.bending=\"midedge\""});
+    EXPECT_TRUE(refused(*built)) << "the cuda backend stepped the mid-edge model";
+    const auto live = make_world("cantilever", "cuda", {});
+    EXPECT_TRUE(live->step().ok());
+    live->settings().solver.bending = BendingModel::MidEdge;
+    EXPECT_TRUE(refused(*live)) << "the cuda backend stepped the mid-edge model switched on live";
+}
+
 // The bending model per triangle is paid for only where it runs: its arrays are allocated on the first
 // substep that asks for it (none on a hinge scene), and switching it live changes the step (the
 // cantilever sags differently) and back again.

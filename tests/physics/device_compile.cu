@@ -12,6 +12,7 @@
 #include "weft/physics/offset_contact.h"
 #include "weft/physics/pair_contact.h"
 #include "weft/physics/proximity.h"
+#include "weft/physics/midedge_bending.h"
 #include "weft/physics/shell_bending.h"
 #include "weft/physics/swept_collider.h"
 
@@ -59,6 +60,14 @@ __device__ void exercise(DeviceProbe<T>& p) {
     const ShellBendingTerms<T> st = shell_bending_evaluate(T(1e-3), sr, present, stencil, shell_rest);
     p.scalar[1] += st.energy + shell_bending_coupling(T(1e-3), sr, 0, 1);
     p.vec[4] = st.dtheta[0][0];
+    // with mid-edge normals
+    const ShellBendingRest<T> mr = midedge_condensed_rest(sr, present);
+    MidEdgeFace<T> mf;
+    mf.side[0] = T(midedge_side(0u, 0u));
+    const T xi[3] = {T(0.01), T(0), T(0)};
+    const ShellReading<T> reading = midedge_reading(mf, xi);
+    p.scalar[1] += shell_bending_evaluate(T(1e-3), mr, present, stencil, shell_rest, &reading).energy +
+                   midedge_xi_gradient(mf, mr, xi, 0, true);
     // contact
     const ContactParams<T> cp{T(1e4), T(0.01), T(0.3), T(0.01)};
     for (int k = 0; k < 4; ++k) p.contact[k] = collider_contact(p.shape, cp, p.x[0], p.v[0], static_cast<HessianKind>(k));

@@ -1,12 +1,15 @@
 // Bending from a shape operator per triangle (weft/physics/shell_bending.h): the rest data, the
 // gradient and the Gauss–Newton Hessian against finite differences, invariance under rigid motions,
-// missing hinges, and the plate energy of a grid triangle bent into a cylinder about either axis.
+// missing hinges, and the plate energy of a grid triangle bent into a cylinder about either axis; the
+// mid-edge model's pieces (weft/physics/midedge_bending.h): a reading that changes nothing, the
+// gradient with a reading, and a boundary edge's free normal condensed out.
 #include <gtest/gtest.h>
 
 #include <cmath>
 #include <random>
 
 #include "fd_util.h"
+#include "weft/physics/midedge_bending.h"
 #include "weft/physics/shell_bending.h"
 
 namespace weft::physics::test {
@@ -183,6 +186,94 @@ TEST(ShellBending, AGridTriangleOnACylinderHasThePlateEnergy) {
         const double plate = 0.5 * stiffness * kappa * kappa * rest.area;
         EXPECT_NEAR(energy / plate, 1.0, 1e-9) << (about_z ? "about z" : "about x");
     }
+}
+
+// The mid-edge model's reading at scale 1 and offset 0 is the shell model, to the bit.
+TEST(MidEdgeBending, ANeutralReadingIsTheShellModel) {
+    std::mt19937 rng(7);
+    const Stencil flat = grid_triangle(0.1);
+    ShellBendingRest<double> rest;
+    ASSERT_TRUE(shell_bending_rest(flat.x[0], flat.x[1], flat.x[2], rest));
+    const bool all[3] = {true, true, true};
+    const double rest_angle[3] = {0.0, 0.05, 0.0};
+    const Stencil s = random_stencil(rng);
+    V p[3][4];
+    for (int k = 0; k < 3; ++k)
+        for (int a = 0; a < 4; ++a) p[k][a] = s.x[kHinge[k][a]];
+    const ShellReading<double> neutral;
+    const auto plain = shell_bending_evaluate(1e-3, rest, all, p, rest_angle);
+    const auto read = shell_bending_evaluate(1e-3, rest, all, p, rest_angle, &neutral);
+    EXPECT_EQ(plain.energy, read.energy);
+    for (int k = 0; k < 3; ++k) EXPECT_EQ(plain.force_angle[k], read.force_angle[k]);
+}
+
+// With a reading (scales and offsets), the gradient is the energy's: finite differences.
+TEST(MidEdgeBending, GradientWithAReadingMatchesFiniteDifferences) {
+    std::mt19937 rng(11);
+    const Stencil flat = grid_triangle(0.1);
+    ShellBendingRest<double> rest;
+    ASSERT_TRUE(shell_bending_rest(flat.x[0], flat.x[1], flat.x[2], rest));
+    const bool all[3] = {true, true, true};
+    const double rest_angle[3] = {0.0, 0.0, 0.0};
+    ShellReading<double> reading;
+    reading.scale[1] = 2.0;
+    reading.scale[2] = 0.0;
+    reading.offset[0] = 0.03;
+    reading.offset[1] = -0.02;
+    const Stencil s = random_stencil(rng);
+    const auto energy = [&](const V x[6]) {
+        V p[3][4];
+        for (int k = 0; k < 3; ++k)
+            for (int a = 0; a < 4; ++a) p[k][a] = x[kHinge[k][a]];
+        return shell_bending_evaluate(1e-3, rest, all, p, rest_angle, &reading);
+    };
+    const auto t = energy(s.x);
+    V g[6];
+    gradient(t, g);
+    const double eps = 1e-7;
+    for (int a = 0; a < 6; ++a)
+        for (int c = 0; c < 3; ++c) {
+            V plus[6], minus[6];
+            for (int b = 0; b < 6; ++b) plus[b] = minus[b] = s.x[b];
+            plus[a][c] += eps;
+            minus[a][c] -= eps;
+            const double fd = (energy(plus).energy - energy(minus).energy) / (2.0 * eps);
+            EXPECT_NEAR(g[a][c], fd, 1e-6 * (1.0 + std::abs(fd))) << "vertex " << a << " axis " << c;
+        }
+}
+
+// A boundary edge's normal is free: the condensed coupling gives, for any readings of the other
+// edges, the energy minimised over the boundary edge's reading (and never more than with it at 0,
+// the shell model's boundary).
+TEST(MidEdgeBending, ABoundaryEdgesFreeNormalIsCondensedOut) {
+    const Stencil flat = grid_triangle(0.1);
+    ShellBendingRest<double> rest;
+    ASSERT_TRUE(shell_bending_rest(flat.x[0], flat.x[1], flat.x[2], rest));
+    const auto quad = [&](const ShellBendingRest<double>& r, const double psi[3]) {
+        double e = 0.0;
+        for (int k = 0; k < 3; ++k)
+            for (int l = 0; l < 3; ++l) e += 0.5 * psi[k] * r.m[k][l] * psi[l];
+        return e;
+    };
+    for (int boundary = 0; boundary < 3; ++boundary) {
+        bool present[3] = {true, true, true};
+        present[boundary] = false;
+        const ShellBendingRest<double> condensed = midedge_condensed_rest(rest, present);
+        for (int k = 0; k < 3; ++k) EXPECT_EQ(condensed.m[boundary][k], 0.0);
+        double psi[3] = {0.3, -0.2, 0.1};
+        psi[boundary] = 0.0;
+        // The minimum over the free reading, by its stationarity condition.
+        double coupling = 0.0;
+        for (int l = 0; l < 3; ++l) coupling += rest.m[boundary][l] * psi[l];
+        double best[3] = {psi[0], psi[1], psi[2]};
+        best[boundary] = -coupling / rest.m[boundary][boundary];
+        EXPECT_NEAR(quad(condensed, psi), quad(rest, best), 1e-12 * quad(rest, psi)) << "boundary edge " << boundary;
+        EXPECT_LT(quad(condensed, psi), quad(rest, psi));
+    }
+    const bool none[3] = {false, false, false};
+    const ShellBendingRest<double> lone = midedge_condensed_rest(rest, none);
+    for (int k = 0; k < 3; ++k)
+        for (int l = 0; l < 3; ++l) EXPECT_EQ(lone.m[k][l], 0.0);
 }
 
 }  // namespace

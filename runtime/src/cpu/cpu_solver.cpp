@@ -6,6 +6,7 @@
 #include <chrono>
 #include <cstring>
 #include <cmath>
+#include <utility>
 
 #include "weft/backend/collider_shape.h"
 #include "weft/backend/energy_audit.h"
@@ -178,7 +179,7 @@ void CpuSolver<T>::evaluate_elements(const Model& model, double /*t*/, T h) {
     });
     face_contacts_active_ = face_contacts.load();
     const std::size_t nh = f.hinge_count();
-    if (bending_ == BendingModel::Shell) {
+    if (bending_ == BendingModel::Shell || bending_ == BendingModel::MidEdge) {
         evaluate_shell_bending(h);
         return;
     }
@@ -218,13 +219,48 @@ void CpuSolver<T>::evaluate_shell_bending(T h) {
     });
     const auto hinge_at = [&](std::int32_t k) -> const Hinge& { return f.hinges[static_cast<std::size_t>(k)]; };
     const auto rest_angle_at = [&](std::int32_t k) { return hinge_rest_[static_cast<std::size_t>(k)].rest_angle; };
+    const bool midedge = bending_ == BendingModel::MidEdge;
+    if (midedge) {
+        // The normals relaxed at the linearisation point (midedge_normals.h), in double.
+        if (midedge_.rest.size() != nt) {
+            midedge_rest(f.shell_rest, f.triangle_hinges, midedge_.rest);
+            midedge_.hinge_faces = hinge_faces_;
+            midedge_rest_.resize(nt);
+            for (std::size_t t = 0; t < nt; ++t) {
+                midedge_rest_[t].area = static_cast<T>(midedge_.rest[t].area);
+                for (int a = 0; a < 3; ++a)
+                    for (int b = 0; b < 3; ++b) midedge_rest_[t].m[a][b] = static_cast<T>(midedge_.rest[t].m[a][b]);
+            }
+        }
+        midedge_faces(f.triangles, f.triangle_hinges, f.hinges, [&](std::uint32_t i) {
+                          const V3& p = x_lin_[i];
+                          return Vec3d{static_cast<double>(p.x), static_cast<double>(p.y), static_cast<double>(p.z)};
+                      },
+                      [&](std::uint32_t i) { return fixed_[i] != 0; }, midedge_.angle, midedge_.faces);
+        midedge_.xi.resize(nh);
+        midedge_.report = solve_midedge_normals(midedge_.faces, midedge_.rest, midedge_.hinge_faces, midedge_.xi, midedge_.scratch);
+        if (!midedge_.report.converged) ++midedge_not_converged_;
+    }
     parallel_chunks(nt, [&](std::size_t lo, std::size_t hi) {
         for (std::size_t t = lo; t < hi; ++t) {
             const ClothParams& p = cloth_params_[f.triangle_cloth[t]];
-            shell_faces_[t] = p.bending > T(0) ? shell_face_terms<T>(h, p.bending, p.damping_stiffness, shell_rest_[t],
-                                                                     f.triangle_hinges[t], hinge_at, rest_angle_at,
-                                                                     x_lin_.data(), vk_.data(), d_lin_.data())
-                                               : ShellFaceTerms<T>{};
+            if (!(p.bending > T(0))) {
+                shell_faces_[t] = ShellFaceTerms<T>{};
+                continue;
+            }
+            if (midedge) {
+                const physics::ShellReading<double> rd = midedge_.reading(t);
+                physics::ShellReading<T> reading;
+                for (int k = 0; k < 3; ++k) {
+                    reading.scale[k] = static_cast<T>(rd.scale[k]);
+                    reading.offset[k] = static_cast<T>(rd.offset[k]);
+                }
+                shell_faces_[t] = shell_face_terms<T>(h, p.bending, p.damping_stiffness, midedge_rest_[t], f.triangle_hinges[t], hinge_at,
+                                                      rest_angle_at, x_lin_.data(), vk_.data(), d_lin_.data(), &reading);
+            } else {
+                shell_faces_[t] = shell_face_terms<T>(h, p.bending, p.damping_stiffness, shell_rest_[t], f.triangle_hinges[t], hinge_at,
+                                                      rest_angle_at, x_lin_.data(), vk_.data(), d_lin_.data());
+            }
         }
     });
     parallel_chunks(nh, [&](std::size_t lo, std::size_t hi) {
@@ -339,6 +375,7 @@ void CpuSolver<T>::substep(const Model& model, double t, double h_double, StepSt
         clock = Clock::now();
         evaluate_elements(model, t, h);
         stats.collider_contacts = evaluate_vertices(model, h) + face_contacts_active_;
+        stats.cg_not_converged += std::exchange(midedge_not_converged_, 0);  // the mid-edge normals' solve
         if (contacts != nullptr) contacts->evaluate(h, x0_, wk_, vk_, kinematic_x1, kinematic_v);
         stats.ms(Stage::Forces) += ms_since(clock);
 

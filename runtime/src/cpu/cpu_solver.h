@@ -12,6 +12,7 @@
 #include "cpu/pcg.h"
 #include "cpu/schwarz_preconditioner.h"
 #include "cpu/shell_bending_terms.h"
+#include "midedge_normals.h"
 #include "weft/backend/schwarz_hierarchy.h"
 #include "weft/backend/flat_model.h"
 #include "weft/backend/material_terms.h"
@@ -110,6 +111,12 @@ private:
     std::vector<physics::ShellBendingRest<T>> shell_rest_;
     std::vector<std::array<std::int32_t, 2>> hinge_faces_;
     std::vector<ShellFaceTerms<T>> shell_faces_;
+    // The mid-edge model (SolverSettings::bending = MidEdge; midedge_normals.h): its normals relaxed
+    // at the linearisation point, its triangles' condensed rest data in T, and its normals' solves
+    // that hit their cap since the stats last took them.
+    MidEdgeState midedge_;
+    std::vector<physics::ShellBendingRest<T>> midedge_rest_;
+    int midedge_not_converged_ = 0;
     std::vector<V3> x_lin_, d_lin_;
     // Per-element outputs gathered per vertex / per BSR slot in fixed order (deterministic).
     std::vector<V3> element_rhs_;

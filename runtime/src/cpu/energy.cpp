@@ -27,6 +27,16 @@ EnergyBreakdown cloth_energy(const ClothDesc& cloth, const WorldDesc& world, std
             e.bending += shell_bending_triangle(f, t, cloth.material.bending_stiffness, x, [](std::uint32_t, const Vec3d&) {});
         return e;
     }
+    if (world.solver.bending == BendingModel::MidEdge) {
+        MidEdgeState midedge;
+        std::vector<char> pinned(f.vertex_count(), 0);
+        for (const PinDesc& pin : cloth.pins) pinned[pin.vertex] = 1;
+        relax_midedge_normals(f, x, [&](std::uint32_t i) { return pinned[i] != 0; }, midedge);
+        for (std::size_t t = 0; t < f.triangle_count(); ++t)
+            e.bending +=
+                shell_bending_triangle(f, t, cloth.material.bending_stiffness, x, [](std::uint32_t, const Vec3d&) {}, &midedge);
+        return e;
+    }
     for (const Hinge& h : f.hinges()) {
         const Vec3d xs[4] = {x[h.v[0]], x[h.v[1]], x[h.v[2]], x[h.v[3]]};
         e.bending += physics::bending_evaluate<double>(cloth.material.bending_stiffness, h.weight, h.rest_angle, xs,

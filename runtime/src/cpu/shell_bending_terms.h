@@ -1,5 +1,5 @@
 #pragma once
-// The bending model per triangle (SolverSettings::bending = Shell) in the CPU solver's element slots:
+// The bending models per triangle (SolverSettings::bending = Shell, MidEdge) in the CPU solver's element slots:
 // the two passes of weft/physics/shell_bending_slots.h (shared with the CUDA backend), fed from the
 // solver's arrays (the file comment there says what each pass computes and why the matrix is H').
 
@@ -17,10 +17,12 @@ using ShellFaceTerms = physics::ShellFaceTerms<T>;
 /// Pass 1 for one triangle. `x`, `vk`, `d`: the solver's arrays (linearisation point, iterate,
 /// v_k − w_k) indexed by global vertex; `hinge_at` the flat model's hinges; `stiffness` D, `beta` the
 /// stiffness damping; `rest_angle_at` per hinge.
+/// `reading`: the mid-edge model's (weft/physics/midedge_bending.h); null for the shell model.
 template <typename T, typename HingeAt, typename RestAngleAt>
 ShellFaceTerms<T> shell_face_terms(T h, T stiffness, T beta, const physics::ShellBendingRest<T>& rest, const TriangleHinges& th,
                                    HingeAt&& hinge_at, RestAngleAt&& rest_angle_at, const physics::Vec3<T>* x,
-                                   const physics::Vec3<T>* vk, const physics::Vec3<T>* d) {
+                                   const physics::Vec3<T>* vk, const physics::Vec3<T>* d,
+                                   const physics::ShellReading<T>* reading = nullptr) {
     physics::Vec3<T> p[3][4], v[3][4], dv[3][4];
     T rest_angle[3];
     for (int k = 0; k < 3; ++k) {
@@ -33,7 +35,7 @@ ShellFaceTerms<T> shell_face_terms(T h, T stiffness, T beta, const physics::Shel
             dv[k][a] = present ? d[vertex] : physics::Vec3<T>{};
         }
     }
-    return physics::shell_face_terms(h, stiffness, beta, rest, th.edge, p, v, dv, rest_angle);
+    return physics::shell_face_terms(h, stiffness, beta, rest, th.edge, p, v, dv, rest_angle, reading);
 }
 
 /// Pass 2 for hinge `self`: adds into rhs[4] and block[16] (row-major, the hinge's vertex order)

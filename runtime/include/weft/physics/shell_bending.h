@@ -88,13 +88,24 @@ struct ShellBendingTerms {
     bool active[3]{};         ///< hinge k present and not degenerate
 };
 
+/// How a triangle reads its hinges' angles: ψ_k = scale_k·(θ_k − θ̄_k) + offset_k (rad). The mid-edge
+/// model's (weft/physics/midedge_bending.h: its clamp's scales and its edge normals' turns); the
+/// identity reading (scale 1, offset 0) is this file's model.
+template <typename T>
+struct ShellReading {
+    T scale[3]{T(1), T(1), T(1)};
+    T offset[3]{};
+};
+
 /// Evaluates one triangle. `stiffness` D (N·m); `rest` from shell_bending_rest; `present[k]`: the
 /// edge has a hinge; `x[k]` its four positions (m) in hinge order; `rest_angle[k]` its rest angle.
 /// The gradient with respect to hinge k's vertex a is force_angle[k]·dtheta[k][a]; vertices that
-/// appear in several hinges sum their parts.
+/// appear in several hinges sum their parts. `reading` (null: the identity): the triangle reads its
+/// hinges as ψ, so that E = ½·D·A·ψᵀMψ and ∂E/∂θ_k = scale_k·D·A·(Mψ)_k.
 template <typename T>
 WEFT_HD inline ShellBendingTerms<T> shell_bending_evaluate(T stiffness, const ShellBendingRest<T>& rest, const bool present[3],
-                                                           const Vec3<T> x[3][4], const T rest_angle[3]) {
+                                                           const Vec3<T> x[3][4], const T rest_angle[3],
+                                                           const ShellReading<T>* reading = nullptr) {
     ShellBendingTerms<T> out;
     for (int k = 0; k < 3; ++k) {
         if (!present[k]) continue;
@@ -102,6 +113,17 @@ WEFT_HD inline ShellBendingTerms<T> shell_bending_evaluate(T stiffness, const Sh
         if (out.active[k]) out.angle[k] = detail::wrap_angle(dihedral_angle(x[k]) - rest_angle[k]);
     }
     const T scale = stiffness * rest.area;
+    if (reading != nullptr) {
+        T psi[3];
+        for (int k = 0; k < 3; ++k) psi[k] = reading->scale[k] * out.angle[k] + reading->offset[k];
+        for (int k = 0; k < 3; ++k) {
+            T sum = T(0);
+            for (int l = 0; l < 3; ++l) sum += rest.m[k][l] * psi[l];
+            out.force_angle[k] = reading->scale[k] * scale * sum;
+            out.energy += T(0.5) * psi[k] * scale * sum;
+        }
+        return out;
+    }
     for (int k = 0; k < 3; ++k) {
         T sum = T(0);
         for (int l = 0; l < 3; ++l) sum += rest.m[k][l] * out.angle[l];

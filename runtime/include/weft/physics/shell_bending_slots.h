@@ -44,14 +44,16 @@ struct ShellFaceTerms {
 /// four vertices' linearisation point (m), iterate (m/s) and v_k − w_k (m/s), in the hinge's order
 /// (read only where hinge[k] ≥ 0); `rest_angle[k]` its rest angle (rad); `stiffness` D (N·m),
 /// `beta` the stiffness damping (s), `h` the substep (s).
+/// `reading`: the mid-edge model's (shell_bending_evaluate); its scales enter the couplings too.
 template <typename T>
 WEFT_HD inline ShellFaceTerms<T> shell_face_terms(T h, T stiffness, T beta, const ShellBendingRest<T>& rest,
                                                   const std::int32_t hinge[3], const Vec3<T> x[3][4], const Vec3<T> vk[3][4],
-                                                  const Vec3<T> d[3][4], const T rest_angle[3]) {
+                                                  const Vec3<T> d[3][4], const T rest_angle[3],
+                                                  const ShellReading<T>* reading = nullptr) {
     ShellFaceTerms<T> out;
     bool present[3];
     for (int k = 0; k < 3; ++k) present[k] = hinge[k] >= 0;
-    const ShellBendingTerms<T> t = shell_bending_evaluate(stiffness, rest, present, x, rest_angle);
+    const ShellBendingTerms<T> t = shell_bending_evaluate(stiffness, rest, present, x, rest_angle, reading);
     T q[3]{};
     for (int k = 0; k < 3; ++k) {
         if (!t.active[k]) continue;
@@ -67,7 +69,8 @@ WEFT_HD inline ShellFaceTerms<T> shell_face_terms(T h, T stiffness, T beta, cons
         T sum = h * t.force_angle[k], weight = T(0);
         for (int l = 0; l < 3; ++l)
             if (t.active[l]) {
-                const T c = shell_bending_coupling(stiffness, rest, k, l);
+                const T c = reading != nullptr ? reading->scale[k] * reading->scale[l] * shell_bending_coupling(stiffness, rest, k, l)
+                                               : shell_bending_coupling(stiffness, rest, k, l);
                 sum += c * q[l];
                 weight += l == k ? c : (c < T(0) ? -c : c);
             }
