@@ -68,9 +68,10 @@ int main(int argc, char** argv) {
         for (const test::StabilityCase& c : test::stability_cases(!small)) {
             if (!only.empty() && c.name.find(only) == std::string::npos) continue;
             for (const std::string& backend : backends)
-                for (const BendingModel m : {BendingModel::Hinge, BendingModel::Shell}) {
+                for (const BendingModel m : {BendingModel::Hinge, BendingModel::Shell, BendingModel::MidEdge}) {
+                    if (m == BendingModel::MidEdge && backend != "cpu") continue;  // the cpu backend's only so far
                     const test::StabilityResult r = test::run_stability_case(c, backend, m);
-                    const char* model = m == BendingModel::Hinge ? "hinge" : "shell";
+                    const char* model = m == BendingModel::Hinge ? "hinge" : m == BendingModel::Shell ? "shell" : "midedge";
                     std::printf("| %s | %s | %s | %s | %d | %d | %.2f | %.2f | %s |\n", c.name.c_str(), backend.c_str(), model,
                                 test::outcome_name(r.outcome), r.steps, r.energy_gained, 1000.0 * r.deepest, r.seconds,
                                 r.detail.c_str());

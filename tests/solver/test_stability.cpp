@@ -76,7 +76,7 @@ INSTANTIATE_TEST_SUITE_P(
     [](const ::testing::TestParamInfo<Case>& param_info) { return std::string(param_info.param.name); });
 
 // The small stability matrix (tests/common/stability_matrix.h; the full one is
-// bench/stability_matrix_bench.cpp): the one-at-a-time extremes of every dimension, with both
+// bench/stability_matrix_bench.cpp): the one-at-a-time extremes of every dimension, with the three
 // bending models, on the CPU backend, with the energy guard's redo on. Every cell must be stable or
 // refused with a message, except the known failures listed here (none today: the moving ball and the
 // 2.5 mm cells gained energy until the guard's redo took more Newton iterations), which are reported
@@ -85,11 +85,11 @@ TEST(StabilityMatrix, EveryExtremeIsStableOrRefused) {
     const std::vector<std::string> known_failures{};
     int checked = 0;
     for (const test::StabilityCase& c : test::stability_cases(false))
-        for (const BendingModel m : {BendingModel::Hinge, BendingModel::Shell}) {
+        for (const BendingModel m : {BendingModel::Hinge, BendingModel::Shell, BendingModel::MidEdge}) {
             const test::StabilityResult r = test::run_stability_case(c, "cpu", m);
             const bool ok = r.outcome == test::StabilityOutcome::Stable || r.outcome == test::StabilityOutcome::Refused;
             const bool known = std::find(known_failures.begin(), known_failures.end(), c.name) != known_failures.end();
-            const char* model = m == BendingModel::Hinge ? "hinge" : "shell";
+            const char* model = m == BendingModel::Hinge ? "hinge" : m == BendingModel::Shell ? "shell" : "midedge";
             if (r.outcome == test::StabilityOutcome::Refused) {
                 EXPECT_FALSE(r.detail.empty()) << c.name << ": refused without a message";
             }
@@ -129,7 +129,7 @@ TEST(LineSearch, KeepsPlainNewtonFromGainingEnergyOnAStiffLightSheet) {
 TEST(StabilityMatrix, TheStiffLightCornersAtALongStepAreStable) {
     for (const test::StabilityCase& c : test::stability_cases(true)) {
         if (c.name.find("stiff") == std::string::npos || c.name.find("light dt 1/24") == std::string::npos) continue;
-        for (const BendingModel m : {BendingModel::Hinge, BendingModel::Shell}) {
+        for (const BendingModel m : {BendingModel::Hinge, BendingModel::Shell, BendingModel::MidEdge}) {
             const test::StabilityResult r = test::run_stability_case(c, "cpu", m);
             EXPECT_EQ(r.outcome, test::StabilityOutcome::Stable)
                 << c.name << (m == BendingModel::Hinge ? ", hinge: " : ", shell: ") << test::outcome_name(r.outcome) << ": " << r.detail;
@@ -145,7 +145,7 @@ TEST(StabilityMatrix, TheSoftHeavyCornersAtALongStepStayOutOfTheBall) {
     int cases = 0;
     for (const test::StabilityCase& c : test::stability_cases(true)) {
         if (c.name.find("soft") == std::string::npos || c.name.find("heavy dt 1/24") == std::string::npos) continue;
-        for (const BendingModel m : {BendingModel::Hinge, BendingModel::Shell}) {
+        for (const BendingModel m : {BendingModel::Hinge, BendingModel::Shell, BendingModel::MidEdge}) {
             const test::StabilityResult r = test::run_stability_case(c, "cpu", m);
             ++cases;
             EXPECT_EQ(r.outcome, test::StabilityOutcome::Stable)
