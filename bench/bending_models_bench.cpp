@@ -32,6 +32,7 @@
 #include <utility>
 #include <vector>
 
+#include "diagonal_strip.h"
 #include "heavy_elastica.h"
 #include "json_file.h"
 #include "json_writer.h"
@@ -69,53 +70,18 @@ struct Strip {
     [[nodiscard]] std::uint32_t id(int i, int j) const { return static_cast<std::uint32_t>(i * (ny + 1) + j); }
 };
 
-/// The strip meshed with its rows at 45°: the lattice points (p·sx, q·sz) with p + q even, each
-/// diamond around an odd point split into two triangles (along its x diagonal and its z diagonal in
-/// alternation), the diamonds cut by the strip's edges into half diamonds. `columns` (even) lattice
-/// columns along; sz chosen so that an even number of rows spans the width and sz ≈ sx. Numbered by
-/// column, then row; the first two columns are the clamp.
+/// The strip meshed with its rows at 45° (tests/common/diagonal_strip.h), as a Strip: its clamp is
+/// its first vertices.
 Strip make_diagonal_strip(int columns, double length, double width) {
+    const weft::test::DiagonalStrip d = weft::test::make_diagonal_strip(columns, length, width);
     Strip s;
-    const double sx = length / columns;
-    int rows = std::max(2, static_cast<int>(std::lround(width / sx)));
-    if (rows % 2 != 0) ++rows;
-    const double sz = width / rows;
-    std::vector<std::int64_t> index(static_cast<std::size_t>((columns + 1) * (rows + 1)), -1);
-    const auto at = [&](int p, int q) -> std::int64_t& { return index[static_cast<std::size_t>(p * (rows + 1) + q)]; };
-    for (int p = 0; p <= columns; ++p)
-        for (int q = 0; q <= rows; ++q)
-            if ((p + q) % 2 == 0) {
-                at(p, q) = static_cast<std::int64_t>(s.rest.size());
-                s.rest.push_back({p * sx, 0.0, q * sz});
-                if (p == columns) s.tip.push_back(static_cast<std::uint32_t>(at(p, q)));
-                if (p <= 1) s.pinned = s.rest.size();
-            }
-    const auto id = [&](int p, int q) { return static_cast<std::uint32_t>(at(p, q)); };
-    const auto inside = [&](int p, int q) { return p >= 0 && p <= columns && q >= 0 && q <= rows; };
-    // Oriented with the normal up (+y), as make_strip: counter-clockwise seen from +y is (x, z) → (z, x)…
-    const auto add = [&](std::uint32_t a, std::uint32_t b, std::uint32_t c) {
-        const V3 n = weft::physics::cross(s.rest[b] - s.rest[a], s.rest[c] - s.rest[a]);
-        if (n.y > 0.0) s.triangles.push_back({a, b, c}); else s.triangles.push_back({a, c, b});
-    };
-    for (int p = 0; p <= columns; ++p)
-        for (int q = 0; q <= rows; ++q) {
-            if ((p + q) % 2 == 0) continue;  // diamonds sit around the odd points
-            const bool left = inside(p - 1, q), right = inside(p + 1, q), down = inside(p, q - 1), up = inside(p, q + 1);
-            if (left && right && down && up) {
-                if (((p + q) / 2) % 2 == 0) {  // along the x diagonal
-                    add(id(p - 1, q), id(p + 1, q), id(p, q + 1));
-                    add(id(p + 1, q), id(p - 1, q), id(p, q - 1));
-                } else {  // along the z diagonal
-                    add(id(p, q - 1), id(p, q + 1), id(p - 1, q));
-                    add(id(p, q + 1), id(p, q - 1), id(p + 1, q));
-                }
-            } else if (left && right) {
-                add(id(p - 1, q), id(p + 1, q), id(p, down ? q - 1 : q + 1));  // cut by a long edge
-            } else if (down && up) {
-                add(id(p, q - 1), id(p, q + 1), id(p + (left ? -1 : 1), q));  // cut by the clamped or free end
-            }
-        }
-    s.column_step = sx;
+    s.rest = d.mesh.positions;
+    for (const weft::Triangle& t : d.mesh.triangles) s.triangles.push_back({t.v[0], t.v[1], t.v[2]});
+    s.pinned = d.clamp.size();
+    for (std::size_t i = 0; i < d.clamp.size(); ++i)
+        if (d.clamp[i] != i) throw weft::Error("diagonal strip: the clamp is not the first vertices");
+    s.tip = d.tip;
+    s.column_step = d.column_step;
     return s;
 }
 

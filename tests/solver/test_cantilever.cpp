@@ -5,11 +5,12 @@
 
 #include <cmath>
 #include <cstdint>
+#include <utility>
 #include <vector>
 
+#include "diagonal_strip.h"
 #include "heavy_elastica.h"
 #include "weft/mesh.h"
-#include "weft/physics/vec.h"
 #include "weft/world.h"
 
 namespace weft {
@@ -30,6 +31,16 @@ TEST(Elastica, ReducesToTheLinearBeamForSmallLoads) {
 struct Strip {
     double length = 0.3, width = 0.04, density = 0.2, bending = 2.0e-3;
 };
+
+/// The strip with the bending stiffness that makes its load ρ·g·L³/D equal `load`.
+Strip strip_at_load(double load) {
+    Strip s;
+    s.bending = s.density * 9.81 * s.length * s.length * s.length / load;
+    return s;
+}
+
+/// Cells along × across: square cells, cells twice as wide as long, cells twice as long as wide.
+constexpr std::pair<int, int> kCellShapes[] = {{12, 2}, {24, 3}, {24, 2}, {12, 3}};
 
 // Simulates the strip meshed by `mesh` for `steps` steps of 1/24 s (to rest), the vertices `clamp`
 // pinned, and returns the mean height drop of the vertices `tip`.
@@ -79,63 +90,6 @@ std::pair<double, double> simulate(const Strip& s, int cells_along, int cells_ac
     return {deflection, s.length / cells_along};
 }
 
-/// The strip meshed with its rows at 45°: the lattice points (p·sx, 0, q·sz) with p + q even, each
-/// diamond around an odd point split into two triangles (along its x diagonal and its z diagonal in
-/// alternation), the diamonds cut by the strip's edges into half diamonds; `columns` (even) lattice
-/// columns along, an even number of rows across with sz ≈ sx. The clamp: the first two lattice
-/// columns; the tip: the last.
-struct DiagonalStrip {
-    MeshData mesh;
-    std::vector<std::uint32_t> clamp, tip;
-    double column_step = 0.0;  ///< sx, m
-};
-
-DiagonalStrip make_diagonal_strip(int columns, double length, double width) {
-    DiagonalStrip d;
-    d.mesh.source = "diagonal strip";
-    const double sx = length / columns;
-    int rows = std::max(2, static_cast<int>(std::lround(width / sx)));
-    if (rows % 2 != 0) ++rows;
-    const double sz = width / rows;
-    std::vector<std::int64_t> index(static_cast<std::size_t>((columns + 1) * (rows + 1)), -1);
-    const auto at = [&](int p, int q) -> std::int64_t& { return index[static_cast<std::size_t>(p * (rows + 1) + q)]; };
-    for (int p = 0; p <= columns; ++p)
-        for (int q = 0; q <= rows; ++q)
-            if ((p + q) % 2 == 0) {
-                at(p, q) = static_cast<std::int64_t>(d.mesh.positions.size());
-                d.mesh.positions.push_back({p * sx, 0.0, q * sz});
-                if (p <= 1) d.clamp.push_back(static_cast<std::uint32_t>(at(p, q)));
-                if (p == columns) d.tip.push_back(static_cast<std::uint32_t>(at(p, q)));
-            }
-    const auto id = [&](int p, int q) { return static_cast<std::uint32_t>(at(p, q)); };
-    const auto inside = [&](int p, int q) { return p >= 0 && p <= columns && q >= 0 && q <= rows; };
-    const auto add = [&](std::uint32_t a, std::uint32_t b, std::uint32_t c) {  // normal up (+y)
-        const auto& x = d.mesh.positions;
-        const Vec3d n = physics::cross(x[b] - x[a], x[c] - x[a]);
-        d.mesh.triangles.push_back(n.y > 0.0 ? Triangle{{a, b, c}} : Triangle{{a, c, b}});
-    };
-    for (int p = 0; p <= columns; ++p)
-        for (int q = 0; q <= rows; ++q) {
-            if ((p + q) % 2 == 0) continue;
-            const bool left = inside(p - 1, q), right = inside(p + 1, q), down = inside(p, q - 1), up = inside(p, q + 1);
-            if (left && right && down && up) {
-                if (((p + q) / 2) % 2 == 0) {
-                    add(id(p - 1, q), id(p + 1, q), id(p, q + 1));
-                    add(id(p + 1, q), id(p - 1, q), id(p, q - 1));
-                } else {
-                    add(id(p, q - 1), id(p, q + 1), id(p - 1, q));
-                    add(id(p, q + 1), id(p, q - 1), id(p + 1, q));
-                }
-            } else if (left && right) {
-                add(id(p - 1, q), id(p + 1, q), id(p, down ? q - 1 : q + 1));
-            } else if (down && up) {
-                add(id(p, q - 1), id(p, q + 1), id(p + (left ? -1 : 1), q));
-            }
-        }
-    d.column_step = sx;
-    return d;
-}
-
 TEST(Cantilever, TipDeflectionConvergesToTheHeavyElastica) {
     Strip s;
     const double q = s.density * 9.81 / s.bending;  // w / EI = ρ·b·g / (D·b)
@@ -167,11 +121,9 @@ TEST(Cantilever, TipDeflectionConvergesToTheHeavyElastica) {
 // slower), which the energy guard reports; with five, no substep gains energy.
 TEST(Cantilever, ShellBendingConvergesWhateverTheCellShape) {
     for (const double load : {0.5, 6.6}) {
-        Strip s;
-        s.bending = s.density * 9.81 * s.length * s.length * s.length / load;
+        const Strip s = strip_at_load(load);
         const double q = s.density * 9.81 / s.bending;
-        // Square cells, cells twice as wide as long, cells twice as long as wide.
-        for (const auto& [along, across] : {std::pair{12, 2}, std::pair{24, 3}, std::pair{24, 2}, std::pair{12, 3}}) {
+        for (const auto& [along, across] : kCellShapes) {
             long long gained = 0;
             const auto [shell, dx] = simulate(s, along, across, BendingModel::Shell, &gained, 5);
             const auto [hinge, dx_hinge] = simulate(s, along, across, BendingModel::Hinge, nullptr, 5);
@@ -200,10 +152,9 @@ TEST(Cantilever, ShellBendingConvergesWhateverTheCellShape) {
 // lattice columns, +0.96% and +0.53% at 96. The 45° strip is at rest (to 1e-6 m) within 100 steps.
 TEST(Cantilever, MidEdgeBendingConvergesOnGridsAndOnRowsAt45Degrees) {
     for (const double load : {0.5, 6.6}) {
-        Strip s;
-        s.bending = s.density * 9.81 * s.length * s.length * s.length / load;
+        const Strip s = strip_at_load(load);
         const double q = s.density * 9.81 / s.bending;
-        for (const auto& [along, across] : {std::pair{12, 2}, std::pair{24, 3}, std::pair{24, 2}, std::pair{12, 3}}) {
+        for (const auto& [along, across] : kCellShapes) {
             long long gained = 0;
             const auto [midedge, dx] = simulate(s, along, across, BendingModel::MidEdge, &gained, 5);
             const double reference = heavy_elastica(q, s.length - dx).tip_deflection;
@@ -212,7 +163,7 @@ TEST(Cantilever, MidEdgeBendingConvergesOnGridsAndOnRowsAt45Degrees) {
             EXPECT_LT(std::abs(error), 0.02) << "load " << load << ", " << along << " x " << across;
             EXPECT_EQ(gained, 0) << "the energy guard found a substep that gained energy";
         }
-        const DiagonalStrip d = make_diagonal_strip(96, s.length, s.width);
+        const test::DiagonalStrip d = test::make_diagonal_strip(96, s.length, s.width);
         const double reference = heavy_elastica(q, s.length - d.column_step).tip_deflection;
         long long gained = 0;
         int not_converged = 0;
