@@ -20,9 +20,10 @@ std::uint64_t fnv1a(const std::vector<Vec3d>& a, std::uint64_t h = 1469598103934
     return h;
 }
 
-std::uint64_t run(int threads, Precision precision) {
+std::uint64_t run(int threads, Precision precision, BendingModel bending = BendingModel::Hinge) {
     WorldDesc desc;
     desc.solver.precision = precision;
+    desc.solver.bending = bending;
     desc.solver.threads = threads;
     desc.solver.cg_tolerance = 1e-6;
     desc.wind.velocity = {5.0, 0.0, 1.0};
@@ -49,6 +50,14 @@ TEST(Determinism, SameBitsOnOneTwoAndFourThreadsInDouble) {
 
 TEST(Determinism, SameBitsOnOneAndThreeThreadsInFloat) {
     EXPECT_EQ(run(1, Precision::Float), run(3, Precision::Float));
+}
+
+// The bending models per triangle gather each hinge's terms in a fixed order, and the mid-edge
+// model's normals are relaxed by a CG whose sums are chunked as the solver's.
+TEST(Determinism, SameBitsOnOneAndThreeThreadsWithTheBendingModelsPerTriangle) {
+    for (const BendingModel m : {BendingModel::Shell, BendingModel::MidEdge})
+        EXPECT_EQ(run(1, Precision::Double, m), run(3, Precision::Double, m)) << (m == BendingModel::Shell ? "shell" : "midedge");
+    EXPECT_NE(run(1, Precision::Double, BendingModel::MidEdge), run(1, Precision::Double, BendingModel::Shell));
 }
 
 TEST(Determinism, DifferentInputsGiveDifferentHashes) {

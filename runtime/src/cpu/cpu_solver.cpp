@@ -72,6 +72,7 @@ void CpuSolver<T>::build(const FlatModel& flat, const Model& model) {
             }
     }
     shell_faces_.clear();  // allocated on the first substep that asks for the model
+    midedge_.rest.clear();  // the mid-edge model's too (and its rest data rebuilt for this model)
     element_rhs_.assign(3 * flat.triangle_count() + 4 * flat.hinge_count(), V3{});
     element_blocks_.assign(9 * flat.triangle_count() + 16 * flat.hinge_count(), M3{});
     vertex_rhs_.assign(n_, V3{});
