@@ -182,11 +182,7 @@ EnergyAudit host_energy_audit(const Model& model, std::span<const std::vector<Ve
             // at these positions, so that the audit sees min over ξ, the energy the solver descends.
             MidEdgeState midedge;
             const bool relaxed = w.solver.bending == BendingModel::MidEdge;
-            if (relaxed) {
-                std::vector<char> pins(f.vertex_count(), 0);
-                for (const PinDesc& pin : cloth.pins) pins[pin.vertex] = 1;
-                relax_midedge_normals(f, xc, [&](std::uint32_t i) { return pins[i] != 0; }, midedge);
-            }
+            if (relaxed) relax_midedge_normals(f, cloth.pins, xc, midedge);
             parts.assign(chunk_count(f.triangle_count()), Parts{});
             parallel_chunks(f.triangle_count(), [&](std::size_t lo, std::size_t hi) {
                 Parts& out = parts[lo / kParallelChunk];

@@ -14,6 +14,7 @@
 #include <vector>
 
 #include "deterministic_parallel.h"
+#include "weft/cloth.h"
 #include "weft/fabric.h"
 #include "weft/physics/bending.h"
 #include "weft/physics/midedge_bending.h"
@@ -211,6 +212,7 @@ struct MidEdgeState {
     MidEdgeScratch scratch;
     MidEdgeSolveReport report;
     const Fabric* source = nullptr;  ///< whose rest data `rest` holds
+    std::vector<char> pinned;        ///< per vertex, for the overload that takes a cloth's pins
 
     /// Triangle t's reading of its hinges at the solved ξ (for shell_bending_evaluate).
     [[nodiscard]] physics::ShellReading<double> reading(std::size_t t) const {
@@ -241,6 +243,13 @@ void relax_midedge_normals(const Fabric& fabric, std::span<const Vec3d> x, Pinne
                   state.angle, state.faces);
     state.xi.resize(fabric.hinges().size());
     state.report = solve_midedge_normals(state.faces, state.rest, state.hinge_faces, state.xi, state.scratch);
+}
+
+/// The same for a cloth's fabric and its pins (the energy accounts' form).
+inline void relax_midedge_normals(const Fabric& fabric, std::span<const PinDesc> pins, std::span<const Vec3d> x, MidEdgeState& state) {
+    state.pinned.assign(fabric.vertex_count(), 0);
+    for (const PinDesc& pin : pins) state.pinned[pin.vertex] = 1;
+    relax_midedge_normals(fabric, x, [&](std::uint32_t i) { return state.pinned[i] != 0; }, state);
 }
 
 }  // namespace weft

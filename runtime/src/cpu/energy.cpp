@@ -29,9 +29,7 @@ EnergyBreakdown cloth_energy(const ClothDesc& cloth, const WorldDesc& world, std
     }
     if (world.solver.bending == BendingModel::MidEdge) {
         MidEdgeState midedge;
-        std::vector<char> pinned(f.vertex_count(), 0);
-        for (const PinDesc& pin : cloth.pins) pinned[pin.vertex] = 1;
-        relax_midedge_normals(f, x, [&](std::uint32_t i) { return pinned[i] != 0; }, midedge);
+        relax_midedge_normals(f, cloth.pins, x, midedge);
         for (std::size_t t = 0; t < f.triangle_count(); ++t)
             e.bending +=
                 shell_bending_triangle(f, t, cloth.material.bending_stiffness, x, [](std::uint32_t, const Vec3d&) {}, &midedge);
