@@ -42,14 +42,6 @@ void set_host_wait(int device, HostWait wait) {
                     std::to_string(device) + ": " + cudaGetErrorString(e));
 }
 
-// What the device does not run yet: the mid-edge bending model (its normals' solve is on the host
-// only, midedge_normals.h). Refused by name rather than stepped with another model.
-void require_device_bending(const SolverSettings& settings) {
-    if (settings.bending == BendingModel::MidEdge)
-        throw Error("cuda backend: solver.bending = \"midedge\" (the mid-edge bending model) runs on the cpu backend so far; "
-                    "use --backend cpu, or solver.bending = \"shell\" or \"hinge\"");
-}
-
 class CudaBackend final : public Backend, public CudaBackendApi {
 public:
     explicit CudaBackend(const BackendOptions& options) : budget_(options.device_memory_limit) {
@@ -93,7 +85,6 @@ public:
     // (device_collisions.h; impact zones on the host for now); self-collision switched on or off live
     // rebuilds them at the next substep.
     void build(const Model& model) override {
-        require_device_bending(model.settings.solver);
         const BudgetScope scope(&budget_);
         flat_ = flatten(model);
         solver_->build(flat_, model);
@@ -101,7 +92,6 @@ public:
 
     // Fast analytic colliders are swept per vertex after the solve, in the device solver as on the CPU.
     void substep(const Model& model, double t, double h, StepStats& stats) override {
-        require_device_bending(model.settings.solver);  // the model may change live
         const BudgetScope scope(&budget_);
         const long long launches_before = thread_kernel_launches;
         solver_->substep(model, t, h, stats);

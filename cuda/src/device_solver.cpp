@@ -18,6 +18,7 @@
 #include "loop_clock.h"
 #include "weft/backend/timing.h"
 #include "weft/error.h"
+#include "weft/physics/midedge_bending.h"
 #include "weft/physics/swept_collider.h"
 
 namespace weft::cuda {
@@ -58,14 +59,31 @@ bool face_contacts(const Model& model) {
 }
 
 void DeviceSolver::choose_bending(BendingModel bending) {
-    const bool shell = bending == BendingModel::Shell;
-    if (shell == (view_.shell_faces != nullptr)) return;
-    if (shell && shell_faces_.size() == 0) upload_shell_bending();
+    const bool per_triangle = bending == BendingModel::Shell || bending == BendingModel::MidEdge;
+    const bool midedge = bending == BendingModel::MidEdge;
+    if (per_triangle == (view_.shell_faces != nullptr) && midedge == (view_.midedge.xi != nullptr)) return;
+    if (per_triangle && shell_faces_.size() == 0) upload_shell_bending();
+    if (midedge && midedge_vectors_.size() == 0) upload_midedge_bending();
     destroy_graph();  // recorded with the other view
-    view_.triangle_hinges = shell ? triangle_hinges_.get() : nullptr;
-    view_.hinge_faces = shell ? hinge_faces_.get() : nullptr;
-    view_.shell_rest = shell ? shell_rest_.get() : nullptr;
-    view_.shell_faces = shell ? shell_faces_.get() : nullptr;
+    view_.triangle_hinges = per_triangle ? triangle_hinges_.get() : nullptr;
+    view_.hinge_faces = per_triangle ? hinge_faces_.get() : nullptr;
+    view_.shell_rest = midedge ? midedge_rest_.get() : per_triangle ? shell_rest_.get() : nullptr;
+    view_.shell_faces = per_triangle ? shell_faces_.get() : nullptr;
+    view_.midedge = MidEdgeView{};
+    if (midedge) {
+        const std::size_t nh = std::max<std::size_t>(flat_->hinge_count(), 1);
+        double* v = midedge_vectors_.get();
+        view_.midedge.xi = v;
+        view_.midedge.angle = v + nh;
+        view_.midedge.r = v + 2 * nh;
+        view_.midedge.p = v + 3 * nh;
+        view_.midedge.q = v + 4 * nh;
+        view_.midedge.diag = v + 5 * nh;
+        view_.midedge.clamp = midedge_flags_.get();
+        view_.midedge.edge = midedge_flags_.get() + nh;
+        view_.midedge.partials = midedge_partials_.get();
+        view_.midedge.grid = midedge_grid_;
+    }
 }
 
 void DeviceSolver::upload_shell_bending() {
@@ -96,6 +114,32 @@ void DeviceSolver::upload_shell_bending() {
     hinge_faces_.upload(faces, ledger_, "shell bending");
     shell_rest_.upload(rest, ledger_, "shell bending");
     shell_faces_.allocate(std::max<std::size_t>(nt, 1), ledger_, "shell bending");
+}
+
+void DeviceSolver::upload_midedge_bending() {
+    // The shell model's rest data with each triangle's boundary edges condensed out (the host's
+    // midedge_rest), in the device's colour order; the normals' vectors and the cooperative grid.
+    const FlatModel& flat = *flat_;
+    const std::size_t nt = flat.triangle_count(), nh = flat.hinge_count();
+    std::vector<float> rest(10 * nt, 0.0f);
+    for (std::size_t j = 0; j < nt; ++j) {
+        const auto t = static_cast<std::size_t>(layout_.triangle_colors.order[j]);  // device triangle j is flat triangle t
+        bool present[3];
+        for (int k = 0; k < 3; ++k) present[k] = flat.triangle_hinges[t].edge[k] >= 0;
+        const physics::ShellBendingRest<double> r = physics::midedge_condensed_rest(flat.shell_rest[t], present);
+        rest[10 * j] = static_cast<float>(r.area);
+        for (int e = 0; e < 9; ++e) rest[10 * j + 1 + static_cast<std::size_t>(e)] = static_cast<float>(r.m[e / 3][e % 3]);
+    }
+    WEFT_CUDA_CHECK(cudaSetDevice(device_));
+    midedge_grid_ = midedge_relax_grid(view_, device_);
+    if (midedge_grid_ <= 0)
+        throw Error("CUDA backend: solver.bending = \"midedge\" needs cooperative launches, which GPU " + std::to_string(device_) +
+                    " does not support; use solver.bending = \"shell\" or --backend cpu");
+    midedge_rest_.upload(rest, ledger_, "mid-edge bending");
+    const std::size_t rows = std::max<std::size_t>(nh, 1);
+    midedge_vectors_.allocate(6 * rows, ledger_, "mid-edge bending");
+    midedge_flags_.allocate(rows + 3 * std::max<std::size_t>(nt, 1), ledger_, "mid-edge bending");
+    midedge_partials_.allocate(4 * static_cast<std::size_t>(midedge_grid_), ledger_, "mid-edge bending");
 }
 
 void DeviceSolver::choose_pcg_loop() {
@@ -388,6 +432,8 @@ EnergyAudit DeviceSolver::energy_audit(const Model& model, double t, double h, b
     if (rebuild_pending_) rebuild_after_fault(model);
     if (view_.n == 0) return a;
     WEFT_CUDA_CHECK(cudaSetDevice(device_));
+    // The bending model the next substep steps (the first step's start is audited before any substep).
+    choose_bending(model.settings.solver.bending);
     cudaStream_t stream = active_stream();
     ensure_audit_buffers(stream);
     // The audit's own copy of the parameters at t (the solver's block belongs to its substeps).

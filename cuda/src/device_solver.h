@@ -228,10 +228,13 @@ private:
     /// Switches the preconditioner to `preconditioner` (builds the Schwarz levels the first time;
     /// the graph is re-captured with the other kernels).
     void choose_preconditioner(Preconditioner preconditioner);
-    /// Points the view at the bending model per triangle's arrays while solver.bending = "shell"
-    /// (uploaded on the first substep that asks for it, kept until the next build), or at none.
+    /// Points the view at the bending models per triangle's arrays while solver.bending = "shell" or
+    /// "midedge" (uploaded on the first substep that asks for them, kept until the next build), or at
+    /// none.
     void choose_bending(BendingModel bending);
     void upload_shell_bending();
+    /// The mid-edge model's arrays beside the shell model's (uploaded on the first substep that asks).
+    void upload_midedge_bending();
     void capture_graph();
     void choose_assembly();
     void choose_pcg_loop();
@@ -289,6 +292,14 @@ private:
     DeviceArray<std::int32_t> triangle_hinges_, hinge_faces_;
     DeviceArray<float> shell_rest_;
     DeviceArray<physics::ShellFaceTerms<float>> shell_faces_;
+    // The mid-edge model (DeviceView::midedge): its condensed rest data (10 floats a triangle), the
+    // normals' vectors (ξ, angle, r, p, q, diagonal: one double each a hinge), the hinges' clamps and
+    // the triangles' edge readings, the solve's partial sums and its cooperative grid.
+    DeviceArray<float> midedge_rest_;
+    DeviceArray<double> midedge_vectors_;
+    DeviceArray<std::uint8_t> midedge_flags_;
+    DeviceArray<double> midedge_partials_;
+    int midedge_grid_ = 0;
     DeviceArray<float> hinge_rest_;
     DeviceArray<std::uint32_t> vertex_triangle_start_, vertex_triangle_, vertex_hinge_start_, vertex_hinge_;
     DeviceArray<std::uint32_t> pin_vertex_;

@@ -40,6 +40,10 @@ void DeviceSolver::build(const FlatModel& flat, const Model& model) {
     hinge_faces_ = {};
     shell_rest_ = {};
     shell_faces_ = {};
+    midedge_rest_ = {};
+    midedge_vectors_ = {};
+    midedge_flags_ = {};
+    midedge_partials_ = {};
     schwarz_on_ = false;
     schwarz_factored_ = false;
     substep_count_ = 0;

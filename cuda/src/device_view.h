@@ -12,6 +12,19 @@
 
 namespace weft::cuda {
 
+/// The mid-edge bending model's normals (solver.bending = "midedge"; weft/physics/midedge_bending.h,
+/// midedge_kernels.cu): per hinge the turn ξ of its edge's normal (rad) and the solve's vectors, per
+/// triangle the reading of each edge (MidEdgeEdge). Null (and unused) with the other models.
+struct MidEdgeView {
+    double* xi = nullptr;     ///< rad, one per hinge (0 where the edge has no ξ)
+    double* angle = nullptr;  ///< θ − θ̄ at the relaxed state, rad, one per hinge
+    double *r = nullptr, *p = nullptr, *q = nullptr, *diag = nullptr;  ///< the CG's vectors, one per hinge
+    std::uint8_t* clamp = nullptr;  ///< per hinge: 1 where a triangle of it has its three corners pinned
+    std::uint8_t* edge = nullptr;   ///< per triangle, 3: how it reads edge k (MidEdgeEdge)
+    double* partials = nullptr;     ///< 4 per block of the solve's grid
+    int grid = 0;                   ///< blocks of the cooperative solve (all resident at once)
+};
+
 struct DeviceView {
     std::uint32_t n = 0, triangles = 0, hinges = 0, pins = 0, slices = 0;
     /// Rows this device assembles and solves: n, or in part mode (the multi-GPU solver) the owned
@@ -49,6 +62,9 @@ struct DeviceView {
     const std::int32_t* hinge_faces = nullptr;
     const float* shell_rest = nullptr;
     physics::ShellFaceTerms<float>* shell_faces = nullptr;
+    /// With solver.bending = "midedge" the same arrays (shell_rest then holds the mid-edge model's
+    /// condensed rest data) and the normals' turns; midedge.xi is null with the other models.
+    MidEdgeView midedge;
     // Vertex → incident (element, corner) pairs, entries 4·element + corner (device_layout.h).
     const std::uint32_t* vertex_triangle_start = nullptr;
     const std::uint32_t* vertex_triangle = nullptr;

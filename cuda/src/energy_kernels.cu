@@ -330,9 +330,12 @@ void launch_energy_audit(const DeviceView& d, bool with_wind, bool with_faces, d
                                                                                      stride);
         WEFT_CUDA_CHECK_LAUNCH("audit_face_contact_kernel");
     }
-    if (d.shell_faces != nullptr) {  // the bending model per triangle
+    if (d.shell_faces != nullptr) {  // the bending models per triangle
         counts.blocks[kEnergyBending] = d.triangles > 0 ? grid_for(d.triangles) : 0;
         if (d.triangles > 0) {
+            // The mid-edge model's energy is its minimum over the normals: relaxed at this state first
+            // (the pins' power below reads them too), as the host audit's relax_midedge_normals.
+            launch_midedge_relax(d, MidEdgeAt::Positions, stream);
             audit_shell_kernel<<<grid_for(d.triangles), kBlockSize, 0, stream>>>(d, partials + kEnergyBending * stride);
             WEFT_CUDA_CHECK_LAUNCH("audit_shell_kernel");
         }

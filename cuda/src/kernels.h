@@ -53,10 +53,22 @@ void launch_drop_solve(const DeviceView& d, cudaStream_t stream);
 void launch_write_stamp(void* where, std::uint64_t stamp, cudaStream_t stream);
 
 // ---- forces and assembly (force_kernels.cu) -------------------------------------------------------
-/// The bending model per triangle's pass 1 (solver.bending = "shell"; shell_bending_kernels.cu): every
-/// triangle's terms at the Newton iteration's linearisation point into d.shell_faces, which the
-/// assembly then reads through each hinge. Nothing without d.shell_faces.
+/// The bending models per triangle's pass 1 (solver.bending = "shell", "midedge";
+/// shell_bending_kernels.cu): every triangle's terms at the Newton iteration's linearisation point
+/// into d.shell_faces, which the assembly then reads through each hinge (with the mid-edge model, its
+/// normals relaxed there first). Nothing without d.shell_faces.
 void launch_shell_faces(const DeviceView& d, cudaStream_t stream);
+/// Where the mid-edge model's normals are relaxed: at the Newton iteration's linearisation point
+/// x0 + h·w_k (the solver's pass 1), or at d.x (the energy audit's state).
+enum class MidEdgeAt { Linearisation, Positions };
+/// The mid-edge model's normals (solver.bending = "midedge"; midedge_kernels.cu): the turns ξ that
+/// minimise the bending energy at the state `at`, into d.midedge.xi, by Jacobi-preconditioned CG in
+/// double in one cooperative launch of d.midedge.grid blocks. A solve of the solver's own
+/// (MidEdgeAt::Linearisation) that reaches its cap counts in DeviceStats::cg_not_converged.
+void launch_midedge_relax(const DeviceView& d, MidEdgeAt at, cudaStream_t stream);
+/// The largest grid that launch_midedge_relax may use on `device` for d's hinges and triangles (all
+/// its blocks resident at once); 0 where the device has no cooperative launch.
+[[nodiscard]] int midedge_relax_grid(const DeviceView& d, int device);
 /// The whole system A·Δv = b (assembly_kernels.cu): inertia, gravity, mass damping and collider
 /// contacts of each vertex, membrane, damping and wind of each triangle, bending of each hinge.
 /// Row gather: one launch, one warp per row (device_layout.h says when each strategy wins).

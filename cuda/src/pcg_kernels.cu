@@ -22,6 +22,7 @@
 #include "cuda_check.h"
 #include "device_math.cuh"
 #include "pcg_control.cuh"
+#include "persistent_sum.cuh"
 #include "loop_clock.cuh"
 #include "schwarz_apply.cuh"
 
@@ -180,25 +181,6 @@ __global__ void pcg_finish_kernel(DeviceView d) {
 // the block partials (in index order, so all blocks get the same bits and take the same decisions).
 // Two partial arrays alternate so that a block still reading one dot's partials never sees the next
 // dot's. Used where launch latency, not bandwidth, bounds an iteration.
-__device__ double persistent_sum(double value, double* partials) {
-    namespace cg = cooperative_groups;
-    using Reduce = cub::BlockReduce<double, kBlockSize>;
-    __shared__ typename Reduce::TempStorage storage;
-    __shared__ double total;
-    const double block_sum = Reduce(storage).Sum(value);
-    if (threadIdx.x == 0) partials[blockIdx.x] = block_sum;
-    cg::this_grid().sync();
-    // Every block sums all partials with all its threads (a fixed assignment and CUB's fixed tree).
-    double acc = 0.0;
-    for (unsigned b = threadIdx.x; b < gridDim.x; b += blockDim.x) acc += __ldcg(&partials[b]);
-    __syncthreads();  // storage is reused
-    const double sum = Reduce(storage).Sum(acc);
-    if (threadIdx.x == 0) total = sum;
-    __syncthreads();
-    const double result = total;
-    __syncthreads();  // `total` and `storage` are reused by the next call
-    return result;
-}
 
 /// The one-launch CG loop: the same phases as the per-kernel form, a grid-wide barrier after each
 /// (the contact pair pass; SpMV and cᵀq; the preconditioner with rᵀs; the direction). With block-Jacobi

@@ -1,4 +1,4 @@
-// The bending model per triangle on the device (solver.bending = "shell";
+// The bending models per triangle on the device (solver.bending = "shell" and "midedge";
 // weft/physics/shell_bending_slots.h): pass 1, each triangle's terms at the Newton iteration's
 // linearisation point, before the assembly, which reads them through each hinge's slots
 // (element_terms.cuh: shell_hinge_terms). The same two passes as the CPU backend, in float.
@@ -31,7 +31,14 @@ __global__ void shell_faces_kernel(DeviceView d) {
                 vk[k][a] = load3(d.vk, v, d.n);
                 dvw[k][a] = vk[k][a] - w;
             }
-        out = physics::shell_face_terms<float>(h, p.bending, p.damping_stiffness, in.rest, in.hinge, x, vk, dvw, in.rest_angle);
+        if (d.midedge.xi != nullptr) {  // the mid-edge model: its normals were relaxed just before
+            const physics::ShellReading<float> reading = midedge_reading_of(d, t);
+            out = physics::shell_face_terms<float>(h, p.bending, p.damping_stiffness, in.rest, in.hinge, x, vk, dvw, in.rest_angle,
+                                                   &reading);
+        } else {
+            out = physics::shell_face_terms<float>(h, p.bending, p.damping_stiffness, in.rest, in.hinge, x, vk, dvw,
+                                                   in.rest_angle);
+        }
     }
     d.shell_faces[t] = out;
 }
@@ -40,6 +47,8 @@ __global__ void shell_faces_kernel(DeviceView d) {
 
 void launch_shell_faces(const DeviceView& d, cudaStream_t stream) {
     if (d.shell_faces == nullptr || d.triangles == 0) return;
+    // The mid-edge model's normals at the same linearisation point first (midedge_kernels.cu).
+    if (d.midedge.xi != nullptr) launch_midedge_relax(d, MidEdgeAt::Linearisation, stream);
     shell_faces_kernel<<<grid_for(d.triangles), kBlockSize, 0, stream>>>(d);
     WEFT_CUDA_CHECK_LAUNCH("shell_faces_kernel");
 }

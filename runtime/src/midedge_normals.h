@@ -29,12 +29,6 @@ struct MidEdgeSolveReport {
     bool converged = true;
 };
 
-/// Relative residual at which the normals count as relaxed: far below what moves a force's digits
-/// that the solver resolves (float CG stops at 1e-3–1e-4 of its residual).
-inline constexpr double kMidEdgeTolerance = 1e-8;
-/// The most iterations: K_ξξ is mass-like (no differences across neighbours), so its condition
-/// number does not grow with resolution; 20–60 iterations on Weft's meshes.
-inline constexpr int kMidEdgeMaxIterations = 500;
 
 /// Scratch kept between solves, so that a step allocates nothing after the first.
 struct MidEdgeScratch {
@@ -104,8 +98,8 @@ inline MidEdgeSolveReport solve_midedge_normals(std::span<const physics::MidEdge
     if (!(bb > 0.0)) return report;
     double rz = dot(s.r, s.z);
     double rr = bb;
-    const double stop = kMidEdgeTolerance * kMidEdgeTolerance * bb;
-    while (rr > stop && report.iterations < kMidEdgeMaxIterations) {
+    const double stop = physics::kMidEdgeTolerance * physics::kMidEdgeTolerance * bb;
+    while (rr > stop && report.iterations < physics::kMidEdgeMaxIterations) {
         parallel_chunks(nh, [&](std::size_t lo, std::size_t hi) {
             for (std::size_t h = lo; h < hi; ++h) s.q[h] = s.diag[h] > 0.0 ? row(h, &s.p, false) : 0.0;
         });

@@ -60,6 +60,35 @@ TEST(CudaEnergyAudit, DeviceSumsMatchTheHostAudit) {
     }
 }
 
+// The mid-edge model's bending energy is its minimum over the edge normals: the device audit relaxes
+// them at the audited state as the host audit does. Audited at a state the solver did not step last
+// (the cantilever's frame 15 written back at frame 30), so that normals left over from the last solve
+// would show; the shell model (the same angles read without the normals' turns and the clamp's
+// scales) puts a different energy on the same state.
+TEST(CudaEnergyAudit, MidEdgeBendingEnergyMatchesTheHostAudit) {
+    WEFT_REQUIRE_GPU();
+    const auto world = make_world("cantilever", "cuda",
+                                  {"solver.cg_tolerance=1e-4", "solver.cg_max_iterations=5000", "solver.bending=\"midedge\""});
+    std::vector<Vec3d> earlier;
+    for (int f = 0; f < 30; ++f) {
+        (void)world->step();
+        if (f == 14) earlier = world->positions(0);
+    }
+    const std::vector<Vec3d> still(earlier.size());
+    world->set_state(0, earlier, still);
+    const auto [device, host, scale] = test::audit_device_and_host(*world);
+    world->settings().solver.bending = BendingModel::Shell;
+    const auto shell = test::audit_device_and_host(*world);
+    std::printf("[ audit    ] cantilever at frame 15, written back: mid-edge device U %.9e host U %.9e | shell device U %.9e "
+                "host U %.9e\n",
+                device.elastic, host.elastic, shell.device.elastic, shell.host.elastic);
+    ASSERT_GT(host.elastic, 0.0);
+    // Float positions and rest data against double: 2.9e-6 of the energy with either model (one H200).
+    EXPECT_NEAR(device.elastic, host.elastic, 3e-5 * host.elastic) << "mid-edge";
+    EXPECT_NEAR(shell.device.elastic, shell.host.elastic, 3e-5 * shell.host.elastic) << "shell";
+    EXPECT_GT(std::abs(shell.host.elastic - host.elastic), 1e-3 * host.elastic) << "the two models' energies are the same";
+}
+
 // Offset contact (collision.mode = offset): the device audit adds the offset contacts' penalty energy
 // to the colliders' (the host audit of the same backend has no contact list, so the difference is
 // that energy); it is positive once the sheets of `layers` lie on each other.

@@ -46,8 +46,8 @@ enum class BendingModel : std::uint8_t {
     /// The shell model with each edge's normal free to turn about the edge, relaxed to minimise the
     /// energy (weft/physics/midedge_bending.h): a cylinder costs the plate energy bent about any
     /// direction of the mesh (the shell and hinge models charge 1.49× about a grid's diagonal), so a
-    /// strip meshed with its rows at 45° converges too. A small solve per step over the edges. CPU
-    /// backend only so far.
+    /// strip meshed with its rows at 45° converges too. A small solve per Newton iteration over the
+    /// edges. CPU backend and one GPU.
     MidEdge,
 };
 

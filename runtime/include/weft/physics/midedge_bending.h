@@ -40,6 +40,14 @@
 
 namespace weft::physics {
 
+/// Relative residual |K_ξξ·ξ + b| / |b| at which the normals count as relaxed: far below what moves
+/// a force's digits that the solver resolves (float CG stops at 1e-3–1e-4 of its residual).
+inline constexpr double kMidEdgeTolerance = 1e-8;
+/// The most CG iterations of the normals' solve: K_ξξ is mass-like (no differences across
+/// neighbours), so its condition number does not grow with resolution; 20–60 iterations on Weft's
+/// meshes.
+inline constexpr int kMidEdgeMaxIterations = 500;
+
 /// The rest data of a triangle of the mid-edge model: the shell model's (shell_bending_rest) with the
 /// normals of the edges that have no hinge (`present[k]` false) condensed out of the coupling.
 template <typename T>
