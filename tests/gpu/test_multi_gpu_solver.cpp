@@ -654,7 +654,7 @@ TEST(MultiGpuSolver, ContactSystemRowsMatchOneGpu) {
 
 TEST(MultiGpuSolver, BadRequestsAreClearErrors) {
     WEFT_REQUIRE_GPU();
-    // The bending model per triangle is one GPU's so far, the mid-edge model the CPU's.
+    // The bending models per triangle are one GPU's so far.
     for (const std::string model : {"shell", "midedge"}) {
         try {
             auto world = make("cantilever", {"solver.bending=\"" + model + "\""}, 2, true);

@@ -20,15 +20,17 @@
 namespace weft::cuda::multi {
 namespace {
 
-/// What one GPU runs and several do not yet: the bending model per triangle (its per-triangle pass
-/// and hinge faces are not split over the parts); nor the mid-edge model, which no GPU runs yet.
+/// What one GPU runs and several do not yet: the bending models per triangle. A triangle's pass
+/// reads its three hinges' far corners, two rings from a part's rows, which the parts' ghosts (the
+/// pattern's neighbours, the halo the pipelined CG pushes) do not hold; the mid-edge model's normals
+/// are one solve over the whole cloth besides.
 void require_multi_gpu_support(const SolverSettings& settings) {
     if (settings.bending == BendingModel::Shell)
         throw Error("cuda backend on several GPUs: solver.bending = \"shell\" (the bending model per triangle) runs on one "
                     "GPU or the cpu backend so far; use --gpus 1, solver.bending = \"hinge\" or --backend cpu");
     if (settings.bending == BendingModel::MidEdge)
-        throw Error("cuda backend on several GPUs: solver.bending = \"midedge\" (the mid-edge bending model) runs on the cpu "
-                    "backend so far; use --backend cpu, or solver.bending = \"hinge\"");
+        throw Error("cuda backend on several GPUs: solver.bending = \"midedge\" (the mid-edge bending model) runs on one GPU "
+                    "or the cpu backend so far; use --gpus 1, solver.bending = \"hinge\" or --backend cpu");
 }
 
 
