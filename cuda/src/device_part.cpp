@@ -36,6 +36,8 @@ void DeviceSolver::build_part(const FlatModel& whole, const PartModel& part, con
     }
     const std::vector<std::uint32_t> owned(part.global_vertex.begin(), part.global_vertex.begin() + part.owned);
     output_index_.upload(owned, ledger_, "part output places");
+    // The bending model per triangle: the part holds its faces' hinges (extract_part), cut for it.
+    if (!part.model.triangle_hinges.empty()) choose_bending(model.settings.solver.bending);
     global_index_.upload(part.global_vertex, ledger_, "part vertex ids");
     if (needs_cloth_collisions(model)) {
         std::vector<std::uint32_t> row_of(whole.vertex_count, std::numeric_limits<std::uint32_t>::max());
@@ -61,6 +63,7 @@ void DeviceSolver::part_assemble(bool first_newton, bool offset_contacts) {
     WEFT_CUDA_CHECK(cudaSetDevice(device_));
     cudaStream_t stream = active_stream();
     launch_begin_newton(view_, stream);
+    launch_shell_faces(view_, stream);  // the bending model per triangle's pass 1 (nothing with hinges)
     if (row_gather_)
         launch_assemble_rows(view_, stream);
     else

@@ -62,6 +62,11 @@ void DeviceSolver::choose_bending(BendingModel bending) {
     const bool per_triangle = bending == BendingModel::Shell || bending == BendingModel::MidEdge;
     const bool midedge = bending == BendingModel::MidEdge;
     if (per_triangle == (view_.shell_faces != nullptr) && midedge == (view_.midedge.xi != nullptr)) return;
+    // A part holds what the per-triangle pass of its rows reads only when it was cut for it
+    // (extract_part), and the mid-edge normals are one solve over the whole cloth.
+    if (part_ != nullptr && (midedge || (per_triangle && flat_->triangle_hinges.size() != flat_->triangle_count())))
+        throw Error("CUDA backend: a part of the multi-GPU solver cannot switch to solver.bending = \"" +
+                    std::string(midedge ? "midedge" : "shell") + "\" (its parts were cut for another model); build the world again");
     if (per_triangle && shell_faces_.size() == 0) upload_shell_bending();
     if (midedge && midedge_vectors_.size() == 0) upload_midedge_bending();
     destroy_graph();  // recorded with the other view

@@ -13,7 +13,7 @@ constexpr std::uint32_t kAbsent = std::numeric_limits<std::uint32_t>::max();
 
 }  // namespace
 
-PartModel extract_part(const FlatModel& flat, const VertexPartition& partition, std::uint32_t p) {
+PartModel extract_part(const FlatModel& flat, const VertexPartition& partition, std::uint32_t p, bool per_triangle_bending) {
     if (p >= partition.parts)
         throw Error("extract_part: part " + std::to_string(p) + " of " + std::to_string(partition.parts));
     if (partition.part_of.size() != flat.vertex_count)
@@ -55,26 +55,55 @@ PartModel extract_part(const FlatModel& flat, const VertexPartition& partition, 
             if (local[v] == kAbsent)
                 throw Error(std::string("extract_part: ") + what + " " + std::to_string(index) + " has vertex " +
                             std::to_string(v) + ", neither owned by part " + std::to_string(p) +
-                            " nor one of its ghosts (a partition of another pattern?)");
+                            " nor one of its ghosts (a partition of another pattern, or per-triangle bending on a partition "
+                            "built without its reach?)");
             v = local[v];
         }
         return element;
     };
-    std::vector<std::uint8_t> slot_used(gp.column.size(), 0);
-    for (std::size_t t = 0; t < flat.triangles.size(); ++t) {
-        if (!touches_owned(flat.triangles[t].v)) continue;
-        out.global_triangle.push_back(static_cast<std::uint32_t>(t));
-        m.triangles.push_back(to_local(flat.triangles[t], "triangle", t));
-        m.triangle_rest.push_back(flat.triangle_rest[t]);
-        m.triangle_cloth.push_back(flat.triangle_cloth[t]);
-        for (int k = 0; k < 9; ++k) slot_used[gp.triangle_slots[9 * t + k]] = 1;
+    std::vector<std::uint8_t> triangle_in(flat.triangles.size(), 0), hinge_in(flat.hinges.size(), 0);
+    for (std::size_t t = 0; t < flat.triangles.size(); ++t) triangle_in[t] = touches_owned(flat.triangles[t].v) ? 1 : 0;
+    for (std::size_t h = 0; h < flat.hinges.size(); ++h) hinge_in[h] = touches_owned(flat.hinges[h].v) ? 1 : 0;
+    if (per_triangle_bending) {
+        // A hinge through an owned vertex takes terms from both its faces, and each face's terms read
+        // its three hinges (weft/physics/shell_bending_slots.h): those faces and hinges come too. The
+        // extra ones touch ghosts only, so what they assemble lands in ghost rows, which no part solves.
+        if (flat.triangle_hinges.size() != flat.triangles.size() || flat.shell_rest.size() != flat.triangles.size())
+            throw Error("extract_part: the model has no per-triangle bending data");
+        for (std::size_t t = 0; t < flat.triangles.size(); ++t)
+            for (const std::int32_t h : flat.triangle_hinges[t].edge)
+                if (h >= 0 && hinge_in[static_cast<std::size_t>(h)] == 1) triangle_in[t] = 1;
+        for (std::size_t t = 0; t < flat.triangles.size(); ++t)
+            if (triangle_in[t] != 0)
+                for (const std::int32_t h : flat.triangle_hinges[t].edge)
+                    if (h >= 0 && hinge_in[static_cast<std::size_t>(h)] == 0) hinge_in[static_cast<std::size_t>(h)] = 2;
     }
+    std::vector<std::int32_t> local_hinge(flat.hinges.size(), -1);
+    std::vector<std::uint8_t> slot_used(gp.column.size(), 0);
     for (std::size_t h = 0; h < flat.hinges.size(); ++h) {
-        if (!touches_owned(flat.hinges[h].v)) continue;
+        if (hinge_in[h] == 0) continue;
+        local_hinge[h] = static_cast<std::int32_t>(out.global_hinge.size());
         out.global_hinge.push_back(static_cast<std::uint32_t>(h));
         m.hinges.push_back(to_local(flat.hinges[h], "hinge", h));
         m.hinge_cloth.push_back(flat.hinge_cloth[h]);
         for (int k = 0; k < 16; ++k) slot_used[gp.hinge_slots[16 * h + k]] = 1;
+    }
+    for (std::size_t t = 0; t < flat.triangles.size(); ++t) {
+        if (triangle_in[t] == 0) continue;
+        out.global_triangle.push_back(static_cast<std::uint32_t>(t));
+        m.triangles.push_back(to_local(flat.triangles[t], "triangle", t));
+        m.triangle_rest.push_back(flat.triangle_rest[t]);
+        m.triangle_cloth.push_back(flat.triangle_cloth[t]);
+        if (per_triangle_bending) {
+            TriangleHinges hinges;
+            for (int k = 0; k < 3; ++k) {
+                const std::int32_t h = flat.triangle_hinges[t].edge[k];
+                hinges.edge[k] = h >= 0 ? local_hinge[static_cast<std::size_t>(h)] : -1;
+            }
+            m.triangle_hinges.push_back(hinges);
+            m.shell_rest.push_back(flat.shell_rest[t]);
+        }
+        for (int k = 0; k < 9; ++k) slot_used[gp.triangle_slots[9 * t + k]] = 1;
     }
 
     // Pattern rows: an owned row is the global row whole (its slots are all used by the elements

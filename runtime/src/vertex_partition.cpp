@@ -2,6 +2,7 @@
 #include "weft/backend/vertex_partition.h"
 
 #include <algorithm>
+#include <array>
 #include <cstdio>
 #include <limits>
 
@@ -81,12 +82,53 @@ std::vector<std::uint32_t> cut_order(std::span<const std::uint32_t> order, std::
     return part_of;
 }
 
+VertexReach per_triangle_bending_reach(const FlatModel& flat) {
+    const std::size_t n = flat.vertex_count, nh = flat.hinges.size();
+    // Each hinge's faces, and the hinges through each vertex.
+    std::vector<std::array<std::int32_t, 2>> faces(nh, {-1, -1});
+    for (std::size_t t = 0; t < flat.triangle_hinges.size(); ++t)
+        for (const std::int32_t h : flat.triangle_hinges[t].edge)
+            if (h >= 0) {
+                auto& f = faces[static_cast<std::size_t>(h)];
+                (f[0] < 0 ? f[0] : f[1]) = static_cast<std::int32_t>(t);
+            }
+    std::vector<std::uint32_t> hinge_start(n + 1, 0), hinge_of;
+    for (const Hinge& h : flat.hinges)
+        for (const std::uint32_t v : h.v) ++hinge_start[v + 1];
+    for (std::size_t i = 0; i < n; ++i) hinge_start[i + 1] += hinge_start[i];
+    hinge_of.resize(hinge_start[n]);
+    std::vector<std::uint32_t> fill(hinge_start.begin(), hinge_start.end() - 1);
+    for (std::size_t h = 0; h < nh; ++h)
+        for (const std::uint32_t v : flat.hinges[h].v) hinge_of[fill[v]++] = static_cast<std::uint32_t>(h);
+    VertexReach out;
+    out.start.assign(1, 0);
+    std::vector<std::uint32_t> r;
+    for (std::size_t i = 0; i < n; ++i) {
+        r.clear();
+        for (std::uint32_t k = hinge_start[i]; k < hinge_start[i + 1]; ++k)
+            for (const std::int32_t t : faces[hinge_of[k]]) {
+                if (t < 0) continue;
+                for (const std::int32_t e : flat.triangle_hinges[static_cast<std::size_t>(t)].edge)
+                    if (e >= 0)
+                        for (const std::uint32_t v : flat.hinges[static_cast<std::size_t>(e)].v) r.push_back(v);
+            }
+        std::sort(r.begin(), r.end());
+        r.erase(std::unique(r.begin(), r.end()), r.end());
+        out.vertex.insert(out.vertex.end(), r.begin(), r.end());
+        out.start.push_back(static_cast<std::uint32_t>(out.vertex.size()));
+    }
+    return out;
+}
+
 VertexPartition build_partition(const BlockPattern& pattern, std::span<const std::uint32_t> part_of,
-                                std::uint32_t parts, std::span<const double> work) {
+                                std::uint32_t parts, std::span<const double> work, const VertexReach* reach) {
     const std::size_t n = pattern.row_start.empty() ? 0 : pattern.row_start.size() - 1;
     if (part_of.size() != n || work.size() != n)
         throw Error("build_partition: " + std::to_string(part_of.size()) + " part ids and " + std::to_string(work.size()) +
                     " work values for " + std::to_string(n) + " rows");
+    if (reach != nullptr && reach->start.size() != n + 1)
+        throw Error("build_partition: a reach over " + std::to_string(reach->start.empty() ? 0 : reach->start.size() - 1) +
+                    " vertices for " + std::to_string(n) + " rows");
     if (parts == 0) throw Error("build_partition: 0 parts");
     VertexPartition out;
     out.parts = parts;
@@ -118,20 +160,29 @@ VertexPartition build_partition(const BlockPattern& pattern, std::span<const std
             part.work += work[i];
         }
 
-    // Ghosts: the off-part columns of each part's boundary rows, by owner part, then global id. The
-    // mark array holds the last part that listed each vertex (parts are taken in turn).
+    // Ghosts: the off-part columns of each part's boundary rows, and the off-part reach of all its
+    // rows, by owner part, then global id. The mark array holds the last part that listed each
+    // vertex (parts are taken in turn).
     std::vector<std::uint32_t> mark(n, std::numeric_limits<std::uint32_t>::max());
     for (std::uint32_t p = 0; p < parts; ++p) {
         PartitionPart& part = out.part[p];
+        const auto add = [&](std::uint32_t j) {
+            if (part_of[j] == p || mark[j] == p) return;
+            mark[j] = p;
+            part.ghosts.push_back(j);
+        };
         for (std::size_t k = part.interior; k < part.owned.size(); ++k) {
             const std::uint32_t i = part.owned[k];
-            for (std::uint32_t s = pattern.row_start[i]; s < pattern.row_start[i + 1]; ++s) {
-                const std::uint32_t j = pattern.column[s];
-                if (part_of[j] == p || mark[j] == p) continue;
-                mark[j] = p;
-                part.ghosts.push_back(j);
-            }
+            for (std::uint32_t s = pattern.row_start[i]; s < pattern.row_start[i + 1]; ++s) add(pattern.column[s]);
         }
+        if (reach != nullptr)
+            for (const std::uint32_t i : part.owned)
+                for (std::uint32_t s = reach->start[i]; s < reach->start[i + 1]; ++s) {
+                    if (reach->vertex[s] >= n)
+                        throw Error("build_partition: vertex " + std::to_string(i) + " reaches vertex " +
+                                    std::to_string(reach->vertex[s]) + " of " + std::to_string(n));
+                    add(reach->vertex[s]);
+                }
         std::sort(part.ghosts.begin(), part.ghosts.end(), [&](std::uint32_t a, std::uint32_t b) {
             return part_of[a] != part_of[b] ? part_of[a] < part_of[b] : a < b;
         });

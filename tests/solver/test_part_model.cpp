@@ -8,6 +8,7 @@
 
 #include "weft/backend/flat_model.h"
 #include "weft/backend/part_model.h"
+#include "weft/backend/schwarz_hierarchy.h"
 #include "weft/backend/vertex_partition.h"
 #include "weft/error.h"
 #include "weft/fabric.h"
@@ -32,6 +33,15 @@ FlatModel two_cloths() {
 
 VertexPartition partition(const FlatModel& flat, std::uint32_t parts) { return partition_along_preconditioner(flat, parts); }
 
+/// The multi-GPU solver's partition for the bending model per triangle: the preconditioner's cut,
+/// with per_triangle_bending_reach's vertices as ghosts too.
+VertexPartition partition_with_reach(const FlatModel& flat, std::uint32_t parts) {
+    const SchwarzHierarchy h = build_schwarz_hierarchy(flat.initial_positions, flat.pattern);
+    const std::vector<double> work = row_work(flat.pattern);
+    const VertexReach reach = per_triangle_bending_reach(flat);
+    return build_partition(flat.pattern, cut_order(h.order, work, parts, SchwarzHierarchy::kDomainSize), parts, work, &reach);
+}
+
 // The element corner or block behind a gather entry, in global terms: (kind, global element, corner).
 struct Source {
     int kind;
@@ -53,16 +63,19 @@ Source block_source(const FlatModel& m, const std::vector<std::uint32_t>& tri, c
     return {1, hinge.empty() ? (entry - t9) / 16 : hinge[(entry - t9) / 16], (entry - t9) % 16};
 }
 
+// With the bending model per triangle the parts hold more elements (extract_part), all touching
+// ghosts only: the owned rows are the same.
 TEST(PartModel, OwnedRowsAreTheGlobalRowsInTheSameOrder) {
     const FlatModel flat = two_cloths();
     const std::vector<std::uint32_t> none;
+    for (const bool per_triangle : {false, true})
     for (const std::uint32_t parts : {1U, 3U, 6U}) {
-        const VertexPartition vp = partition(flat, parts);
+        const VertexPartition vp = per_triangle ? partition_with_reach(flat, parts) : partition(flat, parts);
         std::size_t owned_total = 0;
         std::set<std::uint32_t> pinned;
         for (std::uint32_t p = 0; p < parts; ++p) {
-            SCOPED_TRACE("part " + std::to_string(p) + " of " + std::to_string(parts));
-            const PartModel pm = extract_part(flat, vp, p);
+            SCOPED_TRACE("part " + std::to_string(p) + " of " + std::to_string(parts) + (per_triangle ? ", per-triangle bending" : ""));
+            const PartModel pm = extract_part(flat, vp, p, per_triangle);
             const FlatModel& m = pm.model;
             ASSERT_EQ(pm.owned, vp.part[p].owned.size());
             ASSERT_EQ(m.vertex_count, pm.owned + vp.part[p].ghosts.size());
@@ -91,14 +104,18 @@ TEST(PartModel, OwnedRowsAreTheGlobalRowsInTheSameOrder) {
                               force_source(flat, none, none, flat.vertex_force_index[flat.vertex_force_start[g] + e]));
                 if (m.vertex_pin[i] >= 0) pinned.insert(g);
             }
-            // Exactly the elements that touch an owned vertex.
+            // Exactly the elements that touch an owned vertex (with per-triangle bending, at least).
             std::size_t touching = 0;
             for (const Triangle& t : flat.triangles) {
                 bool owns = false;
                 for (const std::uint32_t v : t.v) owns = owns || vp.part_of[v] == p;
                 touching += owns ? 1 : 0;
             }
-            EXPECT_EQ(m.triangles.size(), touching);
+            if (per_triangle) {
+                EXPECT_GE(m.triangles.size(), touching);
+            } else {
+                EXPECT_EQ(m.triangles.size(), touching);
+            }
             for (const std::uint32_t s : m.pattern.triangle_slots) EXPECT_LT(s, m.pattern.block_count());
             for (const std::uint32_t s : m.pattern.hinge_slots) EXPECT_LT(s, m.pattern.block_count());
             // Ghost pins stay with their owners.
@@ -106,6 +123,66 @@ TEST(PartModel, OwnedRowsAreTheGlobalRowsInTheSameOrder) {
         }
         EXPECT_EQ(owned_total, flat.vertex_count);
         EXPECT_EQ(pinned, std::set<std::uint32_t>(flat.pin_vertex.begin(), flat.pin_vertex.end())) << "every pin on its owner";
+    }
+}
+
+// The bending model per triangle: a hinge through an owned vertex takes terms from both its faces,
+// and each face's terms read its three hinges. Each part holds all of them, with its triangles'
+// hinges mapped to the same global hinges and the same rest data, on the same cut as without the
+// reach. Without the reach in the partition the part cannot hold them, and says so.
+TEST(PartModel, PerTriangleBendingPartsHoldEveryFaceTheirRowsRead) {
+    const FlatModel flat = two_cloths();
+    std::vector<std::vector<std::uint32_t>> faces_of(flat.hinges.size());
+    for (std::uint32_t t = 0; t < flat.triangles.size(); ++t)
+        for (const std::int32_t h : flat.triangle_hinges[t].edge)
+            if (h >= 0) faces_of[static_cast<std::size_t>(h)].push_back(t);
+    for (const std::uint32_t parts : {2U, 3U, 6U}) {
+        const VertexPartition vp = partition_with_reach(flat, parts), plain = partition(flat, parts);
+        for (std::uint32_t p = 0; p < parts; ++p) {
+            SCOPED_TRACE("part " + std::to_string(p) + " of " + std::to_string(parts));
+            const PartModel pm = extract_part(flat, vp, p, true);
+            const FlatModel& m = pm.model;
+            ASSERT_EQ(m.triangle_hinges.size(), m.triangles.size());
+            ASSERT_EQ(m.shell_rest.size(), m.triangles.size());
+            std::vector<std::int32_t> local_triangle(flat.triangles.size(), -1);
+            for (std::size_t t = 0; t < pm.global_triangle.size(); ++t) local_triangle[pm.global_triangle[t]] = static_cast<std::int32_t>(t);
+            std::size_t needed = 0;
+            for (std::uint32_t h = 0; h < flat.hinges.size(); ++h) {
+                bool owned = false;
+                for (const std::uint32_t v : flat.hinges[h].v) owned = owned || vp.part_of[v] == p;
+                if (!owned) continue;
+                for (const std::uint32_t t : faces_of[h]) {
+                    ++needed;
+                    const std::int32_t lt = local_triangle[t];
+                    ASSERT_GE(lt, 0) << "face " << t << " of hinge " << h << " is not in the part";
+                    const auto l = static_cast<std::size_t>(lt);
+                    EXPECT_EQ(m.shell_rest[l].area, flat.shell_rest[t].area);
+                    for (int k = 0; k < 3; ++k) {
+                        const std::int32_t g = flat.triangle_hinges[t].edge[k], local = m.triangle_hinges[l].edge[k];
+                        ASSERT_EQ(local >= 0, g >= 0) << "triangle " << t << " edge " << k;
+                        if (g >= 0) {
+                            EXPECT_EQ(pm.global_hinge[static_cast<std::size_t>(local)], static_cast<std::uint32_t>(g));
+                        }
+                    }
+                }
+            }
+            EXPECT_GT(needed, 0U);
+            // The same cut as without the reach, with the pattern's ghosts among its own.
+            EXPECT_EQ(vp.part[p].owned, plain.part[p].owned);
+            const std::set<std::uint32_t> with(vp.part[p].ghosts.begin(), vp.part[p].ghosts.end());
+            for (const std::uint32_t g : plain.part[p].ghosts) EXPECT_EQ(with.count(g), 1U) << "ghost " << g;
+        }
+        // Without the reach some part misses a far corner and refuses.
+        bool refused = false;
+        for (std::uint32_t p = 0; p < parts && !refused; ++p) {
+            try {
+                (void)extract_part(flat, plain, p, true);
+            } catch (const Error& e) {
+                refused = true;
+                EXPECT_NE(std::string(e.what()).find("per-triangle bending"), std::string::npos) << e.what();
+            }
+        }
+        EXPECT_TRUE(refused) << parts << " parts without the reach";
     }
 }
 

@@ -262,6 +262,47 @@ TEST(VertexPartition, SameInputSameCut) {
     }
 }
 
+// The bending model per triangle's reach: a vertex reads the vertices of every hinge of every face
+// of every hinge through it, which covers its pattern neighbours and goes a ring further (on a grid,
+// a far corner across a face's other edge). Those become ghosts; a reach of another size is refused.
+TEST(VertexPartition, PerTriangleBendingReachesARingFurtherAndBecomesGhosts) {
+    World world;
+    world.add_cloth({.name = "sheet", .fabric = Fabric::cook(make_grid(1.0, 1.0, 12, 12))});
+    const FlatModel flat = flatten(world.model());
+    const BlockPattern& pattern = flat.pattern;
+    const VertexReach reach = per_triangle_bending_reach(flat);
+    ASSERT_EQ(reach.start.size(), flat.vertex_count + 1);
+    std::size_t beyond = 0;
+    for (std::uint32_t i = 0; i < flat.vertex_count; ++i) {
+        const std::set<std::uint32_t> r(reach.vertex.begin() + reach.start[i], reach.vertex.begin() + reach.start[i + 1]);
+        EXPECT_EQ(r.size(), reach.start[i + 1] - reach.start[i]) << "vertex " << i << " lists a vertex twice";
+        for (std::uint32_t s = pattern.row_start[i]; s < pattern.row_start[i + 1]; ++s)
+            EXPECT_EQ(r.count(pattern.column[s]), 1U) << "vertex " << i << " does not reach its neighbour " << pattern.column[s];
+        beyond += r.size() - (pattern.row_start[i + 1] - pattern.row_start[i]);
+    }
+    EXPECT_GT(beyond, 0U) << "the reach is the pattern's";
+    const SchwarzHierarchy h = build_schwarz_hierarchy(flat.initial_positions, pattern);
+    const std::vector<double> work = row_work(pattern);
+    const std::vector<std::uint32_t> part_of = cut_order(h.order, work, 3, SchwarzHierarchy::kDomainSize);
+    const VertexPartition plain = build_partition(pattern, part_of, 3, work);
+    const VertexPartition wide = build_partition(pattern, part_of, 3, work, &reach);
+    expect_consistent(pattern, plain);
+    EXPECT_GT(wide.quality.halo_vertices, plain.quality.halo_vertices);
+    for (std::uint32_t p = 0; p < 3; ++p) {
+        EXPECT_EQ(wide.part[p].owned, plain.part[p].owned);
+        EXPECT_EQ(wide.part[p].interior, plain.part[p].interior) << "the product still reads one ring";
+        const std::set<std::uint32_t> ghosts(wide.part[p].ghosts.begin(), wide.part[p].ghosts.end());
+        for (const std::uint32_t i : wide.part[p].owned)
+            for (std::uint32_t s = reach.start[i]; s < reach.start[i + 1]; ++s) {
+                const std::uint32_t j = reach.vertex[s];
+                EXPECT_TRUE(part_of[j] == p || ghosts.count(j) == 1) << "part " << p << " misses vertex " << j;
+            }
+    }
+    VertexReach short_reach = reach;
+    short_reach.start.pop_back();
+    EXPECT_THROW((void)build_partition(pattern, part_of, 3, work, &short_reach), Error);
+}
+
 TEST(VertexPartition, BadInputIsAnErrorNamingTheValue) {
     const Grid g = make_cloth(3);  // 16 vertices: one domain
     const std::vector<double> work = row_work(g.fabric->pattern());

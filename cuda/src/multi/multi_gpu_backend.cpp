@@ -20,14 +20,9 @@
 namespace weft::cuda::multi {
 namespace {
 
-/// What one GPU runs and several do not yet: the bending models per triangle. A triangle's pass
-/// reads its three hinges' far corners, two rings from a part's rows, which the parts' ghosts (the
-/// pattern's neighbours, the halo the pipelined CG pushes) do not hold; the mid-edge model's normals
-/// are one solve over the whole cloth besides.
+/// What one GPU runs and several do not yet: the mid-edge bending model, whose normals are one solve
+/// over the whole cloth (its CG would need the parts to meet every iteration).
 void require_multi_gpu_support(const SolverSettings& settings) {
-    if (settings.bending == BendingModel::Shell)
-        throw Error("cuda backend on several GPUs: solver.bending = \"shell\" (the bending model per triangle) runs on one "
-                    "GPU or the cpu backend so far; use --gpus 1, solver.bending = \"hinge\" or --backend cpu");
     if (settings.bending == BendingModel::MidEdge)
         throw Error("cuda backend on several GPUs: solver.bending = \"midedge\" (the mid-edge bending model) runs on one GPU "
                     "or the cpu backend so far; use --gpus 1, solver.bending = \"hinge\" or --backend cpu");

@@ -130,15 +130,18 @@ void MultiSolver::build_parts(const Model& model, const std::vector<double>& wor
     halo_.reset();
     solvers_.clear();
     part_models_.clear();
+    // The bending model per triangle reads two rings out: its reach becomes ghosts too (vertex_partition.h).
+    per_triangle_bending_ = model.settings.solver.bending == BendingModel::Shell;
+    const VertexReach reach = per_triangle_bending_ ? per_triangle_bending_reach(flat) : VertexReach{};
     // Throws, naming the count, when there are fewer level-0 domains than parts.
-    partition_ =
-        build_partition(flat.pattern, cut_order(hierarchy_.order, work, parts, SchwarzHierarchy::kDomainSize), parts, work);
+    partition_ = build_partition(flat.pattern, cut_order(hierarchy_.order, work, parts, SchwarzHierarchy::kDomainSize), parts, work,
+                                 per_triangle_bending_ ? &reach : nullptr);
     // Each part's rows' work (without contacts): what the detections weigh its contacts against.
     part_row_work_.assign(parts, 0.0);
     const std::vector<double> rows = row_work(flat.pattern);
     for (std::size_t v = 0; v < rows.size(); ++v) part_row_work_[partition_.part_of[v]] += rows[v];
     part_models_.reserve(parts);
-    for (std::uint32_t p = 0; p < parts; ++p) part_models_.push_back(extract_part(flat, partition_, p));
+    for (std::uint32_t p = 0; p < parts; ++p) part_models_.push_back(extract_part(flat, partition_, p, per_triangle_bending_));
     std::vector<cudaStream_t> streams;
     for (std::uint32_t p = 0; p < parts; ++p) {
         auto solver = std::make_unique<DeviceSolver>(devices_[p]);
@@ -475,6 +478,7 @@ void MultiSolver::substep(const Model& model, double t, double h, StepStats& sta
     if (needs_cloth_collisions(model) != colliding)
         throw Error("CUDA backend on " + std::to_string(devices_.size()) +
                     " parts: the cloth collisions were switched on or off after the build; across GPUs that takes a new world");
+    require_bending_as_built(model);
     if (colliding && collisions_.front()->stale(model)) {
         for (std::size_t p = 0; p < collisions_.size(); ++p) {  // self-collision toggled live
             WEFT_CUDA_CHECK(cudaSetDevice(devices_[p]));
@@ -832,7 +836,15 @@ void MultiSolver::restore_solver_state(std::span<const std::uint8_t> bytes) {
     }
 }
 
+void MultiSolver::require_bending_as_built(const Model& model) const {
+    if ((model.settings.solver.bending == BendingModel::Shell) != per_triangle_bending_)
+        throw Error("CUDA backend on " + std::to_string(devices_.size()) +
+                    " parts: solver.bending was switched between \"hinge\" and \"shell\" after the build; the parts are cut for "
+                    "the model they were built with, so across GPUs that takes a new world");
+}
+
 EnergyAudit MultiSolver::energy_audit(const Model& model, double t, double h, bool with_wind) {
+    require_bending_as_built(model);
     EnergyAudit sum;
     sum.with_wind = with_wind;
     // Offset contacts name vertices of the whole model: every part reads them from its GPU's whole x.

@@ -122,6 +122,9 @@ private:
     /// builds every part, the halo, the level-1 all-gather, the contact mirror and the CG. The
     /// state is the flat model's initial one.
     void build_parts(const Model& model, const std::vector<double>& work);
+    /// Throws weft::Error when solver.bending changed between the hinge and the per-triangle model
+    /// since the parts were cut (their ghosts and elements follow the model).
+    void require_bending_as_built(const Model& model) const;
     // ---- cloth collisions across GPUs (docs/multi-gpu.md, "Collisions") ---------------------------
     /// Whole arrays on every GPU: x, v, v0 and the previous Δv, 3 × vertices each.
     enum WholeArray : int { kWholeX = 0, kWholeV = 1, kWholeV0 = 2, kWholePrevious = 3 };
@@ -187,6 +190,7 @@ private:
     std::vector<DeviceArray<float>> whole_;
     std::vector<DeviceArray<std::uint8_t>> whole_fixed_;  // per GPU: 1 at the whole model's pinned vertices
     bool offset_ = false;                                  // this substep's detection ran in offset mode
+    bool per_triangle_bending_ = false;                    // the parts were cut for solver.bending = "shell"
     std::unique_ptr<std::barrier<>> share_barrier_;        // detect_shares: the shares' meeting point
     std::atomic<bool> share_failed_{false};                // a share threw: the others stop at the barrier
     MemoryLedger ledger_;                            // what the solver holds beside the parts

@@ -21,7 +21,8 @@ namespace weft {
 struct PartModel {
     /// The part as a FlatModel over local vertices: owned (interior, then boundary, as
     /// PartitionPart::owned), then ghosts (as PartitionPart::ghosts). Its elements are the global
-    /// elements that touch an owned vertex, in global order, with local vertex ids; its pins are the
+    /// elements that touch an owned vertex (and with per-triangle bending those its rows' bending
+    /// reads: extract_part), in global order, with local vertex ids; its pins are the
     /// owned vertices' pins. Cloth offsets are left empty (a part's vertices are not runs of cloths):
     /// `global_vertex` maps back.
     FlatModel model;
@@ -33,8 +34,14 @@ struct PartModel {
     std::vector<std::uint32_t> global_slot;      ///< per local pattern slot: the global slot it copies
 };
 
-/// Part `p` of `partition` of `flat`. Throws weft::Error when `p` is out of range or the partition
-/// was not built on this model's pattern (an element with a vertex that is neither owned nor a ghost).
-[[nodiscard]] PartModel extract_part(const FlatModel& flat, const VertexPartition& partition, std::uint32_t p);
+/// Part `p` of `partition` of `flat`. With `per_triangle_bending` (SolverSettings::bending = Shell)
+/// it also holds the faces of every hinge through an owned vertex and those faces' hinges (whose
+/// terms the owned rows' bending reads; they touch ghosts only), and its triangles' hinges (local
+/// ids) and shell rest data; the partition must then have been built with
+/// per_triangle_bending_reach. Throws weft::Error when `p` is out of range or the partition was not
+/// built on this model's pattern and reach (an element with a vertex that is neither owned nor a
+/// ghost).
+[[nodiscard]] PartModel extract_part(const FlatModel& flat, const VertexPartition& partition, std::uint32_t p,
+                                     bool per_triangle_bending = false);
 
 }  // namespace weft

@@ -13,6 +13,12 @@
 /// Owned vertices are listed interior first (no pattern neighbour outside the part), then boundary:
 /// a pipelined product computes the interior rows while the ghosts' values travel, then the
 /// boundary rows (P-Cloth's overlap of the halo exchange with the SpMV).
+///
+/// The bending models per triangle (SolverSettings::bending = Shell) read deeper: a row's hinge
+/// takes terms from its two faces, and each face's terms read all three of its hinges, whose far
+/// corners lie two rings out. A partition built with that reach (per_triangle_bending_reach) lists
+/// those vertices among the ghosts too; the product still reads the pattern's ring only, so the
+/// interior rows stay those without a pattern neighbour outside the part.
 
 #include <cstdint>
 #include <span>
@@ -92,11 +98,25 @@ inline constexpr double kContactWorkPerVertex = 0.5;
 [[nodiscard]] std::vector<std::uint32_t> cut_order(std::span<const std::uint32_t> order, std::span<const double> work,
                                                    std::uint32_t parts, std::uint32_t granule);
 
+/// Vertices each row's assembly reads beyond its pattern neighbours, as lists per global vertex:
+/// vertex i reads vertex[start[i], start[i + 1]).
+struct VertexReach {
+    std::vector<std::uint32_t> start;  ///< size vertices + 1
+    std::vector<std::uint32_t> vertex;
+};
+
+/// The reach of the bending models per triangle on `flat`: for each vertex, the vertices of every
+/// hinge of every face of every hinge through it (weft/physics/shell_bending_slots.h: a hinge's
+/// terms come from its faces, each face's from its three hinges). Sorted, without repeats.
+[[nodiscard]] VertexReach per_triangle_bending_reach(const FlatModel& flat);
+
 /// The owned, interior, ghost and send lists of each part for the assignment `part_of` (each
 /// vertex's part, < parts; a part may own nothing) on `pattern`, and the quality of the cut.
+/// `reach` (optional): vertices the rows read beyond the pattern, which become ghosts as well.
 /// Deterministic. Throws weft::Error when the sizes disagree or a part id is out of range.
 [[nodiscard]] VertexPartition build_partition(const BlockPattern& pattern, std::span<const std::uint32_t> part_of,
-                                              std::uint32_t parts, std::span<const double> work);
+                                              std::uint32_t parts, std::span<const double> work,
+                                              const VertexReach* reach = nullptr);
 
 /// The multi-GPU solver's partition of `flat` (docs/multi-gpu.md, "Partition"): its vertices cut
 /// along the multilevel Schwarz preconditioner's level-0 order into `parts` runs of whole level-0
