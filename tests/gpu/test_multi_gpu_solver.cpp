@@ -655,11 +655,13 @@ TEST(MultiGpuSolver, ContactSystemRowsMatchOneGpu) {
 
 // The bending model per triangle across parts (extract_part: each part holds the faces and hinges
 // its rows' bending reads, the partition their far corners as ghosts): one step from the same state
-// as on one GPU, on the hanging sheet (pins and bending) and the drape (a fall onto the ball), and
-// its energy audit counting every triangle once.
+// as on one GPU, on the flag (pins, wind, flapping folds) and the drape (a fall onto the ball), and
+// the energy audit of the hanging sheet counting every triangle once. (Not the hanging sheet's steps:
+// it is at rest within a few frames, where a step moves 1e-9 m and float rounding alone is of that
+// size, with either bending model.)
 TEST(MultiGpuSolver, ShellBendingAcrossPartsFollowsOneGpu) {
     WEFT_REQUIRE_GPU();
-    for (const char* scene : {"hanging", "drape"}) {
+    for (const char* scene : {"flag", "drape"}) {
         for (const int parts : {2, 3}) {
             const double worst = step_gaps(scene, with({"solver.bending=\"shell\""}), parts, true, 30).worst;
             std::printf("[ multi    ] %s with shell bending: %d parts on one GPU, 30 steps: worst step gap %.3g of the step's move\n",
