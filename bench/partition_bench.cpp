@@ -2,7 +2,8 @@
 // along the preconditioner's Morton order (what the solver uses) against METIS's k-way partition of
 // the same pattern graph where METIS was found at configure time. Per part count: cut blocks, halo
 // and boundary vertices, the imbalance of the row work, the bytes one product's halo exchange moves
-// (float3 per ghost) and the time to build. A table on stdout, JSON with --json.
+// (float3 per ghost) and the time to build; and the cut along the order with the bending model per
+// triangle's deeper reach (its ghosts). A table on stdout, JSON with --json.
 //
 // With --cg, also what the cut does to the multilevel Schwarz preconditioner if no level crossed it
 // (each part's preconditioner built on its own rows, no communication): CG iterations (CPU, double)
@@ -164,6 +165,11 @@ int main(int argc, char** argv) {
             const auto order_cut = weft::cut_order(hierarchy.order, work, parts, weft::SchwarzHierarchy::kDomainSize);
             const weft::VertexPartition by_order = weft::build_partition(flat.pattern, order_cut, parts, work);
             rows.push_back({"preconditioner order", parts, by_order.quality, ms_since(clock)});
+            // The same cut for solver.bending = "shell": the per-triangle model's reach as ghosts too.
+            clock = Clock::now();
+            const weft::VertexReach reach = weft::per_triangle_bending_reach(flat);
+            const weft::VertexPartition with_reach = weft::build_partition(flat.pattern, order_cut, parts, work, &reach);
+            rows.push_back({"preconditioner order, shell bending's reach", parts, with_reach.quality, ms_since(clock)});
 #if WEFT_HAVE_METIS
             clock = Clock::now();
             const auto metis_cut = metis_parts(flat.pattern, parts);

@@ -203,7 +203,7 @@ constexpr Parameter kTable[] = {
     {.section = "solver", .name = "bending", .type = T::Choice,
      .doc = "`hinge`: one term per interior edge (every backend; too soft by an amount that depends on the cells' "
             "shape); `shell`: a shape operator per triangle, converged within 0.5% on a clamped strip at any cell "
-            "shape (cpu backend and one GPU; several GPUs refuse it); `midedge`: the same with each edge's normal "
+            "shape (every backend, one GPU or several); `midedge`: the same with each edge's normal "
             "relaxed, which also converges on meshes whose rows run diagonally (cpu backend and one GPU; several "
             "GPUs refuse it)",
      .label = "bending model", .panel = "solver", .effect = E::Rebuild, .choices = kBendingNames,

@@ -41,7 +41,7 @@ enum class BendingModel : std::uint8_t {
     Hinge,
     /// A shape operator per triangle from its three edges' angles and the plate energy
     /// ½·D·A·|S − S̄|² (weft/physics/shell_bending.h): within 0.5% of the heavy elastica from 12
-    /// cells along a clamped strip, whatever the cells' shape. CPU backend and one GPU.
+    /// cells along a clamped strip, whatever the cells' shape. Every backend, one GPU or several.
     Shell,
     /// The shell model with each edge's normal free to turn about the edge, relaxed to minimise the
     /// energy (weft/physics/midedge_bending.h): a cylinder costs the plate energy bent about any
