@@ -3,6 +3,7 @@
 
 #include <algorithm>
 #include <array>
+#include <cstddef>
 #include <cstdio>
 #include <limits>
 
@@ -100,21 +101,25 @@ VertexReach per_triangle_bending_reach(const FlatModel& flat) {
     std::vector<std::uint32_t> fill(hinge_start.begin(), hinge_start.end() - 1);
     for (std::size_t h = 0; h < nh; ++h)
         for (const std::uint32_t v : flat.hinges[h].v) hinge_of[fill[v]++] = static_cast<std::uint32_t>(h);
+    // Each vertex's list gathered with a stamp per vertex (no repeats), then sorted (a few tens).
     VertexReach out;
     out.start.assign(1, 0);
-    std::vector<std::uint32_t> r;
+    std::vector<std::uint32_t> seen(n, std::numeric_limits<std::uint32_t>::max());
     for (std::size_t i = 0; i < n; ++i) {
-        r.clear();
+        const auto first = out.vertex.size();
+        const auto stamp = static_cast<std::uint32_t>(i);
         for (std::uint32_t k = hinge_start[i]; k < hinge_start[i + 1]; ++k)
             for (const std::int32_t t : faces[hinge_of[k]]) {
                 if (t < 0) continue;
                 for (const std::int32_t e : flat.triangle_hinges[static_cast<std::size_t>(t)].edge)
                     if (e >= 0)
-                        for (const std::uint32_t v : flat.hinges[static_cast<std::size_t>(e)].v) r.push_back(v);
+                        for (const std::uint32_t v : flat.hinges[static_cast<std::size_t>(e)].v)
+                            if (seen[v] != stamp) {
+                                seen[v] = stamp;
+                                out.vertex.push_back(v);
+                            }
             }
-        std::sort(r.begin(), r.end());
-        r.erase(std::unique(r.begin(), r.end()), r.end());
-        out.vertex.insert(out.vertex.end(), r.begin(), r.end());
+        std::sort(out.vertex.begin() + static_cast<std::ptrdiff_t>(first), out.vertex.end());
         out.start.push_back(static_cast<std::uint32_t>(out.vertex.size()));
     }
     return out;
