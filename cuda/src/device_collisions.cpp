@@ -419,6 +419,7 @@ bool DeviceCollisions::resolve(const Model& model, double h, float* x, float* v,
     in.max_iterations = settings.max_impact_iterations;
     in.refresh_broad_phase = [&](int, collision::GpuBroadPhaseInput& bp) { cull(model, bp, stream); };
     if (settings.impact_tolerance > 0.0) in.tolerance_ratio = settings.impact_tolerance;
+    in.ccd_time_tolerance = settings.ccd_time_tolerance;
     if (settings.max_impact_sweeps > 0) in.max_sweeps = settings.max_impact_sweeps;
     if (settings.max_impact_work >= 1.0) in.max_work = static_cast<std::int64_t>(settings.max_impact_work);
     if (colored_zones_ || colored_above_ >= 0) in.colored_zone_vertices = collision::kColoredZoneVertices;

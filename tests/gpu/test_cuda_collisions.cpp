@@ -6,10 +6,12 @@
 #include <algorithm>
 #include <chrono>
 #include <cstdio>
+#include <cstdint>
 #include <cstdlib>
 #include <filesystem>
 #include <memory>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "weft/error.h"
@@ -137,6 +139,32 @@ TEST(CudaCollisions, RestNeighboursGetNoSpringsButOtherClothsDo) {
     const int cpu_two_sheets = test::rest_exclusion_contacts("cpu", 1.0, true);
     EXPECT_LE(std::abs(kept - cpu_kept), std::max(2, cpu_kept / 100));
     EXPECT_LE(std::abs(two_sheets - cpu_two_sheets), std::max(2, cpu_two_sheets / 100));
+}
+
+// collision.ccd_time_tolerance reaches the GPU's impact zones (their float CCD): the stacked layers
+// stay intersection-free with a coarse tolerance, and the run differs from the default's.
+TEST(CudaCollisions, ACoarseCcdTimeToleranceStaysIntersectionFree) {
+    WEFT_REQUIRE_GPU();
+    const auto run = [](const char* tolerance) {
+        const auto world = make_world("layers", "cuda",
+                                      {"collision.check=true", "collision.mode=\"ccd_zones\"",
+                                       std::string("collision.ccd_time_tolerance=") + tolerance});
+        std::int64_t hits = 0;
+        for (int frame = 0; frame < 45; ++frame) {
+            const StepStats& s = world->step();
+            EXPECT_FALSE(s.non_finite) << "frame " << frame;
+            EXPECT_EQ(s.collision.remaining_intersections, 0) << "tolerance " << tolerance << ", frame " << frame;
+            EXPECT_EQ(s.collision.unresolved_substeps, 0) << "tolerance " << tolerance << ", frame " << frame;
+            hits += s.collision.ccd_hits;
+        }
+        return std::make_pair(hits, world->positions(0));
+    };
+    const auto [default_hits, default_x] = run("0");
+    const auto [coarse_hits, coarse_x] = run("1e-2");
+    std::printf("[ ccd      ] layers, 45 frames: %lld CCD hits at the default time tolerance, %lld at 1e-2\n",
+                static_cast<long long>(default_hits), static_cast<long long>(coarse_hits));
+    EXPECT_GT(default_hits, 0) << "no CCD hit: the scene does not test the tolerance";
+    EXPECT_NE(coarse_x, default_x) << "the tolerance did not reach the GPU's CCD";
 }
 
 }  // namespace

@@ -820,6 +820,7 @@ std::uint32_t GpuImpactZones::detect(const GpuImpactZoneInput& in, weft::collisi
     cin.edges = in.edges;
     cin.eta = float_at_least(report.eta);
     cin.clamp_to_start_distance = true;
+    if (in.ccd_time_tolerance > 0.0) cin.t_tolerance = static_cast<float>(in.ccd_time_tolerance);
     const GpuCcdCounters& cc = ccd_.find(cin, broad_.pairs(), stream);
     report.ccd_tests += cc.tests;
     report.ccd_hits += cc.hits;
@@ -1160,6 +1161,9 @@ weft::collision::ImpactZoneReport GpuImpactZones::resolve(const GpuImpactZoneInp
                     "giant_zone_constraints ≥ 1");
     if (!std::isfinite(in.tolerance_ratio) || !(in.tolerance_ratio > 0.0))
         throw Error("GPU impact zones: tolerance_ratio must be finite and > 0");
+    if (!(in.ccd_time_tolerance >= 0.0 && in.ccd_time_tolerance < 1.0))
+        throw Error("GPU impact zones: ccd_time_tolerance must be in [0, 1) (0: the float CCD's default), got " +
+                    std::to_string(in.ccd_time_tolerance));
     if (in.colored_zone_vertices > kColoredZoneVertices)
         throw Error("GPU impact zones: colored_zone_vertices must be at most " + std::to_string(kColoredZoneVertices) +
                     " (got " + std::to_string(in.colored_zone_vertices) + ")");

@@ -69,6 +69,9 @@ struct GpuImpactZoneInput {
     double thickness = 0.0;
     /// CCD separation as a fraction of the thickness, in (0, 1): eta = ratio × thickness.
     double separation_ratio = weft::collision::kImpactZoneSeparationRatio;
+    /// The CCD's time tolerance as a fraction of the substep, in [0, 1): hits are resolved to it
+    /// (collision.ccd_time_tolerance). 0: the float CCD's default, physics::CcdDefaults<float>.
+    double ccd_time_tolerance = 0.0;
     /// Projection rounds before the fallbacks (≥ 0) and fallback rounds of rigid zones (≥ 0).
     int max_iterations = 32;
     int max_rigid_rounds = weft::collision::kImpactZoneRigidRounds;
