@@ -39,9 +39,10 @@ enum class BendingModel : std::uint8_t {
     /// on every backend. Too soft by 13–70% on a clamped strip, by an amount that depends on the
     /// cells' shape and does not shrink with refinement on square cells.
     Hinge,
-    /// A shape operator per triangle from its three edges' angles and the plate energy
+    /// The default. A shape operator per triangle from its three edges' angles and the plate energy
     /// ½·D·A·|S − S̄|² (weft/physics/shell_bending.h): within 0.5% of the heavy elastica from 12
-    /// cells along a clamped strip, whatever the cells' shape. Every backend, one GPU or several.
+    /// cells along a clamped strip, whatever the cells' shape. Every backend, one GPU or several, at
+    /// about the hinge model's cost. About 1.5× too stiff for a bend across a grid's diagonal.
     Shell,
     /// The shell model with each edge's normal free to turn about the edge, relaxed to minimise the
     /// energy (weft/physics/midedge_bending.h): a cylinder costs the plate energy bent about any
@@ -104,7 +105,7 @@ struct SolverSettings {
     bool cg_warm_start = true;
     Precision precision = Precision::Double;  ///< CPU backend scalar; double is the reference
     HessianMode hessian = HessianMode::Fast;
-    BendingModel bending = BendingModel::Hinge;
+    BendingModel bending = BendingModel::Shell;
     Preconditioner preconditioner = Preconditioner::Auto;
     /// Schwarz preconditioner only: substeps between its factorisations. 1 refactors in every Newton
     /// iteration; k > 1 only in the first Newton iteration of every k-th substep, the others reusing
