@@ -208,7 +208,7 @@ DeviceSolver* device_solver(Backend& backend) {
 
 DeviceMemoryBudget* device_memory_budget(Backend& backend) {
     auto* b = dynamic_cast<CudaBackend*>(&backend);
-    return b != nullptr ? &b->budget() : nullptr;
+    return b != nullptr ? &b->budget() : multi::multi_gpu_budget(backend);
 }
 
 }  // namespace weft::cuda

@@ -7,6 +7,9 @@
 // audit, an output buffer and a restored warm start read no freed buffer.
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <cstdio>
+#include <cstdlib>
 #include <filesystem>
 #include <string>
 #include <vector>
@@ -15,6 +18,7 @@
 
 #include "backend_access.h"
 #include "weft/cuda/cuda_backend.h"
+#include "multi/multi_gpu_backend.h"
 #include "gpu_test_util.h"
 #include "weft/error.h"
 
@@ -148,6 +152,109 @@ TEST(CudaDeviceFaults, ABufferThatCannotGrowMidRunFailsTheSubstepAndKeepsTheLast
     EXPECT_EQ(equal, now.size()) << "the output buffer bound during the fault does not hold the state";
     api->set_output(nullptr, 0);
     cudaFree(output);
+}
+
+/// `layers` at one substep a frame on two parts of one GPU (the multi-GPU solver's test mode: the
+/// partition, the halo and the collision shares of two GPUs), with the budget `limit` on that GPU.
+std::unique_ptr<World> layers_on_two_parts(std::size_t limit) {
+    setenv(cuda::multi::kPartsOnOneDeviceEnv, "1", 1);
+    BackendOptions options;
+    options.gpus = 2;
+    options.device_memory_limit = limit;
+    const std::vector<std::string> one_substep = {"solver.substeps=1"};
+    auto world = build_world(load_scene(test::scene_file("layers"), one_substep), "cuda", options);
+    unsetenv(cuda::multi::kPartsOnOneDeviceEnv);
+    return world;
+}
+
+struct WorldState {
+    std::vector<std::vector<Vec3d>> x, v;  // per cloth
+    bool operator==(const WorldState&) const = default;
+};
+
+WorldState state_of(World& world) {
+    WorldState s;
+    for (std::size_t c = 0; c < world.cloth_count(); ++c) {
+        s.x.push_back(world.positions(c));
+        s.v.push_back(world.velocities(c));
+    }
+    return s;
+}
+
+// The same promise across parts: a buffer that cannot grow mid-run fails the substep with the stage
+// named and puts every part back where the substep started (the bits of a world that never failed,
+// every cloth), the state readable and savable; the next step rebuilds the parts and fails again
+// while the memory is not there, and steps on once it is.
+TEST(CudaDeviceFaults, AcrossPartsAFailedSubstepPutsEveryPartBack) {
+    WEFT_REQUIRE_GPU();
+    // The reference: the budget's own count on the GPU, frame by frame, to the first growth after
+    // the first frames (the audit's buffers come with the first step).
+    constexpr int kFrames = 60;
+    auto reference = layers_on_two_parts(0);
+    reference->build();
+    cuda::DeviceMemoryBudget* reference_budget = cuda::device_memory_budget(reference->backend());
+    ASSERT_NE(reference_budget, nullptr) << "the multi-GPU backend has no budget";
+    const int device = 0;
+    std::vector<std::size_t> held{reference_budget->held(device)};
+    std::vector<WorldState> states{state_of(*reference)};
+    int growth = -1;
+    for (int f = 1; f <= kFrames && growth < 0; ++f) {
+        (void)reference->step();
+        held.push_back(reference_budget->held(device));
+        states.push_back(state_of(*reference));
+        if (f >= 2 && held[static_cast<std::size_t>(f)] > held[static_cast<std::size_t>(f - 1)]) growth = f;
+    }
+    ASSERT_GT(growth, 1) << "layers' device memory on two parts did not grow in " << kFrames << " frames";
+    const std::size_t before = held[static_cast<std::size_t>(growth - 1)], after = held[static_cast<std::size_t>(growth)];
+    std::printf("[ fault    ] two parts: the device memory grows at frame %d, %zu -> %zu bytes\n", growth, before, after);
+
+    auto capped = layers_on_two_parts(before + (after - before) / 2);
+    ASSERT_NO_THROW(capped->build());
+    for (int f = 1; f < growth; ++f) ASSERT_NO_THROW((void)capped->step()) << "frame " << f;
+    std::string first;
+    try {
+        (void)capped->step();
+        FAIL() << "the buffer grew past the limit";
+    } catch (const Error& e) {
+        first = e.what();
+    }
+    std::printf("[ fault    ] %s\n", first.c_str());
+    EXPECT_TRUE(contains(first, "out of device memory")) << first;
+    EXPECT_TRUE(contains(first, "parts: the substep from t =")) << first;
+    EXPECT_TRUE(contains(first, "every part is back where that substep started")) << first;
+    const auto g = static_cast<std::size_t>(growth - 1);
+    EXPECT_EQ(capped->steps(), g);
+    EXPECT_TRUE(state_of(*capped) == states[g]) << "the state is not the last good frame's on every cloth";
+    const std::filesystem::path file = std::filesystem::temp_directory_path() / "weft_test_cuda_parts_fault.state";
+    EXPECT_NO_THROW(capped->save_state(file));
+    std::filesystem::remove(file);
+    // The next step rebuilds the parts from that state and fails the same way, the cloth unmoved.
+    try {
+        (void)capped->step();
+        ADD_FAILURE() << "the step after the fault passed the limit";
+    } catch (const Error& e) {
+        EXPECT_TRUE(contains(e.what(), "out of device memory")) << e.what();
+    }
+    EXPECT_TRUE(state_of(*capped) == states[g]);
+    // With the limit lifted the parts are rebuilt and step on from the last good state. The rebuild
+    // starts the CG cold, so the step is near the reference's, not its bits.
+    cuda::DeviceMemoryBudget* budget = cuda::device_memory_budget(capped->backend());
+    ASSERT_NE(budget, nullptr);
+    budget->set_limit(0);
+    StepStats resumed;
+    EXPECT_NO_THROW(resumed = capped->step());
+    EXPECT_FALSE(resumed.non_finite);
+    EXPECT_EQ(capped->steps(), g + 1);
+    const WorldState now = state_of(*capped);
+    double apart = 0.0, moved = 0.0;
+    for (std::size_t c = 0; c < now.x.size(); ++c)
+        for (std::size_t i = 0; i < now.x[c].size(); ++i) {
+            apart = std::max(apart, length(now.x[c][i] - states[g + 1].x[c][i]));
+            moved = std::max(moved, length(now.x[c][i] - states[g].x[c][i]));
+        }
+    std::printf("[ fault    ] resumed: %.3e m from the reference's frame %d, moved %.3e m\n", apart, growth, moved);
+    EXPECT_GT(moved, 0.0) << "the resumed step did not move the cloth";
+    EXPECT_LT(apart, 5e-3) << "the resumed step is not the reference's";
 }
 
 }  // namespace

@@ -88,6 +88,7 @@ public:
 
     std::size_t memory_bytes() const override { return solver_.memory_bytes(); }
     MultiSolver& solver() { return solver_; }
+    DeviceMemoryBudget& budget() { return budget_; }
 
     // The renderer's slots on the first GPU: every part's vertices gathered there, then copied into
     // the slot on that GPU (MultiSolver::set_output); no byte through the host.
@@ -123,6 +124,11 @@ private:
 MultiSolver* multi_solver(Backend& backend) {
     auto* b = dynamic_cast<MultiGpuBackend*>(&backend);
     return b != nullptr ? &b->solver() : nullptr;
+}
+
+DeviceMemoryBudget* multi_gpu_budget(Backend& backend) {
+    auto* b = dynamic_cast<MultiGpuBackend*>(&backend);
+    return b != nullptr ? &b->budget() : nullptr;
 }
 
 std::unique_ptr<Backend> make_multi_gpu_backend(const BackendOptions& options) {

@@ -20,5 +20,14 @@ inline constexpr const char* kPartsOnOneDeviceEnv = "WEFT_MULTI_GPU_ONE_DEVICE";
 class MultiSolver;
 /// The MultiSolver behind a backend made here, or nullptr (tests and benchmarks; not public API).
 MultiSolver* multi_solver(Backend& backend);
+}  // namespace weft::cuda::multi
+
+namespace weft::cuda {
+class DeviceMemoryBudget;
+}
+
+namespace weft::cuda::multi {
+/// The memory budget of a backend made here (BackendOptions::device_memory_limit, per GPU), or nullptr.
+DeviceMemoryBudget* multi_gpu_budget(Backend& backend);
 
 }  // namespace weft::cuda::multi

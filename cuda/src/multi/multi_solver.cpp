@@ -16,7 +16,32 @@
 #include "weft/error.h"
 
 namespace weft::cuda::multi {
+
+// The one-GPU layout (device_upload.cpp): 'G', sizeof(float), the vertex count (u64), the substep
+// count (i64), then 3n floats of the previous Δv, component by component.
 namespace {
+constexpr std::size_t kStateHead = 2 + sizeof(std::uint64_t) + sizeof(std::int64_t);
+
+std::uint64_t state_vertices(std::span<const std::uint8_t> bytes) {
+    std::uint64_t n = 0;
+    std::memcpy(&n, bytes.data() + 2, sizeof(n));
+    return n;
+}
+std::int64_t state_substeps(std::span<const std::uint8_t> bytes) {
+    std::int64_t substeps = 0;
+    std::memcpy(&substeps, bytes.data() + 2 + sizeof(std::uint64_t), sizeof(substeps));
+    return substeps;
+}
+std::vector<std::uint8_t> state_bytes(std::uint64_t n, std::int64_t substeps) {
+    std::vector<std::uint8_t> out(kStateHead + 3 * n * sizeof(float));
+    out[0] = 'G';
+    out[1] = sizeof(float);
+    std::memcpy(out.data() + 2, &n, sizeof(n));
+    std::memcpy(out.data() + 2 + sizeof(n), &substeps, sizeof(substeps));
+    return out;
+}
+float* state_values(std::vector<std::uint8_t>& bytes) { return reinterpret_cast<float*>(bytes.data() + kStateHead); }
+const float* state_values(std::span<const std::uint8_t> bytes) { return reinterpret_cast<const float*>(bytes.data() + kStateHead); }
 
 using Clock = std::chrono::steady_clock;
 
@@ -61,6 +86,10 @@ MultiSolver::~MultiSolver() {
 }
 
 void MultiSolver::build(const FlatModel& flat, const Model& model) {
+    rebuild_pending_ = false;  // a new build forgets a fault's rescue (rebuild_after_fault keeps a copy)
+    rescued_x_.clear();
+    rescued_v_.clear();
+    cold_state_.clear();
     pcg_.reset();
     level1_couplings_.reset();
     mirror_.reset();
@@ -473,12 +502,99 @@ double MultiSolver::elapsed_ms(std::size_t a, std::size_t b) const {
 }
 
 void MultiSolver::substep(const Model& model, double t, double h, StepStats& stats) {
+    if (!device_lost_.empty())
+        throw Error("CUDA backend on " + std::to_string(devices_.size()) + " parts: a GPU was lost in an earlier substep (" +
+                    device_lost_ + "); the state cannot be read: build a new world");
+    if (rebuild_pending_) rebuild_after_fault(model);
     if (solvers_.empty() || flat_ == nullptr || flat_->vertex_count == 0) return;
-    const bool colliding = !collisions_.empty();
-    if (needs_cloth_collisions(model) != colliding)
+    // Requests the parts cannot take are refused before any work (they are not faults).
+    if (needs_cloth_collisions(model) != !collisions_.empty())
         throw Error("CUDA backend on " + std::to_string(devices_.size()) +
                     " parts: the cloth collisions were switched on or off after the build; across GPUs that takes a new world");
     require_bending_as_built(model);
+    begun_ = 0;
+    stage_ = "the substep's start";
+    try {
+        run_substep(model, t, h, stats);
+    } catch (const Error& e) {
+        recover_from_fault(e, t);
+    }
+}
+
+// As one GPU's (DeviceSolver::recover_from_fault): out of memory and other errors that leave every
+// context usable put each part that began the substep back at its start (x0 and v0, which its first
+// kernel wrote; a part that had not begun has not moved) and keep the whole state on the host, from
+// which the next substep rebuilds every part: a buffer that failed to grow may have left its owner
+// half resized, on any GPU. A sticky error loses the context: every later substep fails.
+void MultiSolver::recover_from_fault(const Error& error, double t) {
+    std::string where = "CUDA backend on " + std::to_string(devices_.size()) + " parts: the substep from t = " +
+                        std::to_string(t) + " s failed in " + stage_ + ": " + error.what();
+    bool usable = true;
+    for (const int d : devices_) {
+        (void)cudaSetDevice(d);
+        (void)cudaGetLastError();
+        // An asynchronous error is reported by the first synchronisation and cleared; a sticky one by all.
+        bool ok = cudaDeviceSynchronize() == cudaSuccess;
+        if (!ok) {
+            (void)cudaGetLastError();
+            ok = cudaDeviceSynchronize() == cudaSuccess;
+        }
+        (void)cudaGetLastError();
+        usable = usable && ok;
+    }
+    if (usable) {
+        std::string failure;
+        try {
+            for (std::size_t p = 0; p < begun_; ++p) solvers_[p]->part_rollback();
+            synchronize();
+            const std::size_t n = flat_->vertex_count;
+            std::vector<Vec3d> x(n), v(n);
+            read_state(0, n, x.data(), v.data());
+            std::vector<std::uint8_t> cold = solver_state();
+            std::fill(cold.begin() + static_cast<std::ptrdiff_t>(std::min(cold.size(), kStateHead)), cold.end(), std::uint8_t{0});
+            rescued_x_ = std::move(x);
+            rescued_v_ = std::move(v);
+            cold_state_ = std::move(cold);
+            rebuild_pending_ = true;
+        } catch (const Error& again) {
+            failure = again.what();
+        }
+        if (failure.empty()) throw Error(where + "; every part is back where that substep started (t = " + std::to_string(t) + " s)");
+        where += "; putting the parts back failed too: " + failure;
+    }
+    device_lost_ = error.what();
+    throw Error(where + "; a device is lost (a sticky CUDA error): the state cannot be read, build a new world");
+}
+
+void MultiSolver::rebuild_after_fault(const Model& model) {
+    // build() forgets the rescue, the output binding and the warm start: copies are kept for a retry.
+    const std::vector<Vec3d> x = rescued_x_, v = rescued_v_;
+    const std::vector<std::uint8_t> cold = cold_state_;
+    std::vector<std::uint8_t> warm = std::move(pending_solver_state_);
+    pending_solver_state_.clear();
+    void* const output = output_;
+    const std::size_t stride = output_stride_;
+    const bool synchronous = output_synchronous_;
+    try {
+        build(*flat_, model);
+    } catch (...) {
+        rescued_x_ = x;
+        rescued_v_ = v;
+        cold_state_ = cold;
+        pending_solver_state_ = std::move(warm);
+        output_ = output;
+        output_stride_ = stride;
+        output_synchronous_ = synchronous;
+        rebuild_pending_ = true;
+        throw;
+    }
+    write_state(0, x.size(), x.data(), v.data());
+    if (!warm.empty()) restore_solver_state(warm);
+    if (output != nullptr) set_output(output, stride, synchronous);
+}
+
+void MultiSolver::run_substep(const Model& model, double t, double h, StepStats& stats) {
+    const bool colliding = !collisions_.empty();
     if (colliding && collisions_.front()->stale(model)) {
         for (std::size_t p = 0; p < collisions_.size(); ++p) {  // self-collision toggled live
             WEFT_CUDA_CHECK(cudaSetDevice(devices_[p]));
@@ -511,14 +627,20 @@ void MultiSolver::substep(const Model& model, double t, double h, StepStats& sta
     mark(e++);
     // The detection times its own stages (and waits for them): the first stage is what it leaves.
     const double detection_before = detection_ms(stats);
+    stage_ = "collision detection";
     if (colliding) detect_contacts(model, t, h, stats);
     const double detection = detection_ms(stats) - detection_before;
     const auto host_start = Clock::now();
     if (!colliding) offset_ = false;
-    for (auto& s : solvers_) s->part_begin_substep(model, t, h, offset_);
+    stage_ = "the substep's start";
+    for (auto& s : solvers_) {
+        s->part_begin_substep(model, t, h, offset_);
+        ++begun_;
+    }
     const double host_ms = ms_since(host_start);
     mark(e++);
     const SolverSettings& settings = model.settings.solver;
+    stage_ = "the solve";
     for (int it = 0; it < settings.newton_iterations; ++it) newton_iteration(model, it, stats, &e);
     for (auto& s : solvers_) s->part_commit();
     mark(e++);
@@ -527,6 +649,7 @@ void MultiSolver::substep(const Model& model, double t, double h, StepStats& sta
         // the cloth and take one more Newton iteration from there (CollisionSettings::redetect_share),
         // as on one GPU. Every GPU's truncation counted the same whole model: the first's counts decide.
         DeviceSolver& leader = *solvers_.front();
+        stage_ = "the offset contact's reruns";
         for (;;) {
             WEFT_CUDA_CHECK(cudaSetDevice(leader.device()));
             if (!collisions_.front()->finish_truncation(model, leader.stream(), stats)) break;
@@ -584,11 +707,14 @@ void MultiSolver::substep(const Model& model, double t, double h, StepStats& sta
         const auto moved_by_sweep = [&stats] { return stats.collision.swept_collider_hits + stats.collision.collider_overshoots; };
         const int hits_before = moved_by_sweep();
         bool swept = false;
+        stage_ = "the fast-collider sweep";
         for (auto& s : solvers_) swept = s->part_sweep(stats) || swept;
         if (swept) exchange_state();  // a ghost may have been carried along differently from its owner
+        stage_ = "CCD and the impact zones";
         if (colliding) resolve_contacts(model, h, moved_by_sweep() > hits_before, stats);
     }
     if (output_ != nullptr) {
+        stage_ = "the output write";
         write_output();
         if (output_synchronous_) synchronize();
     }
@@ -729,6 +855,11 @@ void MultiSolver::read_state(std::size_t first, std::size_t count, Vec3d* x, Vec
     if (first + count > (flat_ != nullptr ? flat_->vertex_count : 0))
         throw Error("multi-GPU solver: read_state of vertices [" + std::to_string(first) + ", " + std::to_string(first + count) +
                     ") past the model");
+    if (rebuild_pending_) {  // after a fault the state is on the host (substep)
+        std::copy_n(rescued_x_.begin() + static_cast<std::ptrdiff_t>(first), count, x);
+        std::copy_n(rescued_v_.begin() + static_cast<std::ptrdiff_t>(first), count, v);
+        return;
+    }
     for (std::size_t p = 0; p < solvers_.size(); ++p) {
         const PartModel& pm = part_models_[p];
         std::vector<Vec3d> px(pm.owned), pv(pm.owned);
@@ -746,6 +877,11 @@ void MultiSolver::write_state(std::size_t first, std::size_t count, const Vec3d*
     if (first + count > (flat_ != nullptr ? flat_->vertex_count : 0))
         throw Error("multi-GPU solver: write_state of vertices [" + std::to_string(first) + ", " +
                     std::to_string(first + count) + ") past the model");
+    if (rebuild_pending_) {
+        std::copy_n(x, count, rescued_x_.begin() + static_cast<std::ptrdiff_t>(first));
+        std::copy_n(v, count, rescued_v_.begin() + static_cast<std::ptrdiff_t>(first));
+        return;
+    }
     for (std::size_t p = 0; p < solvers_.size(); ++p) {
         const PartModel& pm = part_models_[p];
         const std::size_t local = pm.model.vertex_count;
@@ -763,34 +899,10 @@ void MultiSolver::write_state(std::size_t first, std::size_t count, const Vec3d*
     }
 }
 
-// The one-GPU layout (device_upload.cpp): 'G', sizeof(float), the vertex count (u64), the substep
-// count (i64), then 3n floats of the previous Δv, component by component.
-namespace {
-constexpr std::size_t kStateHead = 2 + sizeof(std::uint64_t) + sizeof(std::int64_t);
-
-std::uint64_t state_vertices(std::span<const std::uint8_t> bytes) {
-    std::uint64_t n = 0;
-    std::memcpy(&n, bytes.data() + 2, sizeof(n));
-    return n;
-}
-std::int64_t state_substeps(std::span<const std::uint8_t> bytes) {
-    std::int64_t substeps = 0;
-    std::memcpy(&substeps, bytes.data() + 2 + sizeof(std::uint64_t), sizeof(substeps));
-    return substeps;
-}
-std::vector<std::uint8_t> state_bytes(std::uint64_t n, std::int64_t substeps) {
-    std::vector<std::uint8_t> out(kStateHead + 3 * n * sizeof(float));
-    out[0] = 'G';
-    out[1] = sizeof(float);
-    std::memcpy(out.data() + 2, &n, sizeof(n));
-    std::memcpy(out.data() + 2 + sizeof(n), &substeps, sizeof(substeps));
-    return out;
-}
-float* state_values(std::vector<std::uint8_t>& bytes) { return reinterpret_cast<float*>(bytes.data() + kStateHead); }
-const float* state_values(std::span<const std::uint8_t> bytes) { return reinterpret_cast<const float*>(bytes.data() + kStateHead); }
-}  // namespace
 
 std::vector<std::uint8_t> MultiSolver::solver_state() const {
+    // After a fault: what was restored meanwhile, else the cold start the rebuild begins with.
+    if (rebuild_pending_) return pending_solver_state_.empty() ? cold_state_ : pending_solver_state_;
     if (solvers_.empty() || flat_ == nullptr) return {};
     const std::uint64_t n = flat_->vertex_count;
     std::vector<std::uint8_t> out;
@@ -822,6 +934,10 @@ void MultiSolver::restore_solver_state(std::span<const std::uint8_t> bytes) {
     if (n != vertices || bytes.size() != kStateHead + 3 * n * sizeof(float))
         throw Error("cuda backend: the checkpoint's solver state is for " + std::to_string(n) + " vertices, this world has " +
                     std::to_string(vertices));
+    if (rebuild_pending_) {  // kept for the rebuild after a fault
+        pending_solver_state_.assign(bytes.begin(), bytes.end());
+        return;
+    }
     std::vector<float> whole(3 * n);
     std::memcpy(whole.data(), state_values(bytes), whole.size() * sizeof(float));
     for (std::size_t p = 0; p < solvers_.size(); ++p) {
@@ -844,6 +960,11 @@ void MultiSolver::require_bending_as_built(const Model& model) const {
 }
 
 EnergyAudit MultiSolver::energy_audit(const Model& model, double t, double h, bool with_wind) {
+    if (!device_lost_.empty())
+        throw Error("CUDA backend on " + std::to_string(devices_.size()) + " parts: a GPU was lost in an earlier substep (" +
+                    device_lost_ + "); the state cannot be audited");
+    // After a fault the parts are rebuilt first (a failed rebuild throws here, reading nothing).
+    if (rebuild_pending_) rebuild_after_fault(model);
     require_bending_as_built(model);
     EnergyAudit sum;
     sum.with_wind = with_wind;
@@ -870,7 +991,8 @@ void MultiSolver::set_output(void* device_buffer, std::size_t stride, bool synch
     output_ = device_buffer;
     output_stride_ = stride;
     output_synchronous_ = synchronous;
-    if (device_buffer == nullptr || solvers_.empty()) return;
+    // After a fault the binding waits for the rebuild (rebuild_after_fault binds it and writes the state).
+    if (device_buffer == nullptr || solvers_.empty() || rebuild_pending_) return;
     const std::size_t bytes = flat_->vertex_count * stride;
     if (output_staging_.size() != bytes || staged_stride_ != stride) {
         // The staging buffer lives on the first part's GPU; the others write into it through peer

@@ -32,6 +32,7 @@
 #include "weft/backend/recut_policy.h"
 #include "weft/backend/schwarz_hierarchy.h"
 #include "weft/backend/vertex_partition.h"
+#include "weft/error.h"
 #include "weft/stats.h"
 
 namespace weft::cuda::multi {
@@ -49,6 +50,12 @@ public:
     /// Throws weft::Error naming what is missing when the model needs a stage not built across GPUs
     /// (cloth collisions: self-collision or mesh colliders), or when the cloth is too small to cut.
     void build(const FlatModel& flat, const Model& model);
+    /// One substep across the parts. A substep that fails (out of device memory as a collision
+    /// buffer grows, a CUDA error) throws weft::Error naming the stage; where every device is still
+    /// usable, every part is first put back where the substep started and the state kept on the host
+    /// (read_state, write_state and the warm start work on it), and the next substep or audit
+    /// rebuilds the parts from it (docs/design.md, "Device faults"). A lost device fails every later
+    /// substep.
     void substep(const Model& model, double t, double h, StepStats& stats);
     /// Global vertices [first, first + count) of the flat model, from their owners.
     void read_state(std::size_t first, std::size_t count, Vec3d* x, Vec3d* v) const;
@@ -108,6 +115,15 @@ public:
     void recut(const Model& model);
 
 private:
+    /// The substep's work (substep() handles its failure).
+    void run_substep(const Model& model, double t, double h, StepStats& stats);
+    /// After a failed substep: every part that began it back at its start, the state onto the host,
+    /// the rebuild pending; throws weft::Error with `error`'s reason, the stage and what became of
+    /// the cloth.
+    [[noreturn]] void recover_from_fault(const Error& error, double t);
+    /// Builds the parts again from the state kept at the fault, with the warm start and the output
+    /// binding set meanwhile; a rebuild that fails keeps them for the next try.
+    void rebuild_after_fault(const Model& model);
     /// Exchanges the ghosts of x, v and the previous Δv (after a sweep or a rollback changed them).
     void exchange_state();
     void synchronize() const;
@@ -213,6 +229,15 @@ private:
     cudaEvent_t user_event_ = nullptr;  // on the outside stream's device
     std::vector<cudaEvent_t> part_done_;  // per part: its substep's end, for the outside stream
     bool use_graph_ = true;
+    // Device faults (substep, recover_from_fault): the stage running, how many parts began the
+    // substep (wrote its start), and after a fault the state on the host until the rebuild.
+    const char* stage_ = "";
+    std::size_t begun_ = 0;
+    bool rebuild_pending_ = false;
+    std::vector<Vec3d> rescued_x_, rescued_v_;
+    std::vector<std::uint8_t> cold_state_;             // the warm start after a fault: zeros
+    std::vector<std::uint8_t> pending_solver_state_;   // restored while the rebuild was pending
+    std::string device_lost_;                          // a sticky error's reason
     PcgLoop pcg_loop_ = PcgLoop::Auto;
     AssemblyStrategy assembly_ = AssemblyStrategy::Auto;
     // Re-cutting by contact load: the last detection's contacts per share, the policy, whether the
