@@ -533,6 +533,51 @@ TEST(CollisionGpu, SameBitsOnEveryRunAndAfterOverflow) {
     EXPECT_EQ(tiny.reruns(), reruns);
 }
 
+// A call that floods the hash (a twisted sheet crushed: 4.7M candidate pairs) grows the pair buffers;
+// calm calls after it (the sheet spread out: 0.28M) need a fraction. At the end of the first trim
+// window that did not hold the flood (weft/backend/buffer_trim.h, the CPU's policy) they are cut
+// back, and the calm calls' pairs do not change.
+TEST(CollisionGpu, AFloodOfPairsIsGivenBackAfterATrimWindow) {
+    WEFT_REQUIRE_GPU();
+    // The sheet crushed to a fifth (2 mm cells under a 5 mm thickness) and spread 4 times wider.
+    const Scene sheet = twisted_sheet(100, 1.5, 0.03, 0.004, 41);
+    Scene flood = sheet, calm = sheet;
+    for (std::size_t i = 0; i < sheet.x0.size(); ++i) {
+        flood.x0[i] = 0.2 * sheet.x0[i];
+        flood.x1[i] = 0.2 * sheet.x1[i];
+        calm.x0[i] = 4.0 * sheet.x0[i];
+        calm.x1[i] = 4.0 * sheet.x1[i];
+    }
+    Stream stream;
+    const DeviceScene calm_device(calm), flood_device(flood);
+    gpu::GpuBroadPhase bp;
+    const GpuPairs flooded = run_gpu(bp, flood_device, stream.s);
+    const std::size_t flooded_bytes = bp.memory_bytes(), flooded_pair_bytes = bp.pair_memory_bytes();
+    gpu::GpuBroadPhase fresh;
+    const GpuPairs expected = run_gpu(fresh, calm_device, stream.s);
+    ASSERT_GT(flooded.keys.size(), 10 * expected.keys.size()) << "the flood did not flood: the test tests nothing";
+    // The flood's window ends at call kTrimPeriod (its peak is the flood's: nothing cut), the next
+    // at 2·kTrimPeriod; the cut applies at the call after it.
+    for (std::size_t call = 2; call <= 2 * kTrimPeriod; ++call) (void)bp.find(calm_device.input(), stream.s);
+    EXPECT_EQ(bp.trims(), 0);
+    const GpuPairs after = run_gpu(bp, calm_device, stream.s);
+    std::printf("[ trim     ] flood %zu pairs, %.1f MB (pair lists %.1f MB); calm %zu pairs; after %zu calls %.1f MB "
+                "(%.1f MB), %d trim(s)\n",
+                flooded.keys.size(), static_cast<double>(flooded_bytes) / 1e6, static_cast<double>(flooded_pair_bytes) / 1e6,
+                expected.keys.size(), 2 * kTrimPeriod + 1, static_cast<double>(bp.memory_bytes()) / 1e6,
+                static_cast<double>(bp.pair_memory_bytes()) / 1e6, bp.trims());
+    EXPECT_EQ(bp.trims(), 1);
+    EXPECT_LT(bp.pair_memory_bytes(), flooded_pair_bytes / 4);
+    EXPECT_LT(bp.memory_bytes(), flooded_bytes);
+    EXPECT_LT(bp.pair_capacity(), 8 * expected.keys.size() + 4096);
+    EXPECT_TRUE(after.keys == expected.keys);
+    // A steady scene is not cut again: the next window keeps the sizes.
+    const std::size_t bytes = bp.memory_bytes();
+    for (std::size_t call = 0; call < kTrimPeriod + 1; ++call) (void)bp.find(calm_device.input(), stream.s);
+    EXPECT_EQ(bp.trims(), 1);
+    EXPECT_EQ(bp.memory_bytes(), bytes);
+}
+
 // Across GPUs each GPU hashes the cells dealt to it and reports their pairs: the shares are disjoint
 // and together are the whole list, with their entries and tested slots adding up to the whole's
 // (with culling, which cuts runs out of the rows, and with oversized primitives, shared out one by one).

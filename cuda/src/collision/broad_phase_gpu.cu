@@ -7,6 +7,7 @@
 #include <cub/device/device_scan.cuh>
 
 #include <algorithm>
+#include <utility>
 #include <climits>
 #include <string>
 
@@ -768,6 +769,22 @@ void GpuBroadPhase::reserve(const GpuBroadPhaseInput& in, std::uint32_t prims) {
     if (entry_capacity_ > kMaxItems || pair_capacity_ > kMaxItems)
         throw Error("GPU broad phase: more than 2^31 entries or pairs needed (entries " + std::to_string(entry_capacity_) +
                     ", pairs " + std::to_string(pair_capacity_) + ")");
+    if (trimmed_entries_ != 0 || trimmed_pairs_ != 0) {
+        // The last window cut the capacities (needs_rerun): the arrays they size, and the CUB scratch
+        // sized by them, are allocated again below at the new sizes. Freeing waits for the device, so
+        // nothing of the last call still reads them.
+        if (trimmed_entries_ != 0) entry_capacity_ = std::exchange(trimmed_entries_, 0);
+        if (trimmed_pairs_ != 0) pair_capacity_ = std::exchange(trimmed_pairs_, 0);
+        for (auto& a : entry_keys_) a = {};
+        for (auto& a : entry_prims_) a = {};
+        for (auto& a : pair_keys_) a = {};
+        cell_id_ = {};
+        cell_begin_ = {};
+        row_offset_ = {};
+        row_info_ = {};
+        temp_ = {};
+        ++trims_;
+    }
     const bool cull = in.vertex_patch != nullptr;
     const std::size_t ec = entry_capacity_, pc = pair_capacity_;
     ensure(box_lo_, prims, ledger_, "collision: bounds");
@@ -1038,8 +1055,19 @@ bool GpuBroadPhase::needs_rerun() {
         if (bits > key_sort_bits_ || !key_bits_known_) key_sort_bits_ = bits;
         key_bits_known_ = true;
     }
-    if (rerun) ++reruns_;
-    return rerun;
+    if (rerun) {
+        ++reruns_;
+        return true;
+    }
+    // A call that fit: the trim windows (weft/backend/buffer_trim.h). Bytes per slot: an entry's two
+    // keys and primitives, cell id and start, workload offset and row; a pair's two keys.
+    constexpr std::size_t kEntryBytes = 2 * sizeof(unsigned long long) + 2 * sizeof(std::uint32_t) + 2 * sizeof(std::uint32_t) +
+                                        sizeof(unsigned long long) + sizeof(uint4);
+    constexpr std::size_t kPairBytes = 2 * sizeof(unsigned long long);
+    if (const std::size_t e = entry_trim_.record(static_cast<std::size_t>(c.entries), entry_capacity_, kEntryBytes, 1024))
+        trimmed_entries_ = grown_capacity(e);
+    if (const std::size_t p = pair_trim_.record(c.pairs, pair_capacity_, kPairBytes, 1024)) trimmed_pairs_ = grown_capacity(p);
+    return false;
 }
 
 const GpuBroadPhaseCounters& GpuBroadPhase::find(const GpuBroadPhaseInput& in, cudaStream_t stream) {

@@ -61,6 +61,7 @@
 #include "collision/grow_and_rerun.h"
 #include "collision/pair_keys.h"
 #include "device_array.h"
+#include "weft/backend/buffer_trim.h"
 
 namespace weft::cuda::collision {
 
@@ -190,6 +191,9 @@ public:
     [[nodiscard]] int sort_bits() const { return key_sort_bits_; }
     /// Times `enqueue` grew a buffer or a sort width and had to be rerun.
     [[nodiscard]] int reruns() const { return reruns_; }
+    /// Times the entry or pair buffers were cut back after a window of calls that needed far less
+    /// than they held (weft/backend/buffer_trim.h): a flood's memory is given back.
+    [[nodiscard]] int trims() const { return trims_; }
     /// Device memory held, bytes.
     [[nodiscard]] std::size_t memory_bytes() const;
     /// The share of `memory_bytes` held by the candidate-pair lists (both of the alternating pair).
@@ -208,6 +212,11 @@ private:
     int key_sort_bits_ = 64;  ///< bits of the cell keys the entry sort looks at; 64 until measured
     bool key_bits_known_ = false;
     int reruns_ = 0;
+    // The trim windows of the entry and pair capacities (needs_rerun records; the next reserve
+    // reallocates what was cut, once the last call's pairs are no longer read).
+    CapacityTrim entry_trim_, pair_trim_;
+    std::size_t trimmed_entries_ = 0, trimmed_pairs_ = 0;  // the cut capacities, 0 = none pending
+    int trims_ = 0;
     int multiprocessors_ = 0;
     PairEncoding encoding_{};
     unsigned long long* sorted_pairs_ = nullptr;  ///< which pair buffer holds the sorted keys

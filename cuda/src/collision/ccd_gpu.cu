@@ -172,9 +172,10 @@ void GpuCcd::enqueue(const GpuCcdInput& in, const GpuPairList& pairs, cudaStream
     if (in.vertex_count > 0 && (in.x0 == nullptr || in.x1 == nullptr)) throw Error("GPU CCD: positions missing");
     if (!std::isfinite(in.eta) || in.eta < 0.0F) throw Error("GPU CCD: eta must be finite and non-negative, got " + std::to_string(in.eta));
     if (capacity_ == 0) capacity_ = std::max<std::size_t>(1024, pairs.capacity / 16);
+    if (apply_trim(trimmed_, capacity_, hits_)) ++trims_;
     const std::size_t slots = std::size_t{pairs.capacity} + 1;
-    if (position_.size() < slots) position_.allocate(slots, ledger_, "ccd: ranks");
-    if (result_.size() < slots) result_.allocate(slots, ledger_, "ccd: results");
+    fit_to(position_, slots, ledger_, "ccd: ranks");
+    fit_to(result_, slots, ledger_, "ccd: results");
     if (counters_.size() == 0) counters_.allocate(1, ledger_, "ccd: counters");
     std::size_t bytes = 0;
     WEFT_CUDA_CHECK(cub::DeviceScan::ExclusiveSum(nullptr, bytes, position_.get(), pairs.capacity + 1U));
@@ -218,7 +219,9 @@ const GpuCcdCounters& GpuCcd::read_back(cudaStream_t stream) {
 }
 
 bool GpuCcd::needs_rerun() {
-    return grow_after_overflow(counters().overflow != 0, counters().hits, capacity_, reruns_);
+    if (grow_after_overflow(counters().overflow != 0, counters().hits, capacity_, reruns_)) return true;
+    record_for_trim(trim_, counters().hits, capacity_, sizeof(GpuCcdHit), trimmed_);
+    return false;
 }
 
 const GpuCcdCounters& GpuCcd::find(const GpuCcdInput& in, const GpuPairList& pairs, cudaStream_t stream) {

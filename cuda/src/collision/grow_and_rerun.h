@@ -5,7 +5,8 @@
 /// the counts back (the pass's one synchronisation) and, where something did not fit, grows the
 /// buffer to the measured count with headroom and runs the pass again. Launch sizes depend only on
 /// the host-side capacities, so an enqueued pass can be captured into a CUDA graph; nothing is
-/// allocated once the sizes have settled.
+/// allocated once the sizes have settled. A capacity that a window of calls needed far less of is
+/// cut back at the next enqueue (weft/backend/buffer_trim.h, the CPU's policy too).
 
 #include <cuda_runtime_api.h>
 
@@ -13,6 +14,8 @@
 #include <string>
 #include <string_view>
 
+#include "device_array.h"
+#include "weft/backend/buffer_trim.h"
 #include "weft/error.h"
 
 namespace weft::cuda::collision {
@@ -32,6 +35,38 @@ namespace weft::cuda::collision {
     capacity = grown_capacity(needed);
     ++reruns;
     return true;
+}
+
+/// After a pass that fit, needing `needed` of `capacity` slots of `element_bytes` each: records it in
+/// `trim` and, at the end of a window that cuts, sets `pending` to the smaller capacity
+/// (grown_capacity of the window's kept share) for `apply_trim` at the next enqueue.
+inline void record_for_trim(CapacityTrim& trim, std::size_t needed, std::size_t capacity, std::size_t element_bytes,
+                            std::size_t& pending) {
+    if (const std::size_t kept = trim.record(needed, capacity, element_bytes, 1024)) {
+        const std::size_t cut = grown_capacity(kept);
+        if (cut < capacity) pending = cut;
+    }
+}
+
+/// At the start of an enqueue: where a trim is `pending`, `capacity` takes it and `buffer` is freed
+/// (reallocated at the new size by the enqueue; the free waits for the device, so the last call's
+/// readers are done). Returns whether it did.
+template <typename T>
+bool apply_trim(std::size_t& pending, std::size_t& capacity, DeviceArray<T>& buffer) {
+    if (pending == 0) return false;
+    capacity = pending;
+    pending = 0;
+    buffer = {};
+    return true;
+}
+
+/// Sizes `buffer` for `count` elements where it follows another pass's capacity (the candidate
+/// pairs'): grown when smaller, and allocated anew at `count` when it holds more than kTrimExcess
+/// times that and over kTrimFloorBytes, so it follows that capacity's trims down.
+template <typename T>
+void fit_to(DeviceArray<T>& buffer, std::size_t count, MemoryLedger& ledger, const std::string& purpose) {
+    const bool oversized = buffer.size() > kTrimExcess * count && buffer.bytes() > kTrimFloorBytes;
+    if (buffer.size() < count || oversized) buffer.allocate(count, ledger, purpose);
 }
 
 /// Enqueues a pass with `enqueue(attempt)` (attempt 0 first; a rerun may redo only the part that

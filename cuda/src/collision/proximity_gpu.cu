@@ -153,7 +153,8 @@ void GpuProximityContacts::enqueue(const GpuProximityInput& in, const GpuPairLis
         throw Error("GPU proximity contacts: rest positions without cloth ids, or more of them than vertices");
     if (!(in.h > 0.0F)) throw Error("GPU proximity contacts: substep must be positive, got " + std::to_string(in.h));
     if (capacity_ == 0) capacity_ = std::max<std::size_t>(1024, pairs.capacity / 4);
-    if (position_.size() < std::size_t{pairs.capacity} + 1) position_.allocate(std::size_t{pairs.capacity} + 1, ledger_, "contacts: ranks");
+    if (apply_trim(trimmed_, capacity_, contacts_)) ++trims_;
+    fit_to(position_, std::size_t{pairs.capacity} + 1, ledger_, "contacts: ranks");
     if (contacts_.size() < capacity_) contacts_.allocate(capacity_, ledger_, "contacts");
     if (counters_.size() == 0) counters_.allocate(1, ledger_, "contacts: counters");
     std::size_t bytes = 0;
@@ -185,7 +186,9 @@ const GpuProximityCounters& GpuProximityContacts::read_back(cudaStream_t stream)
 }
 
 bool GpuProximityContacts::needs_rerun() {
-    return grow_after_overflow(counters().overflow != 0, counters().contacts, capacity_, reruns_);
+    if (grow_after_overflow(counters().overflow != 0, counters().contacts, capacity_, reruns_)) return true;
+    record_for_trim(trim_, counters().contacts, capacity_, sizeof(GpuProximityContact), trimmed_);
+    return false;
 }
 
 const GpuProximityCounters& GpuProximityContacts::find(const GpuProximityInput& in, const GpuPairList& pairs,

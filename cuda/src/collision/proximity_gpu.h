@@ -25,6 +25,7 @@
 
 #include "collision/pair_keys.h"
 #include "device_array.h"
+#include "weft/backend/buffer_trim.h"
 
 namespace weft::cuda::collision {
 
@@ -102,11 +103,16 @@ public:
     [[nodiscard]] const GpuProximityCounters& counters() const { return *counters_host_.get(); }
     [[nodiscard]] std::size_t capacity() const { return capacity_; }
     [[nodiscard]] int reruns() const { return reruns_; }
+    /// Times the contact buffer was cut back after a window that needed far less (buffer_trim.h).
+    [[nodiscard]] int trims() const { return trims_; }
     [[nodiscard]] std::size_t memory_bytes() const;
 
 private:
     std::size_t capacity_ = 0;
     int reruns_ = 0;
+    CapacityTrim trim_;
+    std::size_t trimmed_ = 0;  // the cut capacity for the next enqueue, 0 = none
+    int trims_ = 0;
     MemoryLedger ledger_;
     DeviceArray<std::uint32_t> position_;  // candidate capacity + 1: flags, then their exclusive sum
     DeviceArray<GpuProximityContact> contacts_;
