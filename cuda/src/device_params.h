@@ -5,6 +5,7 @@
 
 #include <cstdint>
 
+#include "weft/backend/cg_energy_stop.h"
 #include "weft/backend/material_terms.h"
 #include "weft/material.h"
 #include "weft/physics/collider_contact.h"
@@ -46,6 +47,7 @@ struct StepParams {
     int cg_max_iterations = 0;
     int cg_warm_start = 0;
     double cg_eps2 = 0;
+    double cg_energy_floor = 0;  ///< J: the CG's energy test (weft/backend/cg_energy_stop.h); 0 = off
     std::uint32_t cloth_offset = 0, shape_offset = 0, friction_offset = 0, pin_target_offset = 0;
     std::uint32_t shape_start_offset = 0;  ///< the shapes at the start of the substep (swept test)
     /// Model::grab: the global vertex (0xFFFFFFFF when there is none), its target (m) and spring.
@@ -65,6 +67,7 @@ struct PcgControl {
     double delta0;     ///< the scale convergence is measured against
     double cq;         ///< cᵀ A c of the current direction
     float alpha, beta;
+    CgEnergyWindow energy;  ///< the falls of Φ the energy test sums
     int iterations;
     int running;       ///< 1 while the loop must go on
     int converged;

@@ -257,6 +257,7 @@ private:
     cudaStream_t body_stream_ = nullptr;  // captures the CG loop body into the while node
     cudaStream_t user_stream_ = nullptr;
     const FlatModel* flat_ = nullptr;
+    double total_mass_ = 0.0;  // kg, every cloth's (build)
     // Part mode: the whole model, the part, each global vertex's local id (~0: not here) and the
     // owned vertices' global ids on the device (the output's places).
     const FlatModel* whole_ = nullptr;

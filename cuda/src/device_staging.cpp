@@ -68,6 +68,7 @@ void DeviceSolver::fill_staging(const Model& model, double t, double h, unsigned
     p.cg_max_iterations = w.solver.cg_max_iterations;
     p.cg_warm_start = w.solver.cg_warm_start ? 1 : 0;
     p.cg_eps2 = w.solver.cg_tolerance * w.solver.cg_tolerance;
+    p.cg_energy_floor = cg_energy_floor(total_mass_, w.solver.cg_velocity_tolerance);
     p.grab_vertex = 0xFFFFFFFFu;
     if (model.grab && model.grab->cloth < model.cloths.size()) {
         if (part_ == nullptr) {

@@ -29,6 +29,7 @@ __device__ inline void start_solve(const DeviceView& d, double delta, unsigned l
     // As on the CPU: measured against the larger of |b| and the initial residual.
     ctl.delta0 = ctl.delta0_b > delta ? ctl.delta0_b : delta;
     ctl.iterations = 0;
+    ctl.energy.reset();
     if (!(ctl.delta0 > 0.0)) {
         ctl.converged = ctl.delta0 == 0.0;
         ctl.running = 0;
@@ -39,17 +40,18 @@ __device__ inline void start_solve(const DeviceView& d, double delta, unsigned l
     set_condition(handle, ctl.running);
 }
 
-/// After an iteration's new δ = rᵀM⁻¹r: β, the count, and whether to stop (converged or capped). On
-/// exit the direction update of this iteration is skipped: the CPU computes it but never uses it, so
-/// Δv is the same.
+/// After an iteration's new δ = rᵀM⁻¹r: β, the count, and whether to stop (converged, with the
+/// potential no longer falling, or capped). On exit the direction update of this iteration is
+/// skipped: the CPU computes it but never uses it, so Δv is the same.
 __device__ inline void end_iteration(const DeviceView& d, double delta_new, unsigned long long handle) {
     PcgControl& ctl = *d.control;
     const StepParams& sp = step_params(d);
+    ctl.energy.record(ctl.delta / ctl.cq, ctl.delta);  // this iteration's α = δ/cᵀAc, in double
     ctl.beta = static_cast<float>(delta_new / ctl.delta);
     ctl.delta = delta_new;
     ++ctl.iterations;
     ctl.converged = delta_new <= sp.cg_eps2 * ctl.delta0;
-    if (ctl.converged || ctl.iterations >= sp.cg_max_iterations) {
+    if ((ctl.converged && !ctl.energy.still_falling(sp.cg_energy_floor)) || ctl.iterations >= sp.cg_max_iterations) {
         ctl.running = 0;
         set_condition(handle, 0);
     }

@@ -202,6 +202,8 @@ __global__ void __launch_bounds__(kBlockSize, 5) pcg_persistent_kernel(DeviceVie
     double delta = ctl.delta;
     const double delta0 = ctl.delta0;
     int iterations = 0, converged = 0;
+    CgEnergyWindow energy;
+    energy.reset();
     double* partials[2] = {d.partials, d.partials + gridDim.x};
     const std::uint32_t stride = gridDim.x * blockDim.x;
     const std::uint32_t lane = threadIdx.x % 32, warp = threadIdx.x / 32;
@@ -245,6 +247,7 @@ __global__ void __launch_bounds__(kBlockSize, 5) pcg_persistent_kernel(DeviceVie
         clock.mark(kPhaseProduct);
         if (!(cq > 0.0)) break;  // breakdown: reported as not converged
         const float alpha = static_cast<float>(delta / cq);
+        energy.record(delta / cq, delta);
         local = 0.0;
         if constexpr (kSchwarz) {
             // r −= αq and Δv += αc with the restriction to level 1, the restriction down the coarse
@@ -284,7 +287,7 @@ __global__ void __launch_bounds__(kBlockSize, 5) pcg_persistent_kernel(DeviceVie
         delta = delta_new;
         ++iterations;
         converged = delta_new <= sp.cg_eps2 * delta0;
-        if (converged || iterations >= sp.cg_max_iterations) break;
+        if ((converged && !energy.still_falling(sp.cg_energy_floor)) || iterations >= sp.cg_max_iterations) break;
         for (std::uint32_t i = blockIdx.x * blockDim.x + threadIdx.x; i < d.n; i += stride)
             store3(d.c, i, d.n, d.fixed[i] ? V3{} : load3(d.s, i, d.n) + beta * load3(d.c, i, d.n));
         cg::this_grid().sync();

@@ -190,6 +190,11 @@ constexpr Parameter kTable[] = {
     {.section = "solver", .name = "cg_max_iterations", .type = T::Integer, .range = R{1, 100000},
      .doc = "CG iteration cap per solve", .label = "CG iteration cap", .panel = "solver", .log_scale = true,
      .access = field<&WorldDesc::solver, &SolverSettings::cg_max_iterations>()},
+    {.section = "solver", .name = "cg_velocity_tolerance", .type = T::Real, .unit = "m/s", .range = R{0.0, 10.0},
+     .doc = "velocity error the CG's energy stopping test aims under: past the residual test, CG goes on while the "
+            "incremental potential still falls by more than ½·mass·tolerance² over 4 iterations; 0 turns it off",
+     .label = "CG velocity tolerance", .panel = "solver", .log_scale = true,
+     .access = field<&WorldDesc::solver, &SolverSettings::cg_velocity_tolerance>()},
     {.section = "solver", .name = "cg_warm_start", .type = T::Boolean,
      .doc = "start CG from the previous substep's velocity change (fewer iterations at the same tolerance) instead of zero",
      .label = "CG warm start", .panel = "solver", .access = field<&WorldDesc::solver, &SolverSettings::cg_warm_start>()},

@@ -315,6 +315,7 @@ void World::guarded_substep(double h, bool retry, EnergyAudit& audit) {
         restart();
         SolverSettings& solver = model_->settings.solver;
         const double tolerance = solver.cg_tolerance;
+        const double velocity_tolerance = solver.cg_velocity_tolerance;
         const int cap = solver.cg_max_iterations;
         const int newton = solver.newton_iterations;
         // The parameter table's bounds (1e-12, 100000 and 50), so the settings stay valid while
@@ -326,6 +327,7 @@ void World::guarded_substep(double h, bool retry, EnergyAudit& audit) {
         const bool line_search = solver.line_search;
         solver.line_search = true;  // and backtracking on each update: plain Newton may diverge (CPU backend)
         solver.cg_tolerance = std::max(1e-12, tolerance / 100.0);
+        solver.cg_velocity_tolerance = velocity_tolerance / 10.0;  // the energy test's floor / 100
         solver.cg_max_iterations = static_cast<int>(std::min<long>(100'000, 4L * cap));
         solver.newton_iterations = std::min(50, 4 * newton);
         bool judged = attempt(end);
@@ -341,6 +343,7 @@ void World::guarded_substep(double h, bool retry, EnergyAudit& audit) {
             current = judged ? judge(end) : 0.0;
         }
         solver.cg_tolerance = tolerance;
+        solver.cg_velocity_tolerance = velocity_tolerance;
         solver.cg_max_iterations = cap;
         solver.newton_iterations = newton;
         solver.line_search = line_search;

@@ -310,6 +310,31 @@ TEST(CudaBackend, OneLaunchAndPerKernelCgAgree) {
     }
 }
 
+TEST(CudaBackend, TheEnergyStopGoesOnPastTheResidualTestInBothLoopsLikeTheCpu) {
+    // The CG's energy test (weft/backend/cg_energy_stop.h) on the device: behind a loose residual test
+    // (1e-2), solves go on while Φ still falls by more than ½·m·ε², in the one-launch loop and in
+    // the per-kernel one, about as far as the CPU's (float against double: the exits may move).
+    WEFT_REQUIRE_GPU();
+    const auto first_frame_iterations = [](const std::string& backend, double velocity_tolerance, cuda::PcgLoop loop) {
+        auto world = make_world("flag", backend,
+                                {"solver.cg_tolerance=1e-2", "solver.cg_velocity_tolerance=" + std::to_string(velocity_tolerance)});
+        if (backend == "cuda") as_cuda(world->backend())->set_pcg_loop(loop);
+        return world->step().cg_iterations;
+    };
+    const int cpu_off = first_frame_iterations("cpu", 0.0, cuda::PcgLoop::PerKernel);
+    const int cpu_on = first_frame_iterations("cpu", 1e-4, cuda::PcgLoop::PerKernel);
+    EXPECT_GT(cpu_on, cpu_off);
+    for (const cuda::PcgLoop loop : {cuda::PcgLoop::OneLaunch, cuda::PcgLoop::PerKernel}) {
+        const char* name = loop == cuda::PcgLoop::OneLaunch ? "one launch" : "per kernel";
+        const int off = first_frame_iterations("cuda", 0.0, loop);
+        const int on = first_frame_iterations("cuda", 1e-4, loop);
+        std::printf("flag, first frame, CG to 1e-2: %s %d iterations, with the energy test at 1e-4 m/s %d (cpu %d, %d)\n",
+                    name, off, on, cpu_off, cpu_on);
+        EXPECT_GT(on, off) << name;
+        EXPECT_NEAR(on, cpu_on, 0.25 * cpu_on + 4) << name;
+    }
+}
+
 // ---- the output buffer --------------------------------------------------------------------------
 
 /// Area-weighted vertex normals of one cloth computed on the host in double.

@@ -238,6 +238,27 @@ TEST(MultiGpuSolver, SchwarzAcrossPartsKeepsTheOneGpuIterationCount) {
     }
 }
 
+// The CG's energy test across parts (multi/part_pcg_terms.cuh): behind a loose residual test, the
+// parts go on as far as one GPU does, and the steps still follow one GPU's.
+TEST(MultiGpuSolver, TheEnergyStopAcrossPartsGoesAsFarAsOnOneGpu) {
+    WEFT_REQUIRE_GPU();
+    const std::vector<std::string> off{"solver.preconditioner=\"jacobi\"", "solver.cg_tolerance=1e-2",
+                                       "solver.cg_velocity_tolerance=0"};
+    const std::vector<std::string> on{"solver.preconditioner=\"jacobi\"", "solver.cg_tolerance=1e-2",
+                                      "solver.cg_velocity_tolerance=1e-4"};
+    const StepGaps without = step_gaps("flag", off, 2, true, 20);
+    const StepGaps with_test = step_gaps("flag", on, 2, true, 20);
+    std::printf("[ multi    ] flag, CG to 1e-2, 2 parts on one GPU, 20 steps: CG iterations %lld (one GPU %lld); with the "
+                "energy test at 1e-4 m/s %lld (one GPU %lld), worst step gap %.3g of the move\n",
+                without.iterations_split, without.iterations_one, with_test.iterations_split, with_test.iterations_one,
+                with_test.worst);
+    EXPECT_GT(with_test.iterations_one, without.iterations_one);
+    EXPECT_GT(with_test.iterations_split, without.iterations_split);
+    EXPECT_NEAR(static_cast<double>(with_test.iterations_split), static_cast<double>(with_test.iterations_one),
+                0.1 * static_cast<double>(with_test.iterations_one));
+    EXPECT_LT(with_test.worst, kStepTolerance);
+}
+
 TEST(MultiGpuSolver, PartsOnOneGpuFollowOneGpuOverTwistsWholeTrajectory) {
     WEFT_REQUIRE_GPU();
     // Twist's first 100 steps (its edges turn; self-contact off: its contact steps are compared below) do

@@ -106,6 +106,56 @@ TEST(Pcg, IterationCapIsReportedAsNotConverged) {
     EXPECT_GT(r.relative_residual, 1e-12);
 }
 
+// The energy test (weft/backend/cg_energy_stop.h): past a loose residual test the solve goes on
+// while the incremental potential Φ still falls by more than the floor, and only then.
+TEST(Pcg, TheEnergyTestGoesOnPastTheResidualTestWhilePhiStillFalls) {
+    std::mt19937 rng(13);
+    auto fabric = Fabric::cook(make_grid(1, 1, 12, 12));
+    const auto A = random_spd(*fabric, rng, 1e-3);  // ill-conditioned: the residual test stops early
+    const std::size_t n = fabric->vertex_count();
+    std::uniform_real_distribution<double> u(-1, 1);
+    std::vector<V3> exact(n);
+    for (V3& v : exact) v = {u(rng), u(rng), u(rng)};
+    const auto b = multiply(A, exact);
+    const std::vector<std::uint8_t> fixed(n, 0);
+    // ½‖x − x*‖²_A: how far Φ(x) is above its minimum, what the test estimates.
+    const auto energy_error = [&](const std::vector<V3>& x) {
+        std::vector<V3> e(n);
+        for (std::size_t i = 0; i < n; ++i) e[i] = x[i] - exact[i];
+        const auto ae = multiply(A, e);
+        double sum = 0.0;
+        for (std::size_t i = 0; i < n; ++i) sum += physics::dot(e[i], ae[i]);
+        return 0.5 * sum;
+    };
+    cpu::Pcg<double> pcg;
+    pcg.resize(n);
+    const auto solve = [&](double floor, int cap, std::vector<V3>& x) {
+        x.assign(n, V3{});
+        pcg.set_energy_floor(floor);
+        return pcg.solve(A, b, fixed, x, 1e-2, cap);
+    };
+    std::vector<V3> x_residual, x_high, x_energy, x_capped;
+    const auto residual_only = solve(0.0, 5000, x_residual);
+    ASSERT_TRUE(residual_only.converged);
+    const double error_at_residual_test = energy_error(x_residual);
+    ASSERT_GT(error_at_residual_test, 0.0);
+    // A floor above every fall changes nothing: the same iterations, the same bits.
+    const auto high = solve(1e30, 5000, x_high);
+    EXPECT_EQ(high.iterations, residual_only.iterations);
+    EXPECT_EQ(x_high, x_residual);
+    // A floor below what Φ still had to fall: more iterations, and Φ ends much nearer its minimum.
+    const auto energy = solve(1e-4 * error_at_residual_test, 5000, x_energy);
+    EXPECT_TRUE(energy.converged);
+    EXPECT_GT(energy.iterations, residual_only.iterations);
+    EXPECT_LT(energy_error(x_energy), 1e-2 * error_at_residual_test)
+        << "residual test alone: " << residual_only.iterations << " iterations, with the energy test "
+        << energy.iterations;
+    // The iteration cap still holds; the solve that met it past the residual test reports converged.
+    const auto capped = solve(1e-300, residual_only.iterations + 2, x_capped);
+    EXPECT_EQ(capped.iterations, residual_only.iterations + 2);
+    EXPECT_TRUE(capped.converged);
+}
+
 TEST(Pcg, ZeroRightHandSideConvergesImmediately) {
     auto fabric = Fabric::cook(make_grid(1, 1, 3, 3));
     std::mt19937 rng(5);

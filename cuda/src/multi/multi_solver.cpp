@@ -108,6 +108,8 @@ void MultiSolver::build(const FlatModel& flat, const Model& model) {
     solvers_.clear();
     part_models_.clear();
     flat_ = &flat;
+    total_mass_ = 0.0;  // the CG energy test's scale (cg_energy_floor)
+    for (const double m : flat.mass) total_mass_ += m;
     const auto parts = static_cast<std::uint32_t>(devices_.size());
     hierarchy_ = build_schwarz_hierarchy(flat.initial_positions, flat.pattern, kSchwarzMaxLevels);
     if (needs_cloth_collisions(model)) {
@@ -755,6 +757,7 @@ void MultiSolver::newton_iteration(const Model& model, int newton, StepStats& st
         b.push_back(s->view().b);
         dv.push_back(s->view().dv);
     }
+    pcg_->set_energy_floor(cg_energy_floor(total_mass_, settings.cg_velocity_tolerance));
     const PartPcgResult r = pcg_->solve(b, dv, settings.cg_tolerance, settings.cg_max_iterations, kIterationsPerLaunch);
     if (marks != nullptr) mark((*marks)++);
     stats.cg_iterations += r.iterations;

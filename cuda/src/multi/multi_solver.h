@@ -190,6 +190,7 @@ private:
 
     std::vector<int> devices_;
     const FlatModel* flat_ = nullptr;
+    double total_mass_ = 0.0;  // kg, every cloth's (build)
     VertexPartition partition_;
     std::vector<double> part_row_work_;  // each part's row_work, summed (the re-cut's measure)
     std::vector<PartModel> part_models_;

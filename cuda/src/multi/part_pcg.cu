@@ -454,6 +454,7 @@ PartPcgResult PartPcg::solve(std::span<const float* const> b, std::span<float* c
     PartPcgScalars start;
     start.tolerance2 = tolerance * tolerance;
     start.max_iterations = max_iterations;
+    start.energy_floor = energy_floor_;
     // The start, launched directly: r = filter(b − A·x), u = M⁻¹r (γ and the reference), then
     // w = A·u (the first α). With Schwarz, bᵀM⁻¹b comes from an apply to b first (as on one GPU).
     if (schwarz_) {

@@ -38,6 +38,7 @@
 #include "multi/all_gather.h"
 #include "multi/contact_mirror.h"
 #include "multi/halo_exchange.h"
+#include "weft/backend/cg_energy_stop.h"
 #include "multi/part_system.h"
 #include "weft/cuda/cuda_backend.h"
 
@@ -55,6 +56,8 @@ struct PartPcgScalars {
     double reference = 0.0; ///< max(bᵀM⁻¹b, r₀ᵀM⁻¹r₀): what the residual is measured against
     double alpha = 0.0, beta = 0.0;
     double tolerance2 = 0.0;  ///< squared relative tolerance
+    double energy_floor = 0.0;  ///< J: the energy test (weft/backend/cg_energy_stop.h); 0 = off
+    CgEnergyWindow energy{};    ///< the falls of Φ it sums
     double relative = 0.0;    ///< sqrt(γ/reference)
     int iterations = 0;
     int max_iterations = 0;
@@ -71,6 +74,11 @@ public:
     ~PartPcg();
     PartPcg(const PartPcg&) = delete;
     PartPcg& operator=(const PartPcg&) = delete;
+
+    /// The energy test's floor for the next solves, J (cg_energy_floor; 0 turns it off): past the
+    /// residual test the loop goes on while Φ fell by more than this over its last kCgEnergyDelay
+    /// iterations, as on one GPU.
+    void set_energy_floor(double joules) { energy_floor_ = joules; }
 
     /// Solves A·x = b to sqrt(rᵀM⁻¹r / reference) ≤ tolerance or `max_iterations`. b and x are each
     /// part's local vectors (stride local, owned entries read; x's ghosts are overwritten), on the
@@ -122,6 +130,7 @@ private:
 
     std::vector<std::unique_ptr<Part>> part_;
     HaloExchange& halo_;
+    double energy_floor_ = 0.0;  // J; set_energy_floor
     bool schwarz_ = false;                 // the Schwarz preconditioner across the parts, else block-Jacobi
     std::unique_ptr<AllGather> level1_;    // its level 1, gathered every apply
     cudaGraphExec_t graph_ = nullptr;

@@ -55,6 +55,7 @@ __device__ inline void part_advance_scalars(const double* gathered, unsigned par
         // As the single-GPU start (pcg_control.cuh, start_solve): measured against the larger of
         // bᵀM⁻¹b and the start's own residual.
         s.gamma = first;
+        s.energy.reset();
         s.reference = fmax(second, first);
         s.relative = s.reference > 0.0 ? sqrt(fmax(first, 0.0) / s.reference) : 0.0;
         s.converged = !(s.reference > 0.0) || first <= s.tolerance2 * s.reference ? 1 : 0;
@@ -71,10 +72,11 @@ __device__ inline void part_advance_scalars(const double* gathered, unsigned par
         s.beta = 0.0;
         return;
     }
+    s.energy.record(s.alpha, s.gamma);  // Φ fell by ½·α·γ in the iteration that gave γ' = `first`
     ++s.iterations;
     s.relative = sqrt(fmax(first, 0.0) / s.reference);
-    if (first <= s.tolerance2 * s.reference) {
-        s.converged = 1;
+    s.converged = first <= s.tolerance2 * s.reference ? 1 : 0;
+    if (s.converged != 0 && !s.energy.still_falling(s.energy_floor)) {
         s.running = 0;
         return;
     }

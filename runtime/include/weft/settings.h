@@ -86,7 +86,7 @@ enum class EnergyGuard : std::uint8_t {
     /// `StepStats::energy_gained` (the state is kept as solved).
     Report,
     /// As Report, and redo a substep that gained energy once from its start with the CG tolerance
-    /// divided by 100, the iteration cap multiplied by 4 and four times the Newton iterations (at most
+    /// divided by 100 (the velocity tolerance by 10), the iteration cap multiplied by 4 and four times the Newton iterations (at most
     /// 50); if that still gains, once more as four quarter substeps; keeps the attempt that gained
     /// least.
     Retry,
@@ -99,6 +99,13 @@ struct SolverSettings {
     int newton_iterations = 1;     ///< linearisations per substep (1 = Baraff–Witkin).
     double cg_tolerance = 1e-4;    ///< relative residual: stop when rᵀP⁻¹r ≤ ε²·δ₀.
     int cg_max_iterations = 500;   ///< CG cap per solve.
+    /// Velocity error, m/s, that the CG's second stopping test aims under (0, the default, turns it
+    /// off): past the residual test a solve goes on, up to the cap, while the incremental potential
+    /// fell by more than ½·m·ε² over its last 4 iterations (m the cloths' mass): its estimate of the
+    /// energy-norm error left (weft/backend/cg_energy_stop.h). It costs only where the residual test
+    /// stopped on a plateau, the solves that now and then gain energy; 5e-4 removed the flag's gains
+    /// for 2% more iterations (docs/tuning.md).
+    double cg_velocity_tolerance = 0.0;
     /// Start each substep's first CG solve from the previous substep's velocity change instead of
     /// zero. Accelerations change smoothly from one substep to the next, so CG starts closer to the
     /// answer and stops sooner at the same tolerance (docs/results.md measures by how much).

@@ -9,6 +9,7 @@
 #include <utility>
 
 #include "weft/backend/collider_shape.h"
+#include "weft/backend/cg_energy_stop.h"
 #include "weft/backend/energy_audit.h"
 #include "weft/error.h"
 #include "weft/backend/timing.h"
@@ -48,6 +49,8 @@ void CpuSolver<T>::build(const FlatModel& flat, const Model& model) {
     wk_.assign(n_, V3{});
     mass_.resize(n_);
     for (std::size_t i = 0; i < n_; ++i) mass_[i] = static_cast<T>(flat.mass[i]);
+    total_mass_ = 0.0;
+    for (const double m : flat.mass) total_mass_ += m;
     triangle_rest_.resize(flat.triangle_count());
     for (std::size_t t = 0; t < flat.triangle_count(); ++t) {
         const TriangleRest& r = flat.triangle_rest[t];
@@ -417,6 +420,7 @@ void CpuSolver<T>::substep(const Model& model, double t, double h_double, StepSt
             stats.ms(Stage::Precondition) += ms_since(clock);
             clock = Clock::now();
         }
+        pcg_.set_energy_floor(cg_energy_floor(total_mass_, solver.cg_velocity_tolerance));
         PcgResult r = pcg_.solve(SystemOperator<T>{A_, contacts}, b_, fixed_, dv_, solver.cg_tolerance,
                                  solver.cg_max_iterations, schwarz);
         if (r.preconditioner_failed) {

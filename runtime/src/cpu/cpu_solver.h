@@ -100,6 +100,7 @@ private:
     // x0 + h·w_k (w_0 = 0 gives Baraff–Witkin's first step exactly; w_k = v_k afterwards).
     std::vector<V3> vk_, wk_;
     std::vector<T> mass_;
+    double total_mass_ = 0.0;  ///< kg, of every cloth: the CG energy test's scale (cg_energy_floor)
     std::vector<TriangleRestT> triangle_rest_;
     std::vector<HingeRestT> hinge_rest_;
     // The bending model per triangle (SolverSettings::bending = Shell; cpu/shell_bending_terms.h):

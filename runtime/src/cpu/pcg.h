@@ -5,7 +5,8 @@
 // the multilevel additive Schwarz one (cpu/schwarz_preconditioner.h) when the caller hands one over.
 // Both stop on the preconditioned norm rᵀP⁻¹r relative to filter(b)ᵀP⁻¹filter(b) (docs/architecture.md,
 // step 4): the norm the iteration minimises, so the test costs nothing extra; it differs between
-// the two preconditioners, which is why docs/results.md also reports the plain residual.
+// the two preconditioners, which is why docs/results.md also reports the plain residual. Past that
+// test the loop may go on while the incremental potential still falls (weft/backend/cg_energy_stop.h).
 
 #include <cmath>
 #include <cstdint>
@@ -15,6 +16,7 @@
 #include "cpu/pcg_rows.h"
 #include "cpu/schwarz_preconditioner.h"
 #include "deterministic_parallel.h"
+#include "weft/backend/cg_energy_stop.h"
 
 namespace weft::cpu {
 
@@ -42,6 +44,11 @@ public:
         s_.assign(n, V3{});
         precond_.assign(n, M3{});
     }
+
+    /// The second stopping test's floor, J (cg_energy_floor; 0, the default, turns it off): past the
+    /// residual test, the solves go on while the incremental potential fell by more than this over the
+    /// last kCgEnergyDelay iterations, up to the iteration cap.
+    void set_energy_floor(double joules) { energy_floor_ = joules; }
 
     /// Solves A·dv = b. On entry dv holds z (the prescribed values on filtered vertices, zero
     /// elsewhere); `fixed[i]` != 0 filters vertex i out completely. `A` is any symmetric operator
@@ -82,10 +89,13 @@ public:
             result.converged = delta0 == 0.0;
             return result;
         }
-        while (delta > eps2 * delta0 && result.iterations < max_iterations) {
+        CgEnergyWindow window;
+        window.reset();
+        while (result.iterations < max_iterations && (delta > eps2 * delta0 || window.still_falling(energy_floor_))) {
             const double cq = product_along_direction(A, fixed);
             if (!(cq > 0.0)) break;  // loss of positive definiteness or breakdown: report, don't loop
             const T alpha = static_cast<T>(delta / cq);
+            window.record(delta / cq, delta);
             // dv += α·c, r −= α·q, s = P⁻¹·r and δ' = rᵀs in one pass (cpu/pcg_rows.h).
             const double delta_new = deterministic_sum(n, partials_, [&](std::size_t lo, std::size_t hi) {
                 return pcg_jacobi_update_rows(dv.data(), r_.data(), q_.data(), c_.data(), s_.data(), precond_.data(), alpha,
@@ -135,10 +145,13 @@ public:
             result.converged = delta0 == 0.0 && !result.preconditioner_failed;
             return result;
         }
-        while (delta > eps2 * delta0 && result.iterations < max_iterations) {
+        CgEnergyWindow window;
+        window.reset();
+        while (result.iterations < max_iterations && (delta > eps2 * delta0 || window.still_falling(energy_floor_))) {
             const double cq = product_along_direction(A, fixed);
             if (!(cq > 0.0)) break;
             const T alpha = static_cast<T>(delta / cq);
+            window.record(delta / cq, delta);
             parallel_chunks(n, [&](std::size_t lo, std::size_t hi) {
                 for (std::size_t i = lo; i < hi; ++i) {
                     dv[i] += alpha * c_[i];
@@ -199,6 +212,7 @@ private:
     std::vector<V3> r_, c_, q_, s_;
     std::vector<M3> precond_;
     std::vector<double> partials_;
+    double energy_floor_ = 0.0;  // J; set_energy_floor
 };
 
 }  // namespace weft::cpu
