@@ -34,6 +34,22 @@ void start_launch_record();
                 cudaGetErrorString(err) + ")");
 }
 
+/// After a failed step: whether `device`'s context is still usable, leaving it current and its
+/// error state cleared. An asynchronous error is reported by the first synchronisation and
+/// cleared; a sticky one (the context is lost) by every one, so a second synchronisation tells
+/// them apart.
+[[nodiscard]] inline bool context_usable_after_fault(int device) {
+    (void)cudaSetDevice(device);
+    (void)cudaGetLastError();
+    bool usable = cudaDeviceSynchronize() == cudaSuccess;
+    if (!usable) {
+        (void)cudaGetLastError();
+        usable = cudaDeviceSynchronize() == cudaSuccess;
+    }
+    (void)cudaGetLastError();
+    return usable;
+}
+
 }  // namespace weft::cuda
 
 /// Checks a CUDA runtime call.

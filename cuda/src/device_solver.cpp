@@ -14,6 +14,7 @@
 #include <cstddef>
 #include <cstring>
 
+#include "cuda_check.h"
 #include "kernels.h"
 #include "loop_clock.h"
 #include "weft/backend/timing.h"
@@ -220,16 +221,7 @@ void DeviceSolver::substep(const Model& model, double t, double h, StepStats& st
 void DeviceSolver::recover_from_fault(const Error& error, double t) {
     const std::string stage = stage_;
     std::string where = "CUDA backend: the substep from t = " + std::to_string(t) + " s failed in " + stage + ": " + error.what();
-    (void)cudaSetDevice(device_);
-    (void)cudaGetLastError();
-    // An asynchronous error is reported by the first synchronisation and cleared; a sticky one by all.
-    bool usable = cudaDeviceSynchronize() == cudaSuccess;
-    if (!usable) {
-        (void)cudaGetLastError();
-        usable = cudaDeviceSynchronize() == cudaSuccess;
-    }
-    (void)cudaGetLastError();
-    if (usable) {
+    if (context_usable_after_fault(device_)) {
         std::string failure;
         try {
             if (substep_started_) launch_rollback(view_, active_stream());

@@ -35,6 +35,29 @@ std::unique_ptr<World> layers_world(std::size_t limit) {
 
 bool contains(const std::string& text, const std::string& part) { return text.find(part) != std::string::npos; }
 
+/// Where a run's device memory first grows after its first frame: the bytes held at that frame and
+/// at the one before, between which a second run's budget makes that frame fail.
+struct Growth {
+    int frame = -1;  ///< -1: it did not grow
+    std::size_t before = 0, after = 0;
+};
+
+/// Steps the built world `reference` up to `frames` frames, taking `held()` (bytes) and calling
+/// `record()` now and after every frame, until the first frame from the second on whose memory grew.
+template <typename Held, typename Record>
+Growth first_growth(World& reference, int frames, Held&& held, Record&& record) {
+    std::vector<std::size_t> memory{held()};
+    record();
+    for (int f = 1; f <= frames; ++f) {
+        (void)reference.step();
+        memory.push_back(held());
+        record();
+        const auto k = static_cast<std::size_t>(f);
+        if (f >= 2 && memory[k] > memory[k - 1]) return {f, memory[k - 1], memory[k]};
+    }
+    return {};
+}
+
 TEST(CudaDeviceFaults, ASceneLargerThanTheLimitFailsAtBuildWithTheBytes) {
     WEFT_REQUIRE_GPU();
     BackendOptions options;
@@ -62,18 +85,14 @@ TEST(CudaDeviceFaults, ABufferThatCannotGrowMidRunFailsTheSubstepAndKeepsTheLast
     constexpr int kFrames = 60;
     auto reference = layers_world(0);
     reference->build();
-    std::vector<std::size_t> memory{reference->memory_bytes()};
-    std::vector<std::vector<Vec3d>> x{reference->positions(0)}, v{reference->velocities(0)};
-    int growth = -1;
-    for (int f = 1; f <= kFrames && growth < 0; ++f) {
-        (void)reference->step();
-        memory.push_back(reference->memory_bytes());
+    std::vector<std::vector<Vec3d>> x, v;
+    const Growth grew = first_growth(*reference, kFrames, [&] { return reference->memory_bytes(); }, [&] {
         x.push_back(reference->positions(0));
         v.push_back(reference->velocities(0));
-        if (f >= 2 && memory[static_cast<std::size_t>(f)] > memory[static_cast<std::size_t>(f - 1)]) growth = f;
-    }
+    });
+    const int growth = grew.frame;
     ASSERT_GT(growth, 1) << "layers' collision buffers did not grow in " << kFrames << " frames";
-    const std::size_t before = memory[static_cast<std::size_t>(growth - 1)], after = memory[static_cast<std::size_t>(growth)];
+    const std::size_t before = grew.before, after = grew.after;
 
     // A limit between the two: every frame before the growth runs, the growth's fails.
     auto capped = layers_world(before + (after - before) / 2);
@@ -195,17 +214,12 @@ TEST(CudaDeviceFaults, AcrossPartsAFailedSubstepPutsEveryPartBack) {
     cuda::DeviceMemoryBudget* reference_budget = cuda::device_memory_budget(reference->backend());
     ASSERT_NE(reference_budget, nullptr) << "the multi-GPU backend has no budget";
     const int device = 0;
-    std::vector<std::size_t> held{reference_budget->held(device)};
-    std::vector<WorldState> states{state_of(*reference)};
-    int growth = -1;
-    for (int f = 1; f <= kFrames && growth < 0; ++f) {
-        (void)reference->step();
-        held.push_back(reference_budget->held(device));
-        states.push_back(state_of(*reference));
-        if (f >= 2 && held[static_cast<std::size_t>(f)] > held[static_cast<std::size_t>(f - 1)]) growth = f;
-    }
+    std::vector<WorldState> states;
+    const Growth grew = first_growth(*reference, kFrames, [&] { return reference_budget->held(device); },
+                                     [&] { states.push_back(state_of(*reference)); });
+    const int growth = grew.frame;
     ASSERT_GT(growth, 1) << "layers' device memory on two parts did not grow in " << kFrames << " frames";
-    const std::size_t before = held[static_cast<std::size_t>(growth - 1)], after = held[static_cast<std::size_t>(growth)];
+    const std::size_t before = grew.before, after = grew.after;
     std::printf("[ fault    ] two parts: the device memory grows at frame %d, %zu -> %zu bytes\n", growth, before, after);
 
     auto capped = layers_on_two_parts(before + (after - before) / 2);

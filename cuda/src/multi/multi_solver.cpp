@@ -532,18 +532,7 @@ void MultiSolver::recover_from_fault(const Error& error, double t) {
     std::string where = "CUDA backend on " + std::to_string(devices_.size()) + " parts: the substep from t = " +
                         std::to_string(t) + " s failed in " + stage_ + ": " + error.what();
     bool usable = true;
-    for (const int d : devices_) {
-        (void)cudaSetDevice(d);
-        (void)cudaGetLastError();
-        // An asynchronous error is reported by the first synchronisation and cleared; a sticky one by all.
-        bool ok = cudaDeviceSynchronize() == cudaSuccess;
-        if (!ok) {
-            (void)cudaGetLastError();
-            ok = cudaDeviceSynchronize() == cudaSuccess;
-        }
-        (void)cudaGetLastError();
-        usable = usable && ok;
-    }
+    for (const int d : devices_) usable = context_usable_after_fault(d) && usable;  // every context checked and cleared
     if (usable) {
         std::string failure;
         try {
