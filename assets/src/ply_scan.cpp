@@ -43,6 +43,12 @@ constexpr long long kListLimit = 4096;
 /// Checks one ASCII element line against its element's properties: every token a number, each list
 /// as long as its count says, a face's vertex indices in range. Throws naming the line.
 void check_ascii_line(const std::string& line, const Element& e, std::uint64_t vertices, const std::string& where) {
+    // Numbers apart by spaces and tabs only: assimp's reader splits on those alone, so a form feed
+    // between two numbers shifted its reading of the lines after it and made its triangulation
+    // abort (found by fuzz_mesh_import).
+    for (const char c : line)
+        if ((c < ' ' || c > '~') && c != '\t' && c != '\r')
+            throw Error(where + "a control or non-ASCII character in a " + e.name + " line");
     std::istringstream in(line);
     std::vector<std::string> tokens;
     for (std::string t; in >> t;) tokens.push_back(t);
