@@ -34,8 +34,7 @@ void DeviceSolver::build(const FlatModel& flat, const Model& model) {
     flat_ = &flat;
     // The CG energy test's scale (cg_energy_floor): the mass of every cloth, of the whole world in
     // part mode.
-    total_mass_ = 0.0;
-    for (const double m : whole_ != nullptr ? whole_->mass : flat.mass) total_mass_ += m;
+    total_mass_ = (whole_ != nullptr ? *whole_ : flat).total_mass();
     ledger_.clear();
     contacts_.release();  // vertex ids of the old model mean nothing in the new one
     collisions_.release();

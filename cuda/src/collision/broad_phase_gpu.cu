@@ -1064,9 +1064,8 @@ bool GpuBroadPhase::needs_rerun() {
     constexpr std::size_t kEntryBytes = 2 * sizeof(unsigned long long) + 2 * sizeof(std::uint32_t) + 2 * sizeof(std::uint32_t) +
                                         sizeof(unsigned long long) + sizeof(uint4);
     constexpr std::size_t kPairBytes = 2 * sizeof(unsigned long long);
-    if (const std::size_t e = entry_trim_.record(static_cast<std::size_t>(c.entries), entry_capacity_, kEntryBytes, 1024))
-        trimmed_entries_ = grown_capacity(e);
-    if (const std::size_t p = pair_trim_.record(c.pairs, pair_capacity_, kPairBytes, 1024)) trimmed_pairs_ = grown_capacity(p);
+    record_for_trim(entry_trim_, static_cast<std::size_t>(c.entries), entry_capacity_, kEntryBytes, trimmed_entries_);
+    record_for_trim(pair_trim_, c.pairs, pair_capacity_, kPairBytes, trimmed_pairs_);
     return false;
 }
 

@@ -108,8 +108,7 @@ void MultiSolver::build(const FlatModel& flat, const Model& model) {
     solvers_.clear();
     part_models_.clear();
     flat_ = &flat;
-    total_mass_ = 0.0;  // the CG energy test's scale (cg_energy_floor)
-    for (const double m : flat.mass) total_mass_ += m;
+    total_mass_ = flat.total_mass();  // the CG energy test's scale (cg_energy_floor)
     const auto parts = static_cast<std::uint32_t>(devices_.size());
     hierarchy_ = build_schwarz_hierarchy(flat.initial_positions, flat.pattern, kSchwarzMaxLevels);
     if (needs_cloth_collisions(model)) {

@@ -49,8 +49,7 @@ void CpuSolver<T>::build(const FlatModel& flat, const Model& model) {
     wk_.assign(n_, V3{});
     mass_.resize(n_);
     for (std::size_t i = 0; i < n_; ++i) mass_[i] = static_cast<T>(flat.mass[i]);
-    total_mass_ = 0.0;
-    for (const double m : flat.mass) total_mass_ += m;
+    total_mass_ = flat.total_mass();
     triangle_rest_.resize(flat.triangle_count());
     for (std::size_t t = 0; t < flat.triangle_count(); ++t) {
         const TriangleRest& r = flat.triangle_rest[t];

@@ -58,6 +58,12 @@ struct FlatModel {
     std::vector<int> pin_collider_joint;
     std::vector<std::int32_t> vertex_pin;  ///< pin index of each vertex or −1
 
+    /// The cloths' mass, kg (the CG energy test's scale: cg_energy_floor).
+    [[nodiscard]] double total_mass() const {
+        double m = 0.0;
+        for (const double v : mass) m += v;
+        return m;
+    }
     [[nodiscard]] std::size_t triangle_count() const { return triangles.size(); }
     [[nodiscard]] std::size_t hinge_count() const { return hinges.size(); }
     [[nodiscard]] std::size_t memory_bytes() const;
