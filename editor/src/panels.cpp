@@ -255,6 +255,7 @@ void stats_panel(Session& session, const PanelLayout& layout) {
     ImGui::Text("CG: %d iterations (largest solve %d)", s.cg_iterations, s.cg_iterations_max);
     ImGui::Text("CG residual %.2e, %d solves capped", s.cg_residual, s.cg_not_converged);
     ImGui::Text("energy: %d substeps gained (%.3g J), %d redone", s.energy_gained, s.energy_gain, s.energy_retries);
+    if (s.split_substeps > 0) ImGui::Text("split: %d substeps redone as halves, %d taken", s.split_substeps, s.substeps);
     ImGui::Text("contacts: %d collider, %d cloth", s.collider_contacts, s.collision.contacts);
     // Offset contact (collision.mode = offset): what the displacement bounds did in the last step.
     if (s.collision.query_radius_max > 0.0)

@@ -67,7 +67,7 @@ struct Options {
     int frames = 0;  // 0: until the window closes (or the script ends)
     bool check = false, validation = false, offscreen = false;
     double cg_tolerance = 0.0;  // 0: the engine's default (SolverSettings::cg_tolerance)
-    std::string preset;         // a solver preset (weft/presets.h); empty: "game" on the CPU, the defaults on the GPU
+    std::string preset;         // a solver preset (weft/presets.h); empty: "game"
     std::string character;  // a rigged character file (--character); empty: capsules
 };
 
@@ -167,10 +167,9 @@ int play(const Options& options) {
     desc.wind.turbulence = 1.5;
     desc.collision.self_collision = true;  // cape against skirt, and each against itself
     desc.collision.check = options.check;  // the exact intersection check after every step (tests)
-    // The solver's speed against accuracy: a preset (the CPU fallback runs the game preset: one float
-    // step a frame, docs/tuning.md), then an explicit CG tolerance over it.
-    const std::string preset = !options.preset.empty() ? options.preset : (backend == "cpu" ? "game" : "");
-    if (!preset.empty()) weft::apply_solver_preset(desc, preset);
+    // The solver's speed against accuracy: a preset (a game's cloth: one float step a frame, split
+    // where the runner drags the banner, docs/tuning.md), then an explicit CG tolerance over it.
+    weft::apply_solver_preset(desc, !options.preset.empty() ? options.preset : "game");
     if (options.cg_tolerance > 0.0) desc.solver.cg_tolerance = options.cg_tolerance;
     weft::World world(desc, backend);
     Runner runner({0.0, 0.0, 0.0});
@@ -214,6 +213,7 @@ int play(const Options& options) {
     long long most_cloth_pairs = 0, most_body_pairs = 0;
     double cloth_ms_sum = 0.0, frame_ms_sum = 0.0;
     std::array<double, weft::kStageNames.size()> stage_ms_sum{};  // where the cloth's time goes
+    int split_substeps = 0;  // substeps redone as halves where a body dragged cloth open (split_stretch)
     long long cg_iterations = 0, capped_solves = 0, fallback_solves = 0;
     // The most any cloth triangle stretched, and the frames where cloth tore or was dragged along.
     double most_stretch = 0.0;
@@ -299,6 +299,7 @@ int play(const Options& options) {
                         static_cast<long long>(stats.collision.ccd_hits));
         for (std::size_t k = 0; k < stage_ms_sum.size(); ++k) stage_ms_sum[k] += stats.stage_ms[k];
         cg_iterations += stats.cg_iterations;
+        split_substeps += stats.split_substeps;
         capped_solves += stats.cg_not_converged;
         fallback_solves += stats.cg_preconditioner_fallbacks;
         frame_ms_sum += frame_ms;
@@ -322,8 +323,9 @@ int play(const Options& options) {
     std::printf("; CG %.0f iterations a frame, %lld solves capped, %lld redone with block-Jacobi\n",
                 frame > 0 ? static_cast<double>(cg_iterations) / frame : 0.0, capped_solves, fallback_solves);
     std::printf("cape_runner: slowest cloth step %.1f ms (frame %d); collisions: at most %d impact-zone rounds in a substep, "
-                "%lld vertices frozen, %lld substeps unresolved, %lld vertices moved out of the body, %lld jumps of a body\n",
-                slowest_ms, slowest_frame, most_zone_rounds, frozen_vertices, unresolved, moved_out, body_jumps);
+                "%lld vertices frozen, %lld substeps unresolved, %lld vertices moved out of the body, %lld jumps of a body; "
+                "%d substeps split\n",
+                slowest_ms, slowest_frame, most_zone_rounds, frozen_vertices, unresolved, moved_out, body_jumps, split_substeps);
     std::printf("cape_runner: cape away from the shoulders in %d frames%s, intersections after %d, failed steps %d, "
                 "torn frames %lld, validation messages %d\n",
                 cape_lost, options.check ? "" : " (not checked; --check does)", intersections, failed_steps, static_cast<long long>(feed.torn_frames()), renderer.validation_messages());

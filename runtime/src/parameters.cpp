@@ -181,6 +181,15 @@ constexpr Parameter kTable[] = {
     {.section = "solver", .name = "substeps", .type = T::Integer, .range = R{1, 1000},
      .doc = "implicit steps per frame (each of `dt/substeps`)", .label = "substeps", .panel = "solver", .log_scale = true,
      .access = field<&WorldDesc::solver, &SolverSettings::substeps>()},
+    {.section = "solver", .name = "split_stretch", .type = T::Real, .range = R{0.0, 100.0},
+     .doc = "redo a substep as two halves (each may split again) when it left a cloth triangle stretched beyond this "
+            "principal stretch (1 at rest) and further than at its start: a fast body dragging light cloth over a long "
+            "step; 0 turns it off; the attempt that stretched least is kept",
+     .label = "split at stretch", .panel = "solver",
+     .access = field<&WorldDesc::solver, &SolverSettings::split_stretch>()},
+    {.section = "solver", .name = "max_substep_splits", .type = T::Integer, .range = R{0, 10},
+     .doc = "halvings `split_stretch` may make of one substep (at most 2^this pieces)", .label = "max splits",
+     .panel = "solver", .access = field<&WorldDesc::solver, &SolverSettings::max_substep_splits>()},
     {.section = "solver", .name = "newton_iterations", .type = T::Integer, .range = R{1, 50},
      .doc = "linearisations per substep (1 = Baraff–Witkin)", .label = "Newton iterations", .panel = "solver",
      .access = field<&WorldDesc::solver, &SolverSettings::newton_iterations>()},

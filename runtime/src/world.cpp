@@ -194,7 +194,10 @@ std::size_t World::collider_count() const { return model_->colliders.size(); }
 std::size_t World::motion_count() const { return model_->motions.size(); }
 const Model& World::model() const { return *model_; }
 std::string_view World::backend_name() const { return backend_->name(); }
-std::string World::device_description() const { return backend_->device_description(); }
+std::string World::device_description() const {
+    ensure_built();  // a backend describes what it built (the cpu backend's precision is chosen there)
+    return backend_->device_description();
+}
 std::size_t World::memory_bytes() const { return backend_->memory_bytes(); }
 std::vector<std::pair<std::string, std::size_t>> World::memory_breakdown() const { return backend_->memory_breakdown(); }
 void World::release_grab() {
@@ -219,26 +222,56 @@ const StepStats& World::step() {
     // The last step's end audit is this step's start audit while nothing changed since (forget_audit);
     // taken out first, so that a step that throws leaves none behind.
     const std::unique_ptr<EnergyAudit> carried = std::move(carried_audit_);
-    if (guard != EnergyGuard::Off) {
-        if (carried && carried_h_ == h && carried_wind_ == wind)
+    // Splitting overstretched substeps (split_stretch) judges each by the audit's stretch, so it
+    // audits even with the guard off (the wind's power then left out: only the stretch is read).
+    const bool split = model_->settings.solver.split_stretch > 0.0;
+    const bool audit_wind = wind && guard != EnergyGuard::Off;
+    if (guard != EnergyGuard::Off || split) {
+        if (carried && carried_h_ == h && carried_wind_ == audit_wind)
             audit = *carried;
         else
-            audit = backend_->energy_audit(*model_, time_, h, wind);
+            audit = backend_->energy_audit(*model_, time_, h, audit_wind);
     }
+    // Where substeps were split lately, they start split: the state that needed it (a body pushing
+    // through cloth) lasts several frames, and a split only once the stretch is past the limit comes
+    // late each time. The level steps back one halving after kSplitRelaxSubsteps substeps without a
+    // split, as a step-size controller grows its step again.
+    const int max_splits = model_->settings.solver.max_substep_splits;
+    if (!split) split_level_ = 0;
+    split_level_ = std::min(split_level_, max_splits);
+    const int pieces = 1 << split_level_;
+    deepest_split_ = 0;
     for (int s = 0; s < substeps; ++s) {
-        if (guard == EnergyGuard::Off)
+        if (split) {
+            // The guard judges each piece against an audit at the piece's length (the collider
+            // penalty's stiffness depends on it).
+            if (pieces > 1 && guard != EnergyGuard::Off) audit = backend_->energy_audit(*model_, time_, h / pieces, audit_wind);
+            for (int k = 0; k < pieces; ++k)
+                stats_.substeps += split_substep(time_ + h * k / pieces, h / pieces, audit, split_level_);
+        } else if (guard == EnergyGuard::Off)
             backend_->substep(*model_, time_, h, stats_);
         else
-            guarded_substep(h, guard == EnergyGuard::Retry, audit);
+            guarded_substep(time_, h, guard == EnergyGuard::Retry, audit);
+        if (!split) ++stats_.substeps;
         time_ += h;
-        ++stats_.substeps;
     }
     ++steps_;
-    if (guard != EnergyGuard::Off) {
+    if (split && pieces > 1 && guard != EnergyGuard::Off)
+        audit = backend_->energy_audit(*model_, time_, h, audit_wind);  // at the step's h, to carry
+    if (split) {
+        if (deepest_split_ > split_level_) {
+            split_level_ = deepest_split_;
+            substeps_since_split_ = 0;
+        } else if (stats_.split_substeps == 0 && (substeps_since_split_ += substeps) >= kSplitRelaxSubsteps && split_level_ > 0) {
+            --split_level_;
+            substeps_since_split_ = 0;
+        }
+    }
+    if (guard != EnergyGuard::Off || split) {
         stats_.max_stretch = audit.max_stretch;  // the audit of the step's end state
         carried_audit_ = std::make_unique<EnergyAudit>(audit);
         carried_h_ = h;
-        carried_wind_ = wind;
+        carried_wind_ = audit_wind;
     }
     if (model_->settings.collision.check) {
         const auto check_start = std::chrono::steady_clock::now();
@@ -253,15 +286,78 @@ const StepStats& World::step() {
     return stats_;
 }
 
+void World::read_all_states(std::vector<std::vector<Vec3d>>& x, std::vector<std::vector<Vec3d>>& v) const {
+    const std::size_t cloths = model_->cloths.size();
+    x.resize(cloths);
+    v.resize(cloths);
+    for (std::size_t c = 0; c < cloths; ++c) {
+        x[c].resize(model_->cloths[c].fabric->vertex_count());
+        v[c].resize(x[c].size());
+        backend_->read_state(c, x[c], v[c]);
+    }
+}
+
+void World::write_all_states(const std::vector<std::vector<Vec3d>>& x, const std::vector<std::vector<Vec3d>>& v) {
+    for (std::size_t c = 0; c < x.size(); ++c) backend_->write_state(c, x[c], v[c]);
+}
+
+void World::audited_substep(double t, double h, EnergyAudit& audit) {
+    const EnergyGuard guard = model_->settings.solver.energy_guard;
+    if (guard != EnergyGuard::Off) {
+        guarded_substep(t, h, guard == EnergyGuard::Retry, audit);
+        return;
+    }
+    backend_->substep(*model_, t, h, stats_);
+    audit = backend_->energy_audit(*model_, t + h, h, false);
+}
+
+// A substep split where it overstretched the cloth (SolverSettings::split_stretch; docs/methods.md
+// §1c). The criterion is geometric, not an error estimate of the integrator: a triangle past the
+// limit and longer than at the substep's start was stretched within the substep, and with a long
+// step that is how a fast kinematic body drags light cloth (the solve moves it through the body, the
+// collision stages put it back in front, and the cloth behind it opens). Two halves from the same
+// start take the body's motion in shorter pieces, each of which may split again. The whole attempt
+// is kept where the halves stretched more (a stretch the pins impose, which no step length cures).
+// `audit` holds the audit at t and is left holding the one at t + h, taken at length h.
+int World::split_substep(double t, double h, EnergyAudit& audit, int depth) {
+    const double limit = model_->settings.solver.split_stretch;
+    const EnergyAudit start = audit;
+    const bool may_split = depth < model_->settings.solver.max_substep_splits;
+    std::vector<std::vector<Vec3d>> start_x, start_v;
+    if (may_split) read_all_states(start_x, start_v);
+    audited_substep(t, h, audit);
+    if (!may_split || !(audit.max_stretch > limit && audit.max_stretch > start.max_stretch)) return 1;
+    ++stats_.split_substeps;
+    const EnergyAudit whole = audit;
+    std::vector<std::vector<Vec3d>> whole_x, whole_v;
+    read_all_states(whole_x, whole_v);
+    write_all_states(start_x, start_v);
+    // The guard judges each half against an audit at the half's length (the collider penalty's
+    // stiffness depends on it); without the guard only the stretch is read, which h does not change.
+    const bool guarded = model_->settings.solver.energy_guard != EnergyGuard::Off;
+    const bool wind = model_->settings.wind.active() && guarded;
+    EnergyAudit halves = guarded ? backend_->energy_audit(*model_, t, 0.5 * h, wind) : start;
+    int pieces = split_substep(t, 0.5 * h, halves, depth + 1);
+    pieces += split_substep(t + 0.5 * h, 0.5 * h, halves, depth + 1);
+    if (halves.max_stretch > whole.max_stretch) {
+        write_all_states(whole_x, whole_v);
+        audit = whole;
+        return 1;
+    }
+    deepest_split_ = std::max(deepest_split_, depth + 1);  // only a split that helped makes the next substeps start split
+    audit = guarded ? backend_->energy_audit(*model_, t + h, h, wind) : halves;
+    return pieces;
+}
+
 // One substep under the energy guard (docs/methods.md §1b). `audit` holds the audit of the state at
-// time_ and is left holding the one at time_ + h. What a redo restores is what the substep reads:
+// t and is left holding the one at t + h. What a redo restores is what the substep reads:
 // every cloth's positions and velocities (through the backend) and the time, which the World advances
 // only after this returns; motions, colliders and the gust field are functions of the time. What it
 // does not restore is the backend's own carry-over from the failed attempt: the CPU backend's CG
 // warm start is cleared by write_state (the redo starts cold, which only costs iterations), and the
 // collision stages' caches are rebuilt each substep from the state. The stats of both attempts are
 // summed: the work was done.
-void World::guarded_substep(double h, bool retry, EnergyAudit& audit) {
+void World::guarded_substep(double t, double h, bool retry, EnergyAudit& audit) {
     const std::size_t cloths = model_->cloths.size();
     if (retry) {
         guard_x_.resize(cloths);
@@ -280,8 +376,8 @@ void World::guarded_substep(double h, bool retry, EnergyAudit& audit) {
     const auto attempt = [&](EnergyAudit& end, int pieces = 1) {
         const int swept = stats_.collision.swept_collider_hits;
         const int zones = stats_.collision.impact_zones;
-        for (int k = 0; k < pieces; ++k) backend_->substep(*model_, time_ + h * k / pieces, h / pieces, stats_);
-        end = backend_->energy_audit(*model_, time_ + h, h, model_->settings.wind.active());
+        for (int k = 0; k < pieces; ++k) backend_->substep(*model_, t + h * k / pieces, h / pieces, stats_);
+        end = backend_->energy_audit(*model_, t + h, h, model_->settings.wind.active());
         return audit.bounded && end.bounded && stats_.collision.swept_collider_hits == swept &&
                stats_.collision.impact_zones == zones;
     };

@@ -2,6 +2,7 @@
 //
 // The file: the 10 bytes "WEFTSTATE\0", uint32 version, uint64 payload size, uint64 FNV-1a hash of
 // the payload, then the payload (little-endian): the backend's name, time (f64, s), steps (u64),
+// the substep splitting's level and substeps since its last split (i32 each, SolverSettings::split_stretch),
 // the cloth count, per cloth its vertex count, positions and velocities (f64 × 3 each), its pins
 // (vertex, motion, optional position), the grab (optional), and the backend's solver state bytes.
 #include <array>
@@ -25,7 +26,7 @@ namespace {
 static_assert(std::endian::native == std::endian::little, "checkpoints are little-endian; this writer stores native values");
 
 constexpr std::array<char, 10> kMagic = {'W', 'E', 'F', 'T', 'S', 'T', 'A', 'T', 'E', '\0'};
-constexpr std::uint32_t kVersion = 1;
+constexpr std::uint32_t kVersion = 2;  // 2: the substep splitting's controller after the steps
 
 std::uint64_t fnv1a(const std::string& bytes) {
     std::uint64_t h = 14695981039346656037ULL;
@@ -127,6 +128,8 @@ void World::save_state(const std::filesystem::path& file) const {
     w.put(std::string(backend_->name()));
     w.put(time_);
     w.put(static_cast<std::uint64_t>(steps_));
+    w.put(static_cast<std::int32_t>(split_level_));
+    w.put(static_cast<std::int32_t>(substeps_since_split_));
     w.put(static_cast<std::uint64_t>(model_->cloths.size()));
     for (std::size_t c = 0; c < model_->cloths.size(); ++c) {
         const std::vector<Vec3d> x = positions(c), v = velocities(c);
@@ -195,6 +198,11 @@ void World::load_state(const std::filesystem::path& file) {
                     std::string(backend_name()));
     const auto time = r.get<double>();
     const auto steps = r.get<std::uint64_t>();
+    const auto split_level = r.get<std::int32_t>();
+    const auto substeps_since_split = r.get<std::int32_t>();
+    if (split_level < 0 || split_level > 30 || substeps_since_split < 0)
+        throw Error(name + ": the checkpoint's substep splitting state (" + std::to_string(split_level) + ", " +
+                    std::to_string(substeps_since_split) + ") is out of range");
     const auto cloths = r.get<std::uint64_t>();
     if (cloths != model_->cloths.size())
         throw Error(name + ": the checkpoint has " + std::to_string(cloths) + " cloths, this world " +
@@ -266,6 +274,8 @@ void World::load_state(const std::filesystem::path& file) {
     model_->grab = grab;
     time_ = time;
     steps_ = static_cast<std::size_t>(steps);
+    split_level_ = split_level;
+    substeps_since_split_ = substeps_since_split;
 }
 
 }  // namespace weft

@@ -9,6 +9,7 @@
 #include <map>
 #include <utility>
 
+#include "box_mesh.h"
 #include "collision/closed_colliders.h"
 #include "weft/mesh.h"
 #include "weft/world.h"
@@ -19,16 +20,10 @@ namespace {
 using collision::ClosedPiece;
 using collision::CollisionGeometry;
 
-/// An axis-aligned box [lo, hi] as 8 vertices and 12 triangles wound counter-clockwise seen from
-/// outside (so that the inside counts +1).
+/// An axis-aligned box [lo, hi] (tests/common/box_mesh.h).
 MeshData box(Vec3d lo, Vec3d hi) {
     MeshData m;
-    for (int k = 0; k < 8; ++k) m.positions.push_back({(k & 1) ? hi.x : lo.x, (k & 2) ? hi.y : lo.y, (k & 4) ? hi.z : lo.z});
-    const std::uint32_t quads[6][4] = {{0, 2, 3, 1}, {4, 5, 7, 6}, {0, 1, 5, 4}, {2, 6, 7, 3}, {0, 4, 6, 2}, {1, 3, 7, 5}};
-    for (const auto& q : quads) {
-        m.triangles.push_back({{q[0], q[1], q[2]}});
-        m.triangles.push_back({{q[0], q[2], q[3]}});
-    }
+    test::add_box(m, lo, hi);
     return m;
 }
 

@@ -76,6 +76,8 @@ RunSummary summarize(std::span<const StepStats> frames) {
         s.energy_retries += st.energy_retries;
         s.line_search_halvings += st.line_search_halvings;
         s.energy_unchecked += st.energy_unchecked;
+        s.split_substeps += st.split_substeps;
+        if (st.split_substeps > 0) ++s.frames_split;
         const CollisionStats& c = st.collision;
         auto& sc = s.collisions;
         sc.active = sc.active || c.candidate_pairs > 0 || c.ccd_tests > 0 || c.remaining_intersections >= 0 ||
@@ -149,6 +151,7 @@ RunContext describe_run(const SceneDesc& scene, const World& world, int threads,
     c.energy_guard = solver.energy_guard == EnergyGuard::Off      ? "off"
                      : solver.energy_guard == EnergyGuard::Report ? "report"
                                                                   : "retry";
+    c.split_stretch = solver.split_stretch;
     c.cloths = model.cloths.size();
     c.backend_memory_bytes = world.memory_bytes();
     c.backend_memory_breakdown = world.memory_breakdown();
@@ -306,6 +309,8 @@ void write_summary_fields(JsonWriter& json, const RunContext& c, const RunSummar
     json.field("unchecked_substeps", s.energy_unchecked);
     json.end_object();
     json.field("line_search_halvings", s.line_search_halvings);
+    json.key("split_substeps").begin_object().field("split_stretch", c.split_stretch).field("redone", s.split_substeps)
+        .field("frames", s.frames_split).end_object();
     // GPU kernels enqueued per frame (a graph's kernel nodes count at each launch; 0 on the cpu).
     json.key("kernels_per_frame").begin_object();
     json.field("median", s.kernels.median).field("max", s.kernels.max).field("mean", s.kernels.mean);
@@ -433,6 +438,9 @@ void print_run_summary(std::ostream& out, const RunContext& c, const RunSummary&
         out << "  GPU kernels    per frame: median " << format_fixed(s.kernels.median, 0) << ", max "
             << format_fixed(s.kernels.max, 0) << " (a CUDA graph's nodes counted at each launch)\n";
     out << "  NaN/Inf        " << s.non_finite_frames << " frames\n";
+    if (c.split_stretch > 0.0)
+        out << "  split substeps " << s.split_substeps << " redone as halves (a triangle past " << json_number(c.split_stretch)
+            << "x), in " << s.frames_split << " frames; " << s.substeps << " substeps taken\n";
     if (c.energy_guard != "off") {
         out << "  energy guard   " << c.energy_guard << ": " << s.energy_gained << " of " << s.substeps
             << " substeps gained energy";

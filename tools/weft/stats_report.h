@@ -76,6 +76,10 @@ struct RunSummary {
     long long energy_retries = 0;
     long long line_search_halvings = 0;
     long long energy_unchecked = 0;
+    /// Substeps redone as halves for overstretching the cloth (solver.split_stretch), and the frames
+    /// in which any was.
+    long long split_substeps = 0;
+    std::size_t frames_split = 0;
     /// Cloth collisions (docs/collisions.md), over all frames.
     struct Collisions {
         bool active = false;                  ///< any collision stage ran
@@ -135,6 +139,7 @@ struct RunContext {
     int cg_max_iterations = 0;
     std::string precision;  ///< "float" or "double"
     std::string energy_guard = "off";  ///< solver.energy_guard: "off", "report" or "retry"
+    double split_stretch = 0.0;        ///< solver.split_stretch (0: off)
     /// Whether CollisionStats::culled_pairs was counted: collision.count_culled on the cpu backend
     /// (the cuda backend does not count them; weft_cuda_collision_bench measures its culling).
     bool culled_pairs_counted = false;

@@ -92,6 +92,10 @@ enum class EnergyGuard : std::uint8_t {
     Retry,
 };
 
+/// SolverSettings::split_stretch: substeps without a split after which the halvings every substep
+/// starts with come down by one (half a second at 60 Hz).
+inline constexpr int kSplitRelaxSubsteps = 30;
+
 /// Solver knobs. Every one trades speed against accuracy; docs/tuning.md measures them.
 struct SolverSettings {
     double dt = 1.0 / 60.0;        ///< frame time step, s.
@@ -118,6 +122,20 @@ struct SolverSettings {
     /// iteration; k > 1 only in the first Newton iteration of every k-th substep, the others reusing
     /// the last factors (a stale preconditioner is still a valid one: only the iteration count moves).
     int preconditioner_refresh = 1;
+    /// A substep that leaves a cloth triangle stretched beyond this principal stretch (1 at rest), and
+    /// further than at its start, is redone from its start as two halves, each of which may be split
+    /// again, down to 2^max_substep_splits pieces; 0 turns it off. Why: a long step lets a fast
+    /// kinematic body carry light cloth through the solve, and the collision stages then push it back
+    /// in front of the body, where it stays held while the cloth behind it stretches open (a banner
+    /// a runner passes through: docs/methods.md §1c). Shorter pieces only where that happens cost
+    /// nothing elsewhere; the attempt that stretched least is kept. Each substep's start state is
+    /// kept for the redo (a host read of the state per substep on a device backend).
+    double split_stretch = 0.0;
+    /// Halvings of a substep that `split_stretch` may ask for (a substep becomes at most 2^this pieces).
+    /// The pieces a drag needs grow with the cloth's resolution against the body's speed: the
+    /// cape_runner's banner at its coarsest tore with 1 and held with 2, at detail 3 (3.5 cm cells,
+    /// 5 m/s) it tore with 2 and held with 3 (docs/results.md).
+    int max_substep_splits = 3;
     /// Energy check after every substep (a cost of two host reads of the state per substep on a device
     /// backend; docs/tuning.md measures it on the CPU).
     EnergyGuard energy_guard = EnergyGuard::Report;

@@ -126,6 +126,9 @@ struct StepStats {
     /// Substeps redone with a tighter CG tolerance because their first solve gained energy (retry
     /// mode); those the redo did not cure are also in `energy_gained`.
     int energy_retries = 0;
+    /// Substeps (or pieces of one) redone as two halves because they stretched a triangle beyond
+    /// SolverSettings::split_stretch; `substeps` counts the pieces the step finally took.
+    int split_substeps = 0;
     /// Halvings of Newton updates by the line search (SolverSettings::line_search), over the step.
     int line_search_halvings = 0;
     /// GPU kernels the backend enqueued over the step (cuda backend; 0 on the cpu backend): direct

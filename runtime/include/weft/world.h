@@ -159,7 +159,14 @@ public:
 
 private:
     void ensure_built() const;
-    void guarded_substep(double h, bool retry, EnergyAudit& audit);
+    void guarded_substep(double t, double h, bool retry, EnergyAudit& audit);
+    /// One substep of `h` from time `t` under the energy guard's setting, leaving `audit` at its end.
+    void audited_substep(double t, double h, EnergyAudit& audit);
+    /// As audited_substep, split into halves where it overstretched a cloth (split_stretch), `depth`
+    /// halvings below the step's substep; returns the pieces it took.
+    int split_substep(double t, double h, EnergyAudit& audit, int depth);
+    void read_all_states(std::vector<std::vector<Vec3d>>& x, std::vector<std::vector<Vec3d>>& v) const;
+    void write_all_states(const std::vector<std::vector<Vec3d>>& x, const std::vector<std::vector<Vec3d>>& v);
     /// Every way to change the model or the state between steps calls this: the next step audits
     /// its start again instead of taking the last step's end audit.
     void forget_audit();
@@ -177,6 +184,9 @@ private:
     std::unique_ptr<EnergyAudit> carried_audit_;
     double carried_h_ = 0.0;
     bool carried_wind_ = false;
+    /// split_stretch's controller: the halvings every substep starts with (those the last splits
+    /// needed), the deepest split of the current step, and the substeps since the last split.
+    int split_level_ = 0, deepest_split_ = 0, substeps_since_split_ = 0;
     double time_ = 0.0;
     std::size_t steps_ = 0;
     StepStats stats_{};
