@@ -358,16 +358,7 @@ int World::split_substep(double t, double h, EnergyAudit& audit, int depth) {
 // collision stages' caches are rebuilt each substep from the state. The stats of both attempts are
 // summed: the work was done.
 void World::guarded_substep(double t, double h, bool retry, EnergyAudit& audit) {
-    const std::size_t cloths = model_->cloths.size();
-    if (retry) {
-        guard_x_.resize(cloths);
-        guard_v_.resize(cloths);
-        for (std::size_t c = 0; c < cloths; ++c) {
-            guard_x_[c].resize(model_->cloths[c].fabric->vertex_count());
-            guard_v_[c].resize(guard_x_[c].size());
-            backend_->read_state(c, guard_x_[c], guard_v_[c]);
-        }
-    }
+    if (retry) read_all_states(guard_x_, guard_v_);
     // Two corrections after the solve change the state by rules that are not an implicit step, so
     // the criterion does not hold for them and a substep they acted in is not judged: a fast
     // analytic collider that carried vertices along (they take its velocity), and impact zones
@@ -394,19 +385,11 @@ void World::guarded_substep(double t, double h, bool retry, EnergyAudit& audit) 
         // The redos (below) can do worse than the attempt before them (plain Newton from a poor
         // linearisation can diverge): the attempt that gained least is kept, its state saved as the
         // best so far before the next redo starts from the substep's start.
-        std::vector<std::vector<Vec3d>> best_x(cloths), best_v(cloths);
+        std::vector<std::vector<Vec3d>> best_x, best_v;
         EnergyAudit best_end = end;
         double best = excess;
-        const auto save_best = [&] {
-            for (std::size_t c = 0; c < cloths; ++c) {
-                best_x[c].resize(guard_x_[c].size());
-                best_v[c].resize(guard_x_[c].size());
-                backend_->read_state(c, best_x[c], best_v[c]);
-            }
-        };
-        const auto restart = [&] {
-            for (std::size_t c = 0; c < cloths; ++c) backend_->write_state(c, guard_x_[c], guard_v_[c]);
-        };
+        const auto save_best = [&] { read_all_states(best_x, best_v); };
+        const auto restart = [&] { write_all_states(guard_x_, guard_v_); };
         save_best();
         restart();
         SolverSettings& solver = model_->settings.solver;
@@ -449,7 +432,7 @@ void World::guarded_substep(double t, double h, bool retry, EnergyAudit& audit) 
             return;
         }
         if (current > best) {
-            for (std::size_t c = 0; c < cloths; ++c) backend_->write_state(c, best_x[c], best_v[c]);
+            write_all_states(best_x, best_v);
             end = best_end;
             current = best;
         }
