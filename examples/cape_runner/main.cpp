@@ -213,7 +213,7 @@ int play(const Options& options) {
     long long most_cloth_pairs = 0, most_body_pairs = 0;
     double cloth_ms_sum = 0.0, frame_ms_sum = 0.0;
     std::array<double, weft::kStageNames.size()> stage_ms_sum{};  // where the cloth's time goes
-    int split_substeps = 0;  // substeps redone as halves where a body dragged cloth open (split_stretch)
+    int split_substeps = 0, substeps_taken = 0;  // redone as halves where a body dragged cloth open (split_stretch); all pieces
     long long cg_iterations = 0, capped_solves = 0, fallback_solves = 0;
     // The most any cloth triangle stretched, and the frames where cloth tore or was dragged along.
     double most_stretch = 0.0;
@@ -300,6 +300,7 @@ int play(const Options& options) {
         for (std::size_t k = 0; k < stage_ms_sum.size(); ++k) stage_ms_sum[k] += stats.stage_ms[k];
         cg_iterations += stats.cg_iterations;
         split_substeps += stats.split_substeps;
+        substeps_taken += stats.substeps;
         capped_solves += stats.cg_not_converged;
         fallback_solves += stats.cg_preconditioner_fallbacks;
         frame_ms_sum += frame_ms;
@@ -324,8 +325,8 @@ int play(const Options& options) {
                 frame > 0 ? static_cast<double>(cg_iterations) / frame : 0.0, capped_solves, fallback_solves);
     std::printf("cape_runner: slowest cloth step %.1f ms (frame %d); collisions: at most %d impact-zone rounds in a substep, "
                 "%lld vertices frozen, %lld substeps unresolved, %lld vertices moved out of the body, %lld jumps of a body; "
-                "%d substeps split\n",
-                slowest_ms, slowest_frame, most_zone_rounds, frozen_vertices, unresolved, moved_out, body_jumps, split_substeps);
+                "%d substeps split, %d taken\n",
+                slowest_ms, slowest_frame, most_zone_rounds, frozen_vertices, unresolved, moved_out, body_jumps, split_substeps, substeps_taken);
     std::printf("cape_runner: cape away from the shoulders in %d frames%s, intersections after %d, failed steps %d, "
                 "torn frames %lld, validation messages %d\n",
                 cape_lost, options.check ? "" : " (not checked; --check does)", intersections, failed_steps, static_cast<long long>(feed.torn_frames()), renderer.validation_messages());
