@@ -241,6 +241,10 @@ const StepStats& World::step() {
     split_level_ = std::min(split_level_, max_splits);
     const int pieces = 1 << split_level_;
     deepest_split_ = 0;
+    if (split) {  // before the recursion, which holds references into them
+        split_start_.resize(static_cast<std::size_t>(max_splits) + 1);
+        split_whole_.resize(split_start_.size());
+    }
     for (int s = 0; s < substeps; ++s) {
         if (split) {
             // The guard judges each piece against an audit at the piece's length (the collider
@@ -323,15 +327,15 @@ int World::split_substep(double t, double h, EnergyAudit& audit, int depth) {
     const double limit = model_->settings.solver.split_stretch;
     const EnergyAudit start = audit;
     const bool may_split = depth < model_->settings.solver.max_substep_splits;
-    std::vector<std::vector<Vec3d>> start_x, start_v;
-    if (may_split) read_all_states(start_x, start_v);
+    SavedStates& saved_start = split_start_[static_cast<std::size_t>(depth)];
+    if (may_split) read_all_states(saved_start.x, saved_start.v);
     audited_substep(t, h, audit);
     if (!may_split || !(audit.max_stretch > limit && audit.max_stretch > start.max_stretch)) return 1;
     ++stats_.split_substeps;
     const EnergyAudit whole = audit;
-    std::vector<std::vector<Vec3d>> whole_x, whole_v;
-    read_all_states(whole_x, whole_v);
-    write_all_states(start_x, start_v);
+    SavedStates& saved_whole = split_whole_[static_cast<std::size_t>(depth)];
+    read_all_states(saved_whole.x, saved_whole.v);
+    write_all_states(saved_start.x, saved_start.v);
     // The guard judges each half against an audit at the half's length (the collider penalty's
     // stiffness depends on it); without the guard only the stretch is read, which h does not change.
     const bool guarded = model_->settings.solver.energy_guard != EnergyGuard::Off;
@@ -340,7 +344,7 @@ int World::split_substep(double t, double h, EnergyAudit& audit, int depth) {
     int pieces = split_substep(t, 0.5 * h, halves, depth + 1);
     pieces += split_substep(t + 0.5 * h, 0.5 * h, halves, depth + 1);
     if (halves.max_stretch > whole.max_stretch) {
-        write_all_states(whole_x, whole_v);
+        write_all_states(saved_whole.x, saved_whole.v);
         audit = whole;
         return 1;
     }

@@ -184,6 +184,12 @@ private:
     std::unique_ptr<EnergyAudit> carried_audit_;
     double carried_h_ = 0.0;
     bool carried_wind_ = false;
+    /// split_substep's saved states, one pair a depth (its start, and the whole attempt while the
+    /// halves run), sized before a step's substeps and reused: no allocation in step() once warm.
+    struct SavedStates {
+        std::vector<std::vector<Vec3d>> x, v;
+    };
+    std::vector<SavedStates> split_start_, split_whole_;
     /// split_stretch's controller: the halvings every substep starts with (those the last splits
     /// needed), the deepest split of the current step, and the substeps since the last split.
     int split_level_ = 0, deepest_split_ = 0, substeps_since_split_ = 0;
