@@ -115,8 +115,8 @@ struct StepStats {
     int runaway_solves = 0;
     /// The largest principal stretch of any cloth triangle at the end of the step (1 at rest; cloth
     /// stretches a few percent, kOverstretch and more means a torn or dragged cloth), measured by the
-    /// energy guard's audit: 0 with solver.energy_guard = "off". Reported, not judged by ok(): very
-    /// soft cloth may stretch that far by design.
+    /// energy guard's audit: 0 with solver.energy_guard = "off" and no split_stretch. Reported, not
+    /// judged by ok(): very soft cloth may stretch that far by design.
     double max_stretch = 0.0;
     /// Energy guard (SolverSettings::energy_guard; docs/methods.md §1b): substeps whose kinetic +
     /// potential + elastic energy grew beyond the external work, as kept in the state (in retry
