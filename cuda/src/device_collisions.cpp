@@ -189,6 +189,12 @@ std::size_t DeviceCollisions::detect(const Model& model, double t, double h, con
     launch_collision_predict(x, v, n_, static_cast<float>(h), x0c, x1c, vertices_, stream);
     // The mesh colliders at t and t + h, skinned and placed on the device (device_kinematics.h).
     kinematics_.place(model, t, h, x0c, x1c, vertices_, n_, stream);
+    // A mesh collider that does not start this substep where it ended the last one was moved by
+    // something no substep's motion covers: counted, not fixed (as on the CPU, cpu_collisions.cpp).
+    if (const double jump = kinematics_.jump(); jump > 0.1 * geometry_.gap(settings)) {
+        ++stats.collision.collider_jumps;
+        stats.collision.collider_jump_max = std::max(stats.collision.collider_jump_max, jump);
+    }
 
     offset_ = settings.mode == CollisionMode::Offset;
     if (offset_) {

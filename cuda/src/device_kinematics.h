@@ -42,12 +42,26 @@ public:
                cudaStream_t stream);
     [[nodiscard]] const float* end_positions() const { return x1_.get(); }
     [[nodiscard]] const float* velocities() const { return v_.get(); }
+    /// The largest move of a mesh-collider vertex between where the last `place` left it (its end,
+    /// at t + h then) and where this one starts it, m: 0 unless this substep starts at the time the
+    /// last one ended. A game that rewrites a motion or pose for the time already reached makes it
+    /// non-zero (the CPU backend's `collider_jumps` check, the same number: computed on the host in
+    /// double from the maps, as the CPU places the vertices).
+    [[nodiscard]] double jump() const { return jump_; }
 
 private:
     std::vector<std::size_t> colliders_;   // model collider index of each mesh collider
     std::vector<std::uint32_t> first_map_;  // its first map in the table
     std::size_t count_ = 0, map_count_ = 0;
     std::vector<Affine> maps0_, maps1_;     // scratch: one collider's maps at t and t + h
+    // The jump check (jump()): the rest positions, map ids and weights again on the host, every map
+    // at the start of this substep and at the end of the last one, and that end's time.
+    std::vector<Vec3d> rest_host_;
+    std::vector<std::uint32_t> joints_host_;
+    std::vector<double> weights_host_;
+    std::vector<Affine> start_maps_, end_maps_, last_end_maps_;
+    double last_end_time_ = 0.0, jump_ = 0.0;
+    bool have_last_end_ = false;
     DeviceArray<float> rest_;               // X_i, SoA stride count_
     DeviceArray<std::uint32_t> joints_;     // 4 map ids a vertex (into the whole table)
     DeviceArray<float> weights_;            // 4 weights a vertex

@@ -2,7 +2,8 @@
 // character playing a clip, and the one-map placement of a rigid mesh, against the host's double
 // placement (weft::collider_mesh_positions) at t and t + h, with the substep's velocities; and, with
 // weft::assets, the shipped runner scene stepped on the cuda backend: the cape's pins follow the
-// skin, and the exact check after every frame finds no intersection.
+// skin, and the exact check after every frame finds no intersection. A mesh collider that jumps
+// between substeps is reported as on the CPU.
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -14,6 +15,7 @@
 #include <utility>
 #include <vector>
 
+#include "collider_jump.h"
 #include "device_kinematics.h"
 #include "weft/backend/collision_geometry.h"
 #include "weft/backend/model.h"
@@ -210,6 +212,13 @@ TEST(CudaKinematics, TheRunnerSceneRunsOnTheDevice) {
     EXPECT_LT(apart, 0.05) << "the device's cape left the CPU's";
 }
 #endif
+
+// The same check as the CPU backend's (tests/common/collider_jump.h): the jump from the maps on the
+// host, the same number.
+TEST(CudaKinematics, AMeshColliderThatJumpsBetweenSubstepsIsReportedLikeOnTheCpu) {
+    WEFT_REQUIRE_GPU();
+    test::expect_collider_jumps_reported("cuda");
+}
 
 }  // namespace
 }  // namespace weft
