@@ -121,7 +121,9 @@ void DeviceSolver::build(const FlatModel& flat, const Model& model) {
     control_.allocate(1, ledger_, "CG control and stats");
     stats_.allocate(1, ledger_, "CG control and stats");
     // Two sets of block partials: the one-launch CG loop alternates between them.
-    partials_.allocate(2 * std::max(1u, grid_for(static_cast<std::uint32_t>(n))), ledger_, "CG control and stats");
+    // At least kMaxPersistentBlocks a set: the loop's grid may be set wider than a block per 256 rows.
+    partials_.allocate(2 * std::max(kMaxPersistentBlocks, grid_for(static_cast<std::uint32_t>(n))), ledger_,
+                       "CG control and stats");
     if (loop_clock_requested() && loop_clock_.size() == 0) {  // kept over re-uploads: printed when the solver goes
         loop_clock_.allocate(kLoopClockEntries, ledger_, "CG loop clock");
         WEFT_CUDA_CHECK(cudaMemset(loop_clock_.get(), 0, kLoopClockEntries * sizeof(long long)));

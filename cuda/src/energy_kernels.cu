@@ -216,15 +216,18 @@ __device__ inline V3 shell_bending_gradient(const DeviceView& d, const StepParam
 }
 
 /// Per pinned vertex: ∇U·v, the power the pin puts in by holding the vertex against the elastic
-/// force (a static pin has v = 0 and adds nothing; host_energy_audit counts moving pins only).
+/// force (a static pin has v = 0 and adds nothing; host_energy_audit counts moving pins only). One
+/// warp a pin, the lanes over its triangles and hinges, a butterfly for the sum (the same order on
+/// every run): a thread a pin walked a dozen elements in a chain of dependent loads (52 µs a call
+/// on the 672-triangle runner, one H200 under ncu), and the audit runs every substep that may split.
 __global__ void audit_pin_kernel(DeviceView d, double* partials) {
     const StepParams& sp = step_params(d);
-    const std::uint32_t k = blockIdx.x * blockDim.x + threadIdx.x;
+    const std::uint32_t k = (blockIdx.x * blockDim.x + threadIdx.x) / 32, lane = threadIdx.x % 32;
     double power = 0.0;
-    if (k < d.pins) {
+    if (k < d.pins) {  // the same for the whole warp
         const std::uint32_t i = d.pin_vertex[k];
         V3 gradient{};
-        for (std::uint32_t e = d.vertex_triangle_start[i]; e < d.vertex_triangle_start[i + 1]; ++e) {
+        for (std::uint32_t e = d.vertex_triangle_start[i] + lane; e < d.vertex_triangle_start[i + 1]; e += 32) {
             const std::uint32_t t = d.vertex_triangle[e] >> 2, corner = d.vertex_triangle[e] & 3u;
             V3 x[3], grad[3];
             float dm_inv[2][2], area;
@@ -233,7 +236,7 @@ __global__ void audit_pin_kernel(DeviceView d, double* partials) {
             (void)physics::membrane_evaluate<float>(dm_inv, area, p.membrane, x, grad, nullptr, physics::HessianKind::None);
             gradient += grad[corner];
         }
-        for (std::uint32_t e = d.vertex_hinge_start[i]; e < d.vertex_hinge_start[i + 1]; ++e) {
+        for (std::uint32_t e = d.vertex_hinge_start[i] + lane; e < d.vertex_hinge_start[i + 1]; e += 32) {
             const std::uint32_t h = d.vertex_hinge[e] >> 2, corner = d.vertex_hinge[e] & 3u;
             if (d.shell_faces != nullptr) {
                 gradient += shell_bending_gradient(d, sp, h, corner);
@@ -247,7 +250,12 @@ __global__ void audit_pin_kernel(DeviceView d, double* partials) {
                                                    nullptr, physics::HessianKind::None);
             gradient += grad[corner];
         }
-        power = static_cast<double>(physics::dot(gradient, velocity(d, i)));
+        for (int offset = 16; offset > 0; offset /= 2) {
+            gradient.x += __shfl_xor_sync(0xFFFFFFFFU, gradient.x, offset);
+            gradient.y += __shfl_xor_sync(0xFFFFFFFFU, gradient.y, offset);
+            gradient.z += __shfl_xor_sync(0xFFFFFFFFU, gradient.z, offset);
+        }
+        if (lane == 0) power = static_cast<double>(physics::dot(gradient, velocity(d, i)));
     }
     block_partial(power, partials);
 }
@@ -301,10 +309,13 @@ __global__ void audit_finish_kernel(const double* partials, std::uint32_t stride
 
 }  // namespace
 
+/// audit_pin_kernel's blocks: a warp a pin.
+static std::uint32_t pin_blocks(const DeviceView& d) { return blocks_for(d.pins, kBlockSize / 32); }
+
 std::uint32_t energy_partial_stride(const DeviceView& d) {
     std::uint32_t blocks = 1;
-    for (const std::uint32_t count : {d.n, d.triangles, d.hinges, d.pins}) blocks = std::max(blocks, grid_for(count));
-    return blocks;
+    for (const std::uint32_t count : {d.n, d.triangles, d.hinges}) blocks = std::max(blocks, grid_for(count));
+    return std::max(blocks, pin_blocks(d));
 }
 
 void launch_energy_audit(const DeviceView& d, bool with_wind, bool with_faces, double* partials, double* sums, cudaStream_t stream,
@@ -346,9 +357,9 @@ void launch_energy_audit(const DeviceView& d, bool with_wind, bool with_faces, d
             WEFT_CUDA_CHECK_LAUNCH("audit_hinge_kernel");
         }
     }
-    counts.blocks[kEnergyPinPower] = d.pins > 0 ? grid_for(d.pins) : 0;
+    counts.blocks[kEnergyPinPower] = d.pins > 0 ? pin_blocks(d) : 0;
     if (d.pins > 0) {
-        audit_pin_kernel<<<grid_for(d.pins), kBlockSize, 0, stream>>>(d, partials + kEnergyPinPower * stride);
+        audit_pin_kernel<<<pin_blocks(d), kBlockSize, 0, stream>>>(d, partials + kEnergyPinPower * stride);
         WEFT_CUDA_CHECK_LAUNCH("audit_pin_kernel");
     }
     // Offset contacts: at most `stride` blocks (grid-stride over the list), none without a list.

@@ -15,6 +15,9 @@ namespace weft::cuda {
 
 inline constexpr int kBlockSize = 256;
 [[nodiscard]] inline unsigned grid_for(std::uint32_t count) { return blocks_for(count, kBlockSize); }
+/// The most blocks the one-launch CG loop is given beyond one per kBlockSize rows (its block partials
+/// are sized for it): more than any device holds at once at five blocks an SM.
+inline constexpr unsigned kMaxPersistentBlocks = 2048;
 
 // ---- state (state_kernels.cu) --------------------------------------------------------------------
 /// x0 = x, v0 = v, v_k = v, w_k = 0; resets the substep's stats.

@@ -18,10 +18,13 @@
 #include <cooperative_groups.h>
 #include <cuda_runtime.h>
 
+#include <algorithm>
+
 #include "contact_terms.cuh"
 #include "cuda_check.h"
 #include "device_math.cuh"
 #include "pcg_control.cuh"
+#include "pcg_loop_environment.h"
 #include "persistent_sum.cuh"
 #include "loop_clock.cuh"
 #include "schwarz_apply.cuh"
@@ -384,8 +387,15 @@ int pcg_persistent_grid(const DeviceView& d, int device, bool schwarz) {
     // The variant the solver will launch: with contacts it may hold more registers, so fewer blocks.
     WEFT_CUDA_CHECK(cudaOccupancyMaxActiveBlocksPerMultiprocessor(
         &per_sm, persistent_kernel(d.contacts.capacity > 0, schwarz), kBlockSize, 0));
-    const int needed = static_cast<int>(grid_for(d.n));
-    return std::min(needed, per_sm * sms);
+    // At least one block an SM: below that the warp-per-domain phases of the Schwarz apply take two
+    // or more rounds on a few SMs while the rest idle. One H200, µs per CG iteration (the loop
+    // clock, the game preset), a block per 256 rows against 132 blocks: the 9.7K-triangle flag 34.1
+    // against 26.1 (restriction 6.0 → 3.6, domain solves 9.6 → 4.2), the 672-triangle runner 23.8
+    // against 19.7; two blocks an SM (264) gave 32.1 and 24.0 (every barrier waits for more blocks).
+    const int needed = std::max(static_cast<int>(grid_for(d.n)), sms);
+    const int wanted = std::min(pcg_blocks_from_environment().value_or(needed),
+                                std::max(needed, static_cast<int>(kMaxPersistentBlocks)));
+    return std::min(wanted, per_sm * sms);
 }
 
 void launch_pcg_persistent(const DeviceView& d, int grid, bool schwarz, cudaStream_t stream) {

@@ -13,4 +13,9 @@ namespace weft::cuda {
 /// where it is none of one, kernels and auto.
 [[nodiscard]] std::optional<PcgLoop> pcg_loop_from_environment();
 
+/// WEFT_CUDA_PCG_BLOCKS=N (profiling): the one-launch CG loop's grid in blocks, where the default
+/// is one block per 256 rows (pcg_persistent_grid); capped at what the device holds at once. Absent:
+/// nullopt. Anything but a positive integer is an Error naming the value.
+[[nodiscard]] std::optional<int> pcg_blocks_from_environment();
+
 }  // namespace weft::cuda
