@@ -50,6 +50,10 @@ public:
     /// (the context is lost) every later call throws.
     void substep(const Model& model, double t, double h, StepStats& stats);
     void read_state(std::size_t first, std::size_t count, Vec3d* x, Vec3d* v) const;
+    /// The rows [first, first + count) in a contact of the last substep's solve (the incidence the
+    /// solve built: offset pairs beyond their radius left out), each once, ascending, numbered from
+    /// `first` (Backend::contact_vertices). Reads the incidence's starts back: for tools.
+    void contact_vertices(std::size_t first, std::size_t count, std::vector<std::uint32_t>& out) const;
     void write_state(std::size_t first, std::size_t count, const Vec3d* x, const Vec3d* v);
     /// What decides the next substep besides x and v (Backend::solver_state): the CG warm start
     /// (previous Δv) and the substep count (the preconditioner's refresh phase), as bytes.

@@ -240,6 +240,20 @@ void DeviceSolver::read_state(std::size_t first, std::size_t count, Vec3d* x, Ve
     }
 }
 
+void DeviceSolver::contact_vertices(std::size_t first, std::size_t count, std::vector<std::uint32_t>& out) const {
+    out.clear();
+    const ContactView& c = view_.contacts;
+    // No contact path (nothing reserved), or the state is on the host after a fault: no contacts.
+    if (c.capacity == 0 || c.start == nullptr || rebuild_pending_ || count == 0) return;
+    WEFT_CUDA_CHECK(cudaSetDevice(device_));
+    WEFT_CUDA_CHECK(cudaStreamSynchronize(active_stream()));
+    // A row is in a contact where its incidence is not empty: the solve's gathers read the same.
+    std::vector<std::uint32_t> start(count + 1);
+    WEFT_CUDA_CHECK(cudaMemcpy(start.data(), c.start + first, (count + 1) * sizeof(std::uint32_t), cudaMemcpyDeviceToHost));
+    for (std::size_t i = 0; i < count; ++i)
+        if (start[i + 1] > start[i]) out.push_back(static_cast<std::uint32_t>(i));
+}
+
 void DeviceSolver::write_state(std::size_t first, std::size_t count, const Vec3d* x, const Vec3d* v) {
     if (rebuild_pending_) {
         std::copy_n(x, count, rescued_x_.begin() + static_cast<std::ptrdiff_t>(first));

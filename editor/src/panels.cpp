@@ -454,7 +454,7 @@ void display_rows(Session& session) {
     ImGui::Checkbox("contacts", &d.contacts);
     if (ImGui::IsItemHovered())
         ImGui::SetTooltip("orange: vertices within their contact thickness of an analytic collider; magenta: vertices in a "
-                          "contact with cloth or a mesh collider (reported by the cpu backend; not yet by cuda)");
+                          "contact with cloth or a mesh collider (reported by the cpu and one-GPU cuda backends)");
     ImGui::SameLine();
     ImGui::Checkbox("pins", &d.pins);
     if (d.contacts || d.pins)

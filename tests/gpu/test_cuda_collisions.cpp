@@ -9,13 +9,17 @@
 #include <cstdint>
 #include <cstdlib>
 #include <filesystem>
+#include <iterator>
 #include <memory>
+#include <optional>
 #include <string>
 #include <utility>
 #include <vector>
 
 #include "weft/error.h"
+#include "weft/mesh.h"
 #include "weft/scene.h"
+#include "weft/world.h"
 
 #include "gpu_test_util.h"
 #include "rest_exclusion_scene.h"
@@ -165,6 +169,42 @@ TEST(CudaCollisions, ACoarseCcdTimeToleranceStaysIntersectionFree) {
                 static_cast<long long>(default_hits), static_cast<long long>(coarse_hits));
     EXPECT_GT(default_hits, 0) << "no CCD hit: the scene does not test the tolerance";
     EXPECT_NE(coarse_x, default_x) << "the tolerance did not reach the GPU's CCD";
+}
+
+// The vertices in a cloth contact (World::contact_vertices, the editor's magenta marks) on the
+// device: two sheets 2 mm apart, inside their contact thickness, give the CPU's vertices after one
+// step from the same state (a borderline pair or two may differ in float).
+TEST(CudaCollisions, ReportsTheVerticesInClothContactsLikeTheCpu) {
+    WEFT_REQUIRE_GPU();
+    const auto contacts = [](const char* backend) {
+        WorldDesc desc;
+        desc.collision.self_collision = true;
+        World world(desc, backend);
+        world.add_cloth({.name = "back", .fabric = Fabric::cook(make_grid(0.4, 0.4, 4, 4))});
+        ClothDesc front{.name = "front", .fabric = Fabric::cook(make_grid(0.4, 0.4, 4, 4))};
+        front.transform.translation = {0.0, 0.0, 0.002};
+        world.add_cloth(front);
+        (void)world.step();
+        std::vector<std::vector<std::uint32_t>> out;
+        for (std::size_t c = 0; c < 2; ++c) {
+            const std::optional<std::vector<std::uint32_t>> v = world.contact_vertices(c);
+            EXPECT_TRUE(v.has_value()) << backend << " does not report its contacts";
+            out.push_back(v.value_or(std::vector<std::uint32_t>{}));
+        }
+        return out;
+    };
+    const auto gpu = contacts("cuda"), cpu = contacts("cpu");
+    for (std::size_t c = 0; c < 2; ++c) {
+        std::vector<std::uint32_t> only;
+        std::set_symmetric_difference(gpu[c].begin(), gpu[c].end(), cpu[c].begin(), cpu[c].end(), std::back_inserter(only));
+        std::printf("[ contacts ] cloth %zu: %zu vertices in a contact on the GPU, %zu on the CPU, %zu on one only\n", c,
+                    gpu[c].size(), cpu[c].size(), only.size());
+        EXPECT_GT(gpu[c].size(), 10U) << "most of each sheet touches the other";
+        EXPECT_TRUE(std::is_sorted(gpu[c].begin(), gpu[c].end()));
+        EXPECT_TRUE(std::adjacent_find(gpu[c].begin(), gpu[c].end()) == gpu[c].end()) << "each vertex once";
+        for (const std::uint32_t v : gpu[c]) EXPECT_LT(v, 25U) << "cloth-local ids";
+        EXPECT_LE(only.size(), cpu[c].size() / 10) << "cloth " << c;
+    }
 }
 
 }  // namespace

@@ -244,7 +244,7 @@ struct CollisionSettings {
     /// about eta + this × the pair's motion may be taken for a hit. Larger is faster: a hit is
     /// bisected to the tolerance, and on `layers` hits are 2% of the CCD queries and half the CCD
     /// time (1e-4 takes a quarter off the stage for 0.7% more hits, each within 4% of eta:
-    /// docs/results.md). 0: the CCD's default, 1e-6. cpu backend only (the cuda backend keeps 1e-6).
+    /// docs/results.md). 0: the CCD's default, 1e-6. Both backends (the cuda backend's float CCD at 0: 1e-4).
     double ccd_time_tolerance = 0.0;
     /// Contact pipeline: CCD with impact zones, or offset contact with displacement bounds.
     CollisionMode mode = CollisionMode::CcdZones;
