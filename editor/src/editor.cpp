@@ -33,11 +33,12 @@ using Clock = std::chrono::steady_clock;
 
 double seconds(Clock::duration d) { return std::chrono::duration<double>(d).count(); }
 
-// The sizes of every collider, in order: the render scene's collider meshes are made from them.
+// The shape and sizes of every collider, in order: the render scene's collider meshes are made from them.
 std::vector<double> collider_sizes(const World& world) {
     std::vector<double> sizes;
     for (const ColliderDesc& c : world.model().colliders)
-        sizes.insert(sizes.end(), {c.radius, c.half_height, c.half_extents.x, c.half_extents.y, c.half_extents.z});
+        sizes.insert(sizes.end(), {static_cast<double>(c.shape), c.radius, c.half_height, c.half_extents.x,
+                                   c.half_extents.y, c.half_extents.z});
     return sizes;
 }
 

@@ -135,6 +135,7 @@ void parameter_rows(Session& session, const char* panel, bool visible) {
             }
             shown = group_open;
         }
+        if (p.shown && !p.shown(session.world())) shown = false;  // a size of another shape
         double value = p.get(session.world());
         bool changed = shown && widget(p, value);
         if (const std::optional<double> pending = session.parameters().take_pending(p)) {

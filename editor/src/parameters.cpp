@@ -179,19 +179,49 @@ ParameterTable::ParameterTable(const World& world, std::span<const std::string> 
     // ---- colliders: sizes (analytic shapes), friction and (for one that follows no motion) position,
     // read at every substep (World::collider). A mesh collider's triangles are cooked, but where they
     // are is its frame, placed at every substep (collision_geometry.cpp): it gets friction and position.
-    const auto shape_names = weft::parameter("collider", "shape").choices;
+    // An analytic collider's shape is a row too (World::set_collider_shape rebuilds the world at the
+    // next step), so it has the sizes of every analytic shape, each shown while its shape is.
+    const weft::Parameter& shape_row = weft::parameter("collider", "shape");
+    const auto shape_names = shape_row.choices;
+    const auto analytic_size = [](const weft::Parameter& row) {
+        return row.shapes != 0 && (row.applies_to(ColliderShape::Sphere) || row.applies_to(ColliderShape::Capsule) ||
+                                   row.applies_to(ColliderShape::Box));
+    };
     for (std::size_t k = 0; k < world.model().colliders.size(); ++k) {
         const ColliderDesc& c = world.model().colliders[k];
         const std::string name = c.name.empty() ? std::to_string(k) : c.name;
-        const std::string group =
-            "collider " + name + " (" + std::string(shape_names[static_cast<std::size_t>(c.shape)]) + ")";
+        const std::string group = "collider " + name + (c.is_analytic() ? std::string()
+                                                                         : " (" + std::string(shape_names[static_cast<std::size_t>(c.shape)]) + ")");
         const bool follows = k < collider_motions.size() && !collider_motions[k].empty();
         const auto alias = [&](const std::string& key) { aliases_.emplace(key, P.size() - 1); };
+        if (c.is_analytic()) {
+            Parameter p;
+            p.key = "collider." + name + ".shape";
+            p.panel = "colliders";
+            p.group = group;
+            p.label = "shape";
+            p.hint = std::string(shape_row.doc) + " (a mesh comes from a file: not here)";
+            p.kind = ParameterKind::choice;
+            // The analytic shapes, in ColliderShape's order (the runtime's choices end with "mesh").
+            for (int s = 0; s <= static_cast<int>(ColliderShape::Box); ++s)
+                p.choices.emplace_back(shape_names[static_cast<std::size_t>(s)]);
+            p.min = 0.0;
+            p.max = static_cast<double>(p.choices.size() - 1);
+            p.get = [k](const World& w) { return static_cast<double>(w.model().colliders[k].shape); };
+            p.set = [k](World& w, double v) { w.set_collider_shape(k, static_cast<ColliderShape>(std::lround(v))); };
+            P.push_back(std::move(p));
+            alias("collider." + std::to_string(k) + ".shape");
+        }
         for (const weft::Parameter& row : parameter_table()) {
-            if (!shown(row) || !holds<ColliderDesc>(row) || !row.applies_to(c.shape)) continue;
+            if (!shown(row) || !holds<ColliderDesc>(row)) continue;
+            if (!row.applies_to(c.shape) && !(c.is_analytic() && analytic_size(row))) continue;
             if ((row.name == "position" || row.name == "rotation") && follows) continue;  // the motion's frame
+            const std::size_t first = P.size();
             add_rows<ColliderDesc>(P, row, name, std::to_string(k), group,
                                    [k](World& w) -> ColliderDesc& { return w.collider(k); }, alias);
+            if (c.is_analytic() && analytic_size(row))
+                for (std::size_t i = first; i < P.size(); ++i)
+                    P[i].shown = [k, &row](const World& w) { return row.applies_to(w.model().colliders[k].shape); };
         }
     }
 }

@@ -252,9 +252,10 @@ void update_scene_from_world(SceneDesc& scene, const World& world) {
     for (std::size_t k = 0; k < scene.colliders.size(); ++k) {
         const ColliderDesc& live = model.colliders[k];
         ColliderDesc& saved = scene.colliders[k];
-        if (live.shape != saved.shape || live.name != saved.name)
+        if ((live.shape != saved.shape && !(live.is_analytic() && saved.is_analytic())) || live.name != saved.name)
             throw Error("update scene: collider " + std::to_string(k) + " is '" + live.name + "' in the world and '" +
                         saved.name + "' in the scene");
+        saved.shape = live.shape;  // an analytic shape changed live (World::set_collider_shape)
         const bool follows = k < scene.collider_motions.size() && !scene.collider_motions[k].empty();
         for (const Parameter& p : parameter_table()) {
             if (!holds<ColliderDesc>(p) || p.effect != ParameterEffect::Live) continue;

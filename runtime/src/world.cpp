@@ -188,6 +188,37 @@ ColliderDesc& World::collider(std::size_t index) {
     forget_audit();
     return model_->colliders.at(index);
 }
+void World::set_collider_shape(std::size_t index, ColliderShape shape) {
+    const auto names = parameter("collider", "shape").choices;
+    if (index >= model_->colliders.size())
+        throw Error("set_collider_shape: collider " + std::to_string(index) + " of " + std::to_string(model_->colliders.size()));
+    ColliderDesc& c = model_->colliders[index];
+    if (static_cast<std::size_t>(shape) >= names.size())
+        throw Error("collider '" + c.name + "': shape " + std::to_string(static_cast<int>(shape)) + " is not a shape");
+    const std::string from(names[static_cast<std::size_t>(c.shape)]), to(names[static_cast<std::size_t>(shape)]);
+    if (c.shape == ColliderShape::Mesh || shape == ColliderShape::Mesh)
+        throw Error("collider '" + c.name + "': a " + from + " cannot become a " + to +
+                    " live (a mesh collider's triangles come from a file: add a collider)");
+    if (shape == c.shape) return;
+    forget_audit();
+    // The new shape the old one's extent: along the local y axis (a capsule's) and across it.
+    const Vec3d& h = c.half_extents;
+    const double across = c.shape == ColliderShape::Box ? std::max(h.x, h.z) : c.radius;
+    const double along = c.shape == ColliderShape::Box       ? h.y
+                         : c.shape == ColliderShape::Capsule ? c.half_height + c.radius
+                                                             : c.radius;
+    switch (shape) {
+        case ColliderShape::Sphere: c.radius = std::max(across, along); break;
+        case ColliderShape::Capsule:
+            c.radius = across;
+            c.half_height = std::max(0.0, along - across);
+            break;
+        case ColliderShape::Box: c.half_extents = Vec3d{across, along, across}; break;
+        default: break;  // a plane has no size
+    }
+    c.shape = shape;
+    ++model_->topology_version;  // cooked: rebuilt at the next step, the cloths' state kept (ensure_built)
+}
 const ClothDesc& World::cloth(std::size_t index) const { return model_->cloths.at(index); }
 std::size_t World::cloth_count() const { return model_->cloths.size(); }
 std::size_t World::collider_count() const { return model_->colliders.size(); }

@@ -173,9 +173,13 @@ TEST(Parameters, CollidersAreLiveAndMoveWithTheirMotion) {
     const Parameter* radius = table.find("collider.ball.radius");
     ASSERT_NE(radius, nullptr);
     EXPECT_EQ(table.find("collider.0.radius"), radius);
-    EXPECT_EQ(radius->group, "collider ball (sphere)");
+    EXPECT_EQ(radius->group, "collider ball");
     EXPECT_EQ(table.find("collider.ball.position.x"), nullptr) << "the ball follows the motion 'spin'";
-    EXPECT_EQ(table.find("collider.ball.half_height"), nullptr) << "a sphere has no half height";
+    const Parameter* half_height = table.find("collider.ball.half_height");
+    ASSERT_NE(half_height, nullptr) << "every analytic size is a row, for a change of shape";
+    ASSERT_TRUE(half_height->shown && radius->shown);
+    EXPECT_FALSE(half_height->shown(world)) << "a sphere has no half height to show";
+    EXPECT_TRUE(radius->shown(world));
     ASSERT_NE(table.find("collider.floor.position.y"), nullptr);
     session->apply(*radius, 0.35);
     EXPECT_EQ(world.collider(0).radius, 0.35);
@@ -187,6 +191,35 @@ TEST(Parameters, CollidersAreLiveAndMoveWithTheirMotion) {
     session->apply(*table.find("motion.spin.angular_velocity.y"), 4.0);
     EXPECT_EQ(world.motion(0).angular_velocity.y, 4.0);
     EXPECT_EQ(world.collider(0).motion.angular_velocity.y, 4.0) << "the ball spins with its motion";
+}
+
+// An analytic collider's shape is a row (World::set_collider_shape): the ball becomes a box of its
+// size, the panel shows the box's sizes instead of the ball's, the world steps on, and Save writes
+// the box.
+TEST(Parameters, AColliderChangesShapeLiveAndSaveWritesIt) {
+    auto session = open_session("sphere");
+    ParameterTable& table = session->parameters();
+    const Parameter* shape = table.find("collider.ball.shape");
+    ASSERT_NE(shape, nullptr);
+    EXPECT_EQ(table.find("collider.0.shape"), shape);
+    EXPECT_EQ(table.find("collider.floor.shape")->choices,
+              (std::vector<std::string>{"plane", "sphere", "capsule", "box"})) << "no mesh: it comes from a file";
+    EXPECT_EQ(ParameterTable::format_value(*shape, shape->get(session->world())), "sphere");
+    const double radius = session->world().collider(0).radius;
+    session->apply(*shape, ParameterTable::parse_value(*shape, "box"));
+    const ColliderDesc& ball = session->world().collider(0);
+    EXPECT_EQ(ball.shape, ColliderShape::Box);
+    EXPECT_EQ(ball.half_extents.y, radius) << "the box takes the ball's size";
+    EXPECT_FALSE(table.find("collider.ball.radius")->shown(session->world()));
+    EXPECT_TRUE(table.find("collider.ball.half_extents.x")->shown(session->world()));
+    for (int i = 0; i < 3; ++i) EXPECT_FALSE(session->world().step().non_finite);
+
+    const std::filesystem::path saved = std::filesystem::temp_directory_path() / "weft_test_shape_saved.toml";
+    session->save(saved);
+    const SceneDesc back = load_scene(saved);
+    std::filesystem::remove(saved);
+    EXPECT_EQ(back.colliders.at(0).shape, ColliderShape::Box);
+    EXPECT_EQ(back.colliders.at(0).half_extents.x, radius);
 }
 
 // A mesh collider is in the table too: its friction, and its position when it follows no motion

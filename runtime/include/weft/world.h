@@ -76,9 +76,19 @@ public:
     [[nodiscard]] Motion& motion(int index);
 
     /// Analytic collider `index`: its sizes, friction and motion are read at every substep, so
-    /// changes apply at the next step. Its shape (and a mesh collider's triangles) are cooked: add
-    /// a new collider for those.
+    /// changes apply at the next step. Its shape is cooked: change it with set_collider_shape (a mesh
+    /// collider's triangles: add a new collider).
     [[nodiscard]] ColliderDesc& collider(std::size_t index);
+    /// Turns analytic collider `index` into another analytic shape (plane, sphere, capsule, box),
+    /// keeping its name, motion, place and friction. The new shape takes the old one's extent along
+    /// its local y axis and across it (a sphere: its radius both ways; a capsule: half height +
+    /// radius, radius; a box: its y half extent, the larger of x and z; a plane: its `radius` field):
+    /// a box of those half extents, a capsule of the radius across reaching as far along y, a sphere
+    /// of the larger. A pole stays a pole, a ball a cube.
+    /// The shape is cooked into the backend: the world is rebuilt at the next step, every cloth
+    /// keeping its state (as pin()). Throws weft::Error naming the collider for an index out of
+    /// range or a mesh on either side (a mesh collider's triangles come from add_collider).
+    void set_collider_shape(std::size_t index, ColliderShape shape);
 
     /// What was added, in order: cloth `index` as added (its material as tuned since, its pins as
     /// they are now), and the counts. Throw std::out_of_range for an index out of range.

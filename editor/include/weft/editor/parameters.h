@@ -40,6 +40,9 @@ struct Parameter {
     std::vector<std::string> choices;
     std::function<double(const World&)> get;
     std::function<void(World&, double)> set;  ///< called with a value already clamped to [min, max]
+    /// Where set and false for the world as it is, the panels leave the row out (a collider's size
+    /// that its present shape does not have); a script may still set it.
+    std::function<bool(const World&)> shown;
     /// What the last step says it used, where a step reports it (StepStats::substeps); checked by
     /// a script's `expect` once a step has run since the value was applied.
     std::function<std::optional<double>(const StepStats&)> observed;
@@ -52,8 +55,9 @@ public:
     /// name: "cloth.flag.material.stretch_stiffness"; "cloth.0.material…" finds the same; motions by
     /// `motion_names`, the scene's `[[motion]]` names in order: "motion.spin.angular_velocity.y",
     /// "motion.0…" finds the same, and a motion without a name is keyed by its index).
-    /// Analytic colliders by name ("collider.pole.radius", "collider.0.radius" finds the same):
-    /// sizes for their shape, friction, and the position of one that follows no motion.
+    /// Analytic colliders by name ("collider.pole.radius", "collider.0.radius" finds the same): their
+    /// shape (World::set_collider_shape), the sizes of every analytic shape (those of the present
+    /// shape shown), friction, and the position of one that follows no motion.
     /// `collider_motions`: per collider, the name of the motion it follows (SceneDesc::collider_motions),
     /// so that a motion's change moves its colliders with it.
     explicit ParameterTable(const World& world, std::span<const std::string> motion_names = {},
