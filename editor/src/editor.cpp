@@ -261,11 +261,13 @@ int run_editor(const SceneDesc& scene, std::unique_ptr<World> world, EditorOptio
         });
         if (shown > 0) session->history().frame_ms.push(1000.0 * seconds(now - last));
         last = now;
-        // The View panel: the wireframe and normals drawn by the renderer from the cloth buffer, the
-        // marks from the state this frame draws; then the ImGui frame ends.
+        // The View panel: the wireframe, normals, contacts and pins drawn by the renderer from the
+        // cloth buffer, depth-tested; the grab's spring by ImGui; then the ImGui frame ends.
         frame.lines = overlay_lines(session->world(), session->display());
-        draw_viewport_overlay(
-            build_viewport_overlay(session->world(), window.camera(), window.width(), window.height(), session->display()));
+        ViewportOverlay overlay =
+            build_viewport_overlay(session->world(), window.camera(), window.width(), window.height(), session->display());
+        frame.lines.points = std::move(overlay.points);
+        draw_viewport_overlay(overlay);
         imgui.end_frame();
         window.present(frame);
         // present() waited for the frame before: its stamps are in transfer() now.

@@ -17,9 +17,10 @@
 namespace weft::editor {
 namespace {
 
-constexpr std::uint32_t kContact = overlay_colour(255, 140, 0);
-constexpr std::uint32_t kClothContact = overlay_colour(230, 40, 200);
-constexpr std::uint32_t kPin = overlay_colour(30, 60, 230);
+// The renderer's marks, linear RGB (the sRGB of orange 255,140,0, magenta 230,40,200, blue 30,60,230).
+constexpr glm::vec3 kContact{1.0F, 0.262F, 0.0F};
+constexpr glm::vec3 kClothContact{0.791F, 0.021F, 0.578F};
+constexpr glm::vec3 kPin{0.013F, 0.045F, 0.791F};
 constexpr std::uint32_t kGrab = overlay_colour(255, 220, 40);
 
 // The mean rest edge length, m: the scale of a normal's line.
@@ -75,44 +76,52 @@ ViewportOverlay build_viewport_overlay(World& world, const render::Camera& camer
         for (const ColliderDesc& c : model.colliders)
             if (c.is_analytic()) shapes.push_back(shape_at<double>(c, world.time()));
 
+    render::OverlayPoints collider_contacts{.vertices = {}, .colour = kContact};
+    render::OverlayPoints cloth_contacts{.vertices = {}, .colour = kClothContact};
+    render::OverlayPoints pin_marks{.vertices = {}, .colour = kPin};
+    std::uint32_t first = 0;  // the cloth's first vertex in the cloth buffer (make_render_scene's order)
     for (std::size_t c = 0; c < model.cloths.size(); ++c) {
         const ClothDesc& cloth = model.cloths[c];
+        const auto vertex_count = static_cast<std::uint32_t>(cloth.fabric->vertex_count());
         const bool grabbed = model.grab && model.grab->cloth == c;
-        const bool pins = options.pins && !cloth.pins.empty();
-        if (!options.contacts && !pins && !grabbed) continue;
-        const std::vector<Vec3d> x = world.positions(c);
         if (options.contacts && !shapes.empty()) {
             // "Touching": within the cloth's contact thickness (the distance the solver keeps), with
             // a 10 % margin for the penalty's give.
+            const std::vector<Vec3d> x = world.positions(c);
             const double reach = 1.1 * cloth.material.contact_thickness;
-            for (const Vec3d& p : x) {
+            for (std::uint32_t v = 0; v < x.size(); ++v) {
                 bool touching = false;
                 for (const physics::Shape<double>& s : shapes) {
                     Vec3d normal{};
-                    touching = touching || physics::shape_distance(s, p, normal, static_cast<Mat3d*>(nullptr)) < reach;
+                    touching = touching || physics::shape_distance(s, x[v], normal, static_cast<Mat3d*>(nullptr)) < reach;
                 }
-                if (touching && mark(p, OverlayMark::Shape::dot, 2.5F, kContact)) ++out.contacts;
+                if (touching) collider_contacts.vertices.push_back(first + v);
             }
         }
         if (options.contacts) {
             // Cloth against cloth (or a mesh collider): the backend's own proximity pairs.
             if (const std::optional<std::vector<std::uint32_t>> touching = world.contact_vertices(c)) {
-                for (const std::uint32_t v : *touching)
-                    if (mark(x[v], OverlayMark::Shape::dot, 2.5F, kClothContact)) ++out.cloth_contacts;
+                for (const std::uint32_t v : *touching) cloth_contacts.vertices.push_back(first + v);
             } else {
                 out.cloth_contacts_reported = false;
             }
         }
-        if (pins)
-            for (const PinDesc& pin : cloth.pins)
-                out.pins += mark(x[pin.vertex], OverlayMark::Shape::square, 3.0F, kPin) ? 1 : 0;
+        if (options.pins)
+            for (const PinDesc& pin : cloth.pins) pin_marks.vertices.push_back(first + pin.vertex);
         if (grabbed) {
             const VertexGrab& g = *model.grab;
-            out.grab = segment(x[g.vertex], g.target, kGrab);
+            const Vec3d at = world.positions(c)[g.vertex];
+            out.grab = segment(at, g.target, kGrab);
             (void)mark(g.target, OverlayMark::Shape::cross, 6.0F, kGrab);
-            (void)mark(x[g.vertex], OverlayMark::Shape::dot, 3.5F, kGrab);
+            (void)mark(at, OverlayMark::Shape::dot, 3.5F, kGrab);
         }
+        first += vertex_count;
     }
+    out.contacts = collider_contacts.vertices.size();
+    out.cloth_contacts = cloth_contacts.vertices.size();
+    out.pins = pin_marks.vertices.size();
+    for (render::OverlayPoints* list : {&collider_contacts, &cloth_contacts, &pin_marks})
+        if (!list->vertices.empty()) out.points.push_back(std::move(*list));
     return out;
 }
 

@@ -29,5 +29,5 @@ WEFT_BLOCK(1) uniform Draw {
     vec4 front_colour;   // rgb, linear; the side the triangle's normal points to
     vec4 back_colour;    // rgb, linear
     vec4 material;       // x: grid spacing (m) for the ground, 0 otherwise; y: roughness; z: 1 for cloth;
-                         // w: overlay normals' length (m), line.vert
+                         // w: overlay normals' length (m), line.vert; a point's size (pixels), point.vert
 } draw;

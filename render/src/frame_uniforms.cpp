@@ -3,8 +3,11 @@
 
 #include <algorithm>
 #include <cmath>
+#include <string>
 
 #include <glm/gtc/matrix_transform.hpp>
+
+#include "weft/error.h"
 
 namespace weft::render::detail {
 
@@ -62,13 +65,31 @@ std::vector<DrawUniforms> draw_uniforms(const RenderScene& scene, const RenderFr
     return out;
 }
 
-std::array<DrawUniforms, 2> overlay_uniforms(const OverlayLines& lines) {
-    std::array<DrawUniforms, 2> out{};
+std::array<DrawUniforms, kOverlayDraws> overlay_uniforms(const OverlayLines& lines) {
+    std::array<DrawUniforms, kOverlayDraws> out{};
     for (DrawUniforms& u : out) u.model = glm::mat4(1.0F);
     out[0].front_colour = glm::vec4(lines.wireframe_colour, 1.0F);
     out[1].front_colour = glm::vec4(lines.normal_colour, 1.0F);
     out[1].material.w = lines.normal_length;
+    for (std::size_t p = 0; p < lines.points.size() && p < kMaxOverlayPointLists; ++p) {
+        out[2 + p].front_colour = glm::vec4(lines.points[p].colour, 1.0F);
+        out[2 + p].material.w = lines.point_size;
+    }
     return out;
+}
+
+void check_overlay_points(const OverlayLines& lines, std::uint32_t cloth_vertices, std::string_view renderer) {
+    if (lines.points.size() > kMaxOverlayPointLists)
+        throw Error(std::string(renderer) + ": " + std::to_string(lines.points.size()) + " overlay point lists (at most " +
+                    std::to_string(kMaxOverlayPointLists) + ")");
+    for (const OverlayPoints& list : lines.points)
+        for (const std::uint32_t v : list.vertices)
+            if (v >= cloth_vertices)
+                throw Error(std::string(renderer) + ": overlay point at cloth vertex " + std::to_string(v) +
+                            ", the cloth buffer has " + std::to_string(cloth_vertices));
+    if (!(lines.point_size > 0.0F) || !std::isfinite(lines.point_size))
+        throw Error(std::string(renderer) + ": overlay point size " + std::to_string(lines.point_size) +
+                    " (expected a positive number of pixels)");
 }
 
 }  // namespace weft::render::detail

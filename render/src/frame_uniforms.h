@@ -2,6 +2,9 @@
 // The uniform blocks of render/shaders/common.glsl, laid out std140, and how a scene and a frame
 // fill them. Shared by the Vulkan and the EGL renderer: same numbers in, same picture out.
 #include <array>
+#include <cstdint>
+#include <string_view>
+#include <vector>
 
 #include <glm/glm.hpp>
 
@@ -39,8 +42,14 @@ static_assert(sizeof(DrawUniforms) == 112, "std140 layout of Draw");
 /// `frame`; identity where it has fewer entries).
 [[nodiscard]] std::vector<DrawUniforms> draw_uniforms(const RenderScene& scene, const RenderFrame& frame);
 
-/// The two overlay draws that follow draw_uniforms' (line.vert, line.frag): the wireframe (colour,
-/// no offset), then the normals (colour, material.w the normals' length).
-[[nodiscard]] std::array<DrawUniforms, 2> overlay_uniforms(const OverlayLines& lines);
+/// The overlay draws that follow draw_uniforms': the wireframe (line.vert, line.frag; colour, no
+/// offset), the normals (colour, material.w the normals' length), then one a point list
+/// (point.vert, line.frag; colour, material.w the size in pixels), kMaxOverlayPointLists of them.
+inline constexpr std::size_t kOverlayDraws = 2 + kMaxOverlayPointLists;
+[[nodiscard]] std::array<DrawUniforms, kOverlayDraws> overlay_uniforms(const OverlayLines& lines);
+
+/// Throws weft::Error naming `renderer` for more point lists than kMaxOverlayPointLists, a point past
+/// the `cloth_vertices` of the cloth buffer, or a point size that is not a positive number.
+void check_overlay_points(const OverlayLines& lines, std::uint32_t cloth_vertices, std::string_view renderer);
 
 }  // namespace weft::render::detail

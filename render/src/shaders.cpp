@@ -22,6 +22,12 @@ const std::uint32_t kLineVertSpirv[] =
 const std::uint32_t kLineFragSpirv[] =
 #include "line.frag.spv.inc"
     ;
+const std::uint32_t kPointVertSpirv[] =
+#include "point.vert.spv.inc"
+    ;
+const char* const kPointVertGlsl =
+#include "point.vert.glsl.inc"
+    ;
 const char* const kLineVertGlsl =
 #include "line.vert.glsl.inc"
     ;
@@ -49,5 +55,6 @@ ShaderCode shadow_vertex_shader() { return {kShadowVertSpirv, kShadowVertGlsl}; 
 ShaderCode shadow_fragment_shader() { return {kShadowFragSpirv, kShadowFragGlsl}; }
 ShaderCode line_vertex_shader() { return {kLineVertSpirv, kLineVertGlsl}; }
 ShaderCode line_fragment_shader() { return {kLineFragSpirv, kLineFragGlsl}; }
+ShaderCode point_vertex_shader() { return {kPointVertSpirv, kPointVertGlsl}; }
 
 }  // namespace weft::render::detail

@@ -17,5 +17,6 @@ struct ShaderCode {
 [[nodiscard]] ShaderCode shadow_fragment_shader();
 [[nodiscard]] ShaderCode line_vertex_shader();    ///< the overlay lines (OverlayLines)
 [[nodiscard]] ShaderCode line_fragment_shader();
+[[nodiscard]] ShaderCode point_vertex_shader();   ///< the overlay points (OverlayLines::points), with line.frag
 
 }  // namespace weft::render::detail

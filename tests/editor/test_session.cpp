@@ -307,6 +307,11 @@ TEST(ViewportOverlay, MarksTheVerticesInClothContacts) {
     EXPECT_TRUE(o.cloth_contacts_reported);
     EXPECT_EQ(o.cloth_contacts, back->size() + ahead->size());
     EXPECT_EQ(o.contacts, 0U) << "no analytic collider";
+    // The renderer's magenta marks: the back sheet's vertices, then the front's after its 25.
+    ASSERT_EQ(o.points.size(), 1U);
+    EXPECT_EQ(o.points[0].vertices.size(), back->size() + ahead->size());
+    EXPECT_EQ(o.points[0].vertices.front(), back->front());
+    EXPECT_EQ(o.points[0].vertices.back(), 25U + ahead->back()) << "the cloth buffer holds the back sheet first";
     EXPECT_EQ(build_viewport_overlay(world, camera, 640, 480, DisplayOptions{}).cloth_contacts, 0U) << "toggle off";
 }
 
@@ -340,18 +345,28 @@ TEST(ViewportOverlay, MarksContactsAndPinsAndGivesTheRendererItsLines) {
     const render::OverlayLines lines = overlay_lines(world, all);
     EXPECT_TRUE(lines.wireframe);
     EXPECT_NEAR(lines.normal_length, 1.5 * (0.5 + 0.5 + std::sqrt(0.5)) / 3.0, 1e-6);
-    // The centre vertex is drawn at the picture's centre: the camera looks straight at it.
-    const auto contact = std::find_if(o.marks.begin(), o.marks.end(), [](const OverlayMark& m) {
-        return m.shape == OverlayMark::Shape::dot;
-    });
-    ASSERT_NE(contact, o.marks.end());
-    EXPECT_NEAR(contact->x, 320.0F, 0.5F);
-    EXPECT_NEAR(contact->y, 240.0F, 0.5F);
+    // The renderer's marks: the centre touching the ball (orange), the pin (blue), as cloth buffer
+    // indices, drawn from the solver's buffer and depth-tested (render tests: OverlayPoints).
+    ASSERT_EQ(o.points.size(), 2U);
+    EXPECT_EQ(o.points[0].vertices, (std::vector<std::uint32_t>{4}));
+    EXPECT_EQ(o.points[1].vertices, (std::vector<std::uint32_t>{0}));
+    EXPECT_GT(o.points[0].colour.r, o.points[0].colour.b) << "contacts orange";
+    EXPECT_GT(o.points[1].colour.b, o.points[1].colour.r) << "pins blue";
+    EXPECT_TRUE(build_viewport_overlay(world, camera, 640, 480, nothing).points.empty());
 
     world.set_grab({.cloth = 0, .vertex = 8, .target = x[8] + Vec3d{0.0, 0.0, 0.5}, .stiffness = 100.0, .damping = 1.0});
-    EXPECT_TRUE(build_viewport_overlay(world, camera, 640, 480, nothing).grab) << "a grab is always drawn";
+    const ViewportOverlay grabbed = build_viewport_overlay(world, camera, 640, 480, nothing);
+    EXPECT_TRUE(grabbed.grab) << "a grab is always drawn";
+    // The grabbed vertex's dot at its place in the picture (the camera looks straight at the centre,
+    // the grid's 0.5 m cells put vertex 8 up and right of it).
+    const auto dot = std::find_if(grabbed.marks.begin(), grabbed.marks.end(), [](const OverlayMark& m) {
+        return m.shape == OverlayMark::Shape::dot;
+    });
+    ASSERT_NE(dot, grabbed.marks.end());
+    EXPECT_GT(dot->x, 320.0F);
+    EXPECT_LT(dot->y, 240.0F);
 
-    // Behind the camera nothing is drawn.
+    // Behind the camera the grab is not drawn.
     camera.position.z = -3.0F;
     camera.target = {camera.position.x, camera.position.y, -6.0F};
     const ViewportOverlay behind = build_viewport_overlay(world, camera, 640, 480, all);

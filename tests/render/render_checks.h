@@ -462,6 +462,83 @@ inline void expect_redraws_the_same_frame_bit_for_bit(Renderer& r) {
     EXPECT_EQ(r.validation_messages(), 0);
 }
 
+/// The overlay points (OverlayLines::points, the editor's contact and pin marks): squares at the
+/// listed cloth vertices, read from the cloth buffer, hidden where something is in front. The sheet
+/// over the ball behind the box of the lines' test, every fourth vertex marked in magenta: marks
+/// change pixels near the listed vertices only (none near an unlisted vertex that no listed one is
+/// near), none inside the box's outline; the mark's colour is drawn; no points draws the picture
+/// without them; a point past the cloth buffer and too many lists are errors naming the renderer.
+inline void expect_overlay_points_at_the_listed_vertices_where_seen(Renderer& r) {
+    TestScene t = sheet_over_ball();
+    ColliderDesc box{.name = "screen", .shape = ColliderShape::Box};
+    box.half_extents = {0.12, 0.12, 0.04};
+    box.motion.origin = {-0.2, 1.14, 0.9};
+    t.world->add_collider(box);
+    make_sheet_over_ball_view(t);
+    r.load(t.scene);
+    const Image plain = r.draw(t.frame);
+    RenderFrame marked = t.frame;
+    OverlayPoints list;
+    list.colour = {1.0F, 0.0F, 1.0F};
+    for (std::uint32_t v = 0; v < t.scene.cloth_vertices; v += 4) list.vertices.push_back(v);
+    marked.lines.points.push_back(list);
+    marked.lines.point_size = 5.0F;
+    const Image points = r.draw(marked);
+    save(r.name(), "overlay_points", points);
+
+    const glm::mat4 vp = view_projection(t.scene, plain.width, plain.height);
+    glm::vec2 box_lo(1e9F), box_hi(-1e9F);
+    for (int k = 0; k < 8; ++k) {
+        const glm::vec3 corner(-0.2F + ((k & 1) ? 0.12F : -0.12F), 1.14F + ((k & 2) ? 0.12F : -0.12F),
+                               0.9F + ((k & 4) ? 0.04F : -0.04F));
+        const glm::vec2 q = project(vp, corner, plain.width, plain.height);
+        box_lo = glm::min(box_lo, q);
+        box_hi = glm::max(box_hi, q);
+    }
+    std::vector<glm::vec2> listed;
+    for (const std::uint32_t v : list.vertices) {
+        const RenderVertex& rv = t.vertices[v];
+        listed.push_back(project(vp, glm::vec3(rv.position[0], rv.position[1], rv.position[2]), plain.width, plain.height));
+    }
+    int changed = 0, in_box = 0, away = 0, magenta = 0;
+    for (int y = 0; y < plain.height; ++y)
+        for (int x = 0; x < plain.width; ++x) {
+            bool differs = false;
+            for (int c = 0; c < 3; ++c) differs = differs || std::abs(int{plain.pixel(x, y)[c]} - int{points.pixel(x, y)[c]}) > 24;
+            if (!differs) continue;
+            ++changed;
+            const glm::vec2 q(static_cast<float>(x) + 0.5F, static_cast<float>(y) + 0.5F);
+            if (q.x > box_lo.x + 2.0F && q.x < box_hi.x - 2.0F && q.y > box_lo.y + 2.0F && q.y < box_hi.y - 2.0F) ++in_box;
+            float nearest = 1e9F;
+            for (const glm::vec2& p : listed) nearest = std::min(nearest, glm::length(p - q));
+            if (nearest > 5.0F) ++away;  // a 5-pixel square reaches 3.5 pixels from its centre, plus antialiasing
+            const auto* px = points.pixel(x, y);
+            if (px[0] > 200 && px[1] < 60 && px[2] > 200) ++magenta;
+        }
+    std::printf("%s overlay points: %zu listed, %d pixels changed, %d magenta, %d inside the box, %d away from a listed vertex\n",
+                std::string(r.name()).c_str(), list.vertices.size(), changed, magenta, in_box, away);
+    ASSERT_GT(box_hi.x - box_lo.x, 8.0F) << "the box is too small on screen to test hiding";
+    EXPECT_GT(changed, 300) << "the points were not drawn";
+    EXPECT_GT(magenta, 100) << "the points are not the list's colour";
+    EXPECT_EQ(in_box, 0) << "points drawn through the box in front of the sheet (no depth test)";
+    EXPECT_EQ(away, 0) << "points away from the listed vertices";
+    EXPECT_EQ(r.draw(t.frame).rgba, plain.rgba) << "no points must draw the picture without them";
+
+    RenderFrame past = t.frame;
+    past.lines.points.push_back({{t.scene.cloth_vertices}, {1.0F, 0.0F, 0.0F}});
+    try {
+        (void)r.draw(past);
+        ADD_FAILURE() << "a point past the cloth buffer was drawn";
+    } catch (const Error& e) {
+        EXPECT_NE(std::string(e.what()).find("overlay point at cloth vertex"), std::string::npos) << e.what();
+    }
+    RenderFrame many = t.frame;
+    many.lines.points.assign(kMaxOverlayPointLists + 1, OverlayPoints{{0}, {1.0F, 0.0F, 0.0F}});
+    EXPECT_THROW((void)r.draw(many), Error);
+    EXPECT_EQ(r.draw(t.frame).rgba, plain.rgba) << "a rejected frame left the renderer in another state";
+    EXPECT_EQ(r.validation_messages(), 0);
+}
+
 /// The overlay lines (RenderFrame::lines): the wireframe and the normals are drawn from the cloth
 /// buffer, over the cloth where nothing is in front of it and hidden where something is. The sheet
 /// over the ball with a box between the camera and the sheet's left half: lines change many pixels

@@ -214,6 +214,12 @@ TEST(VulkanRenderer, DrawsOverlayLinesFromTheClothBufferHiddenBehindWhatIsInFron
     test::expect_overlay_lines_over_the_cloth_only_where_seen(*c.renderer);
 }
 
+TEST(VulkanRenderer, DrawsOverlayPointsAtTheListedVerticesHiddenBehindWhatIsInFront) {
+    const test::Created c = create(test::small_options(4, /*validation=*/true));
+    if (!c.renderer) GTEST_SKIP() << c.skip;
+    test::expect_overlay_points_at_the_listed_vertices_where_seen(*c.renderer);
+}
+
 }  // namespace
 
 }  // namespace weft::render

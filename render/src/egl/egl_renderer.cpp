@@ -176,6 +176,11 @@ struct SceneObjects {
     /// cloth_edges as an element buffer), and the normals' array (one vertex an instance).
     gl::Buffer edges;
     gl::VertexArray wireframe, normals;
+    /// The overlay's points (OverlayLines::points): their array, and their indices one list after
+    /// another (grown as needed).
+    gl::VertexArray points;
+    gl::Buffer point_indices;
+    std::size_t point_capacity = 0;  ///< indices point_indices holds
     gl::Buffer draw_uniforms;     ///< one DrawUniforms per draw, `draw_stride` apart
     GLsizeiptr draw_stride = 0;
     std::vector<std::byte> draw_staging;  ///< the next frame's DrawUniforms before upload
@@ -211,6 +216,8 @@ private:
     /// The frame's overlay lines from `cloth_buffer`, after the scene's `scene_draws` draws (their
     /// uniforms follow), tested against the scene's depth and not writing it.
     void draw_lines(const OverlayLines& lines, GLuint cloth_buffer, std::size_t scene_draws) const;
+    /// The frame's overlay points into SceneObjects::point_indices (grown as needed).
+    void upload_points(const OverlayLines& lines);
 
     RendererOptions options_;
     DebugLog debug_log_;
@@ -221,6 +228,7 @@ private:
     gl::Program surface_program_;
     gl::Program shadow_program_;
     gl::Program line_program_;
+    gl::Program point_program_;  ///< the overlay's points (point.vert, line.frag)
     gl::Buffer frame_uniforms_;
     gl::Texture shadow_map_;
     gl::Framebuffer shadow_target_;
@@ -274,6 +282,7 @@ EglRenderer::EglRenderer(const RendererOptions& options) : options_(options), co
     surface_program_ =
         gl::link_program("surface", surface_vertex_shader().glsl, surface_fragment_shader().glsl);
     line_program_ = gl::link_program("line", line_vertex_shader().glsl, line_fragment_shader().glsl);
+    point_program_ = gl::link_program("point", point_vertex_shader().glsl, line_fragment_shader().glsl);
     shadow_program_ = gl::link_program("shadow", shadow_vertex_shader().glsl, shadow_fragment_shader().glsl);
 
     frame_uniforms_ = gl::create_buffer();
@@ -383,6 +392,7 @@ void EglRenderer::load(const RenderScene& scene) {
     o.normals = render_vertex_array();
     if (o.edges.get() != 0) glVertexArrayElementBuffer(o.wireframe.get(), o.edges.get());
     glVertexArrayBindingDivisor(o.normals.get(), 0, 1);  // one cloth vertex an instance
+    o.points = render_vertex_array();
     o.colliders.reserve(scene.colliders.size());
     for (const ColliderDraw& c : scene.colliders)  // a deforming collider's vertices are rewritten each frame
         o.colliders.push_back(make_mesh(c.mesh.vertices, c.mesh.indices, c.deforms ? GL_DYNAMIC_STORAGE_BIT : 0));
@@ -391,7 +401,7 @@ void EglRenderer::load(const RenderScene& scene) {
     // device's offset alignment.
     const GLsizeiptr alignment = std::max(get_integer(GL_UNIFORM_BUFFER_OFFSET_ALIGNMENT), 1);
     o.draw_stride = (static_cast<GLsizeiptr>(sizeof(DrawUniforms)) + alignment - 1) / alignment * alignment;
-    const std::size_t draws = scene.cloths.size() + scene.colliders.size() + 2;  // + the overlay lines
+    const std::size_t draws = scene.cloths.size() + scene.colliders.size() + kOverlayDraws;
     o.draw_staging.assign(draws * static_cast<std::size_t>(o.draw_stride), std::byte{0});
     o.draw_uniforms = gl::create_buffer();
     glNamedBufferStorage(o.draw_uniforms.get(), static_cast<GLsizeiptr>(o.draw_staging.size()), nullptr,
@@ -434,11 +444,27 @@ void EglRenderer::draw_meshes(const std::vector<DrawUniforms>& draws, bool shado
     glBindVertexArray(0);
 }
 
+void EglRenderer::upload_points(const OverlayLines& lines) {
+    SceneObjects& o = *loaded_;
+    std::vector<std::uint32_t> all;
+    for (const OverlayPoints& list : lines.points) all.insert(all.end(), list.vertices.begin(), list.vertices.end());
+    if (all.empty()) return;
+    if (all.size() > o.point_capacity) {
+        o.point_capacity = std::max<std::size_t>(all.size(), 1024);
+        o.point_indices = gl::create_buffer();
+        glNamedBufferStorage(o.point_indices.get(), static_cast<GLsizeiptr>(o.point_capacity * sizeof(std::uint32_t)),
+                             nullptr, GL_DYNAMIC_STORAGE_BIT);
+    }
+    glNamedBufferSubData(o.point_indices.get(), 0, static_cast<GLsizeiptr>(all.size() * sizeof(std::uint32_t)), all.data());
+}
+
 void EglRenderer::draw_lines(const OverlayLines& lines, GLuint cloth_buffer, std::size_t scene_draws) const {
     const SceneObjects& o = *loaded_;
     const bool wireframe = lines.wireframe && o.edges.get() != 0;
     const bool normals = lines.normal_length > 0.0F && o.scene.cloth_vertices > 0;
-    if (!wireframe && !normals) return;
+    bool points = false;
+    for (const OverlayPoints& list : lines.points) points = points || !list.vertices.empty();
+    if (!wireframe && !normals && !points) return;
     glUseProgram(line_program_.get());
     glDepthMask(GL_FALSE);  // lines do not hide lines
     glDepthFunc(GL_LEQUAL);
@@ -457,6 +483,23 @@ void EglRenderer::draw_lines(const OverlayLines& lines, GLuint cloth_buffer, std
         glVertexArrayVertexBuffer(o.normals.get(), 0, cloth_buffer, 0, sizeof(RenderVertex));
         glBindVertexArray(o.normals.get());
         glDrawArraysInstanced(GL_LINES, 0, 2, static_cast<GLsizei>(o.scene.cloth_vertices));
+    }
+    if (points) {
+        glUseProgram(point_program_.get());
+        glEnable(GL_PROGRAM_POINT_SIZE);  // the size from point.vert
+        glVertexArrayVertexBuffer(o.points.get(), 0, cloth_buffer, 0, sizeof(RenderVertex));
+        glVertexArrayElementBuffer(o.points.get(), o.point_indices.get());
+        glBindVertexArray(o.points.get());
+        std::size_t first = 0;
+        for (std::size_t p = 0; p < lines.points.size(); ++p) {
+            const std::size_t count = lines.points[p].vertices.size();
+            if (count == 0) continue;
+            bind_draw(scene_draws + 2 + p);
+            glDrawElements(GL_POINTS, static_cast<GLsizei>(count), GL_UNSIGNED_INT,
+                           reinterpret_cast<const void*>(first * sizeof(std::uint32_t)));
+            first += count;
+        }
+        glDisable(GL_PROGRAM_POINT_SIZE);
     }
     glBindVertexArray(0);
     glDepthFunc(GL_LESS);
@@ -539,6 +582,7 @@ Image EglRenderer::collect() {
 
 void EglRenderer::submit(const RenderFrame& frame) {
     if (!loaded_) throw Error("egl renderer: draw() before load()");
+    check_overlay_points(frame.lines, loaded_->scene.cloth_vertices, "egl renderer");
     context_.make_current();
     if (submitted_) (void)collect();  // one frame in flight: the one before is dropped
     SceneObjects& o = *loaded_;
@@ -584,7 +628,8 @@ void EglRenderer::submit(const RenderFrame& frame) {
     const std::vector<DrawUniforms> draws = draw_uniforms(o.scene, frame);
     for (std::size_t k = 0; k < draws.size(); ++k)
         std::memcpy(o.draw_staging.data() + k * static_cast<std::size_t>(o.draw_stride), &draws[k], sizeof(DrawUniforms));
-    const std::array<DrawUniforms, 2> lines = overlay_uniforms(frame.lines);
+    const std::array<DrawUniforms, kOverlayDraws> lines = overlay_uniforms(frame.lines);
+    upload_points(frame.lines);
     for (std::size_t k = 0; k < lines.size(); ++k)
         std::memcpy(o.draw_staging.data() + (draws.size() + k) * static_cast<std::size_t>(o.draw_stride), &lines[k],
                     sizeof(DrawUniforms));

@@ -338,6 +338,13 @@ void VulkanContext::create_device() {
         timeline.timelineSemaphore = VK_TRUE;
         info.pNext = &timeline;
     }
+    // Points wider than a pixel (the overlay's marks), where the device has them.
+    VkPhysicalDeviceFeatures supported{};
+    vkGetPhysicalDeviceFeatures(physical_device_, &supported);
+    VkPhysicalDeviceFeatures enabled{};
+    enabled.largePoints = supported.largePoints;
+    large_points_ = supported.largePoints == VK_TRUE;
+    info.pEnabledFeatures = &enabled;
     // The window presents through a swapchain (choose_physical_device checked the device has it).
     if (surface_ != VK_NULL_HANDLE) extensions.push_back(VK_KHR_SWAPCHAIN_EXTENSION_NAME);
     if (!extensions.empty()) {

@@ -61,6 +61,9 @@ public:
     /// opaque fds, and the extensions for it are enabled. False on lavapipe (no exportable
     /// semaphores); `interop_unavailable_reason()` says what is missing.
     [[nodiscard]] bool interop_available() const { return interop_; }
+    /// The device draws points wider than a pixel (VkPhysicalDeviceFeatures::largePoints, enabled
+    /// where it has it): the overlay's marks.
+    [[nodiscard]] bool large_points() const { return large_points_; }
     [[nodiscard]] const std::string& interop_unavailable_reason() const { return interop_reason_; }
     [[nodiscard]] PFN_vkGetMemoryFdKHR get_memory_fd() const { return get_memory_fd_; }
     [[nodiscard]] PFN_vkGetSemaphoreFdKHR get_semaphore_fd() const { return get_semaphore_fd_; }
@@ -97,6 +100,7 @@ private:
     std::string description_;
     std::atomic<int> messages_{0};  ///< written from the layer's callback, on any thread
     bool interop_ = false;
+    bool large_points_ = false;
     std::string interop_reason_ = "not checked";
     PFN_vkGetMemoryFdKHR get_memory_fd_ = nullptr;
     PFN_vkGetSemaphoreFdKHR get_semaphore_fd_ = nullptr;

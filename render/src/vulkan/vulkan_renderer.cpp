@@ -181,9 +181,9 @@ void VulkanRenderer::create_size_targets() {
 
 void VulkanRenderer::destroy_size_targets() noexcept {
     const VkDevice device = context_.device();
-    for (VkPipeline p : {surface_pipeline_, wireframe_pipeline_, normals_pipeline_})
+    for (VkPipeline p : {surface_pipeline_, wireframe_pipeline_, normals_pipeline_, points_pipeline_})
         if (p != VK_NULL_HANDLE) vkDestroyPipeline(device, p, nullptr);
-    wireframe_pipeline_ = normals_pipeline_ = VK_NULL_HANDLE;
+    wireframe_pipeline_ = normals_pipeline_ = points_pipeline_ = VK_NULL_HANDLE;
     if (surface_framebuffer_ != VK_NULL_HANDLE) vkDestroyFramebuffer(device, surface_framebuffer_, nullptr);
     if (overlay_framebuffer_ != VK_NULL_HANDLE) vkDestroyFramebuffer(device, overlay_framebuffer_, nullptr);
     surface_pipeline_ = VK_NULL_HANDLE;
@@ -293,6 +293,12 @@ void VulkanRenderer::create_surface_pipeline() {
     wireframe_pipeline_ = create_pipeline(context_.device(), lines);
     lines.per_instance = true;
     normals_pipeline_ = create_pipeline(context_.device(), lines);
+    PipelineDesc points = lines;
+    points.vertex = point_vertex_shader();
+    points.per_instance = false;
+    points.normals = false;
+    points.topology = VK_PRIMITIVE_TOPOLOGY_POINT_LIST;
+    points_pipeline_ = create_pipeline(context_.device(), points);
 }
 
 void VulkanRenderer::create_descriptors() {
@@ -412,7 +418,7 @@ void VulkanRenderer::load(const RenderScene& scene) {
     // Uniforms: offsets of dynamic uniform buffers must be multiples of the device's alignment.
     const VkDeviceSize alignment =
         std::max<VkDeviceSize>(context_.properties().limits.minUniformBufferOffsetAlignment, 16);
-    const std::size_t draw_count = scene_.cloths.size() + scene_.colliders.size() + 2;  // + the overlay lines
+    const std::size_t draw_count = scene_.cloths.size() + scene_.colliders.size() + kOverlayDraws;
     draw_base_ = align_up(sizeof(FrameUniforms), alignment);
     draw_stride_ = align_up(sizeof(DrawUniforms), alignment);
     uniforms_ = create_buffer(context_, draw_base_ + std::max<std::size_t>(draw_count, 1) * draw_stride_,
@@ -450,6 +456,7 @@ bool VulkanRenderer::record_frame(const RenderFrame& frame, bool& external,
         throw Error("vulkan renderer: timeline signal value " + std::to_string(frame.signal_value) +
                     " is not above the last one signalled on slot " + std::to_string(frame.cloth_slot) + ", " +
                     std::to_string(slots_[static_cast<std::size_t>(frame.cloth_slot)].last_signal));
+    check_overlay_points(frame.lines, scene_.cloth_vertices, "vulkan renderer");
     // The previous frame must be done with the mapped buffers and the command buffer.
     wait_frame();
     frame_slot_ = frame.cloth_slot;
@@ -472,10 +479,25 @@ bool VulkanRenderer::record_frame(const RenderFrame& frame, bool& external,
     std::memcpy(uniform_bytes, &frame_u, sizeof frame_u);
     for (std::size_t i = 0; i < draws.size(); ++i)
         std::memcpy(uniform_bytes + draw_base_ + i * draw_stride_, &draws[i], sizeof(DrawUniforms));
-    const std::array<DrawUniforms, 2> lines = overlay_uniforms(frame.lines);
+    std::array<DrawUniforms, kOverlayDraws> lines = overlay_uniforms(frame.lines);
+    // Points wider than a pixel need the device's largePoints (enabled where it has it).
+    const float largest_point = context_.large_points() ? context_.properties().limits.pointSizeRange[1] : 1.0F;
+    for (std::size_t i = 2; i < lines.size(); ++i) lines[i].material.w = std::min(lines[i].material.w, largest_point);
     for (std::size_t i = 0; i < lines.size(); ++i)
         std::memcpy(uniform_bytes + draw_base_ + (draws.size() + i) * draw_stride_, &lines[i], sizeof(DrawUniforms));
     frame_lines_ = frame.lines;
+    std::size_t point_count = 0;
+    for (const OverlayPoints& list : frame.lines.points) point_count += list.vertices.size();
+    if (point_count > 0) {
+        const VkDeviceSize bytes = VkDeviceSize{point_count} * sizeof(std::uint32_t);
+        if (points_.size < bytes) {  // the previous frame is done (wait_frame above): safe to replace
+            destroy_buffer(context_.device(), points_);
+            points_ = create_buffer(context_, std::max<VkDeviceSize>(bytes, 4096), VK_BUFFER_USAGE_INDEX_BUFFER_BIT,
+                                    MemoryUse::upload);
+        }
+        auto* at = static_cast<std::uint32_t*>(points_.mapped);
+        for (const OverlayPoints& list : frame.lines.points) at = std::copy(list.vertices.begin(), list.vertices.end(), at);
+    }
 
     WEFT_VK_CHECK(vkResetCommandBuffer(commands_, 0));
     VkCommandBufferBeginInfo begin{};
@@ -657,6 +679,15 @@ void VulkanRenderer::draw_lines(VkCommandBuffer commands, std::size_t scene_draw
         bind(normals_pipeline_, scene_draws + 1);
         vkCmdDraw(commands, 2, scene_.cloth_vertices, 0, 0);  // two ends an instance, one instance a vertex
     }
+    std::uint32_t first = 0;
+    for (std::size_t p = 0; p < frame_lines_.points.size(); ++p) {
+        const auto count = static_cast<std::uint32_t>(frame_lines_.points[p].vertices.size());
+        if (count == 0) continue;
+        bind(points_pipeline_, scene_draws + 2 + p);
+        vkCmdBindIndexBuffer(commands, points_.buffer, 0, VK_INDEX_TYPE_UINT32);
+        vkCmdDrawIndexed(commands, count, 1, first, 0, 0);
+        first += count;
+    }
 }
 
 void VulkanRenderer::destroy_scene() noexcept {
@@ -673,6 +704,7 @@ void VulkanRenderer::destroy_scene() noexcept {
     destroy_buffer(device, cloth_staging_);
     destroy_buffer(device, stamp_readback_);
     destroy_buffer(device, uniforms_);
+    destroy_buffer(device, points_);
     exported_ = false;
     frame_slot_ = 0;
     frame_reads_stamps_ = false;

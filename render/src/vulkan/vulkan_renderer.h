@@ -132,6 +132,7 @@ private:
     VkPipeline shadow_pipeline_ = VK_NULL_HANDLE, surface_pipeline_ = VK_NULL_HANDLE;
     /// The overlay lines (OverlayLines): the wireframe's indexed line list, the normals' instanced one.
     VkPipeline wireframe_pipeline_ = VK_NULL_HANDLE, normals_pipeline_ = VK_NULL_HANDLE;
+    VkPipeline points_pipeline_ = VK_NULL_HANDLE;  ///< the overlay's points (point.vert)
     VkDescriptorPool descriptor_pool_ = VK_NULL_HANDLE;
     VkDescriptorSet descriptor_set_ = VK_NULL_HANDLE;
     VkCommandBuffer commands_ = VK_NULL_HANDLE;
@@ -150,6 +151,9 @@ private:
     std::vector<std::int32_t> collider_first_vertex_;  ///< into the colliders' vertices (static or deforming), per collider
     std::uint32_t edges_first_index_ = 0;  ///< RenderScene::cloth_edges in the index range, after the colliders'
     OverlayLines frame_lines_;             ///< the lines of the frame being recorded
+    /// The frame's overlay point lists, one after another (host-visible: rewritten by each frame that
+    /// has points, after the previous frame is done; grown as needed).
+    DeviceBuffer points_;
     DeviceBuffer deforming_;  ///< the deforming colliders' vertices, host-visible: rewritten by a frame that brings them
     /// A cloth vertex buffer: RenderScene::cloth_vertices vertices, then kSlotStampBytes of stamps.
     /// One until export_cloth(); then kSharedSlots, exported, each with a timeline that orders the
@@ -167,7 +171,7 @@ private:
     bool exported_ = false;
     int frame_slot_ = 0;               ///< the slot the frame being recorded or in flight draws from
     bool frame_reads_stamps_ = false;  ///< it copies the slot's stamps to stamp_readback_
-    DeviceBuffer uniforms_;  ///< Frame at 0, Draw i at draw_base_ + i·draw_stride_ (the scene's, then the two overlay draws)
+    DeviceBuffer uniforms_;  ///< Frame at 0, Draw i at draw_base_ + i·draw_stride_ (the scene's, then the overlay's draws, kOverlayDraws)
     VkDeviceSize draw_base_ = 0, draw_stride_ = 0;
     TransferStats transfer_{"host upload", 0};
 };

@@ -1,11 +1,13 @@
 #pragma once
 /// @file
 /// What the View panel draws over the shaded picture (docs/editor.md, "Display"). The cloth's
-/// wireframe and vertex normals are lines the renderer draws from the cloth buffer the solver wrote,
-/// depth-tested (`overlay_lines`, RenderFrame::lines): no copy of the state through the host. The
-/// vertices touching a collider, the pins and the grab's spring are picture-space marks built from a
-/// host copy of the state (World::positions) and drawn by ImGui in the window's overlay pass, not
-/// depth-tested.
+/// wireframe, vertex normals, contacts and pins are drawn by the renderer from the cloth buffer the
+/// solver wrote, depth-tested (`overlay_lines`, RenderFrame::lines; the marks as OverlayPoints): no
+/// copy of the positions through the host to draw them. Which vertices are marked comes from the
+/// world: pins from the model, cloth contacts from the backend (World::contact_vertices), contacts
+/// with an analytic collider from the distances of a host copy of the positions (the one place a
+/// copy remains, and only while contacts are shown). The grab's spring is a picture-space mark drawn
+/// by ImGui in the window's overlay pass.
 #include <cstddef>
 #include <cstdint>
 #include <vector>
@@ -35,8 +37,11 @@ struct OverlayMark {
 };
 
 struct ViewportOverlay {
-    std::vector<OverlaySegment> segments;
-    std::vector<OverlayMark> marks;
+    std::vector<OverlaySegment> segments;  ///< ImGui's: the grab's spring
+    std::vector<OverlayMark> marks;        ///< ImGui's: the grab's ends
+    /// The renderer's marks (RenderFrame::lines.points): collider contacts (orange), cloth contacts
+    /// (magenta), pins (blue), as indices into the cloth vertex buffer (make_render_scene's order).
+    std::vector<render::OverlayPoints> points;
     std::size_t contacts = 0;  ///< vertices within their contact thickness of an analytic collider
     std::size_t cloth_contacts = 0;       ///< vertices in a proximity contact (cloth or a mesh collider)
     bool cloth_contacts_reported = true;  ///< false: the backend does not report its proximity contacts
@@ -48,10 +53,11 @@ struct ViewportOverlay {
 /// rest edges long (of the cloth with the shortest edges).
 [[nodiscard]] render::OverlayLines overlay_lines(const World& world, const DisplayOptions& options);
 
-/// The marks of `world` as drawn with `camera` on a `width`×`height` picture, for the contact and
-/// pin toggles in `options` (contacts: orange against analytic colliders, magenta in the backend's
-/// proximity pairs with cloth or a mesh collider); the grab's spring whenever a vertex is grabbed. Points behind the
-/// camera are left out. Reads the positions of a cloth only when something is drawn for it.
+/// The marks of `world` for the contact and pin toggles in `options` (contacts: orange against
+/// analytic colliders, magenta in the backend's proximity pairs with cloth or a mesh collider; pins
+/// blue), for the renderer; the grab's spring whenever a vertex is grabbed, as drawn with `camera`
+/// on a `width`×`height` picture (left out behind the camera). Reads the positions of a cloth only
+/// for contacts with an analytic collider and for the grab.
 [[nodiscard]] ViewportOverlay build_viewport_overlay(World& world, const render::Camera& camera, int width, int height,
                                                      const DisplayOptions& options);
 

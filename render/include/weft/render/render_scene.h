@@ -93,14 +93,27 @@ struct RenderScene {
     glm::vec3 bounds_min{-1.0F}, bounds_max{1.0F};
 };
 
-/// Lines a frame draws over the cloth from the cloth buffer itself (what the solver wrote: no copy
-/// through the host), depth-tested against the picture so that the far side stays hidden: the
-/// editor's wireframe and normals.
+/// Marks at some cloth vertices, one colour a list (the editor's contacts and pins).
+struct OverlayPoints {
+    std::vector<std::uint32_t> vertices;          ///< indices into the cloth vertex buffer
+    glm::vec3 colour{1.0F, 0.55F, 0.0F};          ///< linear RGB
+};
+
+/// The most OverlayPoints lists a frame draws.
+inline constexpr std::size_t kMaxOverlayPointLists = 4;
+
+/// Lines and marks a frame draws over the cloth from the cloth buffer itself (what the solver wrote:
+/// no copy through the host), depth-tested against the picture so that the far side stays hidden:
+/// the editor's wireframe, normals, contacts and pins.
 struct OverlayLines {
     bool wireframe = false;       ///< every cloth edge once (RenderScene::cloth_edges)
     float normal_length = 0.0F;   ///< m; > 0 draws each cloth vertex's normal this long
     glm::vec3 wireframe_colour{0.05F, 0.05F, 0.08F};  ///< linear RGB
     glm::vec3 normal_colour{0.1F, 0.45F, 1.0F};       ///< linear RGB
+    /// Squares `point_size` pixels wide at the listed vertices, at most kMaxOverlayPointLists lists
+    /// (more, or an index past the cloth buffer, is an Error from the renderer).
+    std::vector<OverlayPoints> points;
+    float point_size = 6.0F;  ///< pixels (1 where the device draws no larger points)
 };
 
 /// The state drawn in one frame.
