@@ -372,11 +372,13 @@ int World::split_substep(double t, double h, EnergyAudit& audit, int depth) {
     const bool guarded = model_->settings.solver.energy_guard != EnergyGuard::Off;
     const bool wind = model_->settings.wind.active() && guarded;
     EnergyAudit halves = guarded ? backend_->energy_audit(*model_, t, 0.5 * h, wind) : start;
+    const int deepest_before = deepest_split_;
     int pieces = split_substep(t, 0.5 * h, halves, depth + 1);
     pieces += split_substep(t + 0.5 * h, 0.5 * h, halves, depth + 1);
     if (halves.max_stretch > whole.max_stretch) {
         write_all_states(saved_whole.x, saved_whole.v);
         audit = whole;
+        deepest_split_ = deepest_before;  // the halves' own splits went with them: they set no level
         return 1;
     }
     deepest_split_ = std::max(deepest_split_, depth + 1);  // only a split that helped makes the next substeps start split
