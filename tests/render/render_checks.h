@@ -17,6 +17,7 @@
 #include <optional>
 #include <string>
 #include <string_view>
+#include <utility>
 #include <vector>
 
 #include "weft/error.h"
@@ -462,6 +463,32 @@ inline void expect_redraws_the_same_frame_bit_for_bit(Renderer& r) {
     EXPECT_EQ(r.validation_messages(), 0);
 }
 
+/// The sheet over the ball seen with a box between the camera and the sheet's left half (on the line
+/// from the camera to the sheet's point (−0.3, 0.9, 0)): what stands in front of the cloth, for the
+/// overlay tests.
+inline TestScene sheet_over_ball_behind_a_box() {
+    TestScene t = sheet_over_ball();
+    ColliderDesc box{.name = "screen", .shape = ColliderShape::Box};
+    box.half_extents = {0.12, 0.12, 0.04};
+    box.motion.origin = {-0.2, 1.14, 0.9};
+    t.world->add_collider(box);
+    make_sheet_over_ball_view(t);
+    return t;
+}
+
+/// The on-screen bounds (pixels, low and high corners) of sheet_over_ball_behind_a_box's box.
+inline std::pair<glm::vec2, glm::vec2> screen_box_outline(const glm::mat4& vp, int width, int height) {
+    glm::vec2 lo(1e9F), hi(-1e9F);
+    for (int k = 0; k < 8; ++k) {
+        const glm::vec3 corner(-0.2F + ((k & 1) ? 0.12F : -0.12F), 1.14F + ((k & 2) ? 0.12F : -0.12F),
+                               0.9F + ((k & 4) ? 0.04F : -0.04F));
+        const glm::vec2 q = project(vp, corner, width, height);
+        lo = glm::min(lo, q);
+        hi = glm::max(hi, q);
+    }
+    return {lo, hi};
+}
+
 /// The overlay points (OverlayLines::points, the editor's contact and pin marks): squares at the
 /// listed cloth vertices, read from the cloth buffer, hidden where something is in front. The sheet
 /// over the ball behind the box of the lines' test, every fourth vertex marked in magenta: marks
@@ -469,12 +496,7 @@ inline void expect_redraws_the_same_frame_bit_for_bit(Renderer& r) {
 /// near), none inside the box's outline; the mark's colour is drawn; no points draws the picture
 /// without them; a point past the cloth buffer and too many lists are errors naming the renderer.
 inline void expect_overlay_points_at_the_listed_vertices_where_seen(Renderer& r) {
-    TestScene t = sheet_over_ball();
-    ColliderDesc box{.name = "screen", .shape = ColliderShape::Box};
-    box.half_extents = {0.12, 0.12, 0.04};
-    box.motion.origin = {-0.2, 1.14, 0.9};
-    t.world->add_collider(box);
-    make_sheet_over_ball_view(t);
+    TestScene t = sheet_over_ball_behind_a_box();
     r.load(t.scene);
     const Image plain = r.draw(t.frame);
     RenderFrame marked = t.frame;
@@ -487,14 +509,7 @@ inline void expect_overlay_points_at_the_listed_vertices_where_seen(Renderer& r)
     save(r.name(), "overlay_points", points);
 
     const glm::mat4 vp = view_projection(t.scene, plain.width, plain.height);
-    glm::vec2 box_lo(1e9F), box_hi(-1e9F);
-    for (int k = 0; k < 8; ++k) {
-        const glm::vec3 corner(-0.2F + ((k & 1) ? 0.12F : -0.12F), 1.14F + ((k & 2) ? 0.12F : -0.12F),
-                               0.9F + ((k & 4) ? 0.04F : -0.04F));
-        const glm::vec2 q = project(vp, corner, plain.width, plain.height);
-        box_lo = glm::min(box_lo, q);
-        box_hi = glm::max(box_hi, q);
-    }
+    const auto [box_lo, box_hi] = screen_box_outline(vp, plain.width, plain.height);
     std::vector<glm::vec2> listed;
     for (const std::uint32_t v : list.vertices) {
         const RenderVertex& rv = t.vertices[v];
@@ -546,12 +561,7 @@ inline void expect_overlay_points_at_the_listed_vertices_where_seen(Renderer& r)
 /// normals') projected bounds; the normals add pixels the wireframe does not; lines off draws the
 /// same picture as before.
 inline void expect_overlay_lines_over_the_cloth_only_where_seen(Renderer& r) {
-    TestScene t = sheet_over_ball();
-    ColliderDesc box{.name = "screen", .shape = ColliderShape::Box};
-    box.half_extents = {0.12, 0.12, 0.04};
-    box.motion.origin = {-0.2, 1.14, 0.9};  // on the line from the camera to the sheet's point (−0.3, 0.9, 0)
-    t.world->add_collider(box);
-    make_sheet_over_ball_view(t);
+    TestScene t = sheet_over_ball_behind_a_box();
     ASSERT_EQ(t.scene.cloth_edges.size(), 2U * (16U * 17U * 2U + 16U * 16U));  // grid edges and one diagonal a cell
     r.load(t.scene);
     const Image plain = r.draw(t.frame);
@@ -566,15 +576,7 @@ inline void expect_overlay_lines_over_the_cloth_only_where_seen(Renderer& r) {
     save(r.name(), "overlay_normals", normals);
 
     const glm::mat4 vp = view_projection(t.scene, plain.width, plain.height);
-    // The box's outline on screen, shrunk by two pixels (edges are antialiased).
-    glm::vec2 box_lo(1e9F), box_hi(-1e9F);
-    for (int k = 0; k < 8; ++k) {
-        const glm::vec3 corner(-0.2F + ((k & 1) ? 0.12F : -0.12F), 1.14F + ((k & 2) ? 0.12F : -0.12F),
-                               0.9F + ((k & 4) ? 0.04F : -0.04F));
-        const glm::vec2 q = project(vp, corner, plain.width, plain.height);
-        box_lo = glm::min(box_lo, q);
-        box_hi = glm::max(box_hi, q);
-    }
+    const auto [box_lo, box_hi] = screen_box_outline(vp, plain.width, plain.height);
     // The cloth's bounds on screen, grown by the normals' length and two pixels.
     glm::vec2 cloth_lo(1e9F), cloth_hi(-1e9F);
     for (const RenderVertex& v : t.vertices)
