@@ -6,10 +6,10 @@
 //
 //   cape_runner [--cpu] [--detail N] [--script FILE] [--frames N] [--check] [--screenshot FILE.png]
 //               [--validation] [--offscreen] [--cg-tolerance EPS] [--preset NAME]
-//               [--character [FILE.gltf]]
+//               [--character [FILE.gltf]] [--threads N]
 //
 // --offscreen draws every frame with the Vulkan renderer but into no window (a fixed camera): for
-// timing on a machine without a display.
+// timing on a machine without a display. --threads caps the CPU backend's threads (0: every core).
 //
 // W/Up and S/Down run forward and back, A/Left and D/Right turn, Space jumps, Shift runs faster; a
 // gamepad's left stick, A and right bumper do the same. Esc quits. The window's title shows the
@@ -69,6 +69,7 @@ struct Options {
     double cg_tolerance = 0.0;  // 0: the engine's default (SolverSettings::cg_tolerance)
     std::string preset;         // a solver preset (weft/presets.h); empty: "game"
     std::string character;  // a rigged character file (--character); empty: capsules
+    int threads = 0;        // the CPU backend's threads; 0: every core
 };
 
 Options parse(int argc, char** argv) {
@@ -89,6 +90,7 @@ Options parse(int argc, char** argv) {
         else if (a == "--offscreen") o.offscreen = true;
         else if (a == "--cg-tolerance") o.cg_tolerance = std::stod(value());
         else if (a == "--preset") o.preset = value();
+        else if (a == "--threads") o.threads = std::stoi(value());
         else if (a == "--character") {
             // The file that follows, or the shipped runner (found where the package installs it).
             o.character = i + 1 < argc && argv[i + 1][0] != '-' ? argv[++i] : kShippedCharacter;
@@ -97,6 +99,7 @@ Options parse(int argc, char** argv) {
         else throw std::runtime_error("unknown option " + std::string(a) + " (see the comment at the top of main.cpp)");
     }
     if (o.detail < 0 || o.detail > 4) throw std::runtime_error("--detail takes 1 to 4");
+    if (o.threads < 0) throw std::runtime_error("--threads takes 0 (every core) or more");
 #if !WEFT_HAVE_ASSETS
     if (!o.character.empty()) throw std::runtime_error("--character needs Weft's asset importer (Weft::assets), which this build lacks");
 #endif
@@ -171,7 +174,7 @@ int play(const Options& options) {
     // where the runner drags the banner, docs/tuning.md), then an explicit CG tolerance over it.
     weft::apply_solver_preset(desc, !options.preset.empty() ? options.preset : "game");
     if (options.cg_tolerance > 0.0) desc.solver.cg_tolerance = options.cg_tolerance;
-    weft::World world(desc, backend);
+    weft::World world(desc, backend, weft::BackendOptions{.threads = options.threads});
     Runner runner({0.0, 0.0, 0.0});
     std::shared_ptr<const weft::SkinnedMesh> skin;
 #if WEFT_HAVE_ASSETS
