@@ -419,6 +419,64 @@ TEST(BroadPhase, KinematicGroupsDoNotPairAmongThemselves) {
     expect_same(kept.ee, ee_want, "edge-edge");
 }
 
+// Only the pairs with a flagged vertex (BroadPhaseInput::vertex_changed, the impact zones' later
+// detection rounds): exactly the full result's pairs that have one, on random soups (oversized
+// primitives included) with every tenth vertex flagged; none with no flag; all with every flag; a
+// flag list of the wrong size is an error naming both sizes.
+TEST(BroadPhase, OnlyPairsWithAChangedVertexWhenAskedFor) {
+    for (const test::SoupCase& c : test::kSoupCases) {
+        SCOPED_TRACE("seed " + std::to_string(c.seed));
+        Soup s = random_soup(c.seed, c.lattice, c.triangles, c.motion, c.outliers);
+        s.thickness = 0.05;
+        BroadPhase hash;
+        BroadPhaseResult every, some, none, all;
+        hash.find(s.input(), every);
+        std::vector<std::uint8_t> changed(s.x0.size(), 0);
+        for (std::size_t v = 0; v < changed.size(); v += 10) changed[v] = 1;
+        BroadPhaseInput flagged = s.input();
+        flagged.vertex_changed = changed;
+        hash.find(flagged, some);
+        const auto any = [&](std::initializer_list<std::uint32_t> vs) {
+            return std::any_of(vs.begin(), vs.end(), [&](std::uint32_t v) { return changed[v] != 0; });
+        };
+        std::vector<VertexFacePair> vf_want;
+        for (const VertexFacePair& p : every.vf) {
+            const Triangle& t = s.triangles[p.triangle];
+            if (any({p.vertex, t.v[0], t.v[1], t.v[2]})) vf_want.push_back(p);
+        }
+        std::vector<EdgeEdgePair> ee_want;
+        for (const EdgeEdgePair& p : every.ee)
+            if (any({s.edges[p.a].v[0], s.edges[p.a].v[1], s.edges[p.b].v[0], s.edges[p.b].v[1]})) ee_want.push_back(p);
+        ASSERT_FALSE(vf_want.empty());
+        ASSERT_LT(vf_want.size() + ee_want.size(), every.vf.size() + every.ee.size()) << "the flags filter nothing";
+        expect_same(some.vf, vf_want, "vertex-face");
+        expect_same(some.ee, ee_want, "edge-edge");
+
+        std::fill(changed.begin(), changed.end(), std::uint8_t{0});
+        hash.find(flagged, none);
+        EXPECT_TRUE(none.vf.empty() && none.ee.empty()) << "nothing moved, nothing to pair";
+        std::fill(changed.begin(), changed.end(), std::uint8_t{1});
+        hash.find(flagged, all);
+        expect_same(all.vf, every.vf, "vertex-face, every vertex flagged");
+        expect_same(all.ee, every.ee, "edge-edge, every vertex flagged");
+    }
+    Soup s = random_soup(7, 8, 100, 0.2, 0.0);
+    const std::vector<std::uint8_t> short_flags(s.x0.size() - 1, 1);
+    BroadPhaseInput bad = s.input();
+    bad.vertex_changed = short_flags;
+    BroadPhase hash;
+    BroadPhaseResult out;
+    try {
+        hash.find(bad, out);
+        ADD_FAILURE() << "a flag list of the wrong size was taken";
+    } catch (const Error& e) {
+        EXPECT_NE(std::string(e.what()).find(std::to_string(s.x0.size() - 1) + " changed-vertex flags for " +
+                                             std::to_string(s.x0.size()) + " vertices"),
+                  std::string::npos)
+            << e.what();
+    }
+}
+
 // A common motion taken out of the bounds (BroadPhaseInput::frame_motion): a soup moving 30 cm as a
 // whole pairs as if it stood still (the brute force on x1 − T, the same arithmetic), and the world
 // frame's swept bounds give a strict superset of those pairs.

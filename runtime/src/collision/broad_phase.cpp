@@ -124,6 +124,9 @@ void BroadPhase::find(const BroadPhaseInput& in, BroadPhaseResult& out) {
         for (std::uint32_t v : in.edges[e].v)
             if (v >= n) throw Error("broad phase: edge " + std::to_string(e) + " uses vertex " + std::to_string(v));
     const bool padded = !in.vertex_padding.empty();
+    if (!in.vertex_changed.empty() && in.vertex_changed.size() != n)
+        throw Error("broad phase: " + std::to_string(in.vertex_changed.size()) + " changed-vertex flags for " +
+                    std::to_string(n) + " vertices");
     if (padded && in.vertex_padding.size() != n)
         throw Error("broad phase: " + std::to_string(in.vertex_padding.size()) + " vertex paddings for " +
                     std::to_string(n) + " vertices");
@@ -201,6 +204,28 @@ void BroadPhase::find(const BroadPhaseInput& in, BroadPhaseResult& out) {
         const std::uint32_t pa = patch_of(a);
         return pa != kNoPatch && pa == patch_of(b);
     };
+
+    // Which primitives have a flagged vertex (BroadPhaseInput::vertex_changed): a pair is formed
+    // only where one of its two has.
+    const bool only_changed = !in.vertex_changed.empty();
+    if (only_changed) {
+        changed_.resize(prims);
+        parallel_chunks(prims, [&](std::size_t b, std::size_t e) {
+            for (std::size_t p = b; p < e; ++p) {
+                const auto& ch = in.vertex_changed;
+                if (p < edge0) {
+                    changed_[p] = ch[p] != 0;
+                } else if (p < tri0) {
+                    const Edge& edge = in.edges[p - edge0];
+                    changed_[p] = (ch[edge.v[0]] | ch[edge.v[1]]) != 0;
+                } else {
+                    const Triangle& t = in.triangles[p - tri0];
+                    changed_[p] = (ch[t.v[0]] | ch[t.v[1]] | ch[t.v[2]]) != 0;
+                }
+            }
+        });
+    }
+    const auto unchanged = [&](std::uint32_t a, std::uint32_t b) { return only_changed && !changed_[a] && !changed_[b]; };
 
     // ---- Bounds ---------------------------------------------------------------------------------
     // Edge and triangle bounds are unions of their vertices' inflated bounds: min(a−t, b−t) equals
@@ -390,12 +415,14 @@ void BroadPhase::find(const BroadPhaseInput& in, BroadPhaseResult& out) {
     // Pair tests: true when the bounds overlap and the primitives are neither adjacent nor filtered
     // out, i.e. a candidate (counted before the dedup rule decides who reports it).
     const auto vf_candidate = [&](Local& l, std::uint32_t v, std::uint32_t t, const Box& bv, const Box& bt) {
+        if (unchanged(v, t)) return false;
         ++l.tested;
         if (!overlap(bv, bt) || is_corner(v, triangle_of(t)) || filtered(v, t)) return false;
         ++l.candidates;
         return true;
     };
     const auto ee_candidate = [&](Local& l, std::uint32_t a, std::uint32_t b, const Box& ba, const Box& bb) {
+        if (unchanged(a, b)) return false;
         ++l.tested;
         if (!overlap(ba, bb) || shares_vertex(edge_of(a), edge_of(b)) || filtered(a, b)) return false;
         ++l.candidates;
@@ -403,10 +430,13 @@ void BroadPhase::find(const BroadPhaseInput& in, BroadPhaseResult& out) {
     };
     // Culled pairs: counted when they would have been candidates (count_culled), never emitted.
     const auto vf_culled = [&](Local& l, std::uint32_t v, std::uint32_t t, const Box& bv, const Box& bt) {
-        if (in.count_culled && overlap(bv, bt) && !is_corner(v, triangle_of(t)) && !filtered(v, t)) ++l.culled;
+        if (in.count_culled && !unchanged(v, t) && overlap(bv, bt) && !is_corner(v, triangle_of(t)) && !filtered(v, t))
+            ++l.culled;
     };
     const auto ee_culled = [&](Local& l, std::uint32_t a, std::uint32_t b, const Box& ba, const Box& bb) {
-        if (in.count_culled && overlap(ba, bb) && !shares_vertex(edge_of(a), edge_of(b)) && !filtered(a, b)) ++l.culled;
+        if (in.count_culled && !unchanged(a, b) && overlap(ba, bb) && !shares_vertex(edge_of(a), edge_of(b)) &&
+            !filtered(a, b))
+            ++l.culled;
     };
     const auto add_vf = [&](Local& l, std::uint32_t v, std::uint32_t t) {
         l.vf.push_back({v, static_cast<std::uint32_t>(t - tri0)});
@@ -498,6 +528,9 @@ void BroadPhase::find(const BroadPhaseInput& in, BroadPhaseResult& out) {
                 if (p >= tri0 && first_tri == count) first_tri = i;
             }
             first_edge = std::min(first_edge, first_tri);
+            if (only_changed &&
+                std::none_of(l.prim.begin(), l.prim.end(), [&](std::uint32_t p) { return changed_[p] != 0; }))
+                continue;  // nothing here moved since the last round: no pair to form
             if (cull) {
                 cull_cell(l, key, count, first_edge, first_tri);
                 continue;

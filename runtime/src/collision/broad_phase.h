@@ -69,6 +69,12 @@ struct BroadPhaseInput {
     /// With culling, also count the pairs it removed (`BroadPhaseCounters::culled_pairs`) by testing
     /// their bounds, without emitting them. false skips them untested and leaves the count at 0.
     bool count_culled = true;
+    /// Optional, one flag per vertex (or empty: every pair): only pairs with at least one vertex
+    /// flagged are candidates. A later detection round of the impact zones flags the vertices that
+    /// moved since the last round (and those of its hits): a pair whose four vertices all stayed put
+    /// was tested then and missed, or could not collide, and would miss again, so it is not worth
+    /// forming. Cells with no flagged occupant are skipped whole.
+    std::span<const std::uint8_t> vertex_changed;
 };
 
 /// Work counters of one call (for the step statistics, issue 4 item 8).
@@ -161,6 +167,7 @@ private:
     std::vector<std::size_t> cell_start_;
     std::vector<double> extent_;       // edge bound extents, for the automatic cell size
     std::vector<std::uint8_t> state_;  // per primitive: hashed, non-finite or oversized
+    std::vector<std::uint8_t> changed_;  // per primitive, with BroadPhaseInput::vertex_changed: a vertex of it is flagged
     tbb::enumerable_thread_specific<Local> local_;
     // The trim window (buffer_trim.h): calls since the last trim, and the largest merged lists.
     std::size_t calls_since_trim_ = 0;

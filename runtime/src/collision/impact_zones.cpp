@@ -113,6 +113,9 @@ void ImpactZoneSolver::detect(const ImpactZoneInput& in, ImpactZoneReport& repor
     // a brute-force CCD sweep at eta. eta/2 would be the bare minimum for distances ≤ eta.
     bp.thickness = report.eta;
     if (in.refresh_broad_phase) in.refresh_broad_phase(report.detections, bp);
+    // After the first detection only pairs with a vertex that moved (or hit) can hit: the rest were
+    // tested and missed, or could not collide, and are not formed again (they would be kReused below).
+    if (report.detections > 0) bp.vertex_changed = stale_;
     broad_phase_.find(bp, pairs_);
     ++report.detections;
     const std::size_t nvf = pairs_.vf.size(), total = nvf + pairs_.ee.size();
