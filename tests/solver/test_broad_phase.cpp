@@ -432,25 +432,41 @@ TEST(BroadPhase, OnlyPairsWithAChangedVertexWhenAskedFor) {
         BroadPhaseResult every, some, none, all;
         hash.find(s.input(), every);
         std::vector<std::uint8_t> changed(s.x0.size(), 0);
-        for (std::size_t v = 0; v < changed.size(); v += 10) changed[v] = 1;
         BroadPhaseInput flagged = s.input();
         flagged.vertex_changed = changed;
-        hash.find(flagged, some);
         const auto any = [&](std::initializer_list<std::uint32_t> vs) {
             return std::any_of(vs.begin(), vs.end(), [&](std::uint32_t v) { return changed[v] != 0; });
         };
-        std::vector<VertexFacePair> vf_want;
-        for (const VertexFacePair& p : every.vf) {
-            const Triangle& t = s.triangles[p.triangle];
-            if (any({p.vertex, t.v[0], t.v[1], t.v[2]})) vf_want.push_back(p);
+        // Every tenth vertex (changes all over), then the vertices of one corner of the soup (a local
+        // change: most primitives are left out of the hash).
+        double lowest = std::numeric_limits<double>::infinity(), highest = -lowest;
+        for (const Vec3d& p : s.x0)
+            if (std::isfinite(p.x)) {
+                lowest = std::min(lowest, p.x);
+                highest = std::max(highest, p.x);
+            }
+        const double corner = lowest + 0.2 * (highest - lowest);
+        for (const int pattern : {0, 1}) {
+            SCOPED_TRACE(pattern == 0 ? "every tenth vertex" : "one corner");
+            for (std::size_t v = 0; v < changed.size(); ++v)
+                changed[v] = pattern == 0 ? (v % 10 == 0 ? 1 : 0) : (s.x0[v].x < corner ? 1 : 0);
+            hash.find(flagged, some);
+            std::vector<VertexFacePair> vf_want;
+            for (const VertexFacePair& p : every.vf) {
+                const Triangle& t = s.triangles[p.triangle];
+                if (any({p.vertex, t.v[0], t.v[1], t.v[2]})) vf_want.push_back(p);
+            }
+            std::vector<EdgeEdgePair> ee_want;
+            for (const EdgeEdgePair& p : every.ee)
+                if (any({s.edges[p.a].v[0], s.edges[p.a].v[1], s.edges[p.b].v[0], s.edges[p.b].v[1]})) ee_want.push_back(p);
+            ASSERT_FALSE(vf_want.empty());
+            ASSERT_LT(vf_want.size() + ee_want.size(), every.vf.size() + every.ee.size()) << "the flags filter nothing";
+            expect_same(some.vf, vf_want, "vertex-face");
+            expect_same(some.ee, ee_want, "edge-edge");
+            if (pattern == 1) {
+                EXPECT_LT(some.counters.entries, every.counters.entries) << "a local change hashed every primitive";
+            }
         }
-        std::vector<EdgeEdgePair> ee_want;
-        for (const EdgeEdgePair& p : every.ee)
-            if (any({s.edges[p.a].v[0], s.edges[p.a].v[1], s.edges[p.b].v[0], s.edges[p.b].v[1]})) ee_want.push_back(p);
-        ASSERT_FALSE(vf_want.empty());
-        ASSERT_LT(vf_want.size() + ee_want.size(), every.vf.size() + every.ee.size()) << "the flags filter nothing";
-        expect_same(some.vf, vf_want, "vertex-face");
-        expect_same(some.ee, ee_want, "edge-edge");
 
         std::fill(changed.begin(), changed.end(), std::uint8_t{0});
         hash.find(flagged, none);

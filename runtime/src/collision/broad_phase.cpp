@@ -30,6 +30,13 @@ constexpr int kBits = 21;
 constexpr std::uint64_t kMask = (std::uint64_t{1} << kBits) - 1;
 
 constexpr std::uint8_t kHashed = 0, kNonFinite = 1, kOversized = 2;
+/// With BroadPhaseInput::vertex_changed: a primitive with no flagged vertex whose bound reaches no
+/// changed primitive's region cell cannot be in a pair, and is not hashed.
+constexpr std::uint8_t kUnneeded = 3;
+/// The changed primitives' region: a coarse grid of kRegionCells per axis over the scene's bounds.
+constexpr long kRegionCells = 32;
+/// A bound over more region cells than this counts as covering them all (marks, or touches, all).
+constexpr long kRegionCellsPerBound = 4096;
 
 /// Packs three cell coordinates into one key, each axis in just the bits its range needs, so that
 /// the radix sort makes as few passes as the scene's extent in cells allows.
@@ -336,6 +343,54 @@ void BroadPhase::find(const BroadPhaseInput& in, BroadPhaseResult& out) {
         for (int k = 0; k < 3; ++k) top_cell[k] = cell_coord(top[k], origin[k], inv_cell);
     const Packing packing(top_cell);
 
+    // ---- What a later round needs (BroadPhaseInput::vertex_changed) ------------------------------
+    // A pair needs a changed primitive, and its two bounds overlap, so they share a cell of any grid:
+    // the changed bounds mark the cells of a coarse grid, and an unchanged primitive whose bound
+    // reaches no marked cell is left out of the hash. The pairs, and their sorted order, are the same.
+    needed_.assign(prims, 1);
+    if (only_changed && origin.x <= top.x) {
+        const Vec3d extent = top - origin;
+        double region = std::max(extent.x, std::max(extent.y, extent.z)) / static_cast<double>(kRegionCells);
+        if (!(region > 0.0) || !std::isfinite(region)) region = 1.0;
+        const double inv_region = 1.0 / region;
+        const auto coord = [&](double x, int k) {
+            const double c = std::floor((x - origin[k]) * inv_region);
+            return c < 0.0 ? 0L : c >= static_cast<double>(kRegionCells) ? kRegionCells - 1 : static_cast<long>(c);
+        };
+        // Calls `visit(cell index)` for every region cell `box` covers; false where it covers too many.
+        const auto cover = [&](const Box& box, auto&& visit) {
+            long lo[3], hi[3], count = 1;
+            for (int k = 0; k < 3; ++k) {
+                lo[k] = coord(box.lo[k], k);
+                hi[k] = coord(box.hi[k], k);
+                count *= hi[k] - lo[k] + 1;
+            }
+            if (count > kRegionCellsPerBound) return false;
+            for (long z = lo[2]; z <= hi[2]; ++z)
+                for (long y = lo[1]; y <= hi[1]; ++y)
+                    for (long x = lo[0]; x <= hi[0]; ++x)
+                        if (visit(static_cast<std::size_t>((z * kRegionCells + y) * kRegionCells + x))) return true;
+            return true;
+        };
+        region_.assign(static_cast<std::size_t>(kRegionCells * kRegionCells * kRegionCells), 0);
+        bool everywhere = false;
+        for (std::size_t p = 0; p < prims && !everywhere; ++p)
+            if (changed_[p] && finite_box(box_[p]))
+                everywhere = !cover(box_[p], [&](std::size_t at) {
+                    region_[at] = 1;
+                    return false;
+                });
+        if (!everywhere)
+            parallel_chunks(prims, [&](std::size_t b, std::size_t e) {
+                for (std::size_t p = b; p < e; ++p) {
+                    if (changed_[p] || !finite_box(box_[p])) continue;
+                    bool touches = false;
+                    if (!cover(box_[p], [&](std::size_t at) { return touches = region_[at] != 0; })) touches = true;
+                    needed_[p] = touches ? 1 : 0;
+                }
+            });
+    }
+
     // ---- Cells of each bound --------------------------------------------------------------------
     cell_lo_.resize(prims);
     cell_hi_.resize(prims);
@@ -346,6 +401,10 @@ void BroadPhase::find(const BroadPhaseInput& in, BroadPhaseResult& out) {
             offset_[p] = 0;
             if (!finite_box(box)) {
                 state_[p] = kNonFinite;
+                continue;
+            }
+            if (!needed_[p]) {
+                state_[p] = kUnneeded;
                 continue;
             }
             std::uint64_t lo[3], hi[3], cells = 1;
