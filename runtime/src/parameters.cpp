@@ -307,7 +307,8 @@ constexpr Parameter kTable[] = {
      .access = field<&WorldDesc::collision, &CollisionSettings::continuous>()},
     {.section = "collision", .name = "culling", .type = T::Choice,
      .doc = "`normal_cone`: pairs inside one self-collision-free patch are never generated (PSCC); `none`: every pair "
-            "whose bounds overlap is tested. A speed knob: the result is the same",
+            "whose bounds overlap is tested. Meant as a speed knob, but `none` can turn near pairs inside a proven "
+            "patch into impact-zone constraints (the rigged character: 68 substeps unresolved): keep `normal_cone`",
      .label = "culling", .panel = "collision", .choices = kCullingNames,
      .access = choice_field<kCullings, &WorldDesc::collision, &CollisionSettings::culling>()},
     {.section = "collision", .name = "cull_contacts", .type = T::Boolean,
