@@ -214,12 +214,13 @@ ParameterTable::ParameterTable(const World& world, std::span<const std::string> 
         }
         for (const weft::Parameter& row : parameter_table()) {
             if (!shown(row) || !holds<ColliderDesc>(row)) continue;
-            if (!row.applies_to(c.shape) && !(c.is_analytic() && analytic_size(row))) continue;
+            const bool size_of_a_shape = c.is_analytic() && analytic_size(row);  // shown while its shape is
+            if (!row.applies_to(c.shape) && !size_of_a_shape) continue;
             if ((row.name == "position" || row.name == "rotation") && follows) continue;  // the motion's frame
             const std::size_t first = P.size();
             add_rows<ColliderDesc>(P, row, name, std::to_string(k), group,
                                    [k](World& w) -> ColliderDesc& { return w.collider(k); }, alias);
-            if (c.is_analytic() && analytic_size(row))
+            if (size_of_a_shape)
                 for (std::size_t i = first; i < P.size(); ++i)
                     P[i].shown = [k, &row](const World& w) { return row.applies_to(w.model().colliders[k].shape); };
         }

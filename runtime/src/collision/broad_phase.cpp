@@ -347,7 +347,7 @@ void BroadPhase::find(const BroadPhaseInput& in, BroadPhaseResult& out) {
     // A pair needs a changed primitive, and its two bounds overlap, so they share a cell of any grid:
     // the changed bounds mark the cells of a coarse grid, and an unchanged primitive whose bound
     // reaches no marked cell is left out of the hash. The pairs, and their sorted order, are the same.
-    needed_.assign(prims, 1);
+    if (only_changed) needed_.assign(prims, 1);
     if (only_changed && origin.x <= top.x) {
         const Vec3d extent = top - origin;
         double region = std::max(extent.x, std::max(extent.y, extent.z)) / static_cast<double>(kRegionCells);
@@ -403,7 +403,7 @@ void BroadPhase::find(const BroadPhaseInput& in, BroadPhaseResult& out) {
                 state_[p] = kNonFinite;
                 continue;
             }
-            if (!needed_[p]) {
+            if (only_changed && !needed_[p]) {
                 state_[p] = kUnneeded;
                 continue;
             }

@@ -168,7 +168,7 @@ private:
     std::vector<double> extent_;       // edge bound extents, for the automatic cell size
     std::vector<std::uint8_t> state_;  // per primitive: hashed, non-finite or oversized
     std::vector<std::uint8_t> changed_;  // per primitive, with BroadPhaseInput::vertex_changed: a vertex of it is flagged
-    std::vector<std::uint8_t> needed_;   // per primitive: hashed this call (all but unchanged ones far from a change)
+    std::vector<std::uint8_t> needed_;   // per primitive, with vertex_changed: hashed this call (not an unchanged one far from a change)
     std::vector<std::uint8_t> region_;   // the coarse cells the changed primitives' bounds cover
     tbb::enumerable_thread_specific<Local> local_;
     // The trim window (buffer_trim.h): calls since the last trim, and the largest merged lists.
