@@ -496,6 +496,92 @@ TEST(BroadPhase, OnlyPairsWithAChangedVertexWhenAskedFor) {
 // A common motion taken out of the bounds (BroadPhaseInput::frame_motion): a soup moving 30 cm as a
 // whole pairs as if it stood still (the brute force on x1 − T, the same arithmetic), and the world
 // frame's swept bounds give a strict superset of those pairs.
+TEST(BroadPhase, ReusingAnEarlierCallsPairsGivesFindsPairs) {
+    // The impact zones' first detection reuses the proximity detection's pairs: bounds grown by the
+    // contact thickness around the predicted motion then, by eta around the solved motion now. The
+    // lists must be find's exactly, with culling, a moved frame and some vertices far off the
+    // prediction (hashed again); and where the reuse cannot hold it must say so and still give them.
+    for (const unsigned seed : {3U, 11U}) {
+        SCOPED_TRACE("seed " + std::to_string(seed));
+        const Soup s = crumpled_sheet(seed);
+        const std::size_t n = s.x0.size();
+        BroadPhase proximity;
+        BroadPhaseResult predicted;
+        proximity.find(s.input(), predicted);
+
+        std::mt19937 rng(seed);
+        std::normal_distribution<double> small(0.0, 0.2 * s.thickness);
+        std::vector<Vec3d> solved = s.x1;
+        for (std::size_t v = 0; v < n; ++v) solved[v] += Vec3d{small(rng), small(rng), small(rng)};
+        for (std::size_t v = 0; v < n; v += 97) solved[v] += Vec3d{5.0 * s.thickness, 0.0, 5.0 * s.thickness};  // off the prediction
+        // Patches by strips of the sheet, a primitive across two strips in none (kNoPatch).
+        const auto strip = [&](std::uint32_t v) { return static_cast<std::uint32_t>((s.x0[v].x + 1.0) / 0.2); };
+        std::vector<std::uint32_t> vertex_patch(n), edge_patch, triangle_patch;
+        for (std::size_t v = 0; v < n; ++v) vertex_patch[v] = strip(static_cast<std::uint32_t>(v));
+        for (const Edge& e : s.edges) edge_patch.push_back(strip(e.v[0]) == strip(e.v[1]) ? strip(e.v[0]) : kNoPatch);
+        for (const Triangle& t : s.triangles)
+            triangle_patch.push_back(strip(t.v[0]) == strip(t.v[1]) && strip(t.v[1]) == strip(t.v[2]) ? strip(t.v[0])
+                                                                                                     : kNoPatch);
+        BroadPhaseInput ccd = s.input();
+        ccd.x1 = solved;
+        ccd.thickness = 0.1 * s.thickness;
+        ccd.frame_motion = {0.1 * s.thickness, -0.05 * s.thickness, 0.0};
+        for (const bool culled : {false, true}) {
+            SCOPED_TRACE(culled ? "culled" : "not culled");
+            BroadPhaseInput in = ccd;
+            if (culled) {
+                in.vertex_patch = vertex_patch;
+                in.edge_patch = edge_patch;
+                in.triangle_patch = triangle_patch;
+                in.count_culled = false;  // as the solver runs it (CollisionSettings::count_culled)
+            }
+            BroadPhase fresh, zones;
+            BroadPhaseResult want, got;
+            fresh.find(in, want);
+            ASSERT_TRUE(zones.find_reusing(proximity, predicted, in, got));
+            expect_same(got.vf, want.vf, "vertex-face");
+            expect_same(got.ee, want.ee, "edge-edge");
+            EXPECT_EQ(got.counters.vf_pairs, got.vf.size());
+            EXPECT_EQ(got.counters.ee_pairs, got.ee.size());
+            ASSERT_FALSE(want.vf.empty());
+        }
+        // Where it cannot reuse: most vertices off the prediction; counting culled pairs; an earlier
+        // call that culled, or the reusing object's own. It hashes everything and gives find's lists.
+        std::vector<Vec3d> far = s.x1;
+        for (Vec3d& p : far) p += Vec3d{5.0 * s.thickness, 0.0, 0.0};
+        BroadPhaseInput moved = ccd;
+        moved.x1 = far;
+        BroadPhaseInput counting = ccd;
+        counting.vertex_patch = vertex_patch;
+        counting.edge_patch = edge_patch;
+        counting.triangle_patch = triangle_patch;
+        counting.count_culled = true;
+        for (const BroadPhaseInput* in : {&moved, &counting}) {
+            BroadPhase fresh, zones;
+            BroadPhaseResult want, got;
+            fresh.find(*in, want);
+            EXPECT_FALSE(zones.find_reusing(proximity, predicted, *in, got));
+            expect_same(got.vf, want.vf, "vertex-face");
+            expect_same(got.ee, want.ee, "edge-edge");
+            EXPECT_EQ(got.counters.culled_pairs, want.counters.culled_pairs);
+        }
+        BroadPhase culled_earlier;
+        BroadPhaseResult culled_pairs, want, got;
+        BroadPhaseInput culled_in = s.input();
+        culled_in.vertex_patch = vertex_patch;
+        culled_in.edge_patch = edge_patch;
+        culled_in.triangle_patch = triangle_patch;
+        culled_earlier.find(culled_in, culled_pairs);
+        BroadPhase zones;
+        EXPECT_FALSE(zones.find_reusing(culled_earlier, culled_pairs, ccd, got)) << "culled pairs are no superset";
+        BroadPhase fresh;
+        fresh.find(ccd, want);
+        expect_same(got.vf, want.vf, "vertex-face");
+        EXPECT_FALSE(proximity.find_reusing(proximity, predicted, ccd, got)) << "its own last call";
+        expect_same(got.vf, want.vf, "vertex-face");
+    }
+}
+
 TEST(BroadPhase, AMovingFrameTakesACommonMotionOutOfTheBounds) {
     Soup s = random_soup(21, 10, 600, 0.01, 0.0);
     s.thickness = 0.01;

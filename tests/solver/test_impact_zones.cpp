@@ -188,6 +188,50 @@ TEST(ImpactZones, CrumplingSheet) {
     EXPECT_EQ(r.report.frozen_vertices, 0);
 }
 
+TEST(ImpactZones, AFirstDetectionReusingTheProximityPairsGivesTheSameBits) {
+    // The CPU solver hands the zones the proximity detection's broad phase (bounds grown by the
+    // contact thickness around the predicted motion): the first detection reuses its pairs, hashing
+    // only the vertices that left those bounds. Everything after must be what hashing gives.
+    const Scene s = crumpled_sheet(22, 7);
+    std::vector<Vec3d> predicted = s.x1;
+    for (std::size_t v = 0; v < predicted.size(); v += 50) predicted[v].y += 3.0 * s.thickness;  // off the prediction
+    BroadPhase proximity;
+    BroadPhaseResult proximity_pairs;
+    BroadPhaseInput pin;
+    pin.x0 = s.x0;
+    pin.x1 = predicted;
+    pin.triangles = s.triangles;
+    pin.edges = s.edges;
+    pin.triangle_cloth = s.triangle_group;
+    pin.thickness = s.thickness;
+    proximity.find(pin, proximity_pairs);
+
+    const Resolved plain = resolve(s);
+    Resolved reused;
+    reused.x1 = s.x1;
+    ImpactZoneSolver solver;
+    ImpactZoneInput in;
+    in.x0 = s.x0;
+    in.x1 = reused.x1;
+    in.inverse_mass = s.inverse_mass;
+    in.triangles = s.triangles;
+    in.edges = s.edges;
+    in.triangle_cloth = s.triangle_group;
+    in.thickness = s.thickness;
+    in.earlier_broad_phase = &proximity;
+    in.earlier_pairs = &proximity_pairs;
+    reused.report = solver.resolve(in);
+    EXPECT_EQ(reused.report.detections_from_earlier_pairs, 1);
+    EXPECT_EQ(plain.report.detections_from_earlier_pairs, 0);
+    EXPECT_EQ(reused.report.detections, plain.report.detections);
+    EXPECT_EQ(reused.report.candidate_pairs, plain.report.candidate_pairs);
+    EXPECT_EQ(reused.report.ccd_hits, plain.report.ccd_hits);
+    EXPECT_GT(plain.report.zones, 0);
+    std::size_t differ = 0;
+    for (std::size_t v = 0; v < s.x1.size(); ++v) differ += same_bits(plain.x1[v], reused.x1[v]) ? 0 : 1;
+    EXPECT_EQ(differ, 0U);
+}
+
 // ---- Fallbacks -----------------------------------------------------------------------------------------
 
 TEST(ImpactZones, RigidFallbackKeepsMomentumAndShape) {

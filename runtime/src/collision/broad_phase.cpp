@@ -9,6 +9,7 @@
 #include <tbb/parallel_for.h>
 
 #include <algorithm>
+#include <atomic>
 #include <bit>
 #include <cmath>
 #include <limits>
@@ -82,6 +83,43 @@ bool overlap(const Box& a, const Box& b) {
 Vec3d min3(Vec3d a, Vec3d b) { return {std::min(a.x, b.x), std::min(a.y, b.y), std::min(a.z, b.z)}; }
 Vec3d max3(Vec3d a, Vec3d b) { return {std::max(a.x, b.x), std::max(a.y, b.y), std::max(a.z, b.z)}; }
 
+template <typename Box>
+bool finite_box(const Box& b) {
+    return physics::is_finite(b.lo) && physics::is_finite(b.hi);
+}
+
+/// A vertex's bound: the box around x0 and x1 (in the moving frame: x1 − shift), grown by th; NaN
+/// where a position is not finite or the box overflows. find and find_within_last share it, so the
+/// two see the same bits.
+template <typename Box>
+void vertex_bound(Box& box, const Vec3d& x0, const Vec3d& x1_world, const Vec3d& shift, double th) {
+    constexpr double nan = std::numeric_limits<double>::quiet_NaN();
+    // std::min would silently drop a NaN, so a non-finite position poisons the whole box.
+    if (!physics::is_finite(x0) || !physics::is_finite(x1_world)) {
+        box.lo = box.hi = {nan, nan, nan};
+        return;
+    }
+    const Vec3d x1 = x1_world - shift;  // in the moving frame (BroadPhaseInput::frame_motion)
+    box.lo = min3(x0, x1) - Vec3d{th, th, th};
+    box.hi = max3(x0, x1) + Vec3d{th, th, th};
+    if (!finite_box(box)) box.lo = box.hi = {nan, nan, nan};  // overflowed
+}
+
+/// An edge's or triangle's bound: the union of its vertices' bounds (NaN if any is).
+template <typename Box>
+void united_bound(Box& box, std::span<const Box> vertex_bounds, std::span<const std::uint32_t> vertices) {
+    constexpr double nan = std::numeric_limits<double>::quiet_NaN();
+    box = vertex_bounds[vertices[0]];
+    bool finite = finite_box(box);
+    for (std::size_t k = 1; k < vertices.size(); ++k) {
+        const Box& vb = vertex_bounds[vertices[k]];
+        finite = finite && finite_box(vb);
+        box.lo = min3(box.lo, vb.lo);
+        box.hi = max3(box.hi, vb.hi);
+    }
+    if (!finite) box.lo = box.hi = {nan, nan, nan};
+}
+
 bool shares_vertex(const Edge& a, const Edge& b) {
     return a.v[0] == b.v[0] || a.v[0] == b.v[1] || a.v[1] == b.v[0] || a.v[1] == b.v[1];
 }
@@ -111,6 +149,7 @@ std::vector<Edge> build_edges(std::span<const Triangle> triangles) {
 }
 
 void BroadPhase::find(const BroadPhaseInput& in, BroadPhaseResult& out) {
+    last_.reusable = false;  // until this call has finished
     const std::size_t n = in.x0.size(), ne = in.edges.size(), nt = in.triangles.size();
     if (in.x1.size() != n)
         throw Error("broad phase: " + std::to_string(n) + " start positions but " + std::to_string(in.x1.size()) +
@@ -240,34 +279,11 @@ void BroadPhase::find(const BroadPhaseInput& in, BroadPhaseResult& out) {
     box_.resize(prims);
     state_.resize(prims);
     const double nan = std::numeric_limits<double>::quiet_NaN();
-    const double th = in.thickness;
-    const Vec3d shift = in.frame_motion;
-    const auto finite_box = [](const Box& b) { return physics::is_finite(b.lo) && physics::is_finite(b.hi); };
     parallel_chunks(n, [&](std::size_t b, std::size_t e) {
-        for (std::size_t i = b; i < e; ++i) {
-            Box& box = box_[i];
-            // std::min would silently drop a NaN, so a non-finite position poisons the whole box.
-            if (!physics::is_finite(in.x0[i]) || !physics::is_finite(in.x1[i])) {
-                box.lo = box.hi = {nan, nan, nan};
-                continue;
-            }
-            const Vec3d x1 = in.x1[i] - shift;  // in the moving frame (BroadPhaseInput::frame_motion)
-            box.lo = min3(in.x0[i], x1) - Vec3d{th, th, th};
-            box.hi = max3(in.x0[i], x1) + Vec3d{th, th, th};
-            if (!finite_box(box)) box.lo = box.hi = {nan, nan, nan};  // overflowed
-        }
+        for (std::size_t i = b; i < e; ++i) vertex_bound(box_[i], in.x0[i], in.x1[i], in.frame_motion, in.thickness);
     });
-    const auto unite = [&](Box& box, std::span<const std::uint32_t> vertices) {
-        box = box_[vertices[0]];
-        bool finite = finite_box(box);
-        for (std::size_t k = 1; k < vertices.size(); ++k) {
-            const Box& vb = box_[vertices[k]];
-            finite = finite && finite_box(vb);
-            box.lo = min3(box.lo, vb.lo);
-            box.hi = max3(box.hi, vb.hi);
-        }
-        if (!finite) box.lo = box.hi = {nan, nan, nan};
-    };
+    const std::span<const Box> vertex_bounds(box_.data(), n);
+    const auto unite = [&](Box& box, std::span<const std::uint32_t> vertices) { united_bound(box, vertex_bounds, vertices); };
     // With padding, a primitive grows by the largest padding of its vertices: united from the
     // unpadded vertex bounds first, the vertices' own padding last.
     const auto pad = [&](Box& box, double p) {
@@ -689,6 +705,132 @@ void BroadPhase::find(const BroadPhaseInput& in, BroadPhaseResult& out) {
     c.vf_pairs = out.vf.size();
     c.ee_pairs = out.ee.size();
     trim_pair_lists(out);
+    last_ = {!cull && !only_changed && !padded, n, in.triangles, in.edges, in.triangle_cloth, in.self_pairs,
+             in.first_kinematic_group, &out, out.vf.size(), out.ee.size()};
+}
+
+bool BroadPhase::clean_pairs_within_last(const BroadPhaseInput& in, const BroadPhaseResult& last, BroadPhaseResult& clean,
+                                         std::vector<std::uint8_t>& outside) {
+    const std::size_t n = in.x0.size(), ne = in.edges.size(), nt = in.triangles.size();
+    const auto same = [](auto a, auto b) { return a.data() == b.data() && a.size() == b.size(); };
+    // The pairs' filters (adjacency, cloth, colliders) must be the ones the last call applied.
+    const bool filters_kept = same(in.triangles, last_.triangles) && same(in.edges, last_.edges) &&
+                              same(in.triangle_cloth, last_.triangle_cloth) && in.self_pairs == last_.self_pairs &&
+                              in.first_kinematic_group == last_.first_kinematic_group;
+    const bool cull = !in.vertex_patch.empty() || !in.edge_patch.empty() || !in.triangle_patch.empty();
+    if (!last_.reusable || !filters_kept || &last != last_.result || &last == &clean || n != last_.n ||
+        in.x1.size() != n || last.vf.size() != last_.vf || last.ee.size() != last_.ee || !in.vertex_padding.empty() ||
+        !in.vertex_changed.empty() ||
+        (cull && (in.count_culled || in.vertex_patch.size() != n || in.edge_patch.size() != ne ||
+                  in.triangle_patch.size() != nt)) ||
+        !std::isfinite(in.thickness) || in.thickness < 0.0 || !physics::is_finite(in.frame_motion))
+        return false;
+
+    // The new vertex bounds, and which lie outside the last call's (a NaN compares false: a
+    // position not finite now, or then, counts as outside).
+    const std::size_t edge0 = n, tri0 = n + ne, prims = n + ne + nt;
+    within_box_.resize(prims);
+    outside.resize(n);
+    std::atomic<std::size_t> outside_count{0};
+    parallel_chunks(n, [&](std::size_t b, std::size_t e) {
+        std::size_t count = 0;
+        for (std::size_t i = b; i < e; ++i) {
+            Box& box = within_box_[i];
+            vertex_bound(box, in.x0[i], in.x1[i], in.frame_motion, in.thickness);
+            const Box& then = box_[i];
+            const bool inside = box.lo.x >= then.lo.x && box.lo.y >= then.lo.y && box.lo.z >= then.lo.z &&
+                                box.hi.x <= then.hi.x && box.hi.y <= then.hi.y && box.hi.z <= then.hi.z;
+            outside[i] = inside ? 0 : 1;
+            count += inside ? 0 : 1;
+        }
+        outside_count.fetch_add(count, std::memory_order_relaxed);
+    });
+    // Beyond this share the hash of the vertices outside costs about what hashing everything does.
+    if (outside_count.load() * kReuseOutsideShare > n) return false;
+    const std::span<const Box> vertex_bounds(within_box_.data(), n);
+    parallel_chunks(ne, [&](std::size_t b, std::size_t e) {
+        for (std::size_t i = b; i < e; ++i) united_bound(within_box_[edge0 + i], vertex_bounds, in.edges[i].v);
+    });
+    parallel_chunks(nt, [&](std::size_t b, std::size_t e) {
+        for (std::size_t i = b; i < e; ++i) united_bound(within_box_[tri0 + i], vertex_bounds, in.triangles[i].v);
+    });
+
+    // A pair whose primitives have no vertex outside stays where its new bounds overlap and culling
+    // keeps it (find's same_patch); kept in order, the lists stay sorted and unique.
+    const auto out_of = [&](std::span<const std::uint32_t> vertices) {
+        for (const std::uint32_t v : vertices)
+            if (outside[v] != 0) return true;
+        return false;
+    };
+    const std::size_t nvf = last.vf.size(), total = nvf + last.ee.size();
+    keep_.resize(total);
+    parallel_chunks(total, [&](std::size_t b, std::size_t e) {
+        for (std::size_t i = b; i < e; ++i) {
+            std::size_t pa = 0, pb = 0;
+            std::uint32_t patch_a = kNoPatch, patch_b = kNoPatch;
+            bool moved = false;
+            if (i < nvf) {
+                const VertexFacePair& p = last.vf[i];
+                pa = p.vertex;
+                pb = tri0 + p.triangle;
+                moved = outside[p.vertex] != 0 || out_of(in.triangles[p.triangle].v);
+                if (cull) patch_a = in.vertex_patch[p.vertex], patch_b = in.triangle_patch[p.triangle];
+            } else {
+                const EdgeEdgePair& p = last.ee[i - nvf];
+                pa = edge0 + p.a;
+                pb = edge0 + p.b;
+                moved = out_of(in.edges[p.a].v) || out_of(in.edges[p.b].v);
+                if (cull) patch_a = in.edge_patch[p.a], patch_b = in.edge_patch[p.b];
+            }
+            const bool culled = patch_a != kNoPatch && patch_a == patch_b;
+            keep_[i] = !moved && !culled && overlap(within_box_[pa], within_box_[pb]);
+        }
+    });
+    clean.vf.clear();
+    clean.ee.clear();
+    for (std::size_t i = 0; i < nvf; ++i)
+        if (keep_[i]) clean.vf.push_back(last.vf[i]);
+    for (std::size_t i = nvf; i < total; ++i)
+        if (keep_[i]) clean.ee.push_back(last.ee[i - nvf]);
+    BroadPhaseCounters& c = clean.counters;
+    c = {};
+    c.primitives = prims;
+    c.tested_pairs = total;
+    c.candidate_pairs = clean.vf.size() + clean.ee.size();
+    c.vf_pairs = clean.vf.size();
+    c.ee_pairs = clean.ee.size();
+    return true;
+}
+
+bool BroadPhase::find_reusing(BroadPhase& earlier, const BroadPhaseResult& earlier_pairs, const BroadPhaseInput& in,
+                              BroadPhaseResult& out) {
+    if (&earlier == this || !earlier.clean_pairs_within_last(in, earlier_pairs, reuse_clean_, reuse_outside_)) {
+        find(in, out);
+        return false;
+    }
+    // The pairs with a primitive that has a vertex outside: hashed on their own (the later rounds'
+    // vertex_changed), none of them among the clean ones; the union, merged in the pairs' order, is
+    // find(in)'s sorted, unique lists.
+    BroadPhaseInput moved_in = in;
+    moved_in.vertex_changed = reuse_outside_;
+    find(moved_in, reuse_moved_);
+    const auto vf_less = [](const VertexFacePair& a, const VertexFacePair& b) {
+        return a.vertex != b.vertex ? a.vertex < b.vertex : a.triangle < b.triangle;
+    };
+    const auto ee_less = [](const EdgeEdgePair& a, const EdgeEdgePair& b) { return a.a != b.a ? a.a < b.a : a.b < b.b; };
+    out.vf.resize(reuse_clean_.vf.size() + reuse_moved_.vf.size());
+    out.ee.resize(reuse_clean_.ee.size() + reuse_moved_.ee.size());
+    std::merge(reuse_clean_.vf.begin(), reuse_clean_.vf.end(), reuse_moved_.vf.begin(), reuse_moved_.vf.end(),
+               out.vf.begin(), vf_less);
+    std::merge(reuse_clean_.ee.begin(), reuse_clean_.ee.end(), reuse_moved_.ee.begin(), reuse_moved_.ee.end(),
+               out.ee.begin(), ee_less);
+    BroadPhaseCounters& c = out.counters;
+    c = reuse_moved_.counters;
+    c.tested_pairs += reuse_clean_.counters.tested_pairs;
+    c.candidate_pairs += reuse_clean_.counters.candidate_pairs;
+    c.vf_pairs = out.vf.size();
+    c.ee_pairs = out.ee.size();
+    return true;
 }
 
 void BroadPhase::trim_pair_lists(BroadPhaseResult& out) {

@@ -115,6 +115,25 @@ public:
     /// `weft::Error` for mismatched sizes, out-of-range indices or a negative thickness or cell size.
     void find(const BroadPhaseInput& in, BroadPhaseResult& out);
 
+    /// Fills `out` with what `find(in, out)` gives, reusing the pairs `earlier` (another broad phase)
+    /// wrote into `earlier_pairs` in its last `find`. A vertex whose bound now lies inside that
+    /// call's bound of it is "inside"; an edge or triangle whose vertices are all inside has its bound
+    /// inside that call's too (a union of theirs), so a pair of two such primitives whose bounds
+    /// overlap now overlapped then and is among `earlier_pairs`: those are kept where their bounds
+    /// still overlap and `in`'s culling keeps them. The pairs with a vertex outside are hashed on
+    /// their own (as with `vertex_changed`), and the two sorted lists merged: the same lists, in the
+    /// same order, as `find(in)`. Returns true where it reused; false where it called `find` instead:
+    /// the earlier call culled, padded or took only changed vertices, or had other topology or cloth
+    /// filters; `in` pads, takes only changed vertices or counts culled pairs; or more than one
+    /// vertex in kReuseOutsideShare is outside. The counters: `tested_pairs` adds the earlier pairs
+    /// looked at, `candidate_pairs` those kept. The CPU's impact zones answer their first detection
+    /// of a substep from the proximity detection's pairs: their bounds are grown by eta, the
+    /// proximity's by the contact thickness, around the motion the solve mostly kept.
+    bool find_reusing(BroadPhase& earlier, const BroadPhaseResult& earlier_pairs, const BroadPhaseInput& in,
+                      BroadPhaseResult& out);
+    /// find_reusing hashes everything anew when more than one vertex in this many lies outside.
+    static constexpr std::size_t kReuseOutsideShare = 4;
+
     /// Bytes of scratch the hash keeps between calls (its own buffers and every thread's pair lists).
     /// Every kTrimPeriod calls (buffer_trim.h) the pair lists, and `out`'s, that stayed far larger than
     /// what those calls found are cut back: one frame's flood of pairs is not kept for the whole run.
@@ -171,6 +190,28 @@ private:
     std::vector<std::uint8_t> needed_;   // per primitive, with vertex_changed: hashed this call (not an unchanged one far from a change)
     std::vector<std::uint8_t> region_;   // the coarse cells the changed primitives' bounds cover
     tbb::enumerable_thread_specific<Local> local_;
+    // What find_within_last needs to know of the last find (box_ keeps that call's bounds).
+    struct LastCall {
+        bool reusable = false;  // it culled, padded and filtered by changed vertices none of its pairs
+        std::size_t n = 0;
+        std::span<const Triangle> triangles;
+        std::span<const Edge> edges;
+        std::span<const std::uint32_t> triangle_cloth;
+        bool self_pairs = true;
+        std::uint32_t first_kinematic_group = 0;
+        const BroadPhaseResult* result = nullptr;  // where it wrote its pairs
+        std::size_t vf = 0, ee = 0;                // and how many
+    };
+    LastCall last_;
+    std::vector<Box> within_box_;        // clean_pairs_within_last: the new bounds of every primitive
+    std::vector<std::uint8_t> keep_;     // clean_pairs_within_last: which of the last pairs stay
+    BroadPhaseResult reuse_clean_, reuse_moved_;  // find_reusing: the two lists it merges
+    std::vector<std::uint8_t> reuse_outside_;     // find_reusing: the vertices outside the earlier bounds
+    /// On the earlier broad phase: the pairs of its last result `last` (at `&last`) between primitives
+    /// whose vertices all lie inside its bounds, where they still overlap under `in`, into `clean`,
+    /// and the vertices outside into `outside`. False where the last call cannot be reused.
+    bool clean_pairs_within_last(const BroadPhaseInput& in, const BroadPhaseResult& last, BroadPhaseResult& clean,
+                                 std::vector<std::uint8_t>& outside);
     // The trim window (buffer_trim.h): calls since the last trim, and the largest merged lists.
     std::size_t calls_since_trim_ = 0;
     std::size_t out_vf_peak_ = 0, out_ee_peak_ = 0;

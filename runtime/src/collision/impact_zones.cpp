@@ -116,7 +116,12 @@ void ImpactZoneSolver::detect(const ImpactZoneInput& in, ImpactZoneReport& repor
     // After the first detection only pairs with a vertex that moved (or hit) can hit: the rest were
     // tested and missed, or could not collide, and are not formed again (they would be kReused below).
     if (report.detections > 0) bp.vertex_changed = stale_;
-    broad_phase_.find(bp, pairs_);
+    if (report.detections == 0 && in.earlier_broad_phase != nullptr && in.earlier_pairs != nullptr) {
+        if (broad_phase_.find_reusing(*in.earlier_broad_phase, *in.earlier_pairs, bp, pairs_))
+            ++report.detections_from_earlier_pairs;
+    } else {
+        broad_phase_.find(bp, pairs_);
+    }
     ++report.detections;
     const std::size_t nvf = pairs_.vf.size(), total = nvf + pairs_.ee.size();
     report.candidate_pairs += static_cast<std::int64_t>(total);

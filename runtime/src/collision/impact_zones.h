@@ -99,6 +99,11 @@ struct ImpactZoneInput {
     /// on positions must be refreshed here: the zones change x1 between detections, and a normal cone
     /// bounded over the old motion could cull a pair that now collides.
     std::function<void(int detection, BroadPhaseInput& input)> refresh_broad_phase;
+    /// Optional: a broad phase whose last `find` wrote `earlier_pairs` (the proximity detection of
+    /// the same substep). The first detection reuses those pairs (`BroadPhase::find_reusing`: the
+    /// same pairs, with only the vertices that left the earlier bounds hashed again).
+    BroadPhase* earlier_broad_phase = nullptr;
+    const BroadPhaseResult* earlier_pairs = nullptr;
 };
 
 /// The impact-zone solver. Keeps its scratch (and the broad phase's) between calls, so that a

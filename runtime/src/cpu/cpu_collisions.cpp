@@ -385,6 +385,10 @@ void CpuCollisions<T>::end_substep(const Model& model, double h, const std::vect
     // The zones move x1 between detections, so the cones are refitted before each one: a cone
     // bounded over an older motion could cull a pair that now collides.
     in.refresh_broad_phase = [&](int /*detection*/, collision::BroadPhaseInput& b) { cull(model, b.x0, b.x1, b, stats); };
+    // The proximity detection's pairs hold the first detection's wherever the solve moved no vertex
+    // much farther than predicted: its bounds are grown by the contact thickness, the CCD's by eta.
+    in.earlier_broad_phase = &broad_;
+    in.earlier_pairs = &pairs_;
     collision::add_to_stats(zones_.resolve(in), stats);
     // Vertices the zones moved take the velocity of their corrected motion.
     const T inv_h = static_cast<T>(1.0 / h);

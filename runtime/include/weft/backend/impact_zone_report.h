@@ -42,6 +42,9 @@ struct ImpactZoneReport {
     std::int64_t qp_work = 0;          ///< constraint updates of the projections (≤ qp_max_work)
     bool qp_work_spent = false;        ///< the rounds stopped because qp_max_work was spent
     int detections = 0;                ///< broad phase + CCD passes over the whole mesh
+    /// Of those, the first detections that reused the proximity detection's pairs (the CPU:
+    /// ImpactZoneInput::earlier_broad_phase).
+    int detections_from_earlier_pairs = 0;
     std::int64_t candidate_pairs = 0;  ///< broad-phase pairs, summed over detections
     std::int64_t ccd_tests = 0;        ///< CCD queries run (pairs with a movable vertex), summed
     std::int64_t ccd_hits = 0;         ///< of those, reported as colliding, summed
