@@ -89,7 +89,7 @@ bool finite_box(const Box& b) {
 }
 
 /// A vertex's bound: the box around x0 and x1 (in the moving frame: x1 − shift), grown by th; NaN
-/// where a position is not finite or the box overflows. find and find_within_last share it, so the
+/// where a position is not finite or the box overflows. find and clean_pairs_within_last share it, so the
 /// two see the same bits.
 template <typename Box>
 void vertex_bound(Box& box, const Vec3d& x0, const Vec3d& x1_world, const Vec3d& shift, double th) {

@@ -190,9 +190,9 @@ private:
     std::vector<std::uint8_t> needed_;   // per primitive, with vertex_changed: hashed this call (not an unchanged one far from a change)
     std::vector<std::uint8_t> region_;   // the coarse cells the changed primitives' bounds cover
     tbb::enumerable_thread_specific<Local> local_;
-    // What find_within_last needs to know of the last find (box_ keeps that call's bounds).
+    // What clean_pairs_within_last needs to know of the last find (box_ keeps that call's bounds).
     struct LastCall {
-        bool reusable = false;  // it culled, padded and filtered by changed vertices none of its pairs
+        bool reusable = false;  // no culling, padding or changed-vertex filter left any pair out
         std::size_t n = 0;
         std::span<const Triangle> triangles;
         std::span<const Edge> edges;
