@@ -94,6 +94,7 @@ RunSummary summarize(std::span<const StepStats> frames) {
         sc.frozen_vertices += c.frozen_vertices;
         sc.impact_work_spent += c.impact_work_spent;
         sc.unresolved_substeps += c.unresolved_substeps;
+        sc.reused_detections += c.reused_detections;
         sc.ejected_vertices += c.ejected_vertices;
         sc.collider_jumps += c.collider_jumps;
         sc.collider_jump_max = std::max(sc.collider_jump_max, c.collider_jump_max);
@@ -335,6 +336,7 @@ void write_summary_fields(JsonWriter& json, const RunContext& c, const RunSummar
     json.field("rigid_zones", col.rigid_zones).field("frozen_vertices", col.frozen_vertices);
     json.field("impact_work_spent", col.impact_work_spent);
     json.field("unresolved_substeps", col.unresolved_substeps);
+    json.field("reused_detections", col.reused_detections);
     json.field("ejected_vertices", col.ejected_vertices);
     json.field("collider_jumps", col.collider_jumps).field("collider_jump_max", col.collider_jump_max);
     json.field("truncated_vertices", col.truncated_vertices).field("redetections", col.redetections);
@@ -469,6 +471,9 @@ void print_run_summary(std::ostream& out, const RunContext& c, const RunSummary&
             << " frozen"
             << (col.impact_work_spent > 0 ? " (work cap spent in " + std::to_string(col.impact_work_spent) + " substeps)" : std::string())
             << "; unresolved substeps " << col.unresolved_substeps
+            << (col.reused_detections > 0
+                    ? "; first detection from the proximity's pairs in " + std::to_string(col.reused_detections) + " substeps"
+                    : std::string())
             << (col.ejected_vertices > 0 ? "; moved out of closed colliders " + std::to_string(col.ejected_vertices)
                                          : std::string())
             << "\n";

@@ -93,6 +93,7 @@ struct RunSummary {
         long long rigid_zones = 0, frozen_vertices = 0;
         long long impact_work_spent = 0;  ///< substeps whose projections spent collision.max_impact_work
         long long unresolved_substeps = 0;
+        long long reused_detections = 0;  ///< first zone detections that reused the proximity's pairs (cpu)
         long long ejected_vertices = 0;  ///< cloth vertices moved out of a closed mesh collider (cpu backend)
         long long collider_jumps = 0;    ///< substeps a mesh collider started away from where it ended (cpu)
         double collider_jump_max = 0.0;  ///< the largest such jump, m

@@ -56,6 +56,9 @@ struct CollisionStats {
     /// contact that began within the substep) and were put back onto its surface (swept_collider.h).
     int collider_overshoots = 0;
     int unresolved_substeps = 0;        ///< substeps that ended with a collision still detected (must be 0)
+    /// Substeps whose first impact-zone detection reused the proximity detection's pairs instead of
+    /// hashing every primitive again (cpu backend; the same pairs either way: docs/collisions.md).
+    int reused_detections = 0;
     /// Cloth vertices found inside a closed piece of a mesh collider at a substep's start and moved
     /// just outside its nearest face (cpu backend; summed over the substeps). Should stay 0: a vertex
     /// inside got there past the contacts and the CCD, and counting it says so.

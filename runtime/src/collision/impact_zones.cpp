@@ -685,6 +685,7 @@ void add_to_stats(const ImpactZoneReport& r, StepStats& stats) {
     c.frozen_vertices += r.frozen_vertices;
     if (r.qp_work_spent) ++c.impact_work_spent;
     if (!r.resolved) ++c.unresolved_substeps;
+    c.reused_detections += r.detections_from_earlier_pairs;
     stats.ms(Stage::BroadPhase) += r.broad_phase_ms;
     stats.ms(Stage::Ccd) += r.ccd_ms;
     stats.ms(Stage::ImpactZones) += r.zones_ms;
