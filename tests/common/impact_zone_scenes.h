@@ -10,6 +10,7 @@
 #include <algorithm>
 #include <atomic>
 #include <chrono>
+#include <functional>
 #include <cstdio>
 #include <cstring>
 #include <cmath>
@@ -257,7 +258,8 @@ struct Resolved {
 /// The CPU reference (ImpactZoneSolver) on the scene; `reuse` keeps a solver across calls.
 inline Resolved resolve_cpu(const Scene& s, int max_iterations = 32, ImpactZoneSolver* reuse = nullptr,
                             int max_rigid_rounds = kImpactZoneRigidRounds,
-                            std::int64_t max_work = ImpactZoneInput{}.qp_max_work) {
+                            std::int64_t max_work = ImpactZoneInput{}.qp_max_work,
+                            const std::function<void(ImpactZoneInput&)>& adjust = {}) {
     Resolved r;
     r.x1 = s.x1;
     ImpactZoneSolver local;
@@ -273,6 +275,7 @@ inline Resolved resolve_cpu(const Scene& s, int max_iterations = 32, ImpactZoneS
     in.max_iterations = max_iterations;
     in.max_rigid_rounds = max_rigid_rounds;
     in.qp_max_work = max_work;
+    if (adjust) adjust(in);
     const auto t0 = std::chrono::steady_clock::now();
     r.report = solver.resolve(in);
     r.ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();

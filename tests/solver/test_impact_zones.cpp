@@ -207,20 +207,11 @@ TEST(ImpactZones, AFirstDetectionReusingTheProximityPairsGivesTheSameBits) {
     proximity.find(pin, proximity_pairs);
 
     const Resolved plain = resolve(s);
-    Resolved reused;
-    reused.x1 = s.x1;
-    ImpactZoneSolver solver;
-    ImpactZoneInput in;
-    in.x0 = s.x0;
-    in.x1 = reused.x1;
-    in.inverse_mass = s.inverse_mass;
-    in.triangles = s.triangles;
-    in.edges = s.edges;
-    in.triangle_cloth = s.triangle_group;
-    in.thickness = s.thickness;
-    in.earlier_broad_phase = &proximity;
-    in.earlier_pairs = &proximity_pairs;
-    reused.report = solver.resolve(in);
+    const Resolved reused = test::resolve_cpu(s, 32, nullptr, kImpactZoneRigidRounds, ImpactZoneInput{}.qp_max_work,
+                                              [&](ImpactZoneInput& in) {
+                                                  in.earlier_broad_phase = &proximity;
+                                                  in.earlier_pairs = &proximity_pairs;
+                                              });
     EXPECT_EQ(reused.report.detections_from_earlier_pairs, 1);
     EXPECT_EQ(plain.report.detections_from_earlier_pairs, 0);
     EXPECT_EQ(reused.report.detections, plain.report.detections);
