@@ -402,8 +402,10 @@ TEST(CudaContacts, AFloodOfContactsIsGivenBackAfterATrimWindow) {
     }
     std::printf("[ trim     ] contact list: %zu pairs of capacity after the flood, %zu after %zu substeps of %zu\n", flood,
                 flooded->contact_capacity(), kTrimPeriod + 1, m);
-    EXPECT_LT(flooded->contact_capacity(), flood / 4) << "the flood's capacity was kept";
-    EXPECT_GE(flooded->contact_capacity(), m);
+    // The cut keeps kTrimKeep × the window's peak (m), rounded up to a power of two: at most twice that.
+    EXPECT_LT(flooded->contact_capacity(), flood) << "the flood's capacity was kept";
+    EXPECT_LE(flooded->contact_capacity(), 2 * kTrimKeep * m);
+    EXPECT_GE(flooded->contact_capacity(), kTrimKeep * m);
     EXPECT_EQ(flooded->graph_captures(), captures + 1) << "the cut re-captures the graph once";
     const State a = gpu_read(*flooded, n), b = gpu_read(*steady, n);
     EXPECT_TRUE(same_bits(a, b)) << "the capacity changed the results by " << max_distance(a.v, b.v) << " m/s";
