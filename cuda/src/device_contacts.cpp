@@ -24,12 +24,23 @@ std::size_t grown(std::size_t needed) { return needed == 0 ? 0 : std::max<std::s
 bool DeviceContacts::reserve(std::size_t pairs, std::size_t kinematic, std::uint32_t n, cudaStream_t stream) {
     const bool list_fits = pairs <= view_.capacity;
     const bool kinematic_fits = kinematic <= view_.kinematic_capacity;
-    if (list_fits && kinematic_fits) return false;
+    // The trim window: a capacity far above what a window of reserves needed is cut to twice the
+    // window's peak (never below what this call needs, nor below 256).
+    std::size_t cut = 0;
+    if (view_.capacity > 0)
+        if (const std::size_t kept = trim_.record(pairs, view_.capacity, kBytesPerPair, 256)) {
+            const std::size_t to = grown(std::max(kept, pairs));
+            if (to < view_.capacity) cut = to;
+        }
+    if (list_fits && kinematic_fits && cut == 0) return false;
     if (pairs > 0xffffffffu / 16)
         throw Error("CUDA backend: " + std::to_string(pairs) + " proximity contacts is more than the solver indexes");
     // Nothing may still read or write the arrays being replaced.
     WEFT_CUDA_CHECK(cudaStreamSynchronize(stream));
-    const std::size_t capacity = list_fits && view_.capacity > 0 ? view_.capacity : grown(std::max<std::size_t>(pairs, 1));
+    const std::size_t capacity = cut != 0                             ? cut
+                                 : list_fits && view_.capacity > 0 ? view_.capacity
+                                                                   : grown(std::max<std::size_t>(pairs, 1));
+    if (cut != 0) ++trims_;
     const std::size_t kinematic_capacity = kinematic_fits ? view_.kinematic_capacity : grown(kinematic);
     release();
 
@@ -138,6 +149,7 @@ void DeviceContacts::release() {
     sort_scratch_ = {};
     ledger_.clear();
     view_ = ContactView{};
+    trim_ = {};
 }
 
 }  // namespace weft::cuda

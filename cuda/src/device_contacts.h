@@ -21,6 +21,7 @@
 #include <span>
 
 #include "device_array.h"
+#include "weft/backend/buffer_trim.h"
 #include "device_params.h"
 #include "weft/types.h"
 
@@ -134,14 +135,23 @@ struct ContactInputs {
     std::uint32_t kinematic_capacity = 0;
 };
 
-/// Owns the contact arrays of one DeviceSolver. Grows, never shrinks; growing is an allocation (so
-/// it happens outside the step, when a caller reserves or uploads more than fits).
+/// Owns the contact arrays of one DeviceSolver. Grows when a caller reserves or uploads more than
+/// fits; comes down when a window of kTrimPeriod reserves needed far less than it holds (the trim
+/// policy of weft/backend/buffer_trim.h: a flood of contacts in one fold is not kept for the rest of
+/// the run). Either is an allocation, outside the step.
 class DeviceContacts {
 public:
-    /// Makes room for `pairs` contacts and `kinematic` kinematic vertices over `n` cloth vertices;
-    /// returns true when it had to reallocate (the caller's view and graph are then stale). Contents
+    /// About the device bytes a pair's capacity holds: its record (64), incidence entries, weights
+    /// and sort slots (4 corners), and its block, right-hand side and product (16 floats).
+    static constexpr std::size_t kBytesPerPair = 64 + 4 * (4 + 4 + 8 + 4 + 4) + 16 * 4;
+
+    /// Makes room for `pairs` contacts and `kinematic` kinematic vertices over `n` cloth vertices,
+    /// and records `pairs` in the trim window (at a window's end the list may be cut to twice its
+    /// peak); returns true when it reallocated (the caller's view and graph are then stale). Contents
     /// are kept only where nothing was reallocated; the count is 0 after a reallocation.
     bool reserve(std::size_t pairs, std::size_t kinematic, std::uint32_t n, cudaStream_t stream);
+    /// Times the list was cut back by the trim window.
+    [[nodiscard]] int trims() const { return trims_; }
     /// Uploads `contacts` (vertex ids < n + kinematic count) and the kinematic poses at t + h and
     /// velocities, in one host-to-device copy on `stream`; grows first if needed (returns true then).
     /// Throws weft::Error for a vertex id out of range or mismatched kinematic arrays.
@@ -178,6 +188,8 @@ private:
     DeviceArray<std::uint32_t> active_mask_;           // ContactView::active_mask
     DeviceArray<unsigned char> sort_storage_;
     ContactSortScratch sort_scratch_{};
+    CapacityTrim trim_;  // the pairs each reserve needed (weft/backend/buffer_trim.h)
+    int trims_ = 0;
 };
 
 }  // namespace weft::cuda

@@ -376,6 +376,41 @@ TEST(CudaContacts, SameBitsOnEveryRunAndWithOrWithoutTheGraph) {
     }
 }
 
+TEST(CudaContacts, AFloodOfContactsIsGivenBackAfterATrimWindow) {
+    // A list grown for a flood (a fold's one frame) is cut back once a trim window of substeps
+    // needed far less (weft/backend/buffer_trim.h), re-capturing the graph once; the steps before
+    // and after are the bits of a solver that never held the flood.
+    WEFT_REQUIRE_GPU();
+    const ContactScene s = make_scene();
+    const std::size_t n = s.flat.vertex_count, m = s.contacts.size();
+    auto flooded = gpu_solver(s, cuda::PcgLoop::OneLaunch, true);
+    auto steady = gpu_solver(s, cuda::PcgLoop::OneLaunch, true);
+    flooded->reserve_contacts(200000, s.kinematic_x1.size());
+    steady->reserve_contacts(m, s.kinematic_x1.size());
+    const std::size_t flood = flooded->contact_capacity();
+    ASSERT_GE(flood, 200000u);
+    int captures = 0;
+    for (std::size_t step = 0; step <= kTrimPeriod; ++step) {
+        for (auto* g : {flooded.get(), steady.get()}) {
+            g->reserve_contacts(m, s.kinematic_x1.size());  // as each substep's detection does
+            g->set_contacts(s.contacts, s.kinematic_x1, s.kinematic_v);
+            StepStats stats;
+            g->substep(s.model, static_cast<double>(step) * kH, kH, stats);
+            ASSERT_FALSE(stats.non_finite) << "substep " << step;
+        }
+        if (step == 2) captures = flooded->graph_captures();
+    }
+    std::printf("[ trim     ] contact list: %zu pairs of capacity after the flood, %zu after %zu substeps of %zu\n", flood,
+                flooded->contact_capacity(), kTrimPeriod + 1, m);
+    // The cut keeps kTrimKeep × the window's peak (m), rounded up to a power of two: at most twice that.
+    EXPECT_LT(flooded->contact_capacity(), flood) << "the flood's capacity was kept";
+    EXPECT_LE(flooded->contact_capacity(), 2 * kTrimKeep * m);
+    EXPECT_GE(flooded->contact_capacity(), kTrimKeep * m);
+    EXPECT_EQ(flooded->graph_captures(), captures + 1) << "the cut re-captures the graph once";
+    const State a = gpu_read(*flooded, n), b = gpu_read(*steady, n);
+    EXPECT_TRUE(same_bits(a, b)) << "the capacity changed the results by " << max_distance(a.v, b.v) << " m/s";
+}
+
 TEST(CudaContacts, NoContactsGiveTodaysBitsExactly) {
     // A solver with room for contacts but none in the list runs the contact kernels (they return at
     // once) and the contact variants of the PCG kernels: it must step exactly as one without a list.

@@ -22,6 +22,7 @@
 #include "float_positions.h"
 #include "gpu_test_util.h"
 #include "impact_zone_scenes.h"
+#include "weft/backend/buffer_trim.h"
 
 namespace weft::collision {
 namespace {
@@ -362,6 +363,33 @@ TEST(GpuImpactZones, SameBitsOnEveryRunAndNothingToDo) {
     EXPECT_TRUE(n.report.resolved);
     EXPECT_EQ(n.report.constraints, 0);
     for (std::size_t v = 0; v < still.x0.size(); ++v) EXPECT_TRUE(same_bits(n.x1[v], still.x0[v]));
+}
+
+TEST(GpuImpactZones, TheConstraintsOfACrumpleAreGivenBackAfterATrimWindow) {
+    // The constraint arrays grown for a crumple are cut back once a trim window of calls needed
+    // none (weft/backend/buffer_trim.h), and the crumple resolved again gives the same bits.
+    WEFT_REQUIRE_GPU();
+    const Scene s = rounded(test::crumpled_sheet(22, 7));  // 2,780 constraints
+    Scene still = s;
+    still.x1 = still.x0;
+    GpuImpactZones zones;
+    const Resolved first = resolve_gpu(s, 32, zones);
+    const std::size_t grown = zones.constraint_capacity();
+    std::printf("[ trim     ] crumple: %d constraints, capacity %zu (%.1f MB)\n", first.report.constraints, grown,
+                static_cast<double>(grown * GpuImpactZones::kBytesPerConstraint) / 1e6);
+    ASSERT_GT(grown * GpuImpactZones::kBytesPerConstraint, kTrimFloorBytes) << "the crumple is too small to trim";
+    // The window that holds the crumple keeps its capacity (the peak is the crumple's); the next
+    // window, with no constraint at all, gives it back.
+    for (std::size_t call = 0; call < 2 * kTrimPeriod; ++call) (void)resolve_gpu(still, 32, zones);
+    std::printf("[ trim     ] after %zu calls without a collision: capacity %zu, %d trims\n", 2 * kTrimPeriod,
+                zones.constraint_capacity(), zones.trims());
+    EXPECT_LT(zones.constraint_capacity(), grown);
+    EXPECT_EQ(zones.trims(), 1);
+    const Resolved again = resolve_gpu(s, 32, zones);
+    std::size_t differ = 0;
+    for (std::size_t v = 0; v < first.x1.size(); ++v) differ += same_bits(first.x1[v], again.x1[v]) ? 0 : 1;
+    EXPECT_EQ(differ, 0U) << "the reallocated arrays changed the result";
+    EXPECT_EQ(first.outcome, again.outcome);
 }
 
 TEST(GpuImpactZones, RejectsBadInput) {

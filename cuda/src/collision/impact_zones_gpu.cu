@@ -746,6 +746,23 @@ void GpuImpactZones::reserve_vertices(std::uint32_t count) {
     grow(counters_, 1);
 }
 
+void GpuImpactZones::release_constraints() {
+    for (DeviceArray<std::uint32_t>* a : {&c_vertex_, &unique_vertex_, &unique_count_, &unique_offset_, &zone_label_,
+                                          &zone_ccount_, &zone_coffset_, &zone_label2_, &zone_vcount_, &zone_voffset_,
+                                          &color_, &color_order_, &color_start_})
+        *a = {};
+    for (DeviceArray<float>* a : {&c_weight_, &c_normal_}) *a = {};
+    for (DeviceArray<double>* a : {&c_scale_, &lambda_, &momentum_, &previous_, &packed_offset_,
+                                   &packed_inverse_diagonal_, &packed_lambda_})
+        *a = {};
+    for (DeviceArray<float4>* a : {&packed_weight_, &packed_move_, &packed_normal_}) *a = {};
+    packed_slot_ = {};
+    for (int i = 0; i < 2; ++i)
+        for (DeviceArray<std::uint32_t>* a : {&slot_key_[i], &slot_value_[i], &ckey_[i], &cvalue_[i], &vkey_[i], &vvalue_[i]})
+            *a = {};
+    capacity_ = 0;
+}
+
 void GpuImpactZones::reserve_constraints(std::size_t count, cudaStream_t stream) {
     if (count <= capacity_) return;
     const std::size_t cap = grown_capacity(count);
@@ -1256,6 +1273,14 @@ weft::collision::ImpactZoneReport GpuImpactZones::resolve(const GpuImpactZoneInp
         report.frozen_vertices = static_cast<int>(c.frozen);
         report.carried_vertices = static_cast<int>(c.carried);
     }
+    // The trim window (weft/backend/buffer_trim.h): constraints a fold once needed are not kept for
+    // the rest of the run. Freed here, at the end of a call, nothing reads them any more (the frees
+    // wait for the device); the next call that needs constraints allocates what it needs.
+    if (const std::size_t kept = constraint_trim_.record(constraints_, capacity_, kBytesPerConstraint, 1024))
+        if (grown_capacity(kept) < capacity_) {
+            release_constraints();
+            ++trims_;
+        }
     report.zones_ms += ms_since(clock);
     return report;
 }

@@ -46,6 +46,7 @@
 #include "collision/colored_zone_projection.h"
 #include "weft/backend/impact_zone_report.h"
 #include "device_array.h"
+#include "weft/backend/buffer_trim.h"
 
 namespace weft::cuda::collision {
 
@@ -151,7 +152,16 @@ public:
         unsigned long long work = 0;  ///< constraint updates of this round's projections (sweeps × constraints)
     };
 
+    /// About the device bytes a constraint's capacity holds (its vertices, weights, normal and
+    /// multipliers, the incidence and zone sorts' slots, the coloured projection's packing).
+    static constexpr std::size_t kBytesPerConstraint = 400;
+    /// The constraint arrays' capacity (constraints), and how often the trim window cut it back.
+    [[nodiscard]] std::size_t constraint_capacity() const { return capacity_; }
+    [[nodiscard]] int trims() const { return trims_; }
+
 private:
+    /// Frees the per-constraint arrays (capacity 0: the next reserve allocates what it needs).
+    void release_constraints();
     /// Broad phase + CCD over x0 → x1 into ccd_; returns the hit count (after any rerun).
     std::uint32_t detect(const GpuImpactZoneInput& in, weft::collision::ImpactZoneReport& report, cudaStream_t stream);
     /// Appends the `hits` CCD hits as constraints, merges zones, and rebuilds the zone lists.
@@ -171,6 +181,8 @@ private:
     GpuCcd ccd_;
     std::uint32_t vertices_ = 0;       // capacity of the per-vertex arrays
     std::size_t capacity_ = 0;         // constraint capacity
+    CapacityTrim constraint_trim_;     // the constraints each call needed (weft/backend/buffer_trim.h)
+    int trims_ = 0;
     std::uint32_t constraints_ = 0;    // constraints of this call
     std::uint32_t zones_ = 0, unique_ = 0;
     std::uint32_t remaining_ = 0;         // hits of the last detection
