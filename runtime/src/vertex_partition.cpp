@@ -20,22 +20,23 @@ std::vector<double> row_work(const BlockPattern& pattern) {
     return work;
 }
 
-std::vector<double> row_and_contact_work(const BlockPattern& pattern, std::span<const std::uint32_t> contacts_at) {
+std::vector<double> row_and_contact_work(const BlockPattern& pattern, std::span<const std::uint32_t> contacts_at,
+                                         double contact_work) {
     std::vector<double> work = row_work(pattern);
     if (contacts_at.size() != work.size())
         throw Error("row_and_contact_work: " + std::to_string(contacts_at.size()) + " contact counts for " +
                     std::to_string(work.size()) + " rows");
-    for (std::size_t i = 0; i < work.size(); ++i) work[i] += kContactWorkPerVertex * static_cast<double>(contacts_at[i]);
+    for (std::size_t i = 0; i < work.size(); ++i) work[i] += contact_work * static_cast<double>(contacts_at[i]);
     return work;
 }
 
-double part_work_imbalance(std::span<const double> part_rows, std::span<const std::size_t> part_contacts) {
+double part_work_imbalance(std::span<const double> part_rows, std::span<const std::size_t> part_contacts, double contact_work) {
     if (part_rows.size() != part_contacts.size())
         throw Error("part_work_imbalance: " + std::to_string(part_rows.size()) + " parts' rows but " +
                     std::to_string(part_contacts.size()) + " parts' contacts");
     double total = 0.0, busiest = 0.0;
     for (std::size_t p = 0; p < part_rows.size(); ++p) {
-        const double work = part_rows[p] + 4.0 * kContactWorkPerVertex * static_cast<double>(part_contacts[p]);
+        const double work = part_rows[p] + 4.0 * contact_work * static_cast<double>(part_contacts[p]);
         total += work;
         busiest = std::max(busiest, work);
     }

@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <chrono>
+#include <cstdlib>
 #include <cstring>
 #include <exception>
 #include <future>
@@ -16,6 +17,16 @@
 #include "weft/error.h"
 
 namespace weft::cuda::multi {
+
+double contact_work_per_vertex() {
+    const char* env = std::getenv("WEFT_GPU_CONTACT_WORK");
+    if (env == nullptr || *env == '\0') return kContactWorkPerVertex;
+    char* end = nullptr;
+    const double value = std::strtod(env, &end);
+    if (end == env || *end != '\0' || !(value >= 0.0 && value <= 100.0))
+        throw Error(std::string("WEFT_GPU_CONTACT_WORK=") + env + ": expected a number of pattern blocks in [0, 100]");
+    return value;
+}
 
 // The one-GPU layout (device_upload.cpp): 'G', sizeof(float), the vertex count (u64), the substep
 // count (i64), then 3n floats of the previous Δv, component by component.
@@ -226,7 +237,7 @@ void MultiSolver::recut(const Model& model) {
     }
     // The whole arrays live outside the parts: they survive the rebuild, and every new part takes
     // its owned vertices and ghosts from them.
-    build_parts(model, row_and_contact_work(flat_->pattern, contacts_at));
+    build_parts(model, row_and_contact_work(flat_->pattern, contacts_at, contact_work_));
     spread_whole();
     if (output_ != nullptr) {
         staged_stride_ = 0;  // the new parts write into the staging buffer: bind them
@@ -427,7 +438,7 @@ void MultiSolver::distribute_contacts(const Model& model, const std::vector<std:
     if (parts > 1) {
         std::vector<std::size_t> on_part;
         for (auto& s : solvers_) on_part.push_back(s->part_contact_count());
-        const double imbalance = part_work_imbalance(part_row_work_, on_part);
+        const double imbalance = part_work_imbalance(part_row_work_, on_part, contact_work_);
         recut_due_ = recut_policy_.observe(imbalance, model.settings.solver.gpu_rebalance) || recut_due_;
     }
     mirror_->list_contact_vertices(lists);

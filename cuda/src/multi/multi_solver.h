@@ -37,6 +37,11 @@
 
 namespace weft::cuda::multi {
 
+/// The re-cut's cost of a contact's vertex in pattern blocks: kContactWorkPerVertex, or the value of
+/// WEFT_GPU_CONTACT_WORK (for measuring the weight; weft::Error names a value that is not a number
+/// in [0, 100]).
+[[nodiscard]] double contact_work_per_vertex();
+
 class MultiSolver {
 public:
     /// Part p on CUDA device `devices[p]` (one part per entry; entries may repeat). Throws
@@ -247,6 +252,9 @@ private:
     RecutPolicy recut_policy_;
     bool recut_due_ = false;
     int recuts_ = 0;
+    /// A contact's vertex in pattern blocks for the re-cut (kContactWorkPerVertex; profiling may
+    /// override it with WEFT_GPU_CONTACT_WORK: docs/multi-gpu.md, "Re-cutting by contact load").
+    double contact_work_ = contact_work_per_vertex();
 };
 
 }  // namespace weft::cuda::multi

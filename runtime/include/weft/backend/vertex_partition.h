@@ -73,22 +73,28 @@ struct VertexPartition {
 
 /// The cost of one contact's vertex in a row, in the units of row_work (pattern blocks). A contact
 /// costs every CG iteration a pair pass (its four vertices gathered, weighted, multiplied) and a row
-/// gather at each of its cloth vertices. Measured with the one-launch loop's clock on the 1.2M-triangle
-/// flag with self-contact (H200, WEFT_CUDA_PCG_CLOCK=1): on one GPU the contact phases take 264 µs an
-/// iteration for 4.58M contacts and the row phases 288 µs for 6.6M blocks (1.3 blocks a contact);
-/// on each of two GPUs a contact costs about 2.3 blocks (the pair pass reads another part's
-/// vertices from its copy, and a contact across the cut is on both parts): about 0.5 a vertex.
-inline constexpr double kContactWorkPerVertex = 0.5;
+/// gather at each of its cloth vertices. From the one-launch loop's clock on the 1.2M-triangle flag
+/// with self-contact on two H200s (WEFT_CUDA_PCG_CLOCK=1): the parts' row phases cost about 51 µs an
+/// iteration per million pattern blocks and their contact phases about 19.5 µs per million incidence
+/// entries (a contact's vertex), so about 0.38; the re-cut was then run at 0.125–1 in one call
+/// (WEFT_GPU_CONTACT_WORK, docs/multi-gpu.md) and 0.3 left the parts the closest (waits of 34 µs
+/// against 53 at 0.38 and 0.5; below 0.3 the imbalance stays under solver.gpu_rebalance and no
+/// re-cut happens). The row sums' cost follows how the contacts crowd into rows, which no count
+/// captures, so the weight is a compromise.
+inline constexpr double kContactWorkPerVertex = 0.3;
 
 /// How uneven the parts' CG work is: the busiest part's over the mean part's (1 is even), a part's
 /// work being its rows' row_work (`part_rows`) plus 4·kContactWorkPerVertex for every contact it
 /// holds (`part_contacts`, a contact across a cut on each part it touches: each part runs its pair
-/// pass). Throws weft::Error when the spans' sizes differ. 1 where there is no work.
-[[nodiscard]] double part_work_imbalance(std::span<const double> part_rows, std::span<const std::size_t> part_contacts);
+/// pass). `contact_work`: a contact's vertex in pattern blocks (the constant, unless profiling
+/// overrides it). Throws weft::Error when the spans' sizes differ. 1 where there is no work.
+[[nodiscard]] double part_work_imbalance(std::span<const double> part_rows, std::span<const std::size_t> part_contacts,
+                                         double contact_work = kContactWorkPerVertex);
 
 /// row_work plus kContactWorkPerVertex for every contact at the row's vertex (`contacts_at`, one
 /// count a vertex: a re-cut by contact load balances both).
-[[nodiscard]] std::vector<double> row_and_contact_work(const BlockPattern& pattern, std::span<const std::uint32_t> contacts_at);
+[[nodiscard]] std::vector<double> row_and_contact_work(const BlockPattern& pattern, std::span<const std::uint32_t> contacts_at,
+                                                       double contact_work = kContactWorkPerVertex);
 
 /// Cuts `order` (every vertex once, e.g. the multilevel Schwarz preconditioner's level-0 order:
 /// spatially local runs) into `parts` contiguous runs of nearly equal `work`, each run a whole
