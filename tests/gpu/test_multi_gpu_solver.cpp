@@ -699,6 +699,29 @@ TEST(MultiGpuSolver, ShellBendingAcrossPartsFollowsOneGpu) {
     EXPECT_NEAR(device.external_power, host.external_power, 1e-3 * std::abs(host.external_power) + 1e-6);
 }
 
+// The profiling override of the re-cut's contact weight: a number in [0, 100], anything else an
+// error naming the value (host code: runs without a GPU).
+TEST(MultiGpuSolver, TheContactWeightOverrideTakesANumberAndNamesABadOne) {
+    const auto weight_with = [](const char* value) {
+        if (value == nullptr)
+            unsetenv("WEFT_GPU_CONTACT_WORK");
+        else
+            setenv("WEFT_GPU_CONTACT_WORK", value, 1);
+        return cuda::multi::contact_work_per_vertex();
+    };
+    EXPECT_EQ(weight_with(nullptr), kContactWorkPerVertex);
+    EXPECT_EQ(weight_with("0.75"), 0.75);
+    for (const char* bad : {"abc", "0.3x", "-1", "1e9"}) {
+        try {
+            (void)weight_with(bad);
+            ADD_FAILURE() << "WEFT_GPU_CONTACT_WORK=" << bad << " was taken";
+        } catch (const Error& e) {
+            EXPECT_NE(std::string(e.what()).find(bad), std::string::npos) << e.what();
+        }
+    }
+    unsetenv("WEFT_GPU_CONTACT_WORK");
+}
+
 TEST(MultiGpuSolver, BadRequestsAreClearErrors) {
     WEFT_REQUIRE_GPU();
     // The mid-edge model is one GPU's so far.
