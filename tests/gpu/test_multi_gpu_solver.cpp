@@ -8,6 +8,8 @@
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
+#include <iterator>
+#include <optional>
 #include <string>
 #include <utility>
 #include <vector>
@@ -697,6 +699,46 @@ TEST(MultiGpuSolver, ShellBendingAcrossPartsFollowsOneGpu) {
     EXPECT_GT(host.elastic, 0.0);
     EXPECT_NEAR(device.elastic, host.elastic, 1e-5 * scale);
     EXPECT_NEAR(device.external_power, host.external_power, 1e-3 * std::abs(host.external_power) + 1e-6);
+}
+
+// The editor's cloth-contact marks with several GPUs (World::contact_vertices): each part reports
+// its owned rows in a contact, and together they are one GPU's vertices. Two sheets laid 2 mm
+// apart, one step from the same start on one GPU and on two parts.
+TEST(MultiGpuSolver, ReportsTheVerticesInClothContactsLikeOneGpu) {
+    WEFT_REQUIRE_GPU();
+    const auto contacts = [](int gpus) {
+        WorldDesc desc;
+        desc.collision.self_collision = true;
+        BackendOptions options;
+        options.gpus = gpus;
+        parts_on_one_device(gpus > 1);
+        World world(desc, "cuda", options);
+        world.add_cloth({.name = "back", .fabric = Fabric::cook(make_grid(0.4, 0.4, 16, 16))});
+        ClothDesc front{.name = "front", .fabric = Fabric::cook(make_grid(0.4, 0.4, 16, 16))};
+        front.transform.translation = {0.0, 0.0, 0.002};
+        world.add_cloth(front);
+        (void)world.step();
+        parts_on_one_device(false);
+        std::vector<std::vector<std::uint32_t>> out;
+        for (std::size_t c = 0; c < 2; ++c) {
+            const std::optional<std::vector<std::uint32_t>> v = world.contact_vertices(c);
+            EXPECT_TRUE(v.has_value()) << gpus << " GPUs: the backend does not report its contacts";
+            out.push_back(v.value_or(std::vector<std::uint32_t>{}));
+        }
+        return out;
+    };
+    const auto one = contacts(1), split = contacts(2);
+    for (std::size_t c = 0; c < 2; ++c) {
+        std::vector<std::uint32_t> only;
+        std::set_symmetric_difference(split[c].begin(), split[c].end(), one[c].begin(), one[c].end(), std::back_inserter(only));
+        std::printf("[ contacts ] cloth %zu: %zu vertices in a contact on two parts, %zu on one GPU, %zu on one only\n", c,
+                    split[c].size(), one[c].size(), only.size());
+        EXPECT_GT(one[c].size(), 100U) << "most of each sheet touches the other";
+        EXPECT_TRUE(std::is_sorted(split[c].begin(), split[c].end()));
+        EXPECT_TRUE(std::adjacent_find(split[c].begin(), split[c].end()) == split[c].end()) << "each vertex once";
+        for (const std::uint32_t v : split[c]) EXPECT_LT(v, 289U) << "cloth-local ids";
+        EXPECT_LE(only.size(), one[c].size() / 20) << "cloth " << c;
+    }
 }
 
 // The profiling override of the re-cut's contact weight: a number in [0, 100], anything else an

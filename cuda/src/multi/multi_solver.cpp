@@ -875,6 +875,24 @@ void MultiSolver::read_state(std::size_t first, std::size_t count, Vec3d* x, Vec
     }
 }
 
+void MultiSolver::contact_vertices(std::size_t first, std::size_t count, std::vector<std::uint32_t>& out) const {
+    out.clear();
+    if (first + count > (flat_ != nullptr ? flat_->vertex_count : 0))
+        throw Error("multi-GPU solver: contact_vertices of vertices [" + std::to_string(first) + ", " +
+                    std::to_string(first + count) + ") past the model");
+    if (rebuild_pending_ || count == 0) return;  // after a fault the state is on the host: no contacts
+    std::vector<std::uint32_t> touching;
+    for (std::size_t p = 0; p < solvers_.size(); ++p) {
+        const PartModel& pm = part_models_[p];
+        solvers_[p]->contact_vertices(0, pm.owned, touching);  // owned rows, in the part's numbering
+        for (const std::uint32_t i : touching) {
+            const std::size_t g = pm.global_vertex[i];
+            if (g >= first && g < first + count) out.push_back(static_cast<std::uint32_t>(g - first));
+        }
+    }
+    std::sort(out.begin(), out.end());  // every vertex has one owner: no duplicates to drop
+}
+
 void MultiSolver::write_state(std::size_t first, std::size_t count, const Vec3d* x, const Vec3d* v) {
     if (first + count > (flat_ != nullptr ? flat_->vertex_count : 0))
         throw Error("multi-GPU solver: write_state of vertices [" + std::to_string(first) + ", " +

@@ -64,6 +64,11 @@ public:
     void substep(const Model& model, double t, double h, StepStats& stats);
     /// Global vertices [first, first + count) of the flat model, from their owners.
     void read_state(std::size_t first, std::size_t count, Vec3d* x, Vec3d* v) const;
+    /// The vertices [first, first + count) of the model's numbering in a proximity contact in the
+    /// last substep, as `first`-relative ids, each once, ascending (Backend::contact_vertices): each
+    /// part reports its owned rows whose contact incidence is not empty (the rows its solve gathers
+    /// contacts into; a contact across a cut is in each owner's incidence). Reads back: for tools.
+    void contact_vertices(std::size_t first, std::size_t count, std::vector<std::uint32_t>& out) const;
     /// Sets global vertices [first, first + count) on their owners and every ghost copy.
     void write_state(std::size_t first, std::size_t count, const Vec3d* x, const Vec3d* v);
     /// The warm start (the previous Δv) of every vertex, gathered from its owner, in the one-GPU
