@@ -34,6 +34,7 @@ __global__ void assemble_rows_kernel(DeviceView d) {
     const std::uint32_t i = (blockIdx.x * blockDim.x + threadIdx.x) / 32;
     int active = 0;         // this lane's centroid contacts
     int vertex_active = 0;  // the row's vertex contacts (every lane holds them)
+    bool row_face = false;  // a triangle of this lane's at the row has a centroid contact
     if (i < d.rows) {  // uniform over the warp
         const StepParams& sp = step_params(d);
         V3 vertex_rhs;
@@ -59,6 +60,7 @@ __global__ void assemble_rows_kernel(DeviceView d) {
                     TriangleTerms terms;
                     const int faces = triangle_terms(d, sp, t, terms);
                     if (chunk == 0 && a == 0) active += faces;  // a centroid contact counted at its first corner's row
+                    row_face = row_face || faces > 0;
                     if (chunk == 0) rhs += terms.rhs[a];
                     for (int b = 0; b < 3; ++b) {
                         block[b] = terms.block[a][b];
@@ -90,6 +92,8 @@ __global__ void assemble_rows_kernel(DeviceView d) {
         }
         rhs = V3{warp_sum(rhs.x), warp_sum(rhs.y), warp_sum(rhs.z)};
         if (lane == 0) store3(d.b, i, d.n, vertex_rhs + rhs);
+        const bool face = __any_sync(kFullMask, row_face);  // i < d.rows is the whole warp's
+        if (lane == 0) d.collider_contact[i] = vertex_active > 0 || face ? 1 : 0;
     }
     add_contacts(d, active + (lane == 0 ? vertex_active : 0));
 }
@@ -106,6 +110,7 @@ __global__ void vertex_rows_kernel(DeviceView d) {
         M3 block;
         active = vertex_terms(d, step_params(d), i, rhs, block);
         store3(d.b, i, d.n, rhs);
+        d.collider_contact[i] = active > 0 ? 1 : 0;  // the triangle passes after it add the face contacts
         const std::uint32_t slice = i / kSliceRowsDevice;
         const std::uint32_t first = d.slice_start[slice], width = (d.slice_start[slice + 1] - first) / kSliceRowsDevice;
         const std::uint32_t diag = d.diagonal[i];
@@ -123,9 +128,11 @@ __global__ void triangle_pass_kernel(DeviceView d, std::uint32_t first, std::uin
     if (t < last) {
         TriangleTerms terms;
         active = triangle_terms(d, step_params(d), t, terms);
+        const bool face = active > 0;
         if (d.triangle_vertices[3 * t] >= d.rows) active = 0;  // a part counts what its first corner's owner counts
         for (int a = 0; a < 3; ++a) {
             const std::uint32_t v = d.triangle_vertices[3 * t + a];
+            if (face) d.collider_contact[v] = 1;  // one colour's triangles share no vertex
             for (int c = 0; c < 3; ++c) d.b[c * d.n + v] += terms.rhs[a][c];
             for (int b = 0; b < 3; ++b) add_block(d.blocks, d.triangle_positions[9 * t + 3 * a + b], terms.block[a][b]);
         }

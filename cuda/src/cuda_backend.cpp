@@ -113,6 +113,12 @@ public:
         return true;
     }
 
+    bool collider_contact_vertices(std::size_t cloth, std::vector<std::uint32_t>& out) const override {
+        const std::uint32_t first = flat_.cloth_vertex_offset.at(cloth), end = flat_.cloth_vertex_offset.at(cloth + 1);
+        solver_->collider_contact_vertices(first, end - first, out);
+        return true;
+    }
+
     void write_state(std::size_t cloth, std::span<const Vec3d> x, std::span<const Vec3d> v) override {
         const auto [first, count] = flat_.cloth_vertices(cloth, x.size(), v.size());
         solver_->write_state(first, count, x.data(), v.data());

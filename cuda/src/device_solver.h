@@ -54,6 +54,10 @@ public:
     /// solve built: offset pairs beyond their radius left out), each once, ascending, numbered from
     /// `first` (Backend::contact_vertices). Reads the incidence's starts back: for tools.
     void contact_vertices(std::size_t first, std::size_t count, std::vector<std::uint32_t>& out) const;
+    /// The rows [first, first + count) in an active analytic-collider contact at the last assembly
+    /// (DeviceView::collider_contact), as `first`-relative ids, ascending (Backend::collider_contact_vertices).
+    /// Reads the flags back: for tools.
+    void collider_contact_vertices(std::size_t first, std::size_t count, std::vector<std::uint32_t>& out) const;
     void write_state(std::size_t first, std::size_t count, const Vec3d* x, const Vec3d* v);
     /// What decides the next substep besides x and v (Backend::solver_state): the CG warm start
     /// (previous Δv) and the substep count (the preconditioner's refresh phase), as bytes.
@@ -287,6 +291,7 @@ private:
     DeviceArray<float> cg_vectors_;   // r, c, q, s: 3n each, and the preconditioner: 9n
     DeviceArray<float> mass_;
     DeviceArray<std::uint8_t> fixed_;
+    DeviceArray<std::uint8_t> collider_contact_;  // DeviceView::collider_contact
     DeviceArray<std::uint32_t> vertex_cloth_;
     DeviceArray<float> blocks_;
     DeviceArray<std::uint32_t> column_, slice_start_, diagonal_;

@@ -128,6 +128,8 @@ void DeviceSolver::build(const FlatModel& flat, const Model& model) {
         loop_clock_.allocate(kLoopClockEntries, ledger_, "CG loop clock");
         WEFT_CUDA_CHECK(cudaMemset(loop_clock_.get(), 0, kLoopClockEntries * sizeof(long long)));
     }
+    collider_contact_.allocate(std::max<std::size_t>(n, 1), ledger_, "collider contact flags");
+    WEFT_CUDA_CHECK(cudaMemset(collider_contact_.get(), 0, collider_contact_.bytes()));
     WEFT_CUDA_CHECK(cudaMemset(control_.get(), 0, sizeof(PcgControl)));
     WEFT_CUDA_CHECK(cudaMemset(stats_.get(), 0, sizeof(DeviceStats)));
     wait_for_default_stream();
@@ -151,6 +153,7 @@ void DeviceSolver::build(const FlatModel& flat, const Model& model) {
     d.precond = cv + 12 * n;
     d.mass = mass_.get();
     d.fixed = fixed_.get();
+    d.collider_contact = collider_contact_.get();
     d.vertex_cloth = vertex_cloth_.get();
     d.blocks = blocks_.get();
     d.column = column_.get();
@@ -252,6 +255,20 @@ void DeviceSolver::contact_vertices(std::size_t first, std::size_t count, std::v
     WEFT_CUDA_CHECK(cudaMemcpy(start.data(), c.start + first, (count + 1) * sizeof(std::uint32_t), cudaMemcpyDeviceToHost));
     for (std::size_t i = 0; i < count; ++i)
         if (start[i + 1] > start[i]) out.push_back(static_cast<std::uint32_t>(i));
+}
+
+void DeviceSolver::collider_contact_vertices(std::size_t first, std::size_t count, std::vector<std::uint32_t>& out) const {
+    out.clear();
+    if (view_.collider_contact == nullptr || rebuild_pending_ || count == 0) return;
+    if (first + count > view_.n)
+        throw Error("collider_contact_vertices: rows [" + std::to_string(first) + ", " + std::to_string(first + count) +
+                    ") past the " + std::to_string(view_.n) + " of the device");
+    WEFT_CUDA_CHECK(cudaSetDevice(device_));
+    WEFT_CUDA_CHECK(cudaStreamSynchronize(active_stream()));
+    std::vector<std::uint8_t> flag(count);
+    WEFT_CUDA_CHECK(cudaMemcpy(flag.data(), view_.collider_contact + first, count, cudaMemcpyDeviceToHost));
+    for (std::size_t i = 0; i < count; ++i)
+        if (flag[i] != 0) out.push_back(static_cast<std::uint32_t>(i));
 }
 
 void DeviceSolver::write_state(std::size_t first, std::size_t count, const Vec3d* x, const Vec3d* v) {

@@ -39,6 +39,10 @@ struct DeviceView {
     const float* mass = nullptr;
     const std::uint8_t* fixed = nullptr;
     const std::uint32_t* vertex_cloth = nullptr;
+    /// 1 where the last assembly found vertex i in an active contact with an analytic collider (its
+    /// own, or a face contact of a triangle it is a corner of), else 0; n bytes, rows [0, rows)
+    /// written (Backend::collider_contact_vertices).
+    std::uint8_t* collider_contact = nullptr;
     // Matrix (sliced ELL).
     float* blocks = nullptr;
     const std::uint32_t* column = nullptr;

@@ -1,5 +1,4 @@
 // The View panel's overlay (see viewport_overlay.h).
-#include "weft/backend/collider_shape.h"
 #include "weft/backend/model.h"
 #include "weft/editor/viewport_overlay.h"
 
@@ -10,9 +9,8 @@
 
 #include <imgui.h>
 
-#include "weft/collider.h"
 #include "weft/editor/vertex_picking.h"
-#include "weft/physics/collider_contact.h"
+#include "weft/physics/vec.h"
 
 namespace weft::editor {
 namespace {
@@ -70,11 +68,6 @@ ViewportOverlay build_viewport_overlay(World& world, const render::Camera& camer
         return true;
     };
     const Model& model = world.model();
-    // The analytic colliders where they are now, for the contact marks.
-    std::vector<physics::Shape<double>> shapes;
-    if (options.contacts)
-        for (const ColliderDesc& c : model.colliders)
-            if (c.is_analytic()) shapes.push_back(shape_at<double>(c, world.time()));
 
     render::OverlayPoints collider_contacts{.vertices = {}, .colour = kContact};
     render::OverlayPoints cloth_contacts{.vertices = {}, .colour = kClothContact};
@@ -84,21 +77,14 @@ ViewportOverlay build_viewport_overlay(World& world, const render::Camera& camer
         const ClothDesc& cloth = model.cloths[c];
         const auto vertex_count = static_cast<std::uint32_t>(cloth.fabric->vertex_count());
         const bool grabbed = model.grab && model.grab->cloth == c;
-        if (options.contacts && !shapes.empty()) {
-            // "Touching": within the cloth's contact thickness (the distance the solver keeps), with
-            // a 10 % margin for the penalty's give.
-            const std::vector<Vec3d> x = world.positions(c);
-            const double reach = 1.1 * cloth.material.contact_thickness;
-            for (std::uint32_t v = 0; v < x.size(); ++v) {
-                bool touching = false;
-                for (const physics::Shape<double>& s : shapes) {
-                    Vec3d normal{};
-                    touching = touching || physics::shape_distance(s, x[v], normal, static_cast<Mat3d*>(nullptr)) < reach;
-                }
-                if (touching) collider_contacts.vertices.push_back(first + v);
-            }
-        }
         if (options.contacts) {
+            // Against an analytic collider: the contacts the solver's last assembly found active.
+            if (const std::optional<std::vector<std::uint32_t>> touching = world.collider_contact_vertices(c)) {
+                for (const std::uint32_t v : *touching) collider_contacts.vertices.push_back(first + v);
+            } else {
+                out.collider_contacts_reported = false;
+            }
+
             // Cloth against cloth (or a mesh collider): the backend's own proximity pairs.
             if (const std::optional<std::vector<std::uint32_t>> touching = world.contact_vertices(c)) {
                 for (const std::uint32_t v : *touching) cloth_contacts.vertices.push_back(first + v);

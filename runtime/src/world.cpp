@@ -498,6 +498,14 @@ std::optional<std::vector<std::uint32_t>> World::contact_vertices(std::size_t cl
     return out;
 }
 
+std::optional<std::vector<std::uint32_t>> World::collider_contact_vertices(std::size_t cloth) const {
+    (void)model_->cloths.at(cloth);
+    ensure_built();
+    std::vector<std::uint32_t> out;
+    if (!backend_->collider_contact_vertices(cloth, out)) return std::nullopt;
+    return out;
+}
+
 std::vector<Vec3d> World::velocities(std::size_t cloth) const {
     const auto n = model_->cloths.at(cloth).fabric->vertex_count();
     std::vector<Vec3d> x(n), v(n);

@@ -4,7 +4,9 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <cstdint>
 #include <cstdlib>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -19,6 +21,8 @@ struct Draped {
     int gained = 0;             ///< substeps the energy guard saw gaining energy
     int collider_contacts = 0;  ///< at the last step
     bool finite = true;
+    bool reported = false;                ///< the backend reports its collider contacts' vertices
+    std::vector<std::uint32_t> touching;  ///< World::collider_contact_vertices after the last step
 };
 
 /// A 0.8 m sheet of 3×3 cells (0.27 m cells) dropped onto a 0.25 m ball and left to settle for 1.5 s
@@ -49,6 +53,10 @@ inline Draped drape_coarse_sheet(const std::string& backend, bool face_contacts,
             std::printf("step %d: gained %d, contacts %d, cg %d\n", step, s.energy_gained, s.collider_contacts, s.cg_iterations);
         out.finite = out.finite && !s.non_finite;
         out.collider_contacts = s.collider_contacts;
+    }
+    if (const std::optional<std::vector<std::uint32_t>> touching = world.collider_contact_vertices(0)) {
+        out.reported = true;
+        out.touching = *touching;
     }
     const std::vector<Vec3d> x = world.positions(0);
     const Fabric& f = *world.cloth(0).fabric;

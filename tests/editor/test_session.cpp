@@ -334,7 +334,10 @@ TEST(ViewportOverlay, MarksContactsAndPinsAndGivesTheRendererItsLines) {
     DisplayOptions nothing;
     EXPECT_TRUE(build_viewport_overlay(world, camera, 640, 480, nothing).segments.empty());
     DisplayOptions all{.wireframe = true, .normals = true, .contacts = true, .pins = true};
+    EXPECT_EQ(build_viewport_overlay(world, camera, 640, 480, all).contacts, 0U) << "no substep yet: no contact found";
+    (void)world.step();  // the marks are the contacts the solver found active
     const ViewportOverlay o = build_viewport_overlay(world, camera, 640, 480, all);
+    EXPECT_TRUE(o.collider_contacts_reported);
     EXPECT_EQ(o.contacts, 1U) << "only the centre touches the ball";
     EXPECT_EQ(o.pins, 1U);
     EXPECT_TRUE(o.segments.empty()) << "wireframe and normals are the renderer's lines now";

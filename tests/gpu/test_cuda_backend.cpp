@@ -9,6 +9,7 @@
 #include <cstdio>
 #include <cstring>
 #include <filesystem>
+#include <iterator>
 #include <memory>
 #include <ostream>
 #include <random>
@@ -502,6 +503,16 @@ TEST(CudaBackend, FaceContactsHoldACoarseSheetOffTheBallLikeOnTheCpu) {
     EXPECT_GT(gpu.collider_contacts, vertices_only.collider_contacts) << "centroid contacts are counted";
     EXPECT_NEAR(gpu.collider_contacts, cpu.collider_contacts, 2);  // contacts at the thickness's edge differ in float
     EXPECT_NEAR(gpu.centroid_gap, cpu.centroid_gap, 1e-3);
+    // The vertices reported in a collider contact (the editor's marks): the GPU's flags, as the CPU's.
+    ASSERT_TRUE(gpu.reported);
+    std::vector<std::uint32_t> only;
+    std::set_symmetric_difference(gpu.touching.begin(), gpu.touching.end(), cpu.touching.begin(), cpu.touching.end(),
+                                  std::back_inserter(only));
+    std::printf("[ faces    ] vertices in a collider contact: cuda %zu, cpu %zu, on one only %zu\n", gpu.touching.size(),
+                cpu.touching.size(), only.size());
+    EXPECT_EQ(vertices_only.touching.size(), static_cast<std::size_t>(vertices_only.collider_contacts));
+    EXPECT_FALSE(gpu.touching.empty());
+    EXPECT_LE(only.size(), 2U);  // contacts at the thickness's edge differ in float
 }
 
 TEST(CudaBackend, SetStateContinuesLikeTheWorldItCameFrom) {

@@ -701,9 +701,10 @@ TEST(MultiGpuSolver, ShellBendingAcrossPartsFollowsOneGpu) {
     EXPECT_NEAR(device.external_power, host.external_power, 1e-3 * std::abs(host.external_power) + 1e-6);
 }
 
-// The editor's cloth-contact marks with several GPUs (World::contact_vertices): each part reports
-// its owned rows in a contact, and together they are one GPU's vertices. Two sheets laid 2 mm
-// apart, one step from the same start on one GPU and on two parts.
+// The editor's contact marks with several GPUs (World::contact_vertices, collider_contact_vertices):
+// each part reports its owned rows in a contact, and together they are one GPU's vertices. Two
+// sheets laid 2 mm apart, a large ball just behind the back one's middle, one step from the same
+// start on one GPU and on two parts.
 TEST(MultiGpuSolver, ReportsTheVerticesInClothContactsLikeOneGpu) {
     WEFT_REQUIRE_GPU();
     const auto contacts = [](int gpus) {
@@ -717,14 +718,22 @@ TEST(MultiGpuSolver, ReportsTheVerticesInClothContactsLikeOneGpu) {
         ClothDesc front{.name = "front", .fabric = Fabric::cook(make_grid(0.4, 0.4, 16, 16))};
         front.transform.translation = {0.0, 0.0, 0.002};
         world.add_cloth(front);
+        const double thickness = world.model().cloths[0].material.contact_thickness;
+        ColliderDesc ball{.name = "ball", .shape = ColliderShape::Sphere};
+        ball.radius = 1.0;
+        ball.motion.origin = world.positions(0)[144] + Vec3d{0.0, 0.0, -1.0 - 0.5 * thickness};  // the middle vertex
+        world.add_collider(ball);
         (void)world.step();
         parts_on_one_device(false);
-        std::vector<std::vector<std::uint32_t>> out;
+        std::vector<std::vector<std::uint32_t>> out;  // cloth contacts of each sheet, then the back sheet's with the ball
         for (std::size_t c = 0; c < 2; ++c) {
             const std::optional<std::vector<std::uint32_t>> v = world.contact_vertices(c);
             EXPECT_TRUE(v.has_value()) << gpus << " GPUs: the backend does not report its contacts";
             out.push_back(v.value_or(std::vector<std::uint32_t>{}));
         }
+        const std::optional<std::vector<std::uint32_t>> on_ball = world.collider_contact_vertices(0);
+        EXPECT_TRUE(on_ball.has_value()) << gpus << " GPUs: the backend does not report its collider contacts";
+        out.push_back(on_ball.value_or(std::vector<std::uint32_t>{}));
         return out;
     };
     const auto one = contacts(1), split = contacts(2);
@@ -739,6 +748,14 @@ TEST(MultiGpuSolver, ReportsTheVerticesInClothContactsLikeOneGpu) {
         for (const std::uint32_t v : split[c]) EXPECT_LT(v, 289U) << "cloth-local ids";
         EXPECT_LE(only.size(), one[c].size() / 20) << "cloth " << c;
     }
+    std::vector<std::uint32_t> only;
+    std::set_symmetric_difference(split[2].begin(), split[2].end(), one[2].begin(), one[2].end(), std::back_inserter(only));
+    std::printf("[ contacts ] with the ball: %zu vertices on two parts, %zu on one GPU, %zu on one only\n", split[2].size(),
+                one[2].size(), only.size());
+    EXPECT_GT(one[2].size(), 4U) << "the ball touches the back sheet round its middle";
+    EXPECT_LT(one[2].size(), 100U) << "not the whole sheet";
+    EXPECT_TRUE(std::binary_search(split[2].begin(), split[2].end(), 144U)) << "the middle vertex";
+    EXPECT_LE(only.size(), 2U);
 }
 
 // The profiling override of the re-cut's contact weight: a number in [0, 100], anything else an

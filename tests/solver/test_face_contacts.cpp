@@ -5,6 +5,7 @@
 // ball too, with no energy gained and the same vertex-contact behaviour elsewhere.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cstdio>
 
 #include "face_contacts_drape.h"
@@ -35,6 +36,21 @@ TEST(FaceContacts, ACoarseSheetOverABallKeepsItsTrianglesOffTheBall) {
     EXPECT_TRUE(with_faces.finite);
     EXPECT_LE(with_faces.gained, 3);
     EXPECT_LT(with_faces.gained, vertices_only.gained);
+    // What the backend reports (the editor's contact marks): the solver's own active contacts. Vertex
+    // contacts only: one per vertex in a contact, so as many as the stats count. With face contacts
+    // also the corners of the triangles whose centroids touch: more vertices.
+    for (const test::Draped* d : {&vertices_only, &with_faces}) {
+        ASSERT_TRUE(d->reported);
+        EXPECT_TRUE(std::is_sorted(d->touching.begin(), d->touching.end()));
+        EXPECT_TRUE(std::adjacent_find(d->touching.begin(), d->touching.end()) == d->touching.end());
+        for (const std::uint32_t v : d->touching) EXPECT_LT(v, 16U) << "cloth-local ids of the 4×4 vertices";
+    }
+    std::printf("vertices reported in a collider contact: %zu without face contacts, %zu with\n", vertices_only.touching.size(),
+                with_faces.touching.size());
+    EXPECT_EQ(vertices_only.touching.size(), static_cast<std::size_t>(vertices_only.collider_contacts));
+    EXPECT_FALSE(vertices_only.touching.empty());
+    for (const std::uint32_t corner : {5U, 6U, 9U, 10U})  // the middle cell, whose centroids rest on the ball
+        EXPECT_TRUE(std::binary_search(with_faces.touching.begin(), with_faces.touching.end(), corner)) << corner;
     const test::Draped in_float = drape_coarse_sheet("cpu", true, Precision::Float);
     std::printf("with face contacts in float: centroid gap %.4f m, %d substeps gained\n", in_float.centroid_gap, in_float.gained);
 }

@@ -83,6 +83,12 @@ public:
         return true;
     }
 
+    bool collider_contact_vertices(std::size_t cloth, std::vector<std::uint32_t>& out) const override {
+        const std::uint32_t first = flat_.cloth_vertex_offset.at(cloth), end = flat_.cloth_vertex_offset.at(cloth + 1);
+        solver_.collider_contact_vertices(first, end - first, out);
+        return true;
+    }
+
     // Summed on the devices (energy_kernels.cu, each part counting what it owns): no state read back.
     EnergyAudit energy_audit(const Model& model, double t, double h, bool with_wind) const override {
         const BudgetScope scope(&budget_);

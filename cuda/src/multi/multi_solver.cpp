@@ -875,22 +875,46 @@ void MultiSolver::read_state(std::size_t first, std::size_t count, Vec3d* x, Vec
     }
 }
 
+namespace {
+
+/// The vertices [first, first + count) of the model that `part_rows(p, rows)` lists among each
+/// part's owned rows, as `first`-relative ids, ascending (every vertex has one owner).
+template <class PartRows>
+void owned_rows_in_range(const std::vector<PartModel>& parts, std::size_t first, std::size_t count, PartRows part_rows,
+                         std::vector<std::uint32_t>& out) {
+    std::vector<std::uint32_t> rows;
+    for (std::size_t p = 0; p < parts.size(); ++p) {
+        part_rows(p, rows);
+        for (const std::uint32_t i : rows) {
+            const std::size_t g = parts[p].global_vertex[i];
+            if (g >= first && g < first + count) out.push_back(static_cast<std::uint32_t>(g - first));
+        }
+    }
+    std::sort(out.begin(), out.end());
+}
+
+}  // namespace
+
 void MultiSolver::contact_vertices(std::size_t first, std::size_t count, std::vector<std::uint32_t>& out) const {
     out.clear();
     if (first + count > (flat_ != nullptr ? flat_->vertex_count : 0))
         throw Error("multi-GPU solver: contact_vertices of vertices [" + std::to_string(first) + ", " +
                     std::to_string(first + count) + ") past the model");
     if (rebuild_pending_ || count == 0) return;  // after a fault the state is on the host: no contacts
-    std::vector<std::uint32_t> touching;
-    for (std::size_t p = 0; p < solvers_.size(); ++p) {
-        const PartModel& pm = part_models_[p];
-        solvers_[p]->contact_vertices(0, pm.owned, touching);  // owned rows, in the part's numbering
-        for (const std::uint32_t i : touching) {
-            const std::size_t g = pm.global_vertex[i];
-            if (g >= first && g < first + count) out.push_back(static_cast<std::uint32_t>(g - first));
-        }
-    }
-    std::sort(out.begin(), out.end());  // every vertex has one owner: no duplicates to drop
+    owned_rows_in_range(part_models_, first, count, [&](std::size_t p, std::vector<std::uint32_t>& rows) {
+        solvers_[p]->contact_vertices(0, part_models_[p].owned, rows);  // rows with a contact incidence
+    }, out);
+}
+
+void MultiSolver::collider_contact_vertices(std::size_t first, std::size_t count, std::vector<std::uint32_t>& out) const {
+    out.clear();
+    if (first + count > (flat_ != nullptr ? flat_->vertex_count : 0))
+        throw Error("multi-GPU solver: collider_contact_vertices of vertices [" + std::to_string(first) + ", " +
+                    std::to_string(first + count) + ") past the model");
+    if (rebuild_pending_ || count == 0) return;
+    owned_rows_in_range(part_models_, first, count, [&](std::size_t p, std::vector<std::uint32_t>& rows) {
+        solvers_[p]->collider_contact_vertices(0, part_models_[p].owned, rows);
+    }, out);
 }
 
 void MultiSolver::write_state(std::size_t first, std::size_t count, const Vec3d* x, const Vec3d* v) {

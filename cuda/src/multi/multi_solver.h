@@ -69,6 +69,9 @@ public:
     /// part reports its owned rows whose contact incidence is not empty (the rows its solve gathers
     /// contacts into; a contact across a cut is in each owner's incidence). Reads back: for tools.
     void contact_vertices(std::size_t first, std::size_t count, std::vector<std::uint32_t>& out) const;
+    /// The same for the analytic colliders' contacts (DeviceSolver::collider_contact_vertices of each
+    /// part's owned rows: Backend::collider_contact_vertices).
+    void collider_contact_vertices(std::size_t first, std::size_t count, std::vector<std::uint32_t>& out) const;
     /// Sets global vertices [first, first + count) on their owners and every ghost copy.
     void write_state(std::size_t first, std::size_t count, const Vec3d* x, const Vec3d* v);
     /// The warm start (the previous Δv) of every vertex, gathered from its owner, in the one-GPU

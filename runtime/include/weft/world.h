@@ -118,6 +118,9 @@ public:
     /// The vertices of `cloth` in a proximity contact with cloth or a mesh collider in the last
     /// substep (Backend::contact_vertices), or std::nullopt where the backend does not report them.
     [[nodiscard]] std::optional<std::vector<std::uint32_t>> contact_vertices(std::size_t cloth) const;
+    /// The vertices of `cloth` in an active contact with an analytic collider in the last substep
+    /// (Backend::collider_contact_vertices), or std::nullopt where the backend does not report them.
+    [[nodiscard]] std::optional<std::vector<std::uint32_t>> collider_contact_vertices(std::size_t cloth) const;
 
     /// Current positions (m) and velocities (m/s) of a cloth, copied from the backend.
     [[nodiscard]] std::vector<Vec3d> positions(std::size_t cloth) const;

@@ -55,6 +55,12 @@ public:
         return true;
     }
 
+    bool collider_contact_vertices(std::size_t cloth, std::vector<std::uint32_t>& out) const override {
+        const std::uint32_t first = flat_.cloth_vertex_offset.at(cloth), end = flat_.cloth_vertex_offset.at(cloth + 1);
+        std::visit([&](const auto& s) { s.collider_contact_vertices(first, end - first, out); }, solver_);
+        return true;
+    }
+
     std::vector<std::uint8_t> solver_state() const override {
         return std::visit([](const auto& s) { return s.solver_state(); }, solver_);
     }

@@ -86,6 +86,7 @@ void CpuSolver<T>::build(const FlatModel& flat, const Model& model) {
     fixed_.assign(n_, 0);
     for (std::uint32_t v : flat.pin_vertex) fixed_[v] = 1;
     contacts_.assign(n_, 0);
+    face_contact_.assign(flat_->triangle_count(), 0);
     A_.resize(flat.pattern);
     pcg_.resize(n_);
     schwarz_ = SchwarzPreconditioner<T>{};  // levels rebuilt on first use, for this topology
@@ -157,6 +158,7 @@ void CpuSolver<T>::evaluate_elements(const Model& model, double /*t*/, T h) {
                                             contact_stiffness_};
     const bool faces = face_contacts_ && !shapes_.empty();
     std::atomic<int> face_contacts{0};  // an integer count: the same on any number of threads
+    if (!faces && face_contacts_active_ > 0) std::fill(face_contact_.begin(), face_contact_.end(), std::uint8_t{0});
     // Each element's terms (weft/physics/implicit_terms.h) are written straight into its own slots
     // of the element buffers; assemble() gathers them per row in a fixed order.
     parallel_chunks(nt, [&](std::size_t lo, std::size_t hi) {
@@ -175,7 +177,9 @@ void CpuSolver<T>::evaluate_elements(const Model& model, double /*t*/, T h) {
             physics::triangle_terms(step, r.dm_inv, r.area, p, wind_, x, vk, d, kind, out);
             if (faces) {
                 const T mass = (mass_[tri[0]] + mass_[tri[1]] + mass_[tri[2]]) / T(3);
-                active += physics::face_collider_terms(step, colliders, p, mass, x, vk, d, kind, out);
+                const int face = physics::face_collider_terms(step, colliders, p, mass, x, vk, d, kind, out);
+                face_contact_[t] = face > 0 ? 1 : 0;
+                active += face;
             }
         }
         face_contacts += active;
@@ -300,6 +304,22 @@ int CpuSolver<T>::evaluate_vertices(const Model& model, T h) {
         return count;
     });
     return static_cast<int>(contacts);
+}
+
+template <typename T>
+void CpuSolver<T>::collider_contact_vertices(std::size_t first, std::size_t count, std::vector<std::uint32_t>& out) const {
+    out.clear();
+    if (first + count > contacts_.size()) return;  // not built
+    std::vector<std::uint8_t> touching(count, 0);
+    for (std::size_t i = 0; i < count; ++i) touching[i] = contacts_[first + i] > 0 ? 1 : 0;
+    if (face_contacts_active_ > 0)
+        for (std::size_t t = 0; t < face_contact_.size(); ++t) {
+            if (face_contact_[t] == 0) continue;
+            for (const std::uint32_t v : flat_->triangles[t].v)
+                if (v >= first && v < first + count) touching[v - first] = 1;
+        }
+    for (std::size_t i = 0; i < count; ++i)
+        if (touching[i] != 0) out.push_back(static_cast<std::uint32_t>(i));
 }
 
 template <typename T>

@@ -49,6 +49,9 @@ public:
     [[nodiscard]] std::size_t collision_memory_bytes() const { return collisions_.memory_bytes(); }
     /// The flat model's cloth vertices in a proximity contact in the last substep (ContactTerms).
     void contact_vertices(std::vector<std::uint32_t>& out) const { collisions_.terms().contact_vertices(out); }
+    /// The vertices [first, first + count), as `first`-relative ids, in an active analytic-collider
+    /// contact at the last assembly: their own, or a face contact of a triangle they are a corner of.
+    void collider_contact_vertices(std::size_t first, std::size_t count, std::vector<std::uint32_t>& out) const;
     /// Offset mode: the penalty energy of the current substep's offset contacts at the current state,
     /// J (0 in the other mode, or before a substep).
     [[nodiscard]] double offset_contact_energy() const;
@@ -109,6 +112,7 @@ private:
     BendingModel bending_ = BendingModel::Hinge;
     bool face_contacts_ = false;   // SolverSettings::face_contacts
     int face_contacts_active_ = 0;  // of the last evaluate_elements
+    std::vector<std::uint8_t> face_contact_;  // per triangle: 1 where its centroid contact was active (the last evaluate_elements)
     std::vector<physics::ShellBendingRest<T>> shell_rest_;
     std::vector<std::array<std::int32_t, 2>> hinge_faces_;
     std::vector<ShellFaceTerms<T>> shell_faces_;

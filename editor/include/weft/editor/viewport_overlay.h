@@ -4,10 +4,9 @@
 /// wireframe, vertex normals, contacts and pins are drawn by the renderer from the cloth buffer the
 /// solver wrote, depth-tested (`overlay_lines`, RenderFrame::lines; the marks as OverlayPoints): no
 /// copy of the positions through the host to draw them. Which vertices are marked comes from the
-/// world: pins from the model, cloth contacts from the backend (World::contact_vertices), contacts
-/// with an analytic collider from the distances of a host copy of the positions (the one place a
-/// copy remains, and only while contacts are shown). The grab's spring is a picture-space mark drawn
-/// by ImGui in the window's overlay pass.
+/// world: pins from the model, cloth contacts and contacts with an analytic collider from the backend
+/// (World::contact_vertices, World::collider_contact_vertices: ids, not positions). The grab's
+/// spring is a picture-space mark drawn by ImGui in the window's overlay pass.
 #include <cstddef>
 #include <cstdint>
 #include <vector>
@@ -42,7 +41,8 @@ struct ViewportOverlay {
     /// The renderer's marks (RenderFrame::lines.points): collider contacts (orange), cloth contacts
     /// (magenta), pins (blue), as indices into the cloth vertex buffer (make_render_scene's order).
     std::vector<render::OverlayPoints> points;
-    std::size_t contacts = 0;  ///< vertices within their contact thickness of an analytic collider
+    std::size_t contacts = 0;  ///< vertices in an active contact with an analytic collider (the last substep)
+    bool collider_contacts_reported = true;  ///< false: the backend does not report them
     std::size_t cloth_contacts = 0;       ///< vertices in a proximity contact (cloth or a mesh collider)
     bool cloth_contacts_reported = true;  ///< false: the backend does not report its proximity contacts
     std::size_t pins = 0;      ///< pin marks drawn
@@ -57,7 +57,7 @@ struct ViewportOverlay {
 /// analytic colliders, magenta in the backend's proximity pairs with cloth or a mesh collider; pins
 /// blue), for the renderer; the grab's spring whenever a vertex is grabbed, as drawn with `camera`
 /// on a `width`×`height` picture (left out behind the camera). Reads the positions of a cloth only
-/// for contacts with an analytic collider and for the grab.
+/// for the grab.
 [[nodiscard]] ViewportOverlay build_viewport_overlay(World& world, const render::Camera& camera, int width, int height,
                                                      const DisplayOptions& options);
 

@@ -67,6 +67,16 @@ public:
         out.clear();
         return false;
     }
+    /// The vertices of cloth `cloth` (its own numbering) in an active contact with an analytic
+    /// collider in the last assembly of the last substep: their own contact, or with
+    /// solver.face_contacts a centroid contact of a triangle they are a corner of. Each once,
+    /// ascending, into `out`; false, with `out` empty, where the backend does not report them. The
+    /// solver's own decision (the editor's contact marks), read back: for tools, not every frame of a game.
+    [[nodiscard]] virtual bool collider_contact_vertices(std::size_t cloth, std::vector<std::uint32_t>& out) const {
+        (void)cloth;
+        out.clear();
+        return false;
+    }
     /// Bytes of simulation state held (host or device).
     [[nodiscard]] virtual std::size_t memory_bytes() const = 0;
     /// `memory_bytes` split by purpose (bytes each, summing to it), for stats and benchmarks. The
