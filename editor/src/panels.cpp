@@ -454,12 +454,11 @@ void display_rows(Session& session) {
     ImGui::Checkbox("normals", &d.normals);
     ImGui::Checkbox("contacts", &d.contacts);
     if (ImGui::IsItemHovered())
-        ImGui::SetTooltip("orange: vertices within their contact thickness of an analytic collider; magenta: vertices in a "
-                          "contact with cloth or a mesh collider (reported by the cpu and one-GPU cuda backends)");
+        ImGui::SetTooltip("orange: vertices the solver found in a contact with an analytic collider; magenta: vertices in "
+                          "a contact with cloth or a mesh collider (both reported by the backend)");
     ImGui::SameLine();
     ImGui::Checkbox("pins", &d.pins);
-    if (d.contacts || d.pins)
-        ImGui::TextDisabled("contacts and pins from a copy of the state: zero-copy still draws the cloth");
+    if (d.contacts) ImGui::TextDisabled("contact marks: the backend's vertex ids, read back each frame");
 }
 
 // The scene browser: the shipped scenes by name, and any scene file by path. Opening replaces the
