@@ -660,7 +660,7 @@ std::size_t CpuSolver<T>::memory_bytes() const {
            hinge_rest_.capacity() * sizeof(HingeRestT) + shell_rest_.capacity() * sizeof(physics::ShellBendingRest<T>) +
            hinge_faces_.capacity() * sizeof(hinge_faces_[0]) + shell_faces_.capacity() * sizeof(ShellFaceTerms<T>) +
            (x_lin_.capacity() + d_lin_.capacity()) * sizeof(V3) + fixed_.capacity() + contacts_.capacity() * sizeof(int) +
-           pcg_.memory_bytes() + schwarz_.memory_bytes() + collisions_.memory_bytes();
+           face_contact_.capacity() + pcg_.memory_bytes() + schwarz_.memory_bytes() + collisions_.memory_bytes();
 }
 
 template class CpuSolver<float>;
